@@ -1,0 +1,50 @@
+//! One error type for the library. Every message names the problem and, where there is one, the fix:
+//! the CLI prints it as is and exits non-zero.
+
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("cannot read {path}: {source} (check that the path exists and is readable)")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+
+    #[error("{path}: not a valid glTF 2.0 file: {reason}")]
+    Gltf { path: PathBuf, reason: String },
+
+    #[error(
+        "{path}: the file requires the glTF extension `{extension}`, which manylights does not support; \
+         re-export the scene without it (supported: {supported})"
+    )]
+    UnsupportedGltfExtension {
+        path: PathBuf,
+        extension: String,
+        supported: String,
+    },
+
+    #[error("{path}: {reason}")]
+    SceneFile { path: PathBuf, reason: String },
+
+    #[error("invalid scene: {0}")]
+    InvalidScene(String),
+
+    #[error("invalid settings: {0}")]
+    InvalidConfig(String),
+
+    #[error(
+        "no usable GPU adapter found{detail}. Install a Vulkan driver: on Debian/Ubuntu without a GPU, \
+         `sudo apt-get install mesa-vulkan-drivers` gives Mesa's software rasteriser (lavapipe); \
+         `manylights info` lists what wgpu can see, and WGPU_ADAPTER_NAME / WGPU_BACKEND select one"
+    )]
+    NoAdapter { detail: String },
+
+    #[error("the GPU reported an error: {0}")]
+    Gpu(String),
+
+    #[error("cannot write {path}: {reason}")]
+    Output { path: PathBuf, reason: String },
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

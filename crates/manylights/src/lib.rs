@@ -1,0 +1,10 @@
+//! manylights: real-time rendering of many lights and decals through GPU-built acceleration structures.
+//!
+//! Data flows one way: [`scene`] (CPU scene) → [`gpu::GpuScene`] (uploaded buffers and textures) →
+//! [`passes`] (one file per pass, WGSL beside it) → an image. [`pipelines`] holds the frame graphs that
+//! order the passes; [`renderer::Renderer`] ties a device, a scene and a pipeline together.
+
+pub mod error;
+pub mod scene;
+
+pub use error::{Error, Result};

@@ -1,0 +1,68 @@
+//! Cameras: a rigid transform plus a projection. Projections use reverse Z (near → 1, far → 0) for
+//! depth precision; perspective projections without a far plane are infinite.
+
+use glam::{Mat4, Vec3};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    Perspective {
+        /// Vertical field of view, radians.
+        yfov: f32,
+        znear: f32,
+        zfar: Option<f32>,
+    },
+    Orthographic {
+        /// Half extents of the view volume.
+        xmag: f32,
+        ymag: f32,
+        znear: f32,
+        zfar: f32,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub name: String,
+    /// Rigid transform; the camera looks down its local -Z with +Y up.
+    pub world_from_view: Mat4,
+    pub projection: Projection,
+}
+
+impl Camera {
+    pub fn look_at(name: &str, eye: Vec3, target: Vec3, yfov: f32, znear: f32) -> Self {
+        Self {
+            name: name.into(),
+            world_from_view: Mat4::look_at_rh(eye, target, Vec3::Y).inverse(),
+            projection: Projection::Perspective { yfov, znear, zfar: None },
+        }
+    }
+
+    pub fn position(&self) -> Vec3 {
+        self.world_from_view.w_axis.truncate()
+    }
+
+    /// Reverse-Z clip-from-view matrix for the given aspect ratio (width / height).
+    pub fn clip_from_view(&self, aspect: f32) -> Mat4 {
+        match self.projection {
+            Projection::Perspective { yfov, znear, zfar: None } => Mat4::perspective_infinite_reverse_rh(yfov, aspect, znear),
+            // Swapping near and far turns glam's [0,1] depth into reverse Z.
+            Projection::Perspective { yfov, znear, zfar: Some(zfar) } => Mat4::perspective_rh(yfov, aspect, zfar, znear),
+            Projection::Orthographic { xmag, ymag, znear, zfar } => {
+                // glTF's xmag is ignored in favour of the output aspect, as for yfov, so images are not stretched.
+                let _ = xmag;
+                let x = ymag * aspect;
+                Mat4::orthographic_rh(-x, x, -ymag, ymag, zfar, znear)
+            }
+        }
+    }
+
+    /// A camera that frames `bounds` from the front-right and above.
+    pub fn framing(bounds: &super::Bounds) -> Self {
+        let center = bounds.center();
+        let radius = (bounds.diagonal() * 0.5).max(1e-3);
+        let yfov = 50f32.to_radians();
+        let distance = radius / (yfov * 0.5).sin();
+        let eye = center + Vec3::new(0.6, 0.45, 1.0).normalize() * distance;
+        Self::look_at("auto", eye, center, yfov, (distance - radius).max(radius * 1e-3).min(distance * 0.1))
+    }
+}

@@ -1,0 +1,328 @@
+//! The CPU scene: meshes, materials, textures, instances, lights, cameras and global lighting.
+//!
+//! Everything here is plain data with no GPU types, so it can be built by the glTF importer, the TOML
+//! scene file, the procedural demo or a test, then handed to `gpu::GpuScene` in one direction.
+//!
+//! Conventions: right-handed, +Y up, metres; a camera looks down its local -Z (as in glTF).
+
+pub mod camera;
+pub mod demo;
+pub mod generators;
+pub mod gltf;
+pub mod scene_file;
+mod tangents;
+
+use glam::{Mat4, Vec3, Vec4};
+
+pub use camera::{Camera, Projection};
+
+/// One vertex, laid out exactly as the shaders read it (`shading/types.wgsl`, `Vertex`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub u: f32,
+    pub normal: [f32; 3],
+    pub v: f32,
+    /// xyz: tangent, w: bitangent sign (glTF / MikkTSpace convention).
+    pub tangent: [f32; 4],
+}
+
+/// An indexed triangle list with one material.
+#[derive(Clone, Debug)]
+pub struct Primitive {
+    pub vertices: Vec<Vertex>,
+    pub indices: Vec<u32>,
+    pub material: usize,
+}
+
+impl Primitive {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    pub name: String,
+    pub primitives: Vec<Primitive>,
+}
+
+/// A mesh placed in the world; the node hierarchy is flattened into `world_from_local`.
+#[derive(Clone, Debug)]
+pub struct Instance {
+    pub mesh: usize,
+    pub world_from_local: Mat4,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    Opaque,
+    /// Discard where alpha < cutoff.
+    Mask { cutoff: f32 },
+    /// Drawn as opaque until the forward transparent pass exists (see docs/ARCHITECTURE.md).
+    Blend,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Wrap {
+    #[default]
+    Repeat,
+    MirroredRepeat,
+    ClampToEdge,
+}
+
+/// A material's use of a texture: which image and how its coordinates wrap.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    pub texture: usize,
+    pub wrap_u: Wrap,
+    pub wrap_v: Wrap,
+}
+
+/// glTF metallic-roughness material.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    pub base_color_factor: Vec4,
+    pub base_color_texture: Option<TextureRef>,
+    pub metallic_factor: f32,
+    pub roughness_factor: f32,
+    /// glTF layout: G = roughness, B = metallic.
+    pub metallic_roughness_texture: Option<TextureRef>,
+    pub normal_texture: Option<TextureRef>,
+    pub normal_scale: f32,
+    pub emissive_factor: Vec3,
+    pub emissive_texture: Option<TextureRef>,
+    pub alpha_mode: AlphaMode,
+    pub double_sided: bool,
+}
+
+impl Default for Material {
+    /// The glTF default material.
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            base_color_factor: Vec4::ONE,
+            base_color_texture: None,
+            metallic_factor: 1.0,
+            roughness_factor: 1.0,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            emissive_factor: Vec3::ZERO,
+            emissive_texture: None,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+        }
+    }
+}
+
+/// A decoded image, RGBA8. Whether it holds sRGB colour or linear data follows from how materials use
+/// it; the GPU scene uploads it accordingly.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub rgba8: Vec<u8>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    Point,
+    /// Cone angles in radians from the axis, 0 ≤ inner < outer ≤ π/2 (KHR_lights_punctual).
+    Spot {
+        inner_cone_angle: f32,
+        outer_cone_angle: f32,
+    },
+}
+
+/// A punctual light (KHR_lights_punctual units: candela), with a finite range of influence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    pub kind: LightKind,
+    pub position: Vec3,
+    /// Unit direction the light points along (spot lights).
+    pub direction: Vec3,
+    pub color: Vec3,
+    pub intensity: f32,
+    /// Distance where the glTF window function reaches zero.
+    pub range: f32,
+}
+
+impl Light {
+    /// Range where intensity / d² falls to `cutoff`: for lights that come without an explicit range.
+    pub fn range_from_cutoff(intensity: f32, color: Vec3, cutoff: f32) -> f32 {
+        (intensity * color.max_element() / cutoff).sqrt()
+    }
+}
+
+/// Directional light, illuminance in lux (scene-relative units in the demo).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sun {
+    /// Unit direction the light travels (from the sun towards the scene).
+    pub direction: Vec3,
+    pub color: Vec3,
+    pub illuminance: f32,
+}
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub meshes: Vec<Mesh>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub instances: Vec<Instance>,
+    pub lights: Vec<Light>,
+    pub cameras: Vec<Camera>,
+    pub sun: Option<Sun>,
+    /// Uniform ambient radiance, a stand-in for indirect light.
+    pub ambient: Vec3,
+    /// Linear scale applied to radiance before tonemapping.
+    pub exposure: f32,
+}
+
+impl Default for Scene {
+    fn default() -> Self {
+        Self {
+            meshes: Vec::new(),
+            materials: Vec::new(),
+            textures: Vec::new(),
+            instances: Vec::new(),
+            lights: Vec::new(),
+            cameras: Vec::new(),
+            sun: None,
+            ambient: Vec3::splat(0.03),
+            exposure: 1.0,
+        }
+    }
+}
+
+/// Axis-aligned bounds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Bounds {
+    pub const EMPTY: Bounds = Bounds {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+    pub fn diagonal(&self) -> f32 {
+        (self.max - self.min).length()
+    }
+}
+
+impl Scene {
+    /// Triangles as drawn: each mesh counted once per instance.
+    pub fn drawn_triangle_count(&self) -> usize {
+        self.instances
+            .iter()
+            .map(|i| self.meshes[i.mesh].primitives.iter().map(Primitive::triangle_count).sum::<usize>())
+            .sum()
+    }
+
+    /// World-space bounds of all instances.
+    pub fn bounds(&self) -> Bounds {
+        let mut b = Bounds::EMPTY;
+        for inst in &self.instances {
+            for prim in &self.meshes[inst.mesh].primitives {
+                for v in &prim.vertices {
+                    b.grow(inst.world_from_local.transform_point3(Vec3::from(v.position)));
+                }
+            }
+        }
+        b
+    }
+
+    /// Checks the invariants every consumer relies on: indices in range, finite numbers, valid
+    /// references. Importers and generators call it so bad data fails early with a clear message.
+    pub fn validate(&self) -> crate::Result<()> {
+        let err = |m: String| Err(crate::Error::InvalidScene(m));
+        for (mi, mesh) in self.meshes.iter().enumerate() {
+            for (pi, p) in mesh.primitives.iter().enumerate() {
+                if p.indices.len() % 3 != 0 {
+                    return err(format!("mesh {mi} primitive {pi}: index count {} is not a multiple of 3", p.indices.len()));
+                }
+                if let Some(&bad) = p.indices.iter().find(|&&i| i as usize >= p.vertices.len()) {
+                    return err(format!("mesh {mi} primitive {pi}: index {bad} out of range ({} vertices)", p.vertices.len()));
+                }
+                if p.material >= self.materials.len() {
+                    return err(format!("mesh {mi} primitive {pi}: material {} does not exist", p.material));
+                }
+                if p.vertices.iter().any(|v| !v.position.iter().all(|c| c.is_finite())) {
+                    return err(format!("mesh {mi} primitive {pi}: a vertex position is NaN or infinite"));
+                }
+            }
+        }
+        for (ii, inst) in self.instances.iter().enumerate() {
+            if inst.mesh >= self.meshes.len() {
+                return err(format!("instance {ii}: mesh {} does not exist", inst.mesh));
+            }
+            if !inst.world_from_local.is_finite() {
+                return err(format!("instance {ii}: transform is NaN or infinite"));
+            }
+        }
+        for (mi, m) in self.materials.iter().enumerate() {
+            for t in [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture].into_iter().flatten() {
+                if t.texture >= self.textures.len() {
+                    return err(format!("material {mi} ({}): texture {} does not exist", m.name, t.texture));
+                }
+            }
+        }
+        for (li, l) in self.lights.iter().enumerate() {
+            validate_light(l).map_err(|m| crate::Error::InvalidScene(format!("light {li}: {m}")))?;
+        }
+        if let Some(sun) = &self.sun {
+            if !(sun.direction.is_finite() && sun.direction.length() > 0.0 && sun.color.is_finite() && sun.illuminance.is_finite() && sun.illuminance >= 0.0) {
+                return err("sun: direction, colour and illuminance must be finite, illuminance ≥ 0 and the direction non-zero".into());
+            }
+        }
+        if !(self.ambient.is_finite() && self.ambient.min_element() >= 0.0) {
+            return err("ambient must be finite and ≥ 0".into());
+        }
+        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+            return err(format!("exposure must be finite and > 0, got {}", self.exposure));
+        }
+        Ok(())
+    }
+}
+
+/// Checks one light; the message says which field is wrong.
+pub fn validate_light(l: &Light) -> Result<(), String> {
+    if !l.position.is_finite() {
+        return Err(format!("position {:?} is NaN or infinite", l.position.to_array()));
+    }
+    if !(l.color.is_finite() && l.color.min_element() >= 0.0) {
+        return Err(format!("colour {:?} must be finite and ≥ 0", l.color.to_array()));
+    }
+    if !(l.intensity.is_finite() && l.intensity >= 0.0) {
+        return Err(format!("intensity {} must be finite and ≥ 0", l.intensity));
+    }
+    if !(l.range.is_finite() && l.range > 0.0) {
+        return Err(format!("range {} must be finite and > 0", l.range));
+    }
+    if let LightKind::Spot { inner_cone_angle, outer_cone_angle } = l.kind {
+        if !(l.direction.is_finite() && (l.direction.length() - 1.0).abs() < 1e-3) {
+            return Err(format!("spot direction {:?} must be a finite unit vector", l.direction.to_array()));
+        }
+        if !(inner_cone_angle >= 0.0 && inner_cone_angle < outer_cone_angle && outer_cone_angle <= std::f32::consts::FRAC_PI_2) {
+            return Err(format!(
+                "spot cone angles must satisfy 0 ≤ inner < outer ≤ π/2, got inner {inner_cone_angle}, outer {outer_cone_angle}"
+            ));
+        }
+    }
+    Ok(())
+}
