@@ -4,7 +4,13 @@
 //! [`passes`] (one file per pass, WGSL beside it) → an image. [`pipelines`] holds the frame graphs that
 //! order the passes; [`renderer::Renderer`] ties a device, a scene and a pipeline together.
 
+pub mod config;
 pub mod error;
+pub mod gpu;
+pub mod image_io;
+pub mod passes;
+pub mod pipelines;
+pub mod renderer;
 pub mod scene;
 
 pub use error::{Error, Result};

@@ -1,0 +1,29 @@
+//! `manylights info`: what wgpu sees and what manylights would use.
+
+use manylights::gpu::{context, GpuContext};
+
+pub fn run() -> anyhow::Result<()> {
+    let adapters = context::list_adapters();
+    println!("adapters ({}):", adapters.len());
+    for a in &adapters {
+        let status = match &a.usable {
+            Ok(()) => "usable".to_string(),
+            Err(why) => format!("unusable: {why}"),
+        };
+        println!("  - {} [{status}]", context::describe(&a.info));
+    }
+    let ctx = GpuContext::new()?;
+    println!("chosen: {}", ctx.describe());
+    println!("features used: {:?}", ctx.features);
+    if !ctx.has_timestamps() {
+        println!("  (no timestamp queries: --timings is unavailable on this adapter)");
+    }
+    println!(
+        "limits: max texture 2D {}, array layers {}, storage binding {} MiB, buffer {} MiB",
+        ctx.limits.max_texture_dimension_2d,
+        ctx.limits.max_texture_array_layers,
+        ctx.limits.max_storage_buffer_binding_size / (1 << 20),
+        ctx.limits.max_buffer_size / (1 << 20)
+    );
+    Ok(())
+}

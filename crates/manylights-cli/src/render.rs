@@ -1,0 +1,224 @@
+//! `manylights render`: load a scene, render frames, write images and timings.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context};
+use clap::{Args, ValueEnum};
+use manylights::{
+    config::{RenderConfig, Tonemapper},
+    gpu::GpuContext,
+    image_io,
+    pipelines::LightMethod,
+    renderer::Renderer,
+    scene::{self, generators::ScatterLights, Camera, Scene},
+};
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// `demo` (built in), or a .gltf, .glb or .toml scene file.
+    #[arg(long, default_value = "demo")]
+    scene: String,
+    #[arg(long, default_value_t = 1280)]
+    width: u32,
+    #[arg(long, default_value_t = 720)]
+    height: u32,
+    /// Camera index in the scene (glTF cameras, or the scene file's camera first); without cameras the
+    /// scene is framed automatically.
+    #[arg(long)]
+    camera: Option<usize>,
+    /// Scatter this many extra point lights over the scene's surfaces.
+    #[arg(long, default_value_t = 0)]
+    lights: u32,
+    /// Seed of the light scatter.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    #[arg(long, value_enum, default_value_t = MethodArg::Brute)]
+    light_method: MethodArg,
+    #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
+    tonemap: TonemapArg,
+    /// Largest texture size kept on the GPU (larger images are downsampled).
+    #[arg(long, default_value_t = 1024)]
+    texture_size: u32,
+    /// Output PNG (tonemapped, sRGB).
+    #[arg(short, long, default_value = "out.png")]
+    output: PathBuf,
+    /// Also write linear HDR radiance as OpenEXR.
+    #[arg(long)]
+    exr: Option<PathBuf>,
+    /// Print per-pass GPU times (median and p95 over the timed frames).
+    #[arg(long)]
+    timings: bool,
+    /// Write per-pass GPU times and run details as JSON.
+    #[arg(long)]
+    timings_json: Option<PathBuf>,
+    /// Frames to time (after the warm-up); the image is the last one.
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
+    /// Untimed frames before timing starts.
+    #[arg(long, default_value_t = 0)]
+    warmup: u32,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MethodArg {
+    Brute,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum TonemapArg {
+    Aces,
+    Agx,
+    None,
+}
+
+pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    let mut scene = load_scene(&args.scene)?;
+    if args.lights > 0 {
+        let params = ScatterLights {
+            count: args.lights as usize,
+            seed: args.seed,
+            ..Default::default()
+        };
+        scene::generators::add_scattered_lights(&mut scene, &params)?;
+    }
+    let camera = choose_camera(&scene, args.camera)?;
+    let config = RenderConfig {
+        width: args.width,
+        height: args.height,
+        light_method: match args.light_method {
+            MethodArg::Brute => LightMethod::Brute,
+        },
+        tonemapper: match args.tonemap {
+            TonemapArg::Aces => Tonemapper::Aces,
+            TonemapArg::Agx => Tonemapper::Agx,
+            TonemapArg::None => Tonemapper::None,
+        },
+        max_texture_size: args.texture_size,
+    };
+
+    let ctx = GpuContext::new()?;
+    let device = ctx.describe();
+    let mut renderer = Renderer::new(ctx, &scene, config)?;
+    if (args.timings || args.timings_json.is_some()) && !renderer.has_timestamps() {
+        bail!("--timings needs GPU timestamp queries, which this adapter lacks ({device}); run without --timings");
+    }
+    for _ in 0..args.warmup {
+        renderer.render(&camera)?;
+    }
+    let mut frames = Vec::with_capacity(args.frames as usize);
+    for _ in 0..args.frames {
+        frames.push(renderer.render(&camera)?);
+    }
+
+    image_io::save_png(&args.output, &renderer.read_ldr()?)?;
+    if let Some(exr) = &args.exr {
+        image_io::save_exr(exr, &renderer.read_hdr()?)?;
+    }
+    let report = TimingReport::new(&frames);
+    if args.timings {
+        report.print(&device, args, &renderer);
+    }
+    if let Some(path) = &args.timings_json {
+        let json = report.to_json(&device, args, &renderer, &scene);
+        std::fs::write(path, serde_json::to_string_pretty(&json)?).with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    println!("wrote {}", args.output.display());
+    Ok(())
+}
+
+fn load_scene(spec: &str) -> manylights::Result<Scene> {
+    if spec == "demo" {
+        Ok(scene::demo::demo_scene())
+    } else {
+        scene::load_path(std::path::Path::new(spec))
+    }
+}
+
+fn choose_camera(scene: &Scene, index: Option<usize>) -> anyhow::Result<Camera> {
+    match (index, scene.cameras.len()) {
+        (Some(i), n) if i >= n => bail!("--camera {i}: the scene has {n} camera(s){}", if n > 0 { format!(", numbered 0 to {}", n - 1) } else { String::new() }),
+        (Some(i), _) => Ok(scene.cameras[i].clone()),
+        (None, 0) => {
+            let bounds = scene.bounds();
+            Ok(if bounds.is_empty() {
+                Camera::look_at("auto", glam::Vec3::new(0.0, 1.0, 5.0), glam::Vec3::ZERO, 60f32.to_radians(), 0.05)
+            } else {
+                Camera::framing(&bounds)
+            })
+        }
+        (None, _) => Ok(scene.cameras[0].clone()),
+    }
+}
+
+/// Per-pass statistics over the timed frames.
+struct TimingReport {
+    passes: Vec<(&'static str, Vec<f64>)>,
+    frame_totals: Vec<f64>,
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    let rank = (p * (sorted.len() - 1) as f64).round() as usize;
+    sorted[rank.min(sorted.len() - 1)]
+}
+
+impl TimingReport {
+    fn new(frames: &[manylights::gpu::PassTimings]) -> Self {
+        let mut passes: Vec<(&'static str, Vec<f64>)> = Vec::new();
+        for frame in frames {
+            for &(name, ms) in frame {
+                match passes.iter_mut().find(|(n, _)| *n == name) {
+                    Some((_, samples)) => samples.push(ms),
+                    None => passes.push((name, vec![ms])),
+                }
+            }
+        }
+        let frame_totals = frames.iter().map(|f| f.iter().map(|(_, ms)| ms).sum()).collect();
+        Self { passes, frame_totals }
+    }
+
+    fn stats(samples: &[f64]) -> (f64, f64) {
+        let mut sorted = samples.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        (percentile(&sorted, 0.5), percentile(&sorted, 0.95))
+    }
+
+    fn print(&self, device: &str, args: &RenderArgs, renderer: &Renderer) {
+        println!("GPU: {device}");
+        println!(
+            "{}×{}, {} triangles, {} lights, {} timed frames after {} warm-up",
+            args.width, args.height, renderer.scene.triangle_count, renderer.scene.lighting.light_count, args.frames, args.warmup
+        );
+        println!("{:<20} {:>10} {:>10}", "pass", "median ms", "p95 ms");
+        for (name, samples) in &self.passes {
+            let (median, p95) = Self::stats(samples);
+            println!("{name:<20} {median:>10.3} {p95:>10.3}");
+        }
+        let (median, p95) = Self::stats(&self.frame_totals);
+        println!("{:<20} {median:>10.3} {p95:>10.3}", "frame (sum)");
+    }
+
+    fn to_json(&self, device: &str, args: &RenderArgs, renderer: &Renderer, scene: &Scene) -> serde_json::Value {
+        let pass = |samples: &[f64]| {
+            let (median, p95) = Self::stats(samples);
+            serde_json::json!({ "median_ms": median, "p95_ms": p95, "samples_ms": samples })
+        };
+        let passes: serde_json::Map<String, serde_json::Value> = self.passes.iter().map(|(n, s)| (n.to_string(), pass(s))).collect();
+        serde_json::json!({
+            "device": device,
+            "commit": env!("MANYLIGHTS_COMMIT"),
+            "scene": args.scene,
+            "width": args.width,
+            "height": args.height,
+            "triangles": renderer.scene.triangle_count,
+            "lights": scene.lights.len(),
+            "light_method": renderer.config.light_method.name(),
+            "warmup_frames": args.warmup,
+            "timed_frames": args.frames,
+            "passes": passes,
+            "frame": pass(&self.frame_totals),
+        })
+    }
+}

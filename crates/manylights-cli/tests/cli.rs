@@ -1,0 +1,150 @@
+//! The `manylights` binary end to end: it renders, and every kind of bad input ends in a clear error
+//! message and a non-zero exit, never a panic.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn assets() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn manylights(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_manylights")).args(args).output().expect("run manylights")
+}
+
+/// Runs a command that must fail; returns its stderr after checking the exit code and that it did
+/// not panic.
+fn failure(args: &[&str]) -> String {
+    let out = manylights(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!out.status.success(), "{args:?} succeeded; stderr: {stderr}");
+    assert_ne!(out.status.code(), Some(101), "{args:?} panicked: {stderr}");
+    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+    stderr
+}
+
+fn render_to(dir: &Path, extra: &[&str]) -> Output {
+    let out = dir.join("out.png");
+    let mut args = vec!["render", "--width", "64", "--height", "36", "-o", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    manylights(&args)
+}
+
+#[test]
+fn renders_the_demo_and_a_gltf_with_timings() {
+    let dir = temp_dir("render_ok");
+    let json = dir.join("timings.json");
+    let exr = dir.join("out.exr");
+    let out = render_to(&dir, &["--timings", "--timings-json", json.to_str().unwrap(), "--exr", exr.to_str().unwrap(), "--frames", "2"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for pass in ["visbuffer_raster", "visbuffer_shade", "tonemap"] {
+        assert!(stdout.contains(pass), "--timings output lacks {pass}: {stdout}");
+    }
+    let png = image::open(dir.join("out.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (64, 36));
+    assert!(image::open(&exr).is_ok(), "EXR not readable");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["timed_frames"], 2);
+    assert!(report["passes"]["visbuffer_shade"]["median_ms"].as_f64().unwrap() > 0.0);
+    assert_eq!(report["passes"]["visbuffer_shade"]["samples_ms"].as_array().unwrap().len(), 2);
+
+    let duck = assets().join("duck/Duck.glb");
+    let out = render_to(&dir, &["--scene", duck.to_str().unwrap(), "--lights", "16", "--seed", "3"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
+fn missing_file() {
+    let err = failure(&["render", "--scene", "/nonexistent/scene.gltf"]);
+    assert!(err.contains("/nonexistent/scene.gltf") && err.contains("cannot read"), "{err}");
+}
+
+#[test]
+fn unknown_scene_type() {
+    let dir = temp_dir("unknown_type");
+    let path = dir.join("scene.obj");
+    std::fs::write(&path, "v 0 0 0").unwrap();
+    let err = failure(&["render", "--scene", path.to_str().unwrap()]);
+    assert!(err.contains(".gltf, .glb or .toml"), "{err}");
+}
+
+#[test]
+fn truncated_gltf() {
+    let dir = temp_dir("truncated");
+    let bytes = std::fs::read(assets().join("box/Box.glb")).unwrap();
+    let path = dir.join("Box.glb");
+    std::fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
+    let err = failure(&["render", "--scene", path.to_str().unwrap()]);
+    assert!(err.contains("not a valid glTF"), "{err}");
+}
+
+#[test]
+fn required_unsupported_extension() {
+    let dir = temp_dir("extension");
+    let path = dir.join("draco.gltf");
+    std::fs::write(
+        &path,
+        r#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_draco_mesh_compression"],"extensionsRequired":["KHR_draco_mesh_compression"],"scenes":[{"nodes":[]}],"scene":0}"#,
+    )
+    .unwrap();
+    let err = failure(&["render", "--scene", path.to_str().unwrap()]);
+    assert!(err.contains("KHR_draco_mesh_compression") && err.contains("does not support"), "{err}");
+}
+
+#[test]
+fn zero_resolution() {
+    let err = failure(&["render", "--width", "0", "--height", "36"]);
+    assert!(err.contains("at least 1"), "{err}");
+}
+
+#[test]
+fn oversized_resolution() {
+    let err = failure(&["render", "--width", "1000000", "--height", "36"]);
+    assert!(err.contains("over this GPU's limit"), "{err}");
+}
+
+#[test]
+fn nan_in_a_scene_file_light() {
+    let dir = temp_dir("nan_light");
+    let path = dir.join("scene.toml");
+    std::fs::write(
+        &path,
+        "[[lights]]\ntype = \"point\"\nposition = [nan, 1.0, 0.0]\ncolor = [1.0, 1.0, 1.0]\nintensity = 5.0\nrange = 3.0\n",
+    )
+    .unwrap();
+    let err = failure(&["render", "--scene", path.to_str().unwrap()]);
+    assert!(err.contains("scene.toml") && err.contains("light 0") && err.contains("NaN"), "{err}");
+}
+
+#[test]
+fn camera_out_of_range() {
+    let err = failure(&["render", "--camera", "7", "--width", "64", "--height", "36"]);
+    assert!(err.contains("--camera 7"), "{err}");
+}
+
+#[test]
+fn no_matching_adapter_explains_how_to_install_a_driver() {
+    let out = Command::new(env!("CARGO_BIN_EXE_manylights"))
+        .args(["render", "--width", "64", "--height", "36"])
+        .env("WGPU_ADAPTER_NAME", "no-such-gpu-anywhere")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("no usable GPU adapter") && err.contains("mesa-vulkan-drivers"), "{err}");
+}
+
+#[test]
+fn info_lists_the_chosen_adapter() {
+    let out = manylights(&["info"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("chosen:") && stdout.contains("features used"), "{stdout}");
+}

@@ -1,0 +1,55 @@
+//! Render settings chosen by the caller (the CLI's flags), validated against the device.
+
+use crate::{gpu::GpuContext, pipelines::LightMethod, Error, Result};
+
+/// Keep the discriminants in sync with `TONEMAP_*` in `shading/types.wgsl`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Tonemapper {
+    #[default]
+    Aces = 0,
+    Agx = 1,
+    /// Clamp only: for inspecting linear values.
+    None = 2,
+}
+
+#[derive(Clone, Debug)]
+pub struct RenderConfig {
+    pub width: u32,
+    pub height: u32,
+    pub light_method: LightMethod,
+    pub tonemapper: Tonemapper,
+    /// Largest texture layer size; larger images are downsampled at upload.
+    pub max_texture_size: u32,
+}
+
+impl Default for RenderConfig {
+    fn default() -> Self {
+        Self {
+            width: 1280,
+            height: 720,
+            light_method: LightMethod::Brute,
+            tonemapper: Tonemapper::Aces,
+            max_texture_size: 1024,
+        }
+    }
+}
+
+impl RenderConfig {
+    /// Checks the settings against what the device supports.
+    pub fn validate(&self, ctx: &GpuContext) -> Result<()> {
+        let max = ctx.limits.max_texture_dimension_2d;
+        if self.width == 0 || self.height == 0 {
+            return Err(Error::InvalidConfig(format!("resolution {}×{} is empty; width and height must be at least 1", self.width, self.height)));
+        }
+        if self.width > max || self.height > max {
+            return Err(Error::InvalidConfig(format!(
+                "resolution {}×{} is over this GPU's limit of {max} pixels per side; choose a smaller --width/--height",
+                self.width, self.height
+            )));
+        }
+        if self.max_texture_size == 0 {
+            return Err(Error::InvalidConfig("the maximum texture size must be at least 1".into()));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,175 @@
+//! The GPU context: a headless wgpu instance, the chosen adapter, its device and queue.
+//!
+//! Configured from the environment like wgpu's own tools: `WGPU_BACKEND` (vulkan, metal, dx12, gl)
+//! restricts backends, `WGPU_ADAPTER_NAME` picks the first adapter whose name contains it
+//! (case-insensitive). Otherwise a discrete GPU is preferred, then integrated, virtual, and finally a
+//! CPU adapter such as Mesa's lavapipe.
+
+use std::sync::{Arc, Mutex};
+
+use crate::{Error, Result};
+
+/// Features the renderer uses when the adapter has them; none is required.
+const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY;
+
+pub struct GpuContext {
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    /// Features requested from the device (a subset of `OPTIONAL_FEATURES`).
+    pub features: wgpu::Features,
+    pub limits: wgpu::Limits,
+    /// Errors the device reported outside an error scope; checked after each frame.
+    errors: Arc<Mutex<Vec<String>>>,
+}
+
+/// What `manylights info` prints about one adapter.
+#[derive(Clone, Debug)]
+pub struct AdapterSummary {
+    pub info: wgpu::AdapterInfo,
+    pub usable: Result<(), String>,
+}
+
+/// Vulkan, Metal and DX12 unless WGPU_BACKEND says otherwise: the GL backend lacks what the renderer
+/// needs, and probing it prints driver noise on headless machines.
+fn instance() -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
+    desc.backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY);
+    wgpu::Instance::new(desc)
+}
+
+/// Why an adapter cannot run the renderer, if it cannot.
+fn unusable_reason(adapter: &wgpu::Adapter) -> Result<(), String> {
+    let downlevel = adapter.get_downlevel_capabilities();
+    if !downlevel.flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS) {
+        return Err("no compute shaders".into());
+    }
+    if !downlevel.is_webgpu_compliant() {
+        return Err("not WebGPU compliant (downlevel backend)".into());
+    }
+    Ok(())
+}
+
+/// Higher is better: device type first, then native backends before GL.
+fn preference(info: &wgpu::AdapterInfo) -> (u8, u8) {
+    let kind = match info.device_type {
+        wgpu::DeviceType::DiscreteGpu => 4,
+        wgpu::DeviceType::IntegratedGpu => 3,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 1,
+        wgpu::DeviceType::Other => 0,
+    };
+    let backend = u8::from(info.backend != wgpu::Backend::Gl);
+    (kind, backend)
+}
+
+fn name_filter() -> Option<String> {
+    std::env::var("WGPU_ADAPTER_NAME").ok().filter(|s| !s.is_empty()).map(|s| s.to_lowercase())
+}
+
+/// Every adapter wgpu can see, with whether the renderer can use it.
+pub fn list_adapters() -> Vec<AdapterSummary> {
+    let adapters = pollster::block_on(instance().enumerate_adapters(wgpu::Backends::all()));
+    adapters
+        .iter()
+        .map(|a| AdapterSummary {
+            info: a.get_info(),
+            usable: unusable_reason(a),
+        })
+        .collect()
+}
+
+impl GpuContext {
+    /// Picks an adapter as described in the module docs and opens a device on it.
+    pub fn new() -> Result<Self> {
+        let adapters = pollster::block_on(instance().enumerate_adapters(wgpu::Backends::all()));
+        let seen: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
+        let filter = name_filter();
+        let adapter = adapters
+            .into_iter()
+            .filter(|a| unusable_reason(a).is_ok())
+            .filter(|a| filter.as_ref().is_none_or(|f| a.get_info().name.to_lowercase().contains(f)))
+            .max_by_key(|a| preference(&a.get_info()))
+            .ok_or_else(|| Error::NoAdapter {
+                detail: match (&filter, seen.is_empty()) {
+                    (_, true) => String::new(),
+                    (Some(f), false) => format!(" matching WGPU_ADAPTER_NAME=\"{f}\" (adapters present: {})", seen.join("; ")),
+                    (None, false) => format!(" (adapters present but unusable: {})", seen.join("; ")),
+                },
+            })?;
+        Self::open(adapter)
+    }
+
+    fn open(adapter: wgpu::Adapter) -> Result<Self> {
+        let info = adapter.get_info();
+        let features = adapter.features() & OPTIONAL_FEATURES;
+        let available = adapter.limits();
+        // Large scenes need large buffers and texture arrays: take what the adapter offers for the
+        // limits that grow with the scene or the image, defaults for the rest.
+        let limits = wgpu::Limits {
+            max_buffer_size: available.max_buffer_size,
+            max_storage_buffer_binding_size: available.max_storage_buffer_binding_size,
+            max_texture_dimension_2d: available.max_texture_dimension_2d,
+            max_texture_array_layers: available.max_texture_array_layers,
+            ..wgpu::Limits::default().using_resolution(available.clone())
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("manylights"),
+            required_features: features,
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| Error::Gpu(format!("cannot open a device on {}: {e}", describe(&info))))?;
+
+        // wgpu's default handler panics; collect errors instead so they surface as `Error::Gpu`.
+        let errors = Arc::new(Mutex::new(Vec::new()));
+        let sink = errors.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            sink.lock().unwrap_or_else(|p| p.into_inner()).push(e.to_string());
+        }));
+        Ok(Self {
+            adapter,
+            device,
+            queue,
+            info,
+            features,
+            limits,
+            errors,
+        })
+    }
+
+    pub fn has_timestamps(&self) -> bool {
+        self.features.contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// Returns the first error the device reported since the last check, if any.
+    pub fn check_errors(&self) -> Result<()> {
+        let mut errors = self.errors.lock().unwrap_or_else(|p| p.into_inner());
+        let first = errors.drain(..).next();
+        first.map_or(Ok(()), |e| Err(Error::Gpu(e)))
+    }
+
+    /// Waits until the GPU has finished all submitted work.
+    pub fn wait_idle(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
+        Ok(())
+    }
+
+    pub fn describe(&self) -> String {
+        describe(&self.info)
+    }
+}
+
+/// One line naming an adapter, its backend, type and driver.
+pub fn describe(info: &wgpu::AdapterInfo) -> String {
+    format!(
+        "{} ({:?}, {:?}, driver: {} {})",
+        info.name, info.backend, info.device_type, info.driver, info.driver_info
+    )
+}

@@ -1,0 +1,15 @@
+//! GPU plumbing: device context, the uploaded scene, per-frame uniforms, timestamps, readback and
+//! shader composition. Passes build on these; nothing here knows about a particular pipeline.
+
+pub mod context;
+pub mod frame;
+pub mod readback;
+pub mod scene;
+pub mod shaders;
+pub mod textures;
+pub mod timestamps;
+
+pub use context::GpuContext;
+pub use frame::FrameUniforms;
+pub use scene::GpuScene;
+pub use timestamps::{GpuTimer, PassTimings};

@@ -1,0 +1,58 @@
+//! Copying GPU data back to the CPU: buffers, and textures with wgpu's 256-byte row alignment removed.
+
+use crate::{gpu::GpuContext, Error, Result};
+
+/// Maps `size` bytes of a MAP_READ buffer from `offset` and returns them as `T`s.
+pub fn map_buffer<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffer, offset: u64, size: u64) -> Result<Vec<T>> {
+    let (sender, receiver) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, offset..offset + size, move |r| {
+        let _ = sender.send(r);
+    });
+    ctx.wait_idle()?;
+    receiver
+        .recv()
+        .map_err(|_| Error::Gpu("buffer mapping was dropped".into()))?
+        .map_err(|e| Error::Gpu(format!("cannot map a readback buffer: {e}")))?;
+    let data = {
+        let view = buffer
+            .get_mapped_range(offset..offset + size)
+            .map_err(|e| Error::Gpu(format!("cannot read a mapped buffer: {e}")))?;
+        bytemuck::pod_collect_to_vec(&view)
+    };
+    buffer.unmap();
+    Ok(data)
+}
+
+/// Reads a whole 2D texture of `bytes_per_pixel`-sized texels, tightly packed, row by row.
+pub fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture, bytes_per_pixel: u32) -> Result<Vec<u8>> {
+    let (width, height) = (texture.width(), texture.height());
+    let row_bytes = width * bytes_per_pixel;
+    let padded_row = row_bytes.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let size = u64::from(padded_row) * u64::from(height);
+    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("texture readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded_row),
+                rows_per_image: Some(height),
+            },
+        },
+        texture.size(),
+    );
+    ctx.queue.submit([encoder.finish()]);
+    let padded: Vec<u8> = map_buffer(ctx, &buffer, 0, size)?;
+    Ok(padded
+        .chunks_exact(padded_row as usize)
+        .flat_map(|row| &row[..row_bytes as usize])
+        .copied()
+        .collect())
+}

@@ -1,0 +1,366 @@
+//! The GPU scene: the CPU scene uploaded once into storage buffers and texture arrays, plus the
+//! per-frame uniform buffer, all in bind group 0 (`shading/scene_bindings.wgsl`) shared by every pass.
+
+use std::collections::BTreeSet;
+
+use glam::Mat3;
+use wgpu::util::DeviceExt;
+
+use super::{
+    frame::SceneLighting,
+    textures::{TextureArray, TextureSpace},
+    FrameUniforms, GpuContext,
+};
+use crate::{
+    scene::{AlphaMode, Light, LightKind, Material, Scene, TextureRef, Wrap},
+    Error, Result,
+};
+
+/// Keep in sync with `Draw` in `shading/types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuDraw {
+    pub world_from_local: [[f32; 4]; 4],
+    pub normal_from_local: [[f32; 4]; 3],
+    pub first_index: u32,
+    pub index_count: u32,
+    pub base_vertex: u32,
+    pub material: u32,
+}
+
+/// Keep in sync with `Material` in `shading/types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuMaterial {
+    pub base_color_factor: [f32; 4],
+    pub emissive_factor: [f32; 3],
+    pub alpha_cutoff: f32,
+    pub metallic_factor: f32,
+    pub roughness_factor: f32,
+    pub normal_scale: f32,
+    pub flags: u32,
+    pub base_color_layer: i32,
+    pub emissive_layer: i32,
+    pub metallic_roughness_layer: i32,
+    pub normal_layer: i32,
+    pub wrap_modes: u32,
+    pub _pad: [u32; 3],
+}
+
+const MATERIAL_ALPHA_MASK: u32 = 1;
+const MATERIAL_DOUBLE_SIDED: u32 = 2;
+const NO_TEXTURE: i32 = -1;
+
+/// Keep in sync with `Light` in `shading/types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuLight {
+    pub position: [f32; 3],
+    pub range: f32,
+    pub radiant: [f32; 3],
+    pub kind: u32,
+    pub direction: [f32; 3],
+    pub spot_scale: f32,
+    pub spot_offset: f32,
+    pub _pad: [u32; 3],
+}
+
+impl From<&Light> for GpuLight {
+    fn from(l: &Light) -> Self {
+        let (kind, spot_scale, spot_offset) = match l.kind {
+            LightKind::Point => (0, 0.0, 1.0),
+            LightKind::Spot { inner_cone_angle, outer_cone_angle } => {
+                // KHR_lights_punctual's cone parameterisation.
+                let scale = 1.0 / (inner_cone_angle.cos() - outer_cone_angle.cos()).max(1e-3);
+                (1, scale, -outer_cone_angle.cos() * scale)
+            }
+        };
+        Self {
+            position: l.position.to_array(),
+            range: l.range,
+            radiant: (l.color * l.intensity).to_array(),
+            kind,
+            direction: l.direction.normalize_or_zero().to_array(),
+            spot_scale,
+            spot_offset,
+            _pad: [0; 3],
+        }
+    }
+}
+
+/// How the raster pass must draw a primitive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct RasterState {
+    pub alpha_mask: bool,
+    pub double_sided: bool,
+}
+
+/// One instance of one primitive, as the raster pass draws it.
+#[derive(Clone, Copy, Debug)]
+pub struct DrawCommand {
+    pub draw_index: u32,
+    pub index_count: u32,
+    pub state: RasterState,
+}
+
+pub struct GpuScene {
+    pub bind_group_layout: wgpu::BindGroupLayout,
+    pub bind_group: wgpu::BindGroup,
+    pub frame_uniforms: wgpu::Buffer,
+    /// Sorted by raster state, so the raster pass switches pipelines at most four times.
+    pub draw_commands: Vec<DrawCommand>,
+    pub lighting: SceneLighting,
+    pub triangle_count: u64,
+    pub vertex_count: u64,
+}
+
+impl GpuScene {
+    /// Uploads `scene`. `max_texture_size` caps the layer size of the texture arrays.
+    pub fn upload(ctx: &GpuContext, scene: &Scene, max_texture_size: u32) -> Result<Self> {
+        scene.validate()?;
+        let device = &ctx.device;
+
+        let (srgb_used, linear_used) = texture_usage(&scene.materials);
+        let color_textures = TextureArray::upload(device, &ctx.queue, &scene.textures, &srgb_used, TextureSpace::Srgb, max_texture_size)?;
+        let data_textures = TextureArray::upload(device, &ctx.queue, &scene.textures, &linear_used, TextureSpace::Linear, max_texture_size)?;
+
+        let materials: Vec<GpuMaterial> = scene.materials.iter().map(|m| gpu_material(m, &color_textures, &data_textures)).collect();
+
+        // Concatenate every primitive's vertices and indices; record where each starts.
+        let mut vertices = Vec::new();
+        let mut indices = Vec::new();
+        let mut primitive_ranges = Vec::new();
+        for mesh in &scene.meshes {
+            primitive_ranges.push(
+                mesh.primitives
+                    .iter()
+                    .map(|p| {
+                        let range = (indices.len() as u32, p.indices.len() as u32, vertices.len() as u32);
+                        vertices.extend_from_slice(&p.vertices);
+                        indices.extend_from_slice(&p.indices);
+                        range
+                    })
+                    .collect::<Vec<_>>(),
+            );
+        }
+
+        let mut draws = Vec::new();
+        let mut draw_commands = Vec::new();
+        for instance in &scene.instances {
+            let normal_from_local = Mat3::from_mat4(instance.world_from_local).inverse().transpose();
+            let handedness = Mat3::from_mat4(instance.world_from_local).determinant().signum();
+            let normal_columns = [
+                normal_from_local.x_axis.extend(handedness),
+                normal_from_local.y_axis.extend(0.0),
+                normal_from_local.z_axis.extend(0.0),
+            ];
+            let mesh = &scene.meshes[instance.mesh];
+            for (primitive, &(first_index, index_count, base_vertex)) in mesh.primitives.iter().zip(&primitive_ranges[instance.mesh]) {
+                let material = &scene.materials[primitive.material];
+                draw_commands.push(DrawCommand {
+                    draw_index: draws.len() as u32,
+                    index_count,
+                    state: RasterState {
+                        alpha_mask: matches!(material.alpha_mode, AlphaMode::Mask { .. }),
+                        double_sided: material.double_sided,
+                    },
+                });
+                draws.push(GpuDraw {
+                    world_from_local: instance.world_from_local.to_cols_array_2d(),
+                    normal_from_local: normal_columns.map(|c| c.to_array()),
+                    first_index,
+                    index_count,
+                    base_vertex,
+                    material: primitive.material as u32,
+                });
+            }
+        }
+        draw_commands.sort_by_key(|d| d.state);
+
+        let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::from).collect();
+        let limit = ctx.limits.max_storage_buffer_binding_size;
+        let vertex_buffer = storage_buffer(device, "vertices", &vertices, limit)?;
+        let index_buffer = storage_buffer(device, "indices", &indices, limit)?;
+        let draw_buffer = storage_buffer(device, "draws", &draws, limit)?;
+        let material_buffer = storage_buffer(device, "materials", &materials, limit)?;
+        let light_buffer = storage_buffer(device, "lights", &lights, limit)?;
+        let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame uniforms"),
+            size: std::mem::size_of::<FrameUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("material sampler"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            anisotropy_clamp: 8,
+            ..Default::default()
+        });
+
+        let bind_group_layout = Self::create_bind_group_layout(device);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout: &bind_group_layout,
+            entries: &[
+                entry(0, frame_uniforms.as_entire_binding()),
+                entry(1, vertex_buffer.as_entire_binding()),
+                entry(2, index_buffer.as_entire_binding()),
+                entry(3, draw_buffer.as_entire_binding()),
+                entry(4, material_buffer.as_entire_binding()),
+                entry(5, light_buffer.as_entire_binding()),
+                entry(6, wgpu::BindingResource::TextureView(&color_textures.view)),
+                entry(7, wgpu::BindingResource::TextureView(&data_textures.view)),
+                entry(8, wgpu::BindingResource::Sampler(&sampler)),
+            ],
+        });
+        ctx.check_errors()?;
+
+        Ok(Self {
+            bind_group_layout,
+            bind_group,
+            frame_uniforms,
+            draw_commands,
+            lighting: SceneLighting {
+                sun: scene.sun,
+                ambient: scene.ambient,
+                exposure: scene.exposure,
+                light_count: lights.len() as u32,
+            },
+            triangle_count: scene.drawn_triangle_count() as u64,
+            vertex_count: vertices.len() as u64,
+        })
+    }
+
+    /// Keep in sync with `shading/scene_bindings.wgsl`.
+    fn create_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+        let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: all,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let texture_array = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: all,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            count: None,
+        };
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &[
+                // 0: frame uniforms
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: all,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                storage(1), // vertices
+                storage(2), // indices
+                storage(3), // draws
+                storage(4), // materials
+                storage(5), // lights
+                texture_array(6), // colour textures (sRGB)
+                texture_array(7), // data textures (linear)
+                // 8: material sampler
+                wgpu::BindGroupLayoutEntry {
+                    binding: 8,
+                    visibility: all,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        })
+    }
+
+    pub fn write_frame(&self, queue: &wgpu::Queue, uniforms: &FrameUniforms) {
+        queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(uniforms));
+    }
+}
+
+fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource }
+}
+
+/// A read-only storage buffer; empty arrays get one zeroed element because bindings cannot be empty.
+fn storage_buffer<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, data: &[T], limit: u64) -> Result<wgpu::Buffer> {
+    let bytes = std::mem::size_of_val(data) as u64;
+    if bytes > limit {
+        return Err(Error::InvalidScene(format!(
+            "the scene's {label} take {:.1} MiB, over this GPU's storage binding limit of {:.1} MiB; use a smaller scene or a GPU with a larger limit",
+            bytes as f64 / 1048576.0,
+            limit as f64 / 1048576.0
+        )));
+    }
+    let zero = [T::zeroed()];
+    let contents: &[T] = if data.is_empty() { &zero } else { data };
+    Ok(device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::cast_slice(contents),
+        usage: wgpu::BufferUsages::STORAGE,
+    }))
+}
+
+/// Scene textures used as colour (sRGB) and as data (linear); a texture used both ways is in both.
+fn texture_usage(materials: &[Material]) -> (Vec<usize>, Vec<usize>) {
+    let mut srgb = BTreeSet::new();
+    let mut linear = BTreeSet::new();
+    for m in materials {
+        srgb.extend([m.base_color_texture, m.emissive_texture].into_iter().flatten().map(|t| t.texture));
+        linear.extend([m.metallic_roughness_texture, m.normal_texture].into_iter().flatten().map(|t| t.texture));
+    }
+    (srgb.into_iter().collect(), linear.into_iter().collect())
+}
+
+fn wrap_bits(t: Option<TextureRef>) -> u32 {
+    let code = |w: Wrap| match w {
+        Wrap::Repeat => 0,
+        Wrap::MirroredRepeat => 1,
+        Wrap::ClampToEdge => 2,
+    };
+    t.map_or(0, |t| (code(t.wrap_v) << 2) | code(t.wrap_u))
+}
+
+fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuMaterial {
+    let layer = |t: Option<TextureRef>, array: &TextureArray| t.map_or(NO_TEXTURE, |t| array.layers[&t.texture]);
+    let (alpha_cutoff, mask_flag) = match m.alpha_mode {
+        AlphaMode::Mask { cutoff } => (cutoff, MATERIAL_ALPHA_MASK),
+        AlphaMode::Opaque | AlphaMode::Blend => (0.0, 0),
+    };
+    GpuMaterial {
+        base_color_factor: m.base_color_factor.to_array(),
+        emissive_factor: m.emissive_factor.to_array(),
+        alpha_cutoff,
+        metallic_factor: m.metallic_factor,
+        roughness_factor: m.roughness_factor,
+        normal_scale: m.normal_scale,
+        flags: mask_flag | if m.double_sided { MATERIAL_DOUBLE_SIDED } else { 0 },
+        base_color_layer: layer(m.base_color_texture, color),
+        emissive_layer: layer(m.emissive_texture, color),
+        metallic_roughness_layer: layer(m.metallic_roughness_texture, data),
+        normal_layer: layer(m.normal_texture, data),
+        // Slot order matches the WGSL: base colour, emissive, metallic-roughness, normal.
+        wrap_modes: wrap_bits(m.base_color_texture)
+            | wrap_bits(m.emissive_texture) << 8
+            | wrap_bits(m.metallic_roughness_texture) << 16
+            | wrap_bits(m.normal_texture) << 24,
+        _pad: [0; 3],
+    }
+}

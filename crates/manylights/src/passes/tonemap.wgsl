@@ -1,0 +1,79 @@
+// Exposure, tonemapping (ACES fit or AgX) and sRGB encoding of the HDR image into an 8-bit image.
+#include "shading/types.wgsl"
+
+@group(0) @binding(0) var<uniform> frame: FrameUniforms;
+@group(0) @binding(1) var hdr_input: texture_2d<f32>;
+@group(0) @binding(2) var ldr_output: texture_storage_2d<rgba8unorm, write>;
+
+// Stephen Hill's fit of the ACES RRT + ODT (sRGB primaries in and out).
+fn tonemap_aces(color: vec3<f32>) -> vec3<f32> {
+    let aces_input = mat3x3<f32>(
+        vec3<f32>(0.59719, 0.07600, 0.02840),
+        vec3<f32>(0.35458, 0.90834, 0.13383),
+        vec3<f32>(0.04823, 0.01566, 0.83777),
+    );
+    let aces_output = mat3x3<f32>(
+        vec3<f32>(1.60475, -0.10208, -0.00327),
+        vec3<f32>(-0.53108, 1.10813, -0.07276),
+        vec3<f32>(-0.07367, -0.00605, 1.07602),
+    );
+    let v = aces_input * color;
+    let a = v * (v + 0.0245786) - 0.000090537;
+    let b = v * (0.983729 * v + 0.4329510) + 0.238081;
+    return saturate(aces_output * (a / b));
+}
+
+// AgX (Troy Sobotka), base look, with Benjamin Wrensch's polynomial fit of the sigmoid.
+fn agx_contrast(x: vec3<f32>) -> vec3<f32> {
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    return 15.5 * x4 * x2 - 40.14 * x4 * x + 31.96 * x4 - 6.868 * x2 * x + 0.4298 * x2 + 0.1191 * x - 0.00232;
+}
+
+fn tonemap_agx(color: vec3<f32>) -> vec3<f32> {
+    let agx_inset = mat3x3<f32>(
+        vec3<f32>(0.842479062253094, 0.0423282422610123, 0.0423756549057051),
+        vec3<f32>(0.0784335999999992, 0.878468636469772, 0.0784336),
+        vec3<f32>(0.0792237451477643, 0.0791661274605434, 0.879142973793104),
+    );
+    let agx_outset = mat3x3<f32>(
+        vec3<f32>(1.19687900512017, -0.0528968517574562, -0.0529716355144438),
+        vec3<f32>(-0.0980208811401368, 1.15190312990417, -0.0980434501171241),
+        vec3<f32>(-0.0990297440797205, -0.0989611768448433, 1.15107367264116),
+    );
+    let min_ev = -12.47393;
+    let max_ev = 4.026069;
+    var v = agx_inset * max(color, vec3<f32>(1e-10));
+    v = saturate((log2(v) - min_ev) / (max_ev - min_ev));
+    v = agx_contrast(v);
+    v = agx_outset * v;
+    // The curve's output is display-encoded with a 2.2 power; return linear for the sRGB encoder.
+    return pow(max(v, vec3<f32>(0.0)), vec3<f32>(2.2));
+}
+
+fn linear_to_srgb(c: vec3<f32>) -> vec3<f32> {
+    let low = c * 12.92;
+    let high = 1.055 * pow(c, vec3<f32>(1.0 / 2.4)) - 0.055;
+    return select(high, low, c <= vec3<f32>(0.0031308));
+}
+
+@compute @workgroup_size(8, 8)
+fn tonemap(@builtin(global_invocation_id) id: vec3<u32>) {
+    if any(id.xy >= vec2<u32>(frame.viewport.xy)) {
+        return;
+    }
+    let hdr = textureLoad(hdr_input, id.xy, 0).rgb * frame.exposure;
+    var mapped: vec3<f32>;
+    switch frame.tonemapper {
+        case TONEMAP_AGX: {
+            mapped = tonemap_agx(hdr);
+        }
+        case TONEMAP_NONE: {
+            mapped = saturate(hdr);
+        }
+        default: {
+            mapped = tonemap_aces(hdr);
+        }
+    }
+    textureStore(ldr_output, id.xy, vec4<f32>(linear_to_srgb(saturate(mapped)), 1.0));
+}

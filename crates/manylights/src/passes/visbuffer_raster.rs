@@ -1,0 +1,111 @@
+//! Visibility-buffer raster: depth and (draw + 1, triangle) per pixel. See `visbuffer_raster.wgsl`.
+
+use std::collections::HashMap;
+
+use crate::gpu::{shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::gpu::scene::RasterState;
+use crate::Result;
+
+pub const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+pub struct VisbufferRaster {
+    pipelines: HashMap<RasterState, wgpu::RenderPipeline>,
+}
+
+impl VisbufferRaster {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Result<Self> {
+        let module = shaders::create_module(&ctx.device, &ShaderDesc::new("passes/visbuffer_raster.wgsl"))?;
+        let layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("visbuffer_raster"),
+            bind_group_layouts: &[Some(&scene.bind_group_layout)],
+            immediate_size: 0,
+        });
+        let mut pipelines = HashMap::new();
+        for alpha_mask in [false, true] {
+            for double_sided in [false, true] {
+                let state = RasterState { alpha_mask, double_sided };
+                pipelines.insert(state, Self::create_pipeline(&ctx.device, &layout, &module, state));
+            }
+        }
+        Ok(Self { pipelines })
+    }
+
+    fn create_pipeline(device: &wgpu::Device, layout: &wgpu::PipelineLayout, module: &wgpu::ShaderModule, state: RasterState) -> wgpu::RenderPipeline {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("visbuffer_raster"),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("visbuffer_vertex"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                front_face: wgpu::FrontFace::Ccw,
+                cull_mode: if state.double_sided { None } else { Some(wgpu::Face::Back) },
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                // Reverse Z: nearer is greater.
+                depth_compare: Some(wgpu::CompareFunction::Greater),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some(if state.alpha_mask { "visbuffer_masked" } else { "visbuffer_opaque" }),
+                compilation_options: Default::default(),
+                targets: &[Some(VISIBILITY_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&mut GpuTimer>,
+        scene: &GpuScene,
+        visibility: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("visbuffer_raster"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: visibility,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.map(|t| t.render_pass("visbuffer_raster")),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &scene.bind_group, &[]);
+        let mut current = None;
+        for command in &scene.draw_commands {
+            if current != Some(command.state) {
+                pass.set_pipeline(&self.pipelines[&command.state]);
+                current = Some(command.state);
+            }
+            pass.draw(0..command.index_count, command.draw_index..command.draw_index + 1);
+        }
+    }
+}

@@ -1,0 +1,32 @@
+//! Frame graphs: each pipeline orders the passes of one frame, read top to bottom in its own file.
+//! Today: the visibility-buffer pipeline. Forward and deferred pipelines plug in beside it, reusing
+//! the same shading core; light enumeration methods plug in through `LightMethod`.
+
+pub mod visbuffer;
+
+pub use visbuffer::VisbufferPipeline;
+
+/// How the shading core finds the local lights that reach a point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum LightMethod {
+    /// Loop over every light.
+    #[default]
+    Brute,
+}
+
+impl LightMethod {
+    pub const ALL: [LightMethod; 1] = [LightMethod::Brute];
+
+    /// The WGSL module that defines `shade_local_lights` for this method.
+    pub fn enumeration_module(self) -> &'static str {
+        match self {
+            LightMethod::Brute => "shading/enumerate/brute.wgsl",
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            LightMethod::Brute => "brute",
+        }
+    }
+}

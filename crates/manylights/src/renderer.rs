@@ -1,0 +1,95 @@
+//! The renderer: a device, an uploaded scene and a pipeline. `render` draws one frame for a camera;
+//! images are read back on request so benchmarks time frames without readback in the way.
+
+use crate::{
+    config::RenderConfig,
+    gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
+    pipelines::VisbufferPipeline,
+    scene::{Camera, Scene},
+    Result,
+};
+
+pub struct Renderer {
+    pub ctx: GpuContext,
+    pub scene: GpuScene,
+    pub config: RenderConfig,
+    pipeline: VisbufferPipeline,
+    timer: Option<GpuTimer>,
+}
+
+/// A read-back image, rows top to bottom.
+#[derive(Clone, Debug)]
+pub struct Image<T> {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<T>,
+}
+
+impl Renderer {
+    pub fn new(ctx: GpuContext, scene: &Scene, config: RenderConfig) -> Result<Self> {
+        config.validate(&ctx)?;
+        let gpu_scene = GpuScene::upload(&ctx, scene, config.max_texture_size)?;
+        let pipeline = VisbufferPipeline::new(&ctx, &gpu_scene, config.light_method, config.width, config.height)?;
+        let timer = GpuTimer::new(&ctx);
+        ctx.check_errors()?;
+        Ok(Self {
+            ctx,
+            scene: gpu_scene,
+            config,
+            pipeline,
+            timer,
+        })
+    }
+
+    /// Whether `render` returns per-pass GPU timings.
+    pub fn has_timestamps(&self) -> bool {
+        self.timer.is_some()
+    }
+
+    /// Renders one frame and waits for it; returns per-pass GPU milliseconds (empty without
+    /// timestamp support).
+    pub fn render(&mut self, camera: &Camera) -> Result<PassTimings> {
+        let uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.lighting, self.config.tonemapper);
+        self.scene.write_frame(&self.ctx.queue, &uniforms);
+        let mut encoder = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        if let Some(timer) = &mut self.timer {
+            timer.begin_frame();
+        }
+        self.pipeline.record(&mut encoder, self.timer.as_mut(), &self.scene);
+        if let Some(timer) = &self.timer {
+            timer.resolve(&mut encoder);
+        }
+        self.ctx.queue.submit([encoder.finish()]);
+        let timings = match &self.timer {
+            Some(timer) => timer.read(&self.ctx)?,
+            None => {
+                self.ctx.wait_idle()?;
+                Vec::new()
+            }
+        };
+        self.ctx.check_errors()?;
+        Ok(timings)
+    }
+
+    /// The last frame after tonemapping: RGBA8, sRGB-encoded.
+    pub fn read_ldr(&self) -> Result<Image<[u8; 4]>> {
+        let bytes = readback::read_texture(&self.ctx, &self.pipeline.targets.ldr, 4)?;
+        Ok(self.image(bytemuck::cast_slice(&bytes).to_vec()))
+    }
+
+    /// The last frame before exposure and tonemapping: linear RGBA radiance.
+    pub fn read_hdr(&self) -> Result<Image<[f32; 4]>> {
+        let bytes = readback::read_texture(&self.ctx, &self.pipeline.targets.hdr, 8)?;
+        let halves: &[half::f16] = bytemuck::cast_slice(&bytes);
+        let pixels = halves.chunks_exact(4).map(|p| [p[0].to_f32(), p[1].to_f32(), p[2].to_f32(), p[3].to_f32()]).collect();
+        Ok(self.image(pixels))
+    }
+
+    fn image<T>(&self, pixels: Vec<T>) -> Image<T> {
+        Image {
+            width: self.config.width,
+            height: self.config.height,
+            pixels,
+        }
+    }
+}

@@ -1,0 +1,100 @@
+#include "shading/scene_bindings.wgsl"
+#include "shading/shading_input.wgsl"
+
+// Material evaluation: glTF metallic-roughness textures sampled with explicit gradients, so the same
+// code runs in compute (visibility-buffer resolve, ray hits) and fragment stages.
+
+// Texture coordinates and their screen-space derivatives.
+struct UvGradients {
+    uv: vec2<f32>,
+    ddx: vec2<f32>,
+    ddy: vec2<f32>,
+}
+
+fn wrap_coordinate(x: f32, mode: u32, size: f32) -> f32 {
+    switch mode {
+        case WRAP_MIRRORED_REPEAT: {
+            let t = fract(x * 0.5) * 2.0;
+            return select(t, 2.0 - t, t > 1.0);
+        }
+        case WRAP_CLAMP_TO_EDGE: {
+            // Clamp to texel centres: the sampler repeats, and must not blend in the opposite edge.
+            let half_texel = 0.5 / size;
+            return clamp(x, half_texel, 1.0 - half_texel);
+        }
+        default: {
+            return x;
+        }
+    }
+}
+
+fn wrap_uv(uv: vec2<f32>, material: Material, slot: u32, size: f32) -> vec2<f32> {
+    let modes = (material.wrap_modes >> (slot * 8u)) & 0xFu;
+    return vec2<f32>(wrap_coordinate(uv.x, modes & 3u, size), wrap_coordinate(uv.y, modes >> 2u, size));
+}
+
+fn sample_color(layer: i32, material: Material, slot: u32, g: UvGradients) -> vec4<f32> {
+    let size = f32(textureDimensions(color_textures).x);
+    return textureSampleGrad(color_textures, material_sampler, wrap_uv(g.uv, material, slot, size), layer, g.ddx, g.ddy);
+}
+
+fn sample_data(layer: i32, material: Material, slot: u32, g: UvGradients) -> vec4<f32> {
+    let size = f32(textureDimensions(data_textures).x);
+    return textureSampleGrad(data_textures, material_sampler, wrap_uv(g.uv, material, slot, size), layer, g.ddx, g.ddy);
+}
+
+// Base colour with alpha; used for alpha masking too.
+fn material_base_color(material: Material, g: UvGradients) -> vec4<f32> {
+    var color = material.base_color_factor;
+    if material.base_color_layer != NO_TEXTURE {
+        color *= sample_color(material.base_color_layer, material, 0u, g);
+    }
+    return color;
+}
+
+// The surface frame at a point: interpolated, in world space.
+struct SurfaceFrame {
+    normal: vec3<f32>,
+    tangent: vec3<f32>,
+    bitangent_sign: f32,
+}
+
+// Fills a ShadingInput from a material and the interpolated surface.
+fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, position: vec3<f32>, view_dir: vec3<f32>) -> ShadingInput {
+    var s: ShadingInput;
+    s.position = position;
+    s.view_dir = view_dir;
+
+    let base = material_base_color(material, g);
+    s.base_color = base.rgb;
+    s.alpha = base.a;
+
+    var metallic = material.metallic_factor;
+    var roughness = material.roughness_factor;
+    if material.metallic_roughness_layer != NO_TEXTURE {
+        let mr = sample_data(material.metallic_roughness_layer, material, 2u, g);
+        roughness *= mr.g;
+        metallic *= mr.b;
+    }
+    s.metallic = saturate(metallic);
+    s.roughness = saturate(roughness);
+
+    var emissive = material.emissive_factor;
+    if material.emissive_layer != NO_TEXTURE {
+        emissive *= sample_color(material.emissive_layer, material, 1u, g).rgb;
+    }
+    s.emissive = emissive;
+
+    var normal = surface.normal;
+    if material.normal_layer != NO_TEXTURE {
+        let t = normalize(surface.tangent - surface.normal * dot(surface.normal, surface.tangent));
+        let b = cross(surface.normal, t) * surface.bitangent_sign;
+        var n_ts = sample_data(material.normal_layer, material, 3u, g).xyz * 2.0 - 1.0;
+        n_ts = vec3<f32>(n_ts.xy * material.normal_scale, n_ts.z);
+        let mapped = t * n_ts.x + b * n_ts.y + surface.normal * n_ts.z;
+        // A zero-length result (blank normal map texel) keeps the interpolated normal.
+        normal = select(surface.normal, normalize(mapped), dot(mapped, mapped) > 1e-12);
+    }
+    s.normal = normal;
+    return s;
+}

@@ -1,0 +1,26 @@
+// The shading core: one function, used by every pipeline, that lights a `ShadingInput`.
+// The light enumeration module (`shading/enumerate/*.wgsl`) is chosen when the shader is composed.
+#include "shading/scene_bindings.wgsl"
+#include "shading/shading_input.wgsl"
+#include "shading/brdf.wgsl"
+#include "shading/lights.wgsl"
+#include "$LIGHT_ENUMERATION"
+
+// Outgoing radiance towards the viewer.
+fn shade(s: ShadingInput) -> vec3<f32> {
+    // Ambient stands in for indirect light: diffuse only, with the metal's tint kept as a crude
+    // specular term so metals do not turn black.
+    let ambient_albedo = mix(s.base_color, s.base_color * 0.5, s.metallic);
+    var radiance = s.emissive + frame.ambient.rgb * ambient_albedo;
+    if frame.sun_direction.w > 0.0 {
+        radiance += frame.sun_radiance.rgb * brdf_times_cosine(s, -frame.sun_direction.xyz);
+    }
+    radiance += shade_local_lights(s);
+    return radiance;
+}
+
+// Radiance seen where no geometry was drawn: a simple sky from the ambient colour.
+fn sky_radiance(view_ray_dir: vec3<f32>) -> vec3<f32> {
+    let up = saturate(view_ray_dir.y * 0.5 + 0.5);
+    return frame.ambient.rgb * mix(0.6, 1.6, up);
+}

@@ -1,0 +1,16 @@
+// The surface every pipeline hands to the shading core: built by the visibility-buffer resolve today,
+// and by G-buffer decode and forward fragments later. Decals modify it before `shade`.
+
+struct ShadingInput {
+    position: vec3<f32>,
+    // Shading normal (after normal mapping), unit, facing the viewer's side.
+    normal: vec3<f32>,
+    // Unit vector from the surface towards the eye.
+    view_dir: vec3<f32>,
+    base_color: vec3<f32>,
+    alpha: f32,
+    metallic: f32,
+    // Perceptual roughness (alpha = roughness²).
+    roughness: f32,
+    emissive: vec3<f32>,
+}

@@ -1,0 +1,96 @@
+// GPU scene types. Keep in sync with `gpu/scene.rs` (GpuVertex = scene::Vertex, GpuDraw, GpuMaterial,
+// GpuLight) and `gpu/frame.rs` (FrameUniforms): field order, sizes and padding match the repr(C) structs.
+//
+// Spaces: `world_from_local` maps a mesh into the world, `clip_from_world` the world into reverse-Z clip
+// space (near → 1, far → 0). Directions named `*_dir` are unit vectors.
+
+struct Vertex {
+    position: vec3<f32>,
+    u: f32,
+    normal: vec3<f32>,
+    v: f32,
+    // xyz tangent, w bitangent sign
+    tangent: vec4<f32>,
+}
+
+// One instance of one mesh primitive.
+struct Draw {
+    world_from_local: mat4x4<f32>,
+    // Inverse transpose of the upper 3×3 (columns in xyz); w of column 0 holds the sign of the
+    // determinant, which flips the bitangent of mirrored instances.
+    normal_from_local: mat3x4<f32>,
+    first_index: u32,
+    index_count: u32,
+    base_vertex: u32,
+    material: u32,
+}
+
+const MATERIAL_ALPHA_MASK: u32 = 1u;
+const MATERIAL_DOUBLE_SIDED: u32 = 2u;
+const NO_TEXTURE: i32 = -1;
+
+// Texture wrap modes, two bits per axis: (wrap_v << 2) | wrap_u, per texture slot.
+const WRAP_REPEAT: u32 = 0u;
+const WRAP_MIRRORED_REPEAT: u32 = 1u;
+const WRAP_CLAMP_TO_EDGE: u32 = 2u;
+
+struct Material {
+    base_color_factor: vec4<f32>,
+    emissive_factor: vec3<f32>,
+    alpha_cutoff: f32,
+    metallic_factor: f32,
+    roughness_factor: f32,
+    normal_scale: f32,
+    flags: u32,
+    // Layers in `color_textures` (base colour, emissive) and `data_textures` (metallic-roughness,
+    // normal); NO_TEXTURE when absent.
+    base_color_layer: i32,
+    emissive_layer: i32,
+    metallic_roughness_layer: i32,
+    normal_layer: i32,
+    // Four bytes, one per slot in the order above, each `(wrap_v << 2) | wrap_u`.
+    wrap_modes: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+const LIGHT_POINT: u32 = 0u;
+const LIGHT_SPOT: u32 = 1u;
+
+struct Light {
+    position: vec3<f32>,
+    range: f32,
+    // Colour × intensity (candela).
+    radiant: vec3<f32>,
+    kind: u32,
+    // Spot axis: the direction the light points.
+    direction: vec3<f32>,
+    // Spot cone as glTF's scale/offset: attenuation = saturate(cos θ · scale + offset)².
+    spot_scale: f32,
+    spot_offset: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+const TONEMAP_ACES: u32 = 0u;
+const TONEMAP_AGX: u32 = 1u;
+const TONEMAP_NONE: u32 = 2u;
+
+struct FrameUniforms {
+    clip_from_world: mat4x4<f32>,
+    world_from_clip: mat4x4<f32>,
+    camera_position: vec4<f32>,
+    // width, height, 1 / width, 1 / height
+    viewport: vec4<f32>,
+    // xyz: direction the sunlight travels; w: 1 when there is a sun
+    sun_direction: vec4<f32>,
+    // rgb: colour × illuminance
+    sun_radiance: vec4<f32>,
+    ambient: vec4<f32>,
+    light_count: u32,
+    exposure: f32,
+    tonemapper: u32,
+    _pad0: u32,
+}

@@ -1,0 +1,95 @@
+//! Shared helpers for the GPU tests: a renderer on whatever adapter the environment selects
+//! (`scripts/test.sh` sets WGPU_ADAPTER_NAME=llvmpipe), small scenes, image statistics.
+
+#![allow(dead_code)] // each test binary uses a different subset
+
+use glam::{Mat4, Vec3, Vec4};
+use manylights::{
+    config::{RenderConfig, Tonemapper},
+    gpu::GpuContext,
+    renderer::{Image, Renderer},
+    scene::{Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Vertex},
+};
+
+pub const WIDTH: u32 = 256;
+pub const HEIGHT: u32 = 144;
+
+pub fn renderer(scene: &Scene, width: u32, height: u32) -> Renderer {
+    let ctx = GpuContext::new().expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)");
+    let config = RenderConfig {
+        width,
+        height,
+        tonemapper: Tonemapper::Aces,
+        max_texture_size: 256,
+        ..Default::default()
+    };
+    Renderer::new(ctx, scene, config).expect("renderer")
+}
+
+/// Renders one frame; returns the tonemapped and the linear image.
+pub fn render(scene: &Scene, camera: &Camera) -> (Image<[u8; 4]>, Image<[f32; 4]>) {
+    let mut r = renderer(scene, WIDTH, HEIGHT);
+    r.render(camera).expect("frame");
+    (r.read_ldr().expect("ldr"), r.read_hdr().expect("hdr"))
+}
+
+pub fn luminance(p: [f32; 4]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+/// A unit quad in the XY plane facing +Z, scaled by `world_from_local`.
+pub fn quad_mesh() -> Mesh {
+    let v = |x: f32, y: f32| Vertex {
+        position: [x, y, 0.0],
+        u: x * 0.5 + 0.5,
+        normal: [0.0, 0.0, 1.0],
+        v: 0.5 - y * 0.5,
+        tangent: [1.0, 0.0, 0.0, 1.0],
+    };
+    Mesh {
+        name: "quad".into(),
+        primitives: vec![Primitive {
+            vertices: vec![v(-1.0, -1.0), v(1.0, -1.0), v(1.0, 1.0), v(-1.0, 1.0)],
+            indices: vec![0, 1, 2, 0, 2, 3],
+            material: 0,
+        }],
+    }
+}
+
+/// A white, fully rough wall 20 m wide at z = 0 facing +Z, no sun, no ambient, and a camera 4 m in
+/// front of it looking straight at it.
+pub fn wall_scene(lights: Vec<Light>) -> (Scene, Camera) {
+    let scene = Scene {
+        meshes: vec![quad_mesh()],
+        materials: vec![Material {
+            base_color_factor: Vec4::ONE,
+            metallic_factor: 0.0,
+            roughness_factor: 1.0,
+            ..Default::default()
+        }],
+        instances: vec![Instance {
+            mesh: 0,
+            world_from_local: Mat4::from_scale(Vec3::new(10.0, 10.0, 1.0)),
+        }],
+        lights,
+        ambient: Vec3::ZERO,
+        ..Default::default()
+    };
+    let camera = Camera::look_at("front", Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 60f32.to_radians(), 0.1);
+    (scene, camera)
+}
+
+pub fn point_light(position: Vec3, intensity: f32, range: f32) -> Light {
+    Light {
+        kind: LightKind::Point,
+        position,
+        direction: Vec3::NEG_Z,
+        color: Vec3::ONE,
+        intensity,
+        range,
+    }
+}
+
+pub fn pixel<T: Copy>(image: &Image<T>, x: u32, y: u32) -> T {
+    image.pixels[(y * image.width + x) as usize]
+}

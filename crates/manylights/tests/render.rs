@@ -1,0 +1,159 @@
+//! GPU rendering tests (lavapipe in CI, ≤ 256×144): the demo renders lit, varied and deterministic
+//! images that match the golden image; lights really light; the shading matches the analytic BRDF.
+
+mod common;
+
+use std::path::PathBuf;
+
+use common::*;
+use glam::Vec3;
+use manylights::scene::{demo::demo_scene, Light, LightKind};
+
+fn demo_frame() -> (manylights::renderer::Image<[u8; 4]>, manylights::renderer::Image<[f32; 4]>) {
+    let scene = demo_scene();
+    render(&scene, &scene.cameras[0])
+}
+
+#[test]
+fn demo_is_lit_varied_and_deterministic() {
+    let (ldr, hdr) = demo_frame();
+    let (again, _) = demo_frame();
+    assert_eq!(ldr.pixels, again.pixels, "two renders of the demo differ");
+
+    let lum: Vec<f32> = ldr.pixels.iter().map(|p| luminance([p[0] as f32, p[1] as f32, p[2] as f32, 0.0]) / 255.0).collect();
+    let mean = lum.iter().sum::<f32>() / lum.len() as f32;
+    let variance = lum.iter().map(|l| (l - mean).powi(2)).sum::<f32>() / lum.len() as f32;
+    assert!(mean > 0.15 && mean < 0.85, "demo mean luminance {mean} is too dark or too bright");
+    assert!(variance.sqrt() > 0.08, "demo is nearly uniform (std dev {})", variance.sqrt());
+    let distinct: std::collections::HashSet<[u8; 4]> = ldr.pixels.iter().copied().collect();
+    assert!(distinct.len() > 2000, "only {} distinct colours", distinct.len());
+    assert!(hdr.pixels.iter().all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)), "HDR has NaN, inf or negative values");
+}
+
+/// Mean absolute difference per channel (0–255) and the fraction of pixels differing by more than
+/// `threshold` in any channel.
+fn compare(a: &[[u8; 4]], b: &[[u8; 4]], threshold: u8) -> (f64, f64) {
+    let mut sum = 0u64;
+    let mut over = 0usize;
+    for (p, q) in a.iter().zip(b) {
+        let d: Vec<u8> = (0..3).map(|c| p[c].abs_diff(q[c])).collect();
+        sum += d.iter().map(|&x| u64::from(x)).sum::<u64>();
+        over += usize::from(d.iter().any(|&x| x > threshold));
+    }
+    (sum as f64 / (a.len() * 3) as f64, over as f64 / a.len() as f64)
+}
+
+#[test]
+fn demo_matches_golden_image() {
+    let golden_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden/demo_256x144.png");
+    let (ldr, _) = demo_frame();
+    let actual = image::RgbaImage::from_raw(ldr.width, ldr.height, ldr.pixels.concat()).unwrap();
+    if std::env::var_os("MANYLIGHTS_UPDATE_GOLDEN").is_some() {
+        actual.save(&golden_path).unwrap();
+        return;
+    }
+    let golden = image::open(&golden_path).expect("golden image (regenerate with MANYLIGHTS_UPDATE_GOLDEN=1)").to_rgba8();
+    assert_eq!(golden.dimensions(), actual.dimensions());
+    let to_pixels = |img: &image::RgbaImage| img.pixels().map(|p| p.0).collect::<Vec<_>>();
+    let (mean, fraction_over) = compare(&to_pixels(&golden), &to_pixels(&actual), 16);
+    // Tolerance: driver and LLVM versions may change rounding, never the picture.
+    if mean > 1.0 || fraction_over > 0.005 {
+        let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+        let diff = image::RgbaImage::from_fn(actual.width(), actual.height(), |x, y| {
+            let (a, g) = (actual.get_pixel(x, y), golden.get_pixel(x, y));
+            let d = (0..3).map(|c| a[c].abs_diff(g[c])).max().unwrap();
+            image::Rgba([d.saturating_mul(8), d.saturating_mul(8), d.saturating_mul(8), 255])
+        });
+        actual.save(out.join("demo_actual.png")).unwrap();
+        diff.save(out.join("demo_diff.png")).unwrap();
+        panic!(
+            "demo differs from the golden image: mean {mean:.3}/255, {:.3}% of pixels over 16/255; see {}",
+            fraction_over * 100.0,
+            out.join("demo_diff.png").display()
+        );
+    }
+}
+
+#[test]
+fn a_light_before_a_wall_brightens_it_and_removing_it_darkens_it() {
+    let light = point_light(Vec3::new(1.0, 0.5, 1.0), 5.0, 4.0);
+    let (scene_lit, camera) = wall_scene(vec![light]);
+    let (scene_dark, _) = wall_scene(vec![]);
+    let (_, lit) = render(&scene_lit, &camera);
+    let (_, dark) = render(&scene_dark, &camera);
+
+    let mean = |img: &manylights::renderer::Image<[f32; 4]>| img.pixels.iter().map(|&p| luminance(p)).sum::<f32>() / img.pixels.len() as f32;
+    assert!(mean(&dark) < 1e-6, "with no light, no sun and no ambient the wall must be black, mean {}", mean(&dark));
+    assert!(mean(&lit) > 0.01, "the light does not light the wall (mean {})", mean(&lit));
+
+    // The brightest pixel is where the light is closest: its projection onto the wall.
+    let (brightest, _) = lit.pixels.iter().enumerate().max_by(|a, b| luminance(*a.1).total_cmp(&luminance(*b.1))).unwrap();
+    let (bx, by) = ((brightest as u32 % WIDTH) as f32, (brightest as u32 / WIDTH) as f32);
+    let clip = camera.clip_from_view(WIDTH as f32 / HEIGHT as f32) * camera.world_from_view.inverse() * Vec3::new(1.0, 0.5, 0.0).extend(1.0);
+    let expected = ((clip.x / clip.w * 0.5 + 0.5) * WIDTH as f32, (0.5 - clip.y / clip.w * 0.5) * HEIGHT as f32);
+    assert!((bx - expected.0).abs() <= 2.0 && (by - expected.1).abs() <= 2.0, "brightest at ({bx}, {by}), expected near {expected:?}");
+
+    // Beyond the range nothing is lit: the wall's far corner is black.
+    assert_eq!(luminance(pixel(&lit, 0, HEIGHT - 1)), 0.0);
+}
+
+#[test]
+fn spot_light_lights_only_inside_its_cone() {
+    let spot = Light {
+        kind: LightKind::Spot {
+            inner_cone_angle: 10f32.to_radians(),
+            outer_cone_angle: 20f32.to_radians(),
+        },
+        position: Vec3::new(0.0, 0.0, 2.0),
+        direction: Vec3::NEG_Z,
+        color: Vec3::ONE,
+        intensity: 10.0,
+        range: 10.0,
+    };
+    let (scene, camera) = wall_scene(vec![spot]);
+    let (_, hdr) = render(&scene, &camera);
+    // Centre of the image = the wall point on the spot's axis; the cone's edge on the wall lies at
+    // 2 m · tan 20° ≈ 0.73 m, about 25 px from the centre at this field of view.
+    let centre = luminance(pixel(&hdr, WIDTH / 2, HEIGHT / 2));
+    let outside = luminance(pixel(&hdr, WIDTH / 2 + 40, HEIGHT / 2));
+    assert!(centre > 0.05, "spot centre {centre}");
+    assert_eq!(outside, 0.0, "outside the cone must be unlit");
+}
+
+/// The glTF BRDF and falloff, on the CPU, for a white Lambert-plus-GGX wall (roughness 1, metallic 0).
+fn reference_radiance(light: &Light, point: Vec3, normal: Vec3, eye: Vec3) -> f32 {
+    use std::f32::consts::PI;
+    let to_light = light.position - point;
+    let d2 = to_light.length_squared();
+    let l = to_light.normalize();
+    let v = (eye - point).normalize();
+    let h = (l + v).normalize();
+    let (n_l, n_v, n_h, v_h) = (normal.dot(l), normal.dot(v), normal.dot(h), v.dot(h));
+    let ratio2 = d2 / (light.range * light.range);
+    let window = (1.0 - ratio2 * ratio2).clamp(0.0, 1.0).powi(2);
+    let alpha = 1.0f32; // roughness 1
+    let d = alpha * alpha / (PI * ((n_h * n_h) * (alpha * alpha - 1.0) + 1.0).powi(2));
+    let gv = n_l * (n_v * n_v * (1.0 - alpha * alpha) + alpha * alpha).sqrt();
+    let gl = n_v * (n_l * n_l * (1.0 - alpha * alpha) + alpha * alpha).sqrt();
+    let vis = 0.5 / (gv + gl);
+    let fresnel = 0.04 + 0.96 * (1.0 - v_h).powi(5);
+    let brdf = d * vis * fresnel + (1.0 - fresnel) / PI;
+    light.intensity * window / d2 * brdf * n_l
+}
+
+#[test]
+fn shading_matches_the_analytic_brdf_and_falloff() {
+    let light = point_light(Vec3::new(0.3, -0.2, 1.5), 3.0, 5.0);
+    let (scene, camera) = wall_scene(vec![light]);
+    let (_, hdr) = render(&scene, &camera);
+    for (x, y) in [(WIDTH / 2, HEIGHT / 2), (100, 40), (180, 100)] {
+        // The point on the wall under the pixel centre.
+        let ndc = glam::Vec2::new((x as f32 + 0.5) / WIDTH as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / HEIGHT as f32 * 2.0);
+        let half_height = (30f32.to_radians()).tan() * 4.0;
+        let point = Vec3::new(ndc.x * half_height * WIDTH as f32 / HEIGHT as f32, ndc.y * half_height, 0.0);
+        let expected = reference_radiance(&light, point, Vec3::Z, camera.position());
+        let actual = pixel(&hdr, x, y)[1];
+        let error = (actual - expected).abs() / expected.max(1e-6);
+        assert!(error < 0.01, "pixel ({x}, {y}): GPU {actual}, reference {expected}, relative error {error}");
+    }
+}
