@@ -12,9 +12,29 @@ pub mod gltf;
 pub mod scene_file;
 mod tangents;
 
+use std::path::Path;
+
 use glam::{Mat4, Vec3, Vec4};
 
 pub use camera::{Camera, Projection};
+
+/// Illuminance (intensity / d²) at which a light without an explicit range is cut off: its range is
+/// derived with [`Light::range_from_cutoff`] and this value.
+pub const DEFAULT_LIGHT_CUTOFF: f32 = 0.01;
+
+/// Loads a scene file, choosing the loader from the extension: `.gltf`/`.glb` (glTF 2.0) or `.toml`
+/// (a [`scene_file`] that may reference a glTF and add lights).
+pub fn load_path(path: &Path) -> crate::Result<Scene> {
+    let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match extension.as_deref() {
+        Some("gltf" | "glb") => self::gltf::import(path),
+        Some("toml") => scene_file::load(path),
+        _ => Err(crate::Error::InvalidConfig(format!(
+            "{}: unknown scene type; expected .gltf, .glb or .toml",
+            path.display()
+        ))),
+    }
+}
 
 /// One vertex, laid out exactly as the shaders read it (`shading/types.wgsl`, `Vertex`).
 #[repr(C)]
@@ -325,4 +345,56 @@ pub fn validate_light(l: &Light) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+pub(crate) mod test_support {
+    use std::path::{Path, PathBuf};
+
+    /// The shared test scenes (see `shared/assets/README.md`).
+    pub fn assets_dir() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets")
+    }
+
+    /// A directory for one test's files, removed when dropped.
+    pub struct TempDir(PathBuf);
+
+    impl std::ops::Deref for TempDir {
+        type Target = Path;
+        fn deref(&self) -> &Path {
+            &self.0
+        }
+    }
+
+    impl Drop for TempDir {
+        fn drop(&mut self) {
+            // Best effort: a leftover directory in the system temp dir is harmless.
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+
+    /// A fresh, empty directory named after the test (and process, so parallel runs do not collide).
+    pub fn temp_dir(test: &str) -> TempDir {
+        let dir = std::env::temp_dir().join(format!("manylights-{}-{test}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("create a temporary directory");
+        TempDir(dir)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn load_path_dispatches_on_extension() {
+        let err = load_path(Path::new("scene.obj")).unwrap_err();
+        assert!(err.to_string().contains("expected .gltf, .glb or .toml"), "{err}");
+        // The extension is matched case-insensitively: a missing .GLB is the glTF loader's I/O error.
+        let dir = test_support::temp_dir("load_path");
+        let missing = load_path(&dir.join("missing.GLB"));
+        assert!(matches!(missing, Err(crate::Error::Io { .. })), "{missing:?}");
+        let scene = load_path(&test_support::assets_dir().join("box/Box.glb")).unwrap();
+        assert_eq!(scene.drawn_triangle_count(), 12);
+    }
 }

@@ -1,0 +1,1018 @@
+//! glTF 2.0 import (`.gltf` with external or embedded buffers, `.glb`) into a [`Scene`].
+//!
+//! The default scene's node hierarchy is flattened into instances; a mesh used by several nodes stays
+//! one [`Mesh`]. Triangle strips and fans become lists, missing normals become flat normals, missing
+//! tangents come from MikkTSpace, and every image is decoded to RGBA8 (in parallel: decoding dominates
+//! load time). Cameras and `KHR_lights_punctual` lights on nodes are placed with their node's world
+//! transform.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use ::gltf::buffer;
+use ::gltf::khr_lights_punctual::Kind;
+use ::gltf::mesh::{Mode, Semantic};
+use ::gltf::{Document, Node};
+use glam::{Mat4, Quat, Vec3, Vec4};
+
+use super::{
+    tangents, AlphaMode, Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Projection,
+    Scene, Sun, Texture, TextureRef, Vertex, Wrap, DEFAULT_LIGHT_CUTOFF,
+};
+use crate::{Error, Result};
+
+/// Extensions a file may require; every other optional extension is ignored.
+const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+
+/// Loads a glTF 2.0 file and everything it references (buffers and images next to it).
+pub fn import(path: &Path) -> Result<Scene> {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let invalid = |reason: String| Error::Gltf {
+        path: path.to_owned(),
+        reason,
+    };
+    // Parsed without validation first: the gltf crate reports an unsupported required extension as
+    // a generic validation failure, and this check names it.
+    let ::gltf::Gltf { document, blob } =
+        ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(e.to_string()))?;
+    check_required_extensions(path, &document)?;
+    let document = Document::from_json(document.into_json()).map_err(|e| invalid(e.to_string()))?;
+
+    check_sources(&document).map_err(invalid)?;
+
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffers = load_buffers(&document, base, blob).map_err(invalid)?;
+    check_views(&document, &buffers).map_err(invalid)?;
+    let textures = decode_images(&document, base, &buffers).map_err(invalid)?;
+    let scene = build_scene(&document, &buffers, textures).map_err(invalid)?;
+    scene.validate()?;
+    Ok(scene)
+}
+
+fn check_required_extensions(path: &Path, document: &Document) -> Result<()> {
+    match document
+        .extensions_required()
+        .find(|e| !SUPPORTED_EXTENSIONS.contains(e))
+    {
+        Some(extension) => Err(Error::UnsupportedGltfExtension {
+            path: path.to_owned(),
+            extension: extension.to_owned(),
+            supported: SUPPORTED_EXTENSIONS.join(", "),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Like `gltf::import_buffers`, with errors that say which buffer failed.
+fn load_buffers(
+    document: &Document,
+    base: &Path,
+    mut blob: Option<Vec<u8>>,
+) -> Result<Vec<buffer::Data>, String> {
+    document
+        .buffers()
+        .map(|buffer| {
+            let what = match buffer.source() {
+                buffer::Source::Bin => "the GLB binary chunk".to_owned(),
+                buffer::Source::Uri(uri) if uri.starts_with("data:") => "a data URI".to_owned(),
+                buffer::Source::Uri(uri) => format!("`{uri}`"),
+            };
+            let data = buffer::Data::from_source_and_blob(buffer.source(), Some(base), &mut blob)
+                .map_err(|e| format!("buffer {} ({what}): {e}", buffer.index()))?;
+            if data.len() < buffer.length() {
+                return Err(format!(
+                    "buffer {} ({what}) has {} bytes, the file declares {}",
+                    buffer.index(),
+                    data.len(),
+                    buffer.length()
+                ));
+            }
+            Ok(data)
+        })
+        .collect()
+}
+
+/// Checks what the gltf crate's validation leaves out but its loaders would panic on: images without
+/// a source, URIs whose percent-decoding is not UTF-8, empty accessors.
+fn check_sources(document: &Document) -> Result<(), String> {
+    let json = document.as_json();
+    for (i, image) in json.images.iter().enumerate() {
+        if image.buffer_view.is_some() && image.mime_type.is_none() {
+            return Err(format!("image {i} has a bufferView but no mimeType"));
+        }
+        if image.buffer_view.is_none() && image.uri.is_none() {
+            return Err(format!("image {i} has neither a uri nor a bufferView"));
+        }
+    }
+    let uris = json.buffers.iter().filter_map(|b| b.uri.as_deref());
+    let uris = uris.chain(json.images.iter().filter_map(|i| i.uri.as_deref()));
+    for uri in uris.filter(|u| !u.starts_with("data:")) {
+        if !percent_decodes_to_utf8(uri) {
+            return Err(format!("URI `{uri}` does not percent-decode to UTF-8"));
+        }
+    }
+    if let Some(accessor) = document.accessors().find(|a| a.count() == 0) {
+        return Err(format!("accessor {} has count 0", accessor.index()));
+    }
+    Ok(())
+}
+
+fn percent_decodes_to_utf8(uri: &str) -> bool {
+    let mut bytes = Vec::with_capacity(uri.len());
+    let mut rest = uri.as_bytes();
+    while let Some((&first, tail)) = rest.split_first() {
+        let escaped = (first == b'%')
+            .then(|| tail.get(..2))
+            .flatten()
+            .and_then(|hex| u8::from_str_radix(std::str::from_utf8(hex).ok()?, 16).ok());
+        match escaped {
+            Some(byte) => {
+                bytes.push(byte);
+                rest = &tail[2..];
+            }
+            None => {
+                bytes.push(first);
+                rest = tail;
+            }
+        }
+    }
+    String::from_utf8(bytes).is_ok()
+}
+
+/// Checks that every buffer view lies inside its buffer: the gltf crate slices images out of them
+/// without checking.
+fn check_views(document: &Document, buffers: &[buffer::Data]) -> Result<(), String> {
+    for view in document.views() {
+        let buffer_len = buffers.get(view.buffer().index()).map_or(0, |b| b.len());
+        if view
+            .offset()
+            .checked_add(view.length())
+            .is_none_or(|end| end > buffer_len)
+        {
+            return Err(format!(
+                "buffer view {} (bytes {}..+{}) lies outside buffer {} ({buffer_len} bytes)",
+                view.index(),
+                view.offset(),
+                view.length(),
+                view.buffer().index()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Decodes every image to an RGBA8 texture, on all cores: PNG decoding dominates loading Sponza.
+fn decode_images(
+    document: &Document,
+    base: &Path,
+    buffers: &[buffer::Data],
+) -> Result<Vec<Texture>, String> {
+    let images: Vec<_> = document.images().collect();
+    let workers = std::thread::available_parallelism()
+        .map_or(1, usize::from)
+        .min(images.len());
+    let next = AtomicUsize::new(0);
+    let mut decoded: Vec<(usize, Result<Texture, String>)> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..workers)
+            .map(|_| {
+                s.spawn(|| {
+                    let mut done = Vec::new();
+                    while let Some(image) = images.get(next.fetch_add(1, Ordering::Relaxed)) {
+                        done.push((image.index(), decode_image(image, base, buffers)));
+                    }
+                    done
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| {
+                h.join()
+                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            })
+            .collect()
+    });
+    decoded.sort_by_key(|(index, _)| *index);
+    decoded.into_iter().map(|(_, texture)| texture).collect()
+}
+
+fn decode_image(
+    image: &::gltf::Image,
+    base: &Path,
+    buffers: &[buffer::Data],
+) -> Result<Texture, String> {
+    let uri = match image.source() {
+        ::gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => Some(uri),
+        _ => None,
+    };
+    // A file name is the most recognisable label; embedded images fall back to their name or index.
+    let name = uri
+        .map(|u| u.rsplit('/').next().unwrap_or(u))
+        .or(image.name())
+        .map_or_else(|| format!("image {}", image.index()), str::to_owned);
+    let data = ::gltf::image::Data::from_source(image.source(), Some(base), buffers)
+        .map_err(|e| format!("image {} ({name}): {e}", image.index()))?;
+    Ok(Texture {
+        name,
+        width: data.width,
+        height: data.height,
+        rgba8: to_rgba8(data),
+    })
+}
+
+/// Expands any decoded pixel format to 8-bit RGBA: grey replicates to RGB, missing alpha is opaque,
+/// 16-bit and float channels are rescaled to 0..=255.
+fn to_rgba8(data: ::gltf::image::Data) -> Vec<u8> {
+    use ::gltf::image::Format::*;
+    let (channels, size) = match data.format {
+        R8G8B8A8 => return data.pixels,
+        R8 => (1, 1),
+        R8G8 => (2, 1),
+        R8G8B8 => (3, 1),
+        R16 => (1, 2),
+        R16G16 => (2, 2),
+        R16G16B16 => (3, 2),
+        R16G16B16A16 => (4, 2),
+        R32G32B32FLOAT => (3, 4),
+        R32G32B32A32FLOAT => (4, 4),
+    };
+    let unorm8 = |c: &[u8]| match size {
+        1 => c[0],
+        2 => ((u32::from(u16::from_ne_bytes([c[0], c[1]])) + 128) / 257) as u8,
+        _ => (f32::from_ne_bytes([c[0], c[1], c[2], c[3]]).clamp(0.0, 1.0) * 255.0).round() as u8,
+    };
+    let mut rgba = Vec::with_capacity(data.pixels.len() / (channels * size) * 4);
+    for pixel in data.pixels.chunks_exact(channels * size) {
+        let c = |i: usize| unorm8(&pixel[i * size..(i + 1) * size]);
+        rgba.extend(match channels {
+            1 => [c(0), c(0), c(0), 255],
+            2 => [c(0), c(0), c(0), c(1)],
+            3 => [c(0), c(1), c(2), 255],
+            _ => [c(0), c(1), c(2), c(3)],
+        });
+    }
+    rgba
+}
+
+fn build_scene(
+    document: &Document,
+    buffers: &[buffer::Data],
+    textures: Vec<Texture>,
+) -> Result<Scene, String> {
+    let mut materials: Vec<Material> = document.materials().map(|m| material(&m)).collect();
+    // Primitives without a material use the glTF default material, appended only when needed.
+    let default_material = materials.len();
+    let meshes = document
+        .meshes()
+        .map(|m| mesh(&m, buffers, default_material))
+        .collect::<Result<Vec<_>, _>>()?;
+    if meshes
+        .iter()
+        .flat_map(|m| &m.primitives)
+        .any(|p| p.material == default_material)
+    {
+        materials.push(Material::default());
+    }
+    let mut scene = Scene {
+        meshes,
+        materials,
+        textures,
+        ..Scene::default()
+    };
+    match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(root) => place_nodes(&mut scene, &root, document.nodes().len())?,
+        None => log::warn!("the glTF file has no scene: nothing is placed"),
+    }
+    Ok(scene)
+}
+
+/// Walks the node hierarchy depth first, adding an instance, camera or light for each node that has one.
+fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Result<(), String> {
+    let mut cameras = Vec::new();
+    let mut stack: Vec<(Node, Mat4, usize)> =
+        root.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    stack.reverse();
+    while let Some((node, parent, depth)) = stack.pop() {
+        // Validation does not rule out cycles; a path longer than the node count must contain one.
+        if depth > node_count {
+            return Err(format!(
+                "node {} is its own ancestor: the node hierarchy has a cycle",
+                node.index()
+            ));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if let Some(mesh) = node.mesh() {
+            scene.instances.push(Instance {
+                mesh: mesh.index(),
+                world_from_local: world,
+            });
+        }
+        if let Some(camera) = node.camera() {
+            cameras.push((camera.index(), place_camera(&camera, &node, world)));
+        }
+        if let Some(light) = node.light() {
+            place_light(scene, &light, world);
+        }
+        let first_child = stack.len();
+        stack.extend(node.children().map(|child| (child, world, depth + 1)));
+        stack[first_child..].reverse();
+    }
+    // Ordered like the file's `cameras` array, so "camera N" means the same thing in both.
+    cameras.sort_by_key(|(index, _)| *index);
+    scene.cameras = cameras.into_iter().map(|(_, camera)| camera).collect();
+    Ok(())
+}
+
+fn place_camera(camera: &::gltf::Camera, node: &Node, world: Mat4) -> Camera {
+    // A camera's transform must be rigid; scale inherited from parents is dropped.
+    let (_, rotation, translation) = world.to_scale_rotation_translation();
+    let rotation = if rotation.is_finite() {
+        rotation.normalize()
+    } else {
+        log::warn!(
+            "camera on node {}: degenerate transform, using no rotation",
+            node.index()
+        );
+        Quat::IDENTITY
+    };
+    let projection = match camera.projection() {
+        ::gltf::camera::Projection::Perspective(p) => Projection::Perspective {
+            yfov: p.yfov(),
+            znear: p.znear(),
+            zfar: p.zfar(),
+        },
+        ::gltf::camera::Projection::Orthographic(o) => Projection::Orthographic {
+            xmag: o.xmag(),
+            ymag: o.ymag(),
+            znear: o.znear(),
+            zfar: o.zfar(),
+        },
+    };
+    Camera {
+        name: camera
+            .name()
+            .or(node.name())
+            .map_or_else(|| format!("camera {}", camera.index()), str::to_owned),
+        world_from_view: Mat4::from_rotation_translation(rotation, translation),
+        projection,
+    }
+}
+
+fn place_light(scene: &mut Scene, light: &::gltf::khr_lights_punctual::Light, world: Mat4) {
+    let color = Vec3::from(light.color());
+    let intensity = light.intensity();
+    // Lights shine down their node's -Z.
+    let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let kind = match light.kind() {
+        Kind::Directional if scene.sun.is_some() => {
+            log::warn!(
+                "light {}: only the first directional light is used",
+                light.index()
+            );
+            return;
+        }
+        Kind::Directional => {
+            scene.sun = Some(Sun {
+                direction,
+                color,
+                illuminance: intensity,
+            });
+            return;
+        }
+        Kind::Point => LightKind::Point,
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => LightKind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        },
+    };
+    let range = light
+        .range()
+        .unwrap_or_else(|| Light::range_from_cutoff(intensity, color, DEFAULT_LIGHT_CUTOFF));
+    if light.range().is_none() && range <= 0.0 {
+        log::warn!(
+            "light {}: no intensity and no range, skipped",
+            light.index()
+        );
+        return;
+    }
+    scene.lights.push(Light {
+        kind,
+        position: world.transform_point3(Vec3::ZERO),
+        direction,
+        color,
+        intensity,
+        range,
+    });
+}
+
+fn material(m: &::gltf::Material) -> Material {
+    let name = m.name().map_or_else(
+        || format!("material {}", m.index().unwrap_or_default()),
+        str::to_owned,
+    );
+    let pbr = m.pbr_metallic_roughness();
+    let texture = |info: Option<::gltf::texture::Info>| {
+        info.map(|i| texture_ref(&i.texture(), i.tex_coord(), &name))
+    };
+    Material {
+        base_color_factor: Vec4::from(pbr.base_color_factor()),
+        base_color_texture: texture(pbr.base_color_texture()),
+        metallic_factor: pbr.metallic_factor(),
+        roughness_factor: pbr.roughness_factor(),
+        metallic_roughness_texture: texture(pbr.metallic_roughness_texture()),
+        normal_texture: m
+            .normal_texture()
+            .map(|t| texture_ref(&t.texture(), t.tex_coord(), &name)),
+        normal_scale: m.normal_texture().map_or(1.0, |t| t.scale()),
+        emissive_factor: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
+        emissive_texture: texture(m.emissive_texture()),
+        alpha_mode: match m.alpha_mode() {
+            ::gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            ::gltf::material::AlphaMode::Mask => AlphaMode::Mask {
+                cutoff: m.alpha_cutoff().unwrap_or(0.5),
+            },
+            ::gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        },
+        double_sided: m.double_sided(),
+        name,
+    }
+}
+
+fn texture_ref(texture: &::gltf::Texture, tex_coord: u32, material: &str) -> TextureRef {
+    if tex_coord != 0 {
+        log::warn!("material {material}: texture uses TEXCOORD_{tex_coord}; only TEXCOORD_0 is supported, using it");
+    }
+    let wrap = |mode| match mode {
+        ::gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+        ::gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        ::gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+    };
+    let sampler = texture.sampler();
+    TextureRef {
+        texture: texture.source().index(),
+        wrap_u: wrap(sampler.wrap_s()),
+        wrap_v: wrap(sampler.wrap_t()),
+    }
+}
+
+fn mesh(
+    mesh: &::gltf::Mesh,
+    buffers: &[buffer::Data],
+    default_material: usize,
+) -> Result<Mesh, String> {
+    let name = mesh
+        .name()
+        .map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned);
+    let mut primitives = Vec::new();
+    for p in mesh.primitives() {
+        let at = || format!("mesh {} ({name}) primitive {}", mesh.index(), p.index());
+        if !matches!(
+            p.mode(),
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            log::warn!("{}: {:?} are not rendered, skipped", at(), p.mode());
+            continue;
+        }
+        primitives
+            .push(primitive(&p, buffers, default_material).map_err(|e| format!("{}: {e}", at()))?);
+    }
+    Ok(Mesh { name, primitives })
+}
+
+fn primitive(
+    p: &::gltf::Primitive,
+    buffers: &[buffer::Data],
+    default_material: usize,
+) -> Result<Primitive, String> {
+    let reader = p.reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()));
+    let positions: Vec<[f32; 3]> = reader
+        .read_positions()
+        .ok_or("POSITION is missing or lies outside its buffer")?
+        .collect();
+    if positions.iter().flatten().any(|c| !c.is_finite()) {
+        return Err("a vertex position is NaN or infinite".into());
+    }
+    let count = positions.len();
+    let has = |semantic| p.get(&semantic).is_some();
+    let normals = attribute(
+        "NORMAL",
+        has(Semantic::Normals),
+        reader.read_normals(),
+        count,
+    )?;
+    let uvs = attribute(
+        "TEXCOORD_0",
+        has(Semantic::TexCoords(0)),
+        reader.read_tex_coords(0).map(|t| t.into_f32()),
+        count,
+    )?;
+    let file_tangents = attribute(
+        "TANGENT",
+        has(Semantic::Tangents),
+        reader.read_tangents(),
+        count,
+    )?;
+    let indices: Vec<u32> = match reader.read_indices() {
+        Some(indices) => indices.into_u32().collect(),
+        None if p.indices().is_some() => return Err("the indices lie outside their buffer".into()),
+        None => (0..count as u32).collect(),
+    };
+    if let Some(bad) = indices.iter().find(|&&i| i as usize >= count) {
+        return Err(format!("index {bad} out of range ({count} vertices)"));
+    }
+    let mut indices = triangle_list(p.mode(), indices);
+    if !indices.len().is_multiple_of(3) {
+        return Err(format!(
+            "index count {} is not a multiple of 3",
+            indices.len()
+        ));
+    }
+
+    let mut vertices: Vec<Vertex> = (0..count)
+        .map(|i| {
+            let [u, v] = uvs.as_ref().map_or([0.0; 2], |t| t[i]);
+            let (u, v) = if u.is_finite() && v.is_finite() {
+                (u, v)
+            } else {
+                (0.0, 0.0)
+            };
+            Vertex {
+                position: positions[i],
+                u,
+                // Broken normals get a placeholder rather than spreading NaN through shading.
+                normal: normals.as_ref().map_or([0.0; 3], |n| {
+                    Vec3::from(n[i]).normalize_or(Vec3::Y).to_array()
+                }),
+                v,
+                tangent: file_tangents.as_ref().map_or([0.0; 4], |t| t[i]),
+            }
+        })
+        .collect();
+    if normals.is_none() {
+        (vertices, indices) = flat_shaded(&vertices, &indices);
+    }
+    if file_tangents.is_none() && uvs.is_some() {
+        tangents::generate(&mut vertices, &mut indices);
+    } else {
+        tangents::orthonormalize(&mut vertices);
+    }
+    Ok(Primitive {
+        vertices,
+        indices,
+        material: p.material().index().unwrap_or(default_material),
+    })
+}
+
+/// Reads an optional vertex attribute, telling an absent one (`None`) from one that cannot be read.
+fn attribute<T>(
+    name: &str,
+    present: bool,
+    read: Option<impl Iterator<Item = T>>,
+    count: usize,
+) -> Result<Option<Vec<T>>, String> {
+    match (present, read) {
+        (false, _) => Ok(None),
+        (true, None) => Err(format!("{name} lies outside its buffer")),
+        (true, Some(values)) => {
+            let values: Vec<T> = values.collect();
+            if values.len() == count {
+                Ok(Some(values))
+            } else {
+                Err(format!(
+                    "{name} has {} elements, POSITION has {count}",
+                    values.len()
+                ))
+            }
+        }
+    }
+}
+
+/// Strips and fans as triangle lists (counter-clockwise kept: odd strip triangles are swapped).
+fn triangle_list(mode: Mode, indices: Vec<u32>) -> Vec<u32> {
+    match mode {
+        Mode::TriangleStrip => indices
+            .windows(3)
+            .enumerate()
+            .flat_map(|(i, w)| {
+                if i % 2 == 0 {
+                    [w[0], w[1], w[2]]
+                } else {
+                    [w[1], w[0], w[2]]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => match indices.split_first() {
+            Some((&hub, rim)) => rim.windows(2).flat_map(|w| [hub, w[0], w[1]]).collect(),
+            None => Vec::new(),
+        },
+        _ => indices,
+    }
+}
+
+/// Gives each triangle its own three vertices with the face normal (glTF: "When normals are not
+/// specified, client implementations MUST calculate flat normals").
+fn flat_shaded(vertices: &[Vertex], indices: &[u32]) -> (Vec<Vertex>, Vec<u32>) {
+    let mut flat = Vec::with_capacity(indices.len());
+    for triangle in indices.chunks_exact(3) {
+        let corners = [triangle[0], triangle[1], triangle[2]].map(|i| vertices[i as usize]);
+        let [a, b, c] = corners.map(|v| Vec3::from(v.position));
+        let normal = (b - a).cross(c - a).normalize_or(Vec3::Y).to_array();
+        flat.extend(corners.map(|v| Vertex { normal, ..v }));
+    }
+    let indices = (0..flat.len() as u32).collect();
+    (flat, indices)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::test_support::{assets_dir, temp_dir};
+
+    fn load(relative: &str) -> Scene {
+        import(&assets_dir().join(relative)).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn count_materials(scene: &Scene, pred: impl Fn(&Material) -> bool) -> usize {
+        scene.materials.iter().filter(|m| pred(m)).count()
+    }
+
+    /// Every tangent is finite, unit length, orthogonal to its normal and has w = ±1.
+    fn assert_tangent_frames(scene: &Scene) {
+        for mesh in &scene.meshes {
+            for v in mesh.primitives.iter().flat_map(|p| &p.vertices) {
+                let (n, t) = (Vec3::from(v.normal), Vec4::from(v.tangent));
+                let ok = t.is_finite()
+                    && (t.truncate().length() - 1.0).abs() < 1e-3
+                    && t.truncate().dot(n).abs() < 1e-3
+                    && t.w.abs() == 1.0;
+                assert!(ok, "{}: tangent {t} with normal {n}", mesh.name);
+            }
+        }
+    }
+
+    #[test]
+    fn sponza() {
+        let scene = load("sponza/Sponza.gltf");
+        assert_eq!(scene.drawn_triangle_count(), 262_087);
+        assert_eq!(scene.instances.len(), 170);
+        assert_eq!(scene.meshes.len(), 44);
+        assert_eq!(scene.materials.len(), 24);
+        assert_eq!(scene.textures.len(), 49);
+        assert_eq!(scene.cameras.len(), 4);
+        let masked =
+            |m: &Material| matches!(m.alpha_mode, AlphaMode::Mask { cutoff } if cutoff == 0.5);
+        assert_eq!(count_materials(&scene, masked), 3);
+        assert!(scene
+            .textures
+            .iter()
+            .all(|t| t.rgba8.len() == (t.width * t.height * 4) as usize));
+        assert_tangent_frames(&scene);
+    }
+
+    #[test]
+    fn gas_station() {
+        let scene = load("gas_station/GasStation.gltf");
+        assert_eq!(scene.drawn_triangle_count(), 99_002);
+        assert_eq!(scene.instances.len(), 1102);
+        assert_eq!(scene.meshes.len(), 473);
+        assert_eq!(scene.cameras.len(), 2);
+        assert_eq!(scene.materials.len(), 95);
+        assert_eq!(
+            count_materials(&scene, |m| m.alpha_mode == AlphaMode::Blend),
+            2
+        );
+        assert_tangent_frames(&scene);
+    }
+
+    #[test]
+    fn damaged_helmet() {
+        let scene = load("damaged_helmet/DamagedHelmet.glb");
+        assert_eq!(scene.drawn_triangle_count(), 15_452);
+        assert_eq!(scene.textures.len(), 5);
+        let helmet = &scene.materials[0];
+        assert!(helmet.normal_texture.is_some() && helmet.emissive_texture.is_some());
+        assert_tangent_frames(&scene);
+    }
+
+    #[test]
+    fn duck_camera_loses_its_parents_scale() {
+        let scene = load("duck/Duck.glb");
+        assert_eq!(scene.drawn_triangle_count(), 4_212);
+        assert_eq!(scene.textures.len(), 1);
+        assert_eq!(scene.cameras.len(), 1);
+        // The camera node sits under a node scaled by 0.01.
+        let camera = &scene.cameras[0];
+        assert!(
+            camera
+                .position()
+                .abs_diff_eq(Vec3::new(4.00113, 4.63264, -4.31078), 1e-4),
+            "{}",
+            camera.position()
+        );
+        let (scale, _, _) = camera.world_from_view.to_scale_rotation_translation();
+        assert!(scale.abs_diff_eq(Vec3::ONE, 1e-5), "{scale}");
+        assert!(
+            matches!(camera.projection, Projection::Perspective { zfar: Some(zfar), .. } if zfar == 10_000.0)
+        );
+    }
+
+    #[test]
+    fn boxes() {
+        for file in ["box/Box.glb", "box/Box.gltf"] {
+            let scene = load(file);
+            assert_eq!(scene.drawn_triangle_count(), 12, "{file}");
+            assert!(scene.textures.is_empty());
+            assert_tangent_frames(&scene);
+        }
+        let textured = load("box_textured/BoxTextured.glb");
+        assert_eq!(textured.drawn_triangle_count(), 12);
+        assert_eq!(textured.textures.len(), 1);
+        let logo = &textured.textures[0];
+        // A 211 × 211 palette PNG, expanded to RGBA.
+        assert_eq!(
+            (logo.width, logo.height, logo.rgba8.len()),
+            (211, 211, 211 * 211 * 4)
+        );
+        let base = textured.materials[0].base_color_texture.unwrap();
+        assert_eq!(
+            (base.texture, base.wrap_u, base.wrap_v),
+            (0, Wrap::Repeat, Wrap::Repeat)
+        );
+    }
+
+    #[test]
+    fn missing_file_is_an_io_error() {
+        let dir = temp_dir("gltf_missing");
+        let result = import(&dir.join("missing.glb"));
+        assert!(matches!(result, Err(Error::Io { .. })), "{result:?}");
+    }
+
+    #[test]
+    fn truncated_file_is_a_gltf_error() {
+        let bytes = std::fs::read(assets_dir().join("box/Box.glb")).unwrap();
+        let dir = temp_dir("gltf_truncated");
+        let path = dir.join("Box.glb");
+        std::fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
+        match import(&path) {
+            Err(Error::Gltf { path: p, reason }) => assert!(p == path && !reason.is_empty()),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn unsupported_required_extension_is_named() {
+        let dir = temp_dir("gltf_draco");
+        let path = dir.join("draco.gltf");
+        let json = r#"{"asset": {"version": "2.0"},
+            "extensionsUsed": ["KHR_draco_mesh_compression"],
+            "extensionsRequired": ["KHR_draco_mesh_compression"]}"#;
+        std::fs::write(&path, json).unwrap();
+        match import(&path) {
+            Err(Error::UnsupportedGltfExtension { extension, .. }) => {
+                assert_eq!(extension, "KHR_draco_mesh_compression")
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn node_cycles_are_errors() {
+        let dir = temp_dir("gltf_cycle");
+        let path = dir.join("cycle.gltf");
+        let json = r#"{"asset": {"version": "2.0"},
+            "nodes": [{"children": [1]}, {"children": [0]}], "scenes": [{"nodes": [0]}]}"#;
+        std::fs::write(&path, json).unwrap();
+        let result = import(&path);
+        assert!(
+            matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("cycle")),
+            "{result:?}"
+        );
+    }
+
+    #[test]
+    fn punctual_lights_and_material_extensions() {
+        let dir = temp_dir("gltf_lights");
+        let path = dir.join("lights.gltf");
+        let json = r#"{
+            "asset": {"version": "2.0"},
+            "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_emissive_strength"],
+            "extensionsRequired": ["KHR_lights_punctual"],
+            "extensions": {"KHR_lights_punctual": {"lights": [
+                {"type": "point", "color": [1, 0.5, 0.25], "intensity": 20},
+                {"type": "spot", "intensity": 50, "range": 8,
+                 "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}},
+                {"type": "directional", "color": [1, 0.9, 0.8], "intensity": 3},
+                {"type": "directional", "intensity": 1}
+            ]}},
+            "materials": [{"emissiveFactor": [1, 0.5, 0], "alphaMode": "MASK",
+                "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4}}}],
+            "nodes": [
+                {"translation": [1, 0, 0], "children": [1]},
+                {"translation": [0, 2, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                {"translation": [0, 4, 0], "rotation": [-0.7071068, 0, 0, 0.7071068],
+                 "extensions": {"KHR_lights_punctual": {"light": 1}}},
+                {"rotation": [-0.7071068, 0, 0, 0.7071068], "extensions": {"KHR_lights_punctual": {"light": 2}}},
+                {"extensions": {"KHR_lights_punctual": {"light": 3}}}
+            ],
+            "scenes": [{"nodes": [0, 2, 3, 4]}]
+        }"#;
+        std::fs::write(&path, json).unwrap();
+        let scene = import(&path).unwrap();
+
+        assert_eq!(scene.lights.len(), 2);
+        let point = scene.lights[0];
+        assert_eq!(point.kind, LightKind::Point);
+        assert!(point.position.abs_diff_eq(Vec3::new(1.0, 2.0, 0.0), 1e-6));
+        assert_eq!(point.color, Vec3::new(1.0, 0.5, 0.25));
+        // No range in the file: where 20 cd / d² falls to the cutoff.
+        assert!(
+            (point.range - (20.0f32 / DEFAULT_LIGHT_CUTOFF).sqrt()).abs() < 1e-3,
+            "{}",
+            point.range
+        );
+
+        let spot = scene.lights[1];
+        assert_eq!(
+            spot.kind,
+            LightKind::Spot {
+                inner_cone_angle: 0.2,
+                outer_cone_angle: 0.5
+            }
+        );
+        assert!(spot.position.abs_diff_eq(Vec3::new(0.0, 4.0, 0.0), 1e-6));
+        assert!(
+            spot.direction.abs_diff_eq(Vec3::NEG_Y, 1e-5),
+            "{}",
+            spot.direction
+        );
+        assert_eq!((spot.intensity, spot.range), (50.0, 8.0));
+
+        let sun = scene.sun.unwrap();
+        assert!(sun.direction.abs_diff_eq(Vec3::NEG_Y, 1e-5));
+        assert_eq!(
+            (sun.color, sun.illuminance),
+            (Vec3::new(1.0, 0.9, 0.8), 3.0)
+        );
+
+        let material = &scene.materials[0];
+        assert_eq!(material.emissive_factor, Vec3::new(4.0, 2.0, 0.0));
+        assert_eq!(material.alpha_mode, AlphaMode::Mask { cutoff: 0.5 });
+    }
+
+    /// Writes a quad's four corners (no normals, no UVs) and one index list as `quad.bin`.
+    fn write_quad_buffer(dir: &Path) {
+        let positions = [
+            [0.0f32, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 0.0],
+        ];
+        let mut bytes: Vec<u8> = positions
+            .iter()
+            .flatten()
+            .flat_map(|c| c.to_le_bytes())
+            .collect();
+        bytes.extend([0u16, 1, 3, 2].iter().flat_map(|i| i.to_le_bytes()));
+        std::fs::write(dir.join("quad.bin"), bytes).unwrap();
+    }
+
+    #[test]
+    fn strips_fans_points_flat_normals_default_material_and_instancing() {
+        let dir = temp_dir("gltf_modes");
+        write_quad_buffer(&dir);
+        let json = r#"{
+            "asset": {"version": "2.0"},
+            "buffers": [{"uri": "quad.bin", "byteLength": 56}],
+            "bufferViews": [{"buffer": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 8}],
+            "accessors": [
+                {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5123, "count": 4, "type": "SCALAR"}
+            ],
+            "meshes": [{"primitives": [
+                {"attributes": {"POSITION": 0}, "mode": 5},
+                {"attributes": {"POSITION": 0}, "indices": 1, "mode": 6},
+                {"attributes": {"POSITION": 0}, "mode": 0}
+            ]}],
+            "nodes": [
+                {"mesh": 0, "translation": [1, 0, 0], "children": [1]},
+                {"mesh": 0, "translation": [0, 0, 2], "scale": [2, 2, 2]}
+            ],
+            "scenes": [{"nodes": [0]}]
+        }"#;
+        std::fs::write(dir.join("modes.gltf"), json).unwrap();
+        let scene = import(&dir.join("modes.gltf")).unwrap();
+
+        assert_eq!(scene.meshes.len(), 1);
+        let primitives = &scene.meshes[0].primitives;
+        assert_eq!(primitives.len(), 2, "the points primitive is skipped");
+        for p in primitives {
+            assert_eq!(p.triangle_count(), 2);
+            // Flat normals unweld the vertices; both triangles face +Z (counter-clockwise kept).
+            assert_eq!(p.vertices.len(), 6);
+            assert!(p.vertices.iter().all(|v| v.normal == [0.0, 0.0, 1.0]));
+            assert_eq!(p.material, 0);
+        }
+        assert_eq!(scene.materials.len(), 1, "the default material is appended");
+        assert_eq!(scene.materials[0].name, "default");
+        assert_tangent_frames(&scene);
+
+        assert_eq!(scene.instances.len(), 2);
+        assert!(scene.instances.iter().all(|i| i.mesh == 0));
+        let origin = |i: usize| {
+            scene.instances[i]
+                .world_from_local
+                .transform_point3(Vec3::ZERO)
+        };
+        assert_eq!(
+            (origin(0), origin(1)),
+            (Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 2.0))
+        );
+        assert_eq!(scene.drawn_triangle_count(), 8);
+    }
+
+    #[test]
+    fn buffer_views_outside_their_buffer_are_errors() {
+        let dir = temp_dir("gltf_view_bounds");
+        write_quad_buffer(&dir);
+        let json = r#"{
+            "asset": {"version": "2.0"},
+            "buffers": [{"uri": "quad.bin", "byteLength": 56}],
+            "bufferViews": [{"buffer": 0, "byteOffset": 40, "byteLength": 48}]
+        }"#;
+        std::fs::write(dir.join("bounds.gltf"), json).unwrap();
+        let result = import(&dir.join("bounds.gltf"));
+        assert!(
+            matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("outside buffer 0")),
+            "{result:?}"
+        );
+    }
+
+    #[test]
+    fn uris_that_would_panic_the_loader_are_errors() {
+        assert!(percent_decodes_to_utf8("a%20b%C3%A9.png") && percent_decodes_to_utf8("100%.png"));
+        let dir = temp_dir("gltf_uri");
+        let path = dir.join("uri.gltf");
+        let json =
+            r#"{"asset": {"version": "2.0"}, "buffers": [{"uri": "%FF.bin", "byteLength": 4}]}"#;
+        std::fs::write(&path, json).unwrap();
+        let result = import(&path);
+        assert!(
+            matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("UTF-8")),
+            "{result:?}"
+        );
+    }
+
+    #[test]
+    fn every_pixel_format_expands_to_rgba8() {
+        use ::gltf::image::{Data, Format};
+        let data = |format, pixels: Vec<u8>| Data {
+            pixels,
+            format,
+            width: 1,
+            height: 1,
+        };
+        let u16s = |v: &[u16]| v.iter().flat_map(|c| c.to_ne_bytes()).collect();
+        let f32s = |v: &[f32]| v.iter().flat_map(|c| c.to_ne_bytes()).collect();
+        let cases = [
+            (data(Format::R8, vec![7]), [7, 7, 7, 255]),
+            (data(Format::R8G8, vec![7, 9]), [7, 7, 7, 9]),
+            (data(Format::R8G8B8, vec![1, 2, 3]), [1, 2, 3, 255]),
+            (data(Format::R8G8B8A8, vec![1, 2, 3, 4]), [1, 2, 3, 4]),
+            (data(Format::R16, u16s(&[65535])), [255, 255, 255, 255]),
+            (data(Format::R16G16, u16s(&[0, 32896])), [0, 0, 0, 128]),
+            (
+                data(Format::R16G16B16, u16s(&[257, 514, 65535])),
+                [1, 2, 255, 255],
+            ),
+            (
+                data(Format::R16G16B16A16, u16s(&[0, 257, 0, 65535])),
+                [0, 1, 0, 255],
+            ),
+            (
+                data(Format::R32G32B32FLOAT, f32s(&[0.0, 0.5, 2.0])),
+                [0, 128, 255, 255],
+            ),
+            (
+                data(
+                    Format::R32G32B32A32FLOAT,
+                    f32s(&[1.0, -1.0, f32::NAN, 0.25]),
+                ),
+                [255, 0, 0, 64],
+            ),
+        ];
+        for (image, rgba) in cases {
+            let format = image.format;
+            assert_eq!(to_rgba8(image), rgba, "{format:?}");
+        }
+    }
+}
