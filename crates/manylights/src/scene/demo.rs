@@ -136,7 +136,7 @@ fn materials() -> Vec<Material> {
         dielectric("crate", [0.55, 0.42, 0.3], 0.85),
         Material {
             metallic_factor: 1.0,
-            ..dielectric("gold", [1.0, 0.78, 0.34], 0.15)
+            ..dielectric("gold", [1.0, 0.78, 0.34], 0.3)
         },
         dielectric("red plastic", [0.8, 0.08, 0.06], 0.35),
         Material {
@@ -191,20 +191,21 @@ fn lights() -> Vec<Light> {
         point([0.6, 0.5, 2.6], [1.0, 0.25, 0.8], 2.0, 5.0),
         // Just above the glowing sphere, so that it appears to light its surroundings.
         point([-1.4, 0.75, 1.4], [1.0, 0.5, 0.15], 2.0, 5.0),
+        // Pools on the floor, around the red sphere and in front of the crates.
         spot(
-            Vec3::new(1.9, 4.2, 0.8),
-            Vec3::new(1.9, 0.0, -0.2),
+            Vec3::new(1.9, 4.2, 1.2),
+            Vec3::new(2.1, 0.0, 0.4),
             (14.0, 24.0),
             [1.0, 0.95, 0.85],
-            35.0,
+            80.0,
             9.0,
         ),
         spot(
-            Vec3::new(-3.0, 4.0, 0.5),
-            Vec3::new(-0.6, 0.8, -2.2),
-            (10.0, 20.0),
+            Vec3::new(-3.0, 4.0, 1.0),
+            Vec3::new(-2.6, 0.0, -1.8),
+            (12.0, 22.0),
             [0.75, 0.85, 1.0],
-            30.0,
+            70.0,
             10.0,
         ),
     ]
