@@ -39,6 +39,9 @@ pub struct RenderArgs {
     /// Largest texture size kept on the GPU (larger images are downsampled).
     #[arg(long, default_value_t = 1024)]
     texture_size: u32,
+    /// Maximum anisotropy of texture filtering (1 = trilinear, up to 16).
+    #[arg(long, default_value_t = 8)]
+    anisotropy: u16,
     /// Output PNG (tonemapped, sRGB).
     #[arg(short, long, default_value = "out.png")]
     output: PathBuf,
@@ -97,6 +100,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             TonemapArg::None => Tonemapper::None,
         },
         max_texture_size: args.texture_size,
+        anisotropy: args.anisotropy,
     };
 
     let ctx = GpuContext::new()?;

@@ -20,6 +20,9 @@ pub struct RenderConfig {
     pub tonemapper: Tonemapper,
     /// Largest texture layer size; larger images are downsampled at upload.
     pub max_texture_size: u32,
+    /// Maximum anisotropy of texture filtering, 1 (trilinear) to 16. Software rasterisers are many
+    /// times slower with anisotropic filtering, so the tests use 1.
+    pub anisotropy: u16,
 }
 
 impl Default for RenderConfig {
@@ -30,6 +33,7 @@ impl Default for RenderConfig {
             light_method: LightMethod::Brute,
             tonemapper: Tonemapper::Aces,
             max_texture_size: 1024,
+            anisotropy: 8,
         }
     }
 }
@@ -49,6 +53,9 @@ impl RenderConfig {
         }
         if self.max_texture_size == 0 {
             return Err(Error::InvalidConfig("the maximum texture size must be at least 1".into()));
+        }
+        if !(1..=16).contains(&self.anisotropy) {
+            return Err(Error::InvalidConfig(format!("anisotropy {} must be between 1 and 16", self.anisotropy)));
         }
         Ok(())
     }

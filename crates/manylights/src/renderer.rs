@@ -28,7 +28,7 @@ pub struct Image<T> {
 impl Renderer {
     pub fn new(ctx: GpuContext, scene: &Scene, config: RenderConfig) -> Result<Self> {
         config.validate(&ctx)?;
-        let gpu_scene = GpuScene::upload(&ctx, scene, config.max_texture_size)?;
+        let gpu_scene = GpuScene::upload(&ctx, scene, config.max_texture_size, config.anisotropy)?;
         let pipeline = VisbufferPipeline::new(&ctx, &gpu_scene, config.light_method, config.width, config.height)?;
         let timer = GpuTimer::new(&ctx);
         ctx.check_errors()?;

@@ -115,8 +115,9 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    /// Uploads `scene`. `max_texture_size` caps the layer size of the texture arrays.
-    pub fn upload(ctx: &GpuContext, scene: &Scene, max_texture_size: u32) -> Result<Self> {
+    /// Uploads `scene`. `max_texture_size` caps the layer size of the texture arrays; `anisotropy` is
+    /// the sampler's maximum anisotropy (1 = trilinear).
+    pub fn upload(ctx: &GpuContext, scene: &Scene, max_texture_size: u32, anisotropy: u16) -> Result<Self> {
         scene.validate()?;
         let device = &ctx.device;
 
@@ -197,7 +198,7 @@ impl GpuScene {
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,
             mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            anisotropy_clamp: 8,
+            anisotropy_clamp: anisotropy,
             ..Default::default()
         });
 

@@ -21,6 +21,7 @@ pub fn renderer(scene: &Scene, width: u32, height: u32) -> Renderer {
         height,
         tonemapper: Tonemapper::Aces,
         max_texture_size: 256,
+        anisotropy: 1,
         ..Default::default()
     };
     Renderer::new(ctx, scene, config).expect("renderer")

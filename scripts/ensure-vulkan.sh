@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Makes sure a Vulkan loader and at least one Vulkan driver are installed. On a machine without a GPU
+# driver this installs Mesa's software rasteriser (lavapipe, Debian/Ubuntu package mesa-vulkan-drivers),
+# which runs everything manylights does, slowly.
+set -euo pipefail
+
+have_loader() { ldconfig -p 2>/dev/null | grep -q 'libvulkan\.so\.1'; }
+have_driver() {
+  [ -n "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ] && return 0
+  ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json /usr/local/share/vulkan/icd.d/*.json >/dev/null 2>&1
+}
+have_lavapipe() { ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; }
+
+# Tests select lavapipe by name, so it is needed even beside a hardware driver when tests run.
+want_lavapipe=${MANYLIGHTS_NEED_LAVAPIPE:-0}
+
+if have_loader && have_driver && { [ "$want_lavapipe" = 0 ] || have_lavapipe; }; then
+  exit 0
+fi
+
+if ! command -v apt-get >/dev/null; then
+  echo "error: no Vulkan driver found and apt-get is unavailable; install your GPU's Vulkan driver" \
+       "or Mesa's lavapipe (often packaged as mesa-vulkan-drivers or vulkan-swrast)" >&2
+  exit 1
+fi
+sudo=""
+if [ "$(id -u)" != 0 ]; then
+  command -v sudo >/dev/null || { echo "error: need root or sudo to install mesa-vulkan-drivers" >&2; exit 1; }
+  sudo="sudo"
+fi
+echo "Installing the Vulkan loader and Mesa's software Vulkan driver (lavapipe)..." >&2
+$sudo apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq libvulkan1 mesa-vulkan-drivers >/dev/null
+have_loader && have_driver || { echo "error: Vulkan still unavailable after installing mesa-vulkan-drivers" >&2; exit 1; }
