@@ -42,6 +42,8 @@ impl Default for ScatterLights {
 /// same scene and parameters give the same lights.
 pub fn scatter_lights(scene: &Scene, params: &ScatterLights) -> Result<Vec<Light>> {
     check(params)?;
+    // Sampling indexes meshes, vertices and indices directly.
+    scene.validate()?;
     if params.count == 0 {
         return Ok(Vec::new());
     }

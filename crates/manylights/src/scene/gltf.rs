@@ -36,8 +36,8 @@ pub fn import(path: &Path) -> Result<Scene> {
     };
     // Parsed without validation first: the gltf crate reports an unsupported required extension as
     // a generic validation failure, and this check names it.
-    let ::gltf::Gltf { document, blob } =
-        ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(e.to_string()))?;
+    let ::gltf::Gltf { document, blob } = ::gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| invalid(parse_reason(e)))?;
     check_required_extensions(path, &document)?;
     let document = Document::from_json(document.into_json()).map_err(|e| invalid(e.to_string()))?;
 
@@ -50,6 +50,22 @@ pub fn import(path: &Path) -> Result<Scene> {
     let scene = build_scene(&document, &buffers, textures).map_err(invalid)?;
     scene.validate()?;
     Ok(scene)
+}
+
+/// The parser's reason, with the detail its GLB messages leave out.
+fn parse_reason(error: ::gltf::Error) -> String {
+    use ::gltf::binary::Error as Glb;
+    match error {
+        ::gltf::Error::Binary(Glb::Length {
+            length,
+            length_read,
+        }) => format!(
+            "the GLB header declares {length} bytes of content but only {length_read} follow it; the file is truncated"
+        ),
+        ::gltf::Error::Binary(e) => format!("corrupt GLB container: {e}"),
+        ::gltf::Error::Deserialize(e) => format!("invalid glTF JSON: {e}"),
+        e => e.to_string(),
+    }
 }
 
 fn check_required_extensions(path: &Path, document: &Document) -> Result<()> {
@@ -763,7 +779,9 @@ mod tests {
         let path = dir.join("Box.glb");
         std::fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
         match import(&path) {
-            Err(Error::Gltf { path: p, reason }) => assert!(p == path && !reason.is_empty()),
+            Err(Error::Gltf { path: p, reason }) => {
+                assert!(p == path && reason.contains("truncated"), "{reason}")
+            }
             other => panic!("{other:?}"),
         }
     }
