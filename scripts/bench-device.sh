@@ -15,9 +15,11 @@ $bin info | tee -a "$out/gpu.txt"
 run() { # name, then render arguments
   local name=$1; shift
   echo "== $name"
-  $bin render --width 1920 --height 1080 --warmup 30 --frames 200 --timings \
+  $bin render --width 1920 --height 1080 --warmup 100 --frames 300 --timings \
     --timings-json "$out/$name.json" -o "$out/$name.png" "$@" 2>&1 | grep -v XDG_RUNTIME
 }
 run sponza_256 --scene .bench/sponza_lite/Sponza.gltf --lights 256 --seed 1
 run sponza_1024 --scene .bench/sponza_lite/Sponza.gltf --lights 1024 --seed 1
 run demo_256 --scene demo --lights 256 --seed 1
+run sponza_0 --scene .bench/sponza_lite/Sponza.gltf
+run sponza_256_again --scene .bench/sponza_lite/Sponza.gltf --lights 256 --seed 1

@@ -4,12 +4,13 @@
 # which runs everything manylights does, slowly.
 set -euo pipefail
 
-have_loader() { ldconfig -p 2>/dev/null | grep -q 'libvulkan\.so\.1'; }
+have_loader() { ldconfig -p 2>/dev/null | grep 'libvulkan\.so\.1' >/dev/null; } # not grep -q: with pipefail, ldconfig's SIGPIPE would fail the check
 have_driver() {
   [ -n "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ] && return 0
-  ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json /usr/local/share/vulkan/icd.d/*.json >/dev/null 2>&1
+  compgen -G '/usr/share/vulkan/icd.d/*.json' >/dev/null || compgen -G '/etc/vulkan/icd.d/*.json' >/dev/null ||
+    compgen -G '/usr/local/share/vulkan/icd.d/*.json' >/dev/null
 }
-have_lavapipe() { ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; }
+have_lavapipe() { compgen -G '/usr/share/vulkan/icd.d/lvp_icd*.json' >/dev/null; }
 
 # Tests select lavapipe by name, so it is needed even beside a hardware driver when tests run.
 want_lavapipe=${MANYLIGHTS_NEED_LAVAPIPE:-0}

@@ -80,11 +80,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let mut scene = load_scene(&args.scene)?;
     if args.lights > 0 {
-        let params = ScatterLights {
-            count: args.lights as usize,
-            seed: args.seed,
-            ..Default::default()
-        };
+        let params = ScatterLights { count: args.lights as usize, seed: args.seed, ..Default::default() };
         scene::generators::add_scattered_lights(&mut scene, &params)?;
     }
     let camera = choose_camera(&scene, args.camera)?;
@@ -109,13 +105,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if (args.timings || args.timings_json.is_some()) && !renderer.has_timestamps() {
         bail!("--timings needs GPU timestamp queries, which this adapter lacks ({device}); run without --timings");
     }
-    for _ in 0..args.warmup {
-        renderer.render(&camera)?;
-    }
-    let mut frames = Vec::with_capacity(args.frames as usize);
-    for _ in 0..args.frames {
-        frames.push(renderer.render(&camera)?);
-    }
+    renderer.render_frames(&camera, args.warmup)?;
+    let frames = renderer.render_frames(&camera, args.frames)?;
 
     image_io::save_png(&args.output, &renderer.read_ldr()?)?;
     if let Some(exr) = &args.exr {
@@ -143,7 +134,9 @@ fn load_scene(spec: &str) -> manylights::Result<Scene> {
 
 fn choose_camera(scene: &Scene, index: Option<usize>) -> anyhow::Result<Camera> {
     match (index, scene.cameras.len()) {
-        (Some(i), n) if i >= n => bail!("--camera {i}: the scene has {n} camera(s){}", if n > 0 { format!(", numbered 0 to {}", n - 1) } else { String::new() }),
+        (Some(i), n) if i >= n => {
+            bail!("--camera {i}: the scene has {n} camera(s){}", if n > 0 { format!(", numbered 0 to {}", n - 1) } else { String::new() })
+        }
         (Some(i), _) => Ok(scene.cameras[i].clone()),
         (None, 0) => {
             let bounds = scene.bounds();

@@ -43,7 +43,10 @@ impl RenderConfig {
     pub fn validate(&self, ctx: &GpuContext) -> Result<()> {
         let max = ctx.limits.max_texture_dimension_2d;
         if self.width == 0 || self.height == 0 {
-            return Err(Error::InvalidConfig(format!("resolution {}×{} is empty; width and height must be at least 1", self.width, self.height)));
+            return Err(Error::InvalidConfig(format!(
+                "resolution {}×{} is empty; width and height must be at least 1",
+                self.width, self.height
+            )));
         }
         if self.width > max || self.height > max {
             return Err(Error::InvalidConfig(format!(

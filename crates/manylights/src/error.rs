@@ -5,11 +5,10 @@ use std::path::PathBuf;
 
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    #[error("cannot read {path}: {source} (check that the path exists and is readable)")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    // `error` rather than `source`: its message is already part of this one, and must not be
+    // printed again as a cause.
+    #[error("cannot read {path}: {error} (check that the path exists and is readable)")]
+    Io { path: PathBuf, error: std::io::Error },
 
     #[error("{path}: not a valid glTF 2.0 file: {reason}")]
     Gltf { path: PathBuf, reason: String },
@@ -18,11 +17,7 @@ pub enum Error {
         "{path}: the file requires the glTF extension `{extension}`, which manylights does not support; \
          re-export the scene without it (supported: {supported})"
     )]
-    UnsupportedGltfExtension {
-        path: PathBuf,
-        extension: String,
-        supported: String,
-    },
+    UnsupportedGltfExtension { path: PathBuf, extension: String, supported: String },
 
     #[error("{path}: {reason}")]
     SceneFile { path: PathBuf, reason: String },

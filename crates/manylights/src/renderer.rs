@@ -32,13 +32,7 @@ impl Renderer {
         let pipeline = VisbufferPipeline::new(&ctx, &gpu_scene, config.light_method, config.width, config.height)?;
         let timer = GpuTimer::new(&ctx);
         ctx.check_errors()?;
-        Ok(Self {
-            ctx,
-            scene: gpu_scene,
-            config,
-            pipeline,
-            timer,
-        })
+        Ok(Self { ctx, scene: gpu_scene, config, pipeline, timer })
     }
 
     /// Whether `render` returns per-pass GPU timings.
@@ -49,24 +43,33 @@ impl Renderer {
     /// Renders one frame and waits for it; returns per-pass GPU milliseconds (empty without
     /// timestamp support).
     pub fn render(&mut self, camera: &Camera) -> Result<PassTimings> {
+        Ok(self.render_frames(camera, 1)?.pop().unwrap_or_default())
+    }
+
+    /// Renders `count` frames submitted back to back, as an application's frame loop does, waiting
+    /// only when the timer's slots are full and at the end. Returns each frame's pass timings.
+    pub fn render_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<PassTimings>> {
         let uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.lighting, self.config.tonemapper);
         self.scene.write_frame(&self.ctx.queue, &uniforms);
-        let mut encoder = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
-        if let Some(timer) = &mut self.timer {
-            timer.begin_frame();
-        }
-        self.pipeline.record(&mut encoder, self.timer.as_mut(), &self.scene);
-        if let Some(timer) = &self.timer {
-            timer.resolve(&mut encoder);
-        }
-        self.ctx.queue.submit([encoder.finish()]);
-        let timings = match &self.timer {
-            Some(timer) => timer.read(&self.ctx)?,
-            None => {
-                self.ctx.wait_idle()?;
-                Vec::new()
+        let mut timings = Vec::with_capacity(count as usize);
+        for _ in 0..count {
+            let mut encoder = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+            if let Some(timer) = &mut self.timer {
+                if timer.is_full() {
+                    timings.extend(timer.read(&self.ctx)?);
+                }
+                timer.begin_frame();
             }
-        };
+            self.pipeline.record(&mut encoder, self.timer.as_mut(), &self.scene, camera.position());
+            if let Some(timer) = &self.timer {
+                timer.resolve(&mut encoder);
+            }
+            self.ctx.queue.submit([encoder.finish()]);
+        }
+        match &mut self.timer {
+            Some(timer) => timings.extend(timer.read(&self.ctx)?),
+            None => self.ctx.wait_idle()?,
+        }
         self.ctx.check_errors()?;
         Ok(timings)
     }
@@ -86,10 +89,6 @@ impl Renderer {
     }
 
     fn image<T>(&self, pixels: Vec<T>) -> Image<T> {
-        Image {
-            width: self.config.width,
-            height: self.config.height,
-            pixels,
-        }
+        Image { width: self.config.width, height: self.config.height, pixels }
     }
 }

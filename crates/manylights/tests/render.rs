@@ -82,14 +82,16 @@ fn a_light_before_a_wall_brightens_it_and_removing_it_darkens_it() {
     let (_, lit) = render(&scene_lit, &camera);
     let (_, dark) = render(&scene_dark, &camera);
 
-    let mean = |img: &manylights::renderer::Image<[f32; 4]>| img.pixels.iter().map(|&p| luminance(p)).sum::<f32>() / img.pixels.len() as f32;
+    let mean =
+        |img: &manylights::renderer::Image<[f32; 4]>| img.pixels.iter().map(|&p| luminance(p)).sum::<f32>() / img.pixels.len() as f32;
     assert!(mean(&dark) < 1e-6, "with no light, no sun and no ambient the wall must be black, mean {}", mean(&dark));
     assert!(mean(&lit) > 0.01, "the light does not light the wall (mean {})", mean(&lit));
 
     // The brightest pixel is where the light is closest: its projection onto the wall.
     let (brightest, _) = lit.pixels.iter().enumerate().max_by(|a, b| luminance(*a.1).total_cmp(&luminance(*b.1))).unwrap();
     let (bx, by) = ((brightest as u32 % WIDTH) as f32, (brightest as u32 / WIDTH) as f32);
-    let clip = camera.clip_from_view(WIDTH as f32 / HEIGHT as f32) * camera.world_from_view.inverse() * Vec3::new(1.0, 0.5, 0.0).extend(1.0);
+    let clip =
+        camera.clip_from_view(WIDTH as f32 / HEIGHT as f32) * camera.world_from_view.inverse() * Vec3::new(1.0, 0.5, 0.0).extend(1.0);
     let expected = ((clip.x / clip.w * 0.5 + 0.5) * WIDTH as f32, (0.5 - clip.y / clip.w * 0.5) * HEIGHT as f32);
     assert!((bx - expected.0).abs() <= 2.0 && (by - expected.1).abs() <= 2.0, "brightest at ({bx}, {by}), expected near {expected:?}");
 
@@ -100,10 +102,7 @@ fn a_light_before_a_wall_brightens_it_and_removing_it_darkens_it() {
 #[test]
 fn spot_light_lights_only_inside_its_cone() {
     let spot = Light {
-        kind: LightKind::Spot {
-            inner_cone_angle: 10f32.to_radians(),
-            outer_cone_angle: 20f32.to_radians(),
-        },
+        kind: LightKind::Spot { inner_cone_angle: 10f32.to_radians(), outer_cone_angle: 20f32.to_radians() },
         position: Vec3::new(0.0, 0.0, 2.0),
         direction: Vec3::NEG_Z,
         color: Vec3::ONE,

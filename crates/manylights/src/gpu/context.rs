@@ -71,13 +71,7 @@ fn name_filter() -> Option<String> {
 /// Every adapter wgpu can see, with whether the renderer can use it.
 pub fn list_adapters() -> Vec<AdapterSummary> {
     let adapters = pollster::block_on(instance().enumerate_adapters(wgpu::Backends::all()));
-    adapters
-        .iter()
-        .map(|a| AdapterSummary {
-            info: a.get_info(),
-            usable: unusable_reason(a),
-        })
-        .collect()
+    adapters.iter().map(|a| AdapterSummary { info: a.get_info(), usable: unusable_reason(a) }).collect()
 }
 
 impl GpuContext {
@@ -128,15 +122,7 @@ impl GpuContext {
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             sink.lock().unwrap_or_else(|p| p.into_inner()).push(e.to_string());
         }));
-        Ok(Self {
-            adapter,
-            device,
-            queue,
-            info,
-            features,
-            limits,
-            errors,
-        })
+        Ok(Self { adapter, device, queue, info, features, limits, errors })
     }
 
     pub fn has_timestamps(&self) -> bool {
@@ -153,10 +139,7 @@ impl GpuContext {
     /// Waits until the GPU has finished all submitted work.
     pub fn wait_idle(&self) -> Result<()> {
         self.device
-            .poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: None,
-            })
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
             .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
         Ok(())
     }
@@ -168,8 +151,5 @@ impl GpuContext {
 
 /// One line naming an adapter, its backend, type and driver.
 pub fn describe(info: &wgpu::AdapterInfo) -> String {
-    format!(
-        "{} ({:?}, {:?}, driver: {} {})",
-        info.name, info.backend, info.device_type, info.driver, info.driver_info
-    )
+    format!("{} ({:?}, {:?}, driver: {} {})", info.name, info.backend, info.device_type, info.driver, info.driver_info)
 }

@@ -14,9 +14,7 @@ pub fn map_buffer<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffer, off
         .map_err(|_| Error::Gpu("buffer mapping was dropped".into()))?
         .map_err(|e| Error::Gpu(format!("cannot map a readback buffer: {e}")))?;
     let data = {
-        let view = buffer
-            .get_mapped_range(offset..offset + size)
-            .map_err(|e| Error::Gpu(format!("cannot read a mapped buffer: {e}")))?;
+        let view = buffer.get_mapped_range(offset..offset + size).map_err(|e| Error::Gpu(format!("cannot read a mapped buffer: {e}")))?;
         bytemuck::pod_collect_to_vec(&view)
     };
     buffer.unmap();
@@ -40,19 +38,11 @@ pub fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture, bytes_per_pixel: 
         texture.as_image_copy(),
         wgpu::TexelCopyBufferInfo {
             buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded_row),
-                rows_per_image: Some(height),
-            },
+            layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded_row), rows_per_image: Some(height) },
         },
         texture.size(),
     );
     ctx.queue.submit([encoder.finish()]);
     let padded: Vec<u8> = map_buffer(ctx, &buffer, 0, size)?;
-    Ok(padded
-        .chunks_exact(padded_row as usize)
-        .flat_map(|row| &row[..row_bytes as usize])
-        .copied()
-        .collect())
+    Ok(padded.chunks_exact(padded_row as usize).flat_map(|row| &row[..row_bytes as usize]).copied().collect())
 }

@@ -23,7 +23,7 @@ pub struct GpuDraw {
     pub world_from_local: [[f32; 4]; 4],
     pub normal_from_local: [[f32; 4]; 3],
     pub first_index: u32,
-    pub index_count: u32,
+    pub first_visibility_id: u32,
     pub base_vertex: u32,
     pub material: u32,
 }
@@ -101,13 +101,14 @@ pub struct DrawCommand {
     pub draw_index: u32,
     pub index_count: u32,
     pub state: RasterState,
+    /// World-space centre of the primitive's bounds, for front-to-back ordering.
+    pub center: glam::Vec3,
 }
 
 pub struct GpuScene {
     pub bind_group_layout: wgpu::BindGroupLayout,
     pub bind_group: wgpu::BindGroup,
     pub frame_uniforms: wgpu::Buffer,
-    /// Sorted by raster state, so the raster pass switches pipelines at most four times.
     pub draw_commands: Vec<DrawCommand>,
     pub lighting: SceneLighting,
     pub triangle_count: u64,
@@ -123,7 +124,8 @@ impl GpuScene {
 
         let (srgb_used, linear_used) = texture_usage(&scene.materials);
         let color_textures = TextureArray::upload(device, &ctx.queue, &scene.textures, &srgb_used, TextureSpace::Srgb, max_texture_size)?;
-        let data_textures = TextureArray::upload(device, &ctx.queue, &scene.textures, &linear_used, TextureSpace::Linear, max_texture_size)?;
+        let data_textures =
+            TextureArray::upload(device, &ctx.queue, &scene.textures, &linear_used, TextureSpace::Linear, max_texture_size)?;
 
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(|m| gpu_material(m, &color_textures, &data_textures)).collect();
 
@@ -147,20 +149,20 @@ impl GpuScene {
 
         let mut draws = Vec::new();
         let mut draw_commands = Vec::new();
+        // Visibility ids count triangles from 1; 0 is the background.
+        let mut next_visibility_id = 1u64;
         for instance in &scene.instances {
             let normal_from_local = Mat3::from_mat4(instance.world_from_local).inverse().transpose();
             let handedness = Mat3::from_mat4(instance.world_from_local).determinant().signum();
-            let normal_columns = [
-                normal_from_local.x_axis.extend(handedness),
-                normal_from_local.y_axis.extend(0.0),
-                normal_from_local.z_axis.extend(0.0),
-            ];
+            let normal_columns =
+                [normal_from_local.x_axis.extend(handedness), normal_from_local.y_axis.extend(0.0), normal_from_local.z_axis.extend(0.0)];
             let mesh = &scene.meshes[instance.mesh];
             for (primitive, &(first_index, index_count, base_vertex)) in mesh.primitives.iter().zip(&primitive_ranges[instance.mesh]) {
                 let material = &scene.materials[primitive.material];
                 draw_commands.push(DrawCommand {
                     draw_index: draws.len() as u32,
                     index_count,
+                    center: instance.world_from_local.transform_point3(primitive_center(primitive)),
                     state: RasterState {
                         alpha_mask: matches!(material.alpha_mode, AlphaMode::Mask { .. }),
                         double_sided: material.double_sided,
@@ -170,13 +172,20 @@ impl GpuScene {
                     world_from_local: instance.world_from_local.to_cols_array_2d(),
                     normal_from_local: normal_columns.map(|c| c.to_array()),
                     first_index,
-                    index_count,
+                    first_visibility_id: next_visibility_id as u32,
                     base_vertex,
                     material: primitive.material as u32,
                 });
+                next_visibility_id += u64::from(index_count / 3);
             }
         }
-        draw_commands.sort_by_key(|d| d.state);
+        if next_visibility_id > u64::from(u32::MAX) {
+            return Err(Error::InvalidScene(format!(
+                "the scene draws {} triangles; the visibility buffer numbers at most {} (2³² − 1)",
+                next_visibility_id - 1,
+                u32::MAX
+            )));
+        }
 
         let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::from).collect();
         let limit = ctx.limits.max_storage_buffer_binding_size;
@@ -225,12 +234,7 @@ impl GpuScene {
             bind_group,
             frame_uniforms,
             draw_commands,
-            lighting: SceneLighting {
-                sun: scene.sun,
-                ambient: scene.ambient,
-                exposure: scene.exposure,
-                light_count: lights.len() as u32,
-            },
+            lighting: SceneLighting { sun: scene.sun, ambient: scene.ambient, exposure: scene.exposure, light_count: lights.len() as u32 },
             triangle_count: scene.drawn_triangle_count() as u64,
             vertex_count: vertices.len() as u64,
         })
@@ -273,11 +277,11 @@ impl GpuScene {
                     },
                     count: None,
                 },
-                storage(1), // vertices
-                storage(2), // indices
-                storage(3), // draws
-                storage(4), // materials
-                storage(5), // lights
+                storage(1),       // vertices
+                storage(2),       // indices
+                storage(3),       // draws
+                storage(4),       // materials
+                storage(5),       // lights
                 texture_array(6), // colour textures (sRGB)
                 texture_array(7), // data textures (linear)
                 // 8: material sampler
@@ -317,6 +321,14 @@ fn storage_buffer<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, data: &[
         contents: bytemuck::cast_slice(contents),
         usage: wgpu::BufferUsages::STORAGE,
     }))
+}
+
+fn primitive_center(primitive: &crate::scene::Primitive) -> glam::Vec3 {
+    let mut bounds = crate::scene::Bounds::EMPTY;
+    for v in &primitive.vertices {
+        bounds.grow(glam::Vec3::from(v.position));
+    }
+    bounds.center()
 }
 
 /// Scene textures used as colour (sRGB) and as data (linear); a texture used both ways is in both.

@@ -45,7 +45,13 @@ impl ShaderDesc {
         Ok(out)
     }
 
-    fn append(&self, path: &'static str, out: &mut String, seen: &mut HashSet<&'static str>, stack: &mut Vec<&'static str>) -> Result<(), String> {
+    fn append(
+        &self,
+        path: &'static str,
+        out: &mut String,
+        seen: &mut HashSet<&'static str>,
+        stack: &mut Vec<&'static str>,
+    ) -> Result<(), String> {
         if stack.contains(&path) {
             return Err(format!("include cycle: {} -> {path}", stack.join(" -> ")));
         }
@@ -96,10 +102,8 @@ fn include_target(line: &str) -> Option<&str> {
 /// naga test below, so they are reported as GPU errors rather than user errors.
 pub fn create_module(device: &wgpu::Device, desc: &ShaderDesc) -> crate::Result<wgpu::ShaderModule> {
     let source = desc.compose().map_err(crate::Error::Gpu)?;
-    Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(desc.entry),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    }))
+    Ok(device
+        .create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(desc.entry), source: wgpu::ShaderSource::Wgsl(source.into()) }))
 }
 
 /// Every shader the renderer builds, with every substitution it uses: the naga test validates each.

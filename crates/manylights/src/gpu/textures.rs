@@ -56,11 +56,7 @@ impl TextureArray {
                 TextureSpace::Srgb => "color textures",
                 TextureSpace::Linear => "data textures",
             }),
-            size: wgpu::Extent3d {
-                width: size,
-                height: size,
-                depth_or_array_layers: layer_count,
-            },
+            size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layer_count },
             mip_level_count: mip_count,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -69,12 +65,7 @@ impl TextureArray {
             view_formats: &[],
         });
 
-        let white = Texture {
-            name: "white".into(),
-            width: 1,
-            height: 1,
-            rgba8: vec![255; 4],
-        };
+        let white = Texture { name: "white".into(), width: 1, height: 1, rgba8: vec![255; 4] };
         let sources: Vec<&Texture> = if used.is_empty() { vec![&white] } else { used.iter().map(|&t| &textures[t]).collect() };
         for (layer, source) in sources.iter().enumerate() {
             for (mip, level) in mip_chain(source, size, mip_count, space)?.iter().enumerate() {
@@ -86,23 +77,13 @@ impl TextureArray {
                         aspect: wgpu::TextureAspect::All,
                     },
                     level.as_raw(),
-                    wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(level.width() * 4),
-                        rows_per_image: Some(level.height()),
-                    },
-                    wgpu::Extent3d {
-                        width: level.width(),
-                        height: level.height(),
-                        depth_or_array_layers: 1,
-                    },
+                    wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(level.width() * 4), rows_per_image: Some(level.height()) },
+                    wgpu::Extent3d { width: level.width(), height: level.height(), depth_or_array_layers: 1 },
                 );
             }
         }
-        let view = texture.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
+        let view = texture
+            .create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() });
         let layers = used.iter().enumerate().map(|(layer, &t)| (t, layer as i32)).collect();
         Ok(Self { texture, view, layers })
     }
@@ -110,8 +91,9 @@ impl TextureArray {
 
 /// The image resampled to `size`² and its mips, filtered in linear light for sRGB images.
 fn mip_chain(source: &Texture, size: u32, mip_count: u32, space: TextureSpace) -> Result<Vec<RgbaImage>> {
-    let image = RgbaImage::from_raw(source.width, source.height, source.rgba8.clone())
-        .ok_or_else(|| Error::InvalidScene(format!("texture `{}`: pixel data does not match {}×{}", source.name, source.width, source.height)))?;
+    let image = RgbaImage::from_raw(source.width, source.height, source.rgba8.clone()).ok_or_else(|| {
+        Error::InvalidScene(format!("texture `{}`: pixel data does not match {}×{}", source.name, source.width, source.height))
+    })?;
     let mut level = to_linear(&image, space);
     let mut chain = Vec::with_capacity(mip_count as usize);
     for mip in 0..mip_count {

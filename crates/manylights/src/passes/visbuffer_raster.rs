@@ -1,12 +1,12 @@
-//! Visibility-buffer raster: depth and (draw + 1, triangle) per pixel. See `visbuffer_raster.wgsl`.
+//! Visibility-buffer raster: depth and a visibility id (draw and triangle) per pixel. See `visbuffer_raster.wgsl`.
 
 use std::collections::HashMap;
 
+use crate::gpu::scene::{DrawCommand, RasterState};
 use crate::gpu::{shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
-use crate::gpu::scene::RasterState;
 use crate::Result;
 
-pub const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+pub const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 pub struct VisbufferRaster {
@@ -31,7 +31,12 @@ impl VisbufferRaster {
         Ok(Self { pipelines })
     }
 
-    fn create_pipeline(device: &wgpu::Device, layout: &wgpu::PipelineLayout, module: &wgpu::ShaderModule, state: RasterState) -> wgpu::RenderPipeline {
+    fn create_pipeline(
+        device: &wgpu::Device,
+        layout: &wgpu::PipelineLayout,
+        module: &wgpu::ShaderModule,
+        state: RasterState,
+    ) -> wgpu::RenderPipeline {
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("visbuffer_raster"),
             layout: Some(layout),
@@ -72,26 +77,26 @@ impl VisbufferRaster {
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&mut GpuTimer>,
         scene: &GpuScene,
+        eye: glam::Vec3,
         visibility: &wgpu::TextureView,
         depth: &wgpu::TextureView,
     ) {
+        // Opaque before alpha-masked (whose discard defeats early depth tests), each front to back:
+        // this pass is bound by fragment throughput, and early-Z rejects what nearer draws hide.
+        let mut order: Vec<&DrawCommand> = scene.draw_commands.iter().collect();
+        order.sort_by(|a, b| a.state.cmp(&b.state).then(a.center.distance_squared(eye).total_cmp(&b.center.distance_squared(eye))));
+
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("visbuffer_raster"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view: visibility,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store },
             })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0.0),
-                    store: wgpu::StoreOp::Store,
-                }),
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),
             timestamp_writes: timer.map(|t| t.render_pass("visbuffer_raster")),
@@ -100,7 +105,7 @@ impl VisbufferRaster {
         });
         pass.set_bind_group(0, &scene.bind_group, &[]);
         let mut current = None;
-        for command in &scene.draw_commands {
+        for command in order {
             if current != Some(command.state) {
                 pass.set_pipeline(&self.pipelines[&command.state]);
                 current = Some(command.state);

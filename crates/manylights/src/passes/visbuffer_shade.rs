@@ -13,7 +13,13 @@ pub struct VisbufferShade {
 
 impl VisbufferShade {
     /// Keep the layout in sync with group 1 of `visbuffer_shade.wgsl`.
-    pub fn new(ctx: &GpuContext, scene: &GpuScene, method: LightMethod, visibility: &wgpu::TextureView, hdr: &wgpu::TextureView) -> Result<Self> {
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        method: LightMethod,
+        visibility: &wgpu::TextureView,
+        hdr: &wgpu::TextureView,
+    ) -> Result<Self> {
         let device = &ctx.device;
         let shader = ShaderDesc::new("passes/visbuffer_shade.wgsl").with("LIGHT_ENUMERATION", method.enumeration_module());
         let module = shaders::create_module(device, &shader)?;
@@ -61,14 +67,8 @@ impl VisbufferShade {
             label: Some("visbuffer_shade"),
             layout: &layout,
             entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(visibility),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(hdr),
-                },
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(visibility) },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(hdr) },
             ],
         });
         Ok(Self { pipeline, bind_group })

@@ -47,6 +47,21 @@ fn interpolate3(b: vec3<f32>, a0: vec3<f32>, a1: vec3<f32>, a2: vec3<f32>) -> ve
     return a0 * b.x + a1 * b.y + a2 * b.z;
 }
 
+// The draw whose visibility ids contain `id`: the last one starting at or before it.
+fn find_draw(id: u32) -> u32 {
+    var low = 0u;
+    var high = arrayLength(&draws) - 1u;
+    while low < high {
+        let mid = (low + high + 1u) / 2u;
+        if draws[mid].first_visibility_id <= id {
+            low = mid;
+        } else {
+            high = mid - 1u;
+        }
+    }
+    return low;
+}
+
 fn world_direction(draw: Draw, v: vec3<f32>) -> vec3<f32> {
     return (draw.world_from_local * vec4<f32>(v, 0.0)).xyz;
 }
@@ -63,14 +78,14 @@ fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let pixel = vec2<f32>(id.xy) + 0.5;
     let ray = camera_ray(pixel);
-    let ids = textureLoad(visibility, id.xy, 0).xy;
-    if ids.x == 0u {
+    let visibility_id = textureLoad(visibility, id.xy, 0).x;
+    if visibility_id == 0u {
         textureStore(hdr_output, id.xy, vec4<f32>(sky_radiance(ray.dir), 1.0));
         return;
     }
 
-    let draw = draws[ids.x - 1u];
-    let first = draw.first_index + ids.y * 3u;
+    let draw = draws[find_draw(visibility_id)];
+    let first = draw.first_index + (visibility_id - draw.first_visibility_id) * 3u;
     let v0 = vertices[draw.base_vertex + indices[first]];
     let v1 = vertices[draw.base_vertex + indices[first + 1u]];
     let v2 = vertices[draw.base_vertex + indices[first + 2u]];

@@ -3,7 +3,7 @@
 //! same shading loop ran 35× slower as a fragment shader.
 //!
 //! ```text
-//! GpuScene ─▶ visbuffer_raster ─▶ visibility (Rg32Uint) + depth
+//! GpuScene ─▶ visbuffer_raster ─▶ visibility (R32Uint) + depth
 //!                                   │
 //!                                   ▼
 //!             visbuffer_shade (material + shading core) ─▶ hdr (Rgba16Float)
@@ -35,11 +35,7 @@ impl FrameTargets {
         let target = |label, format, usage| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
@@ -73,7 +69,8 @@ impl VisbufferPipeline {
     pub fn new(ctx: &GpuContext, scene: &GpuScene, method: LightMethod, width: u32, height: u32) -> Result<Self> {
         let targets = FrameTargets::new(&ctx.device, width, height);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let (visibility_view, depth_view, hdr_view, ldr_view) = (view(&targets.visibility), view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
+        let (visibility_view, depth_view, hdr_view, ldr_view) =
+            (view(&targets.visibility), view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
         Ok(Self {
             raster: VisbufferRaster::new(ctx, scene)?,
             shade: VisbufferShade::new(ctx, scene, method, &visibility_view, &hdr_view)?,
@@ -84,10 +81,10 @@ impl VisbufferPipeline {
         })
     }
 
-    /// Records one frame. The frame uniforms must already be written.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, scene: &GpuScene) {
+    /// Records one frame seen from `eye`. The frame uniforms must already be written.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, scene: &GpuScene, eye: glam::Vec3) {
         let (width, height) = (self.targets.width, self.targets.height);
-        self.raster.record(encoder, timer.as_deref_mut(), scene, &self.visibility_view, &self.depth_view);
+        self.raster.record(encoder, timer.as_deref_mut(), scene, eye, &self.visibility_view, &self.depth_view);
         self.shade.record(encoder, timer.as_deref_mut(), scene, width, height);
         self.tonemap.record(encoder, timer.as_deref_mut(), width, height);
     }

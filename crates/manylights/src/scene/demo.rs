@@ -12,18 +12,12 @@ use std::f32::consts::PI;
 use glam::{Mat4, Quat, Vec3, Vec4};
 
 use super::{
-    tangents, AlphaMode, Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Sun,
-    Texture, TextureRef, Vertex, Wrap,
+    tangents, AlphaMode, Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Sun, Texture, TextureRef, Vertex, Wrap,
 };
 
 /// Builds the demo scene. Deterministic: every call returns the same scene.
 pub fn demo_scene() -> Scene {
-    let textures = vec![
-        tile_colour(),
-        tile_normal(),
-        metal_stripes(),
-        perforated_paint(),
-    ];
+    let textures = vec![tile_colour(), tile_normal(), metal_stripes(), perforated_paint()];
     let materials = materials();
     let meshes = vec![
         mesh("floor", plane(10.0, 10.0, 5.0), FLOOR),
@@ -35,42 +29,20 @@ pub fn demo_scene() -> Scene {
         mesh("striped block", cuboid(Vec3::new(1.4, 0.8, 0.8)), STRIPES),
         mesh("perforated panel", plane(2.0, 2.0, 1.0), PANEL),
     ];
-    let place = |mesh: usize, world_from_local: Mat4| Instance {
-        mesh,
-        world_from_local,
-    };
+    let place = |mesh: usize, world_from_local: Mat4| Instance { mesh, world_from_local };
     let turn = |degrees: f32| Quat::from_rotation_y(degrees.to_radians());
     let instances = vec![
         place(0, Mat4::IDENTITY),
         place(1, upright(Vec3::Z, Vec3::new(0.0, 2.5, -5.0))),
         place(1, upright(Vec3::X, Vec3::new(-5.0, 2.5, 0.0))),
         // The crate mesh twice: a second, smaller crate stacked on the first.
-        place(
-            2,
-            Mat4::from_rotation_translation(turn(20.0), Vec3::new(-3.3, 0.5, -3.3)),
-        ),
-        place(
-            2,
-            Mat4::from_scale_rotation_translation(
-                Vec3::splat(0.7),
-                turn(55.0),
-                Vec3::new(-3.3, 1.35, -3.3),
-            ),
-        ),
+        place(2, Mat4::from_rotation_translation(turn(20.0), Vec3::new(-3.3, 0.5, -3.3))),
+        place(2, Mat4::from_scale_rotation_translation(Vec3::splat(0.7), turn(55.0), Vec3::new(-3.3, 1.35, -3.3))),
         place(3, Mat4::from_translation(Vec3::new(-0.6, 0.8, -2.2))),
         place(4, Mat4::from_translation(Vec3::new(1.9, 0.6, -0.2))),
         place(5, Mat4::from_translation(Vec3::new(-1.4, 0.25, 1.4))),
-        place(
-            6,
-            Mat4::from_rotation_translation(turn(-15.0), Vec3::new(1.6, 0.4, -3.4)),
-        ),
-        place(
-            7,
-            upright(
-                Vec3::new(-0.6, 0.0, 1.0).normalize(),
-                Vec3::new(3.4, 1.0, -1.4),
-            ),
-        ),
+        place(6, Mat4::from_rotation_translation(turn(-15.0), Vec3::new(1.6, 0.4, -3.4))),
+        place(7, upright(Vec3::new(-0.6, 0.0, 1.0).normalize(), Vec3::new(3.4, 1.0, -1.4))),
     ];
     Scene {
         meshes,
@@ -78,18 +50,8 @@ pub fn demo_scene() -> Scene {
         textures,
         instances,
         lights: lights(),
-        cameras: vec![Camera::look_at(
-            "demo",
-            Vec3::new(4.6, 3.1, 7.2),
-            Vec3::new(-0.6, 0.9, -1.4),
-            52f32.to_radians(),
-            0.05,
-        )],
-        sun: Some(Sun {
-            direction: Vec3::new(-0.45, -0.35, -0.82).normalize(),
-            color: Vec3::new(1.0, 0.82, 0.62),
-            illuminance: 2.5,
-        }),
+        cameras: vec![Camera::look_at("demo", Vec3::new(4.6, 3.1, 7.2), Vec3::new(-0.6, 0.9, -1.4), 52f32.to_radians(), 0.05)],
+        sun: Some(Sun { direction: Vec3::new(-0.45, -0.35, -0.82).normalize(), color: Vec3::new(1.0, 0.82, 0.62), illuminance: 2.5 }),
         ambient: Vec3::new(0.025, 0.03, 0.04),
         exposure: 1.0,
     }
@@ -112,13 +74,7 @@ const METAL_STRIPES: usize = 2;
 const PERFORATED_PAINT: usize = 3;
 
 fn materials() -> Vec<Material> {
-    let repeat = |texture| {
-        Some(TextureRef {
-            texture,
-            wrap_u: Wrap::Repeat,
-            wrap_v: Wrap::Repeat,
-        })
-    };
+    let repeat = |texture| Some(TextureRef { texture, wrap_u: Wrap::Repeat, wrap_v: Wrap::Repeat });
     let dielectric = |name: &str, rgb: [f32; 3], roughness_factor| Material {
         name: name.into(),
         base_color_factor: Vec3::from(rgb).extend(1.0),
@@ -134,15 +90,9 @@ fn materials() -> Vec<Material> {
         },
         dielectric("plaster", [0.8, 0.78, 0.74], 0.9),
         dielectric("crate", [0.55, 0.42, 0.3], 0.85),
-        Material {
-            metallic_factor: 1.0,
-            ..dielectric("gold", [1.0, 0.78, 0.34], 0.3)
-        },
+        Material { metallic_factor: 1.0, ..dielectric("gold", [1.0, 0.78, 0.34], 0.3) },
         dielectric("red plastic", [0.8, 0.08, 0.06], 0.35),
-        Material {
-            emissive_factor: Vec3::new(4.0, 1.6, 0.4),
-            ..dielectric("glow", [0.1; 3], 0.5)
-        },
+        Material { emissive_factor: Vec3::new(4.0, 1.6, 0.4), ..dielectric("glow", [0.1; 3], 0.5) },
         Material {
             name: "striped metal".into(),
             base_color_factor: Vec4::new(0.75, 0.75, 0.78, 1.0),
@@ -168,16 +118,8 @@ fn lights() -> Vec<Light> {
         intensity,
         range,
     };
-    let spot = |position: Vec3,
-                target: Vec3,
-                cone_degrees: (f32, f32),
-                color: [f32; 3],
-                intensity,
-                range| Light {
-        kind: LightKind::Spot {
-            inner_cone_angle: cone_degrees.0.to_radians(),
-            outer_cone_angle: cone_degrees.1.to_radians(),
-        },
+    let spot = |position: Vec3, target: Vec3, cone_degrees: (f32, f32), color: [f32; 3], intensity, range| Light {
+        kind: LightKind::Spot { inner_cone_angle: cone_degrees.0.to_radians(), outer_cone_angle: cone_degrees.1.to_radians() },
         position,
         direction: (target - position).normalize(),
         color: Vec3::from(color),
@@ -192,22 +134,8 @@ fn lights() -> Vec<Light> {
         // Just above the glowing sphere, so that it appears to light its surroundings.
         point([-1.4, 0.75, 1.4], [1.0, 0.5, 0.15], 2.0, 5.0),
         // Pools on the floor, around the red sphere and in front of the crates.
-        spot(
-            Vec3::new(1.9, 4.2, 1.2),
-            Vec3::new(2.1, 0.0, 0.4),
-            (14.0, 24.0),
-            [1.0, 0.95, 0.85],
-            80.0,
-            9.0,
-        ),
-        spot(
-            Vec3::new(-3.0, 4.0, 1.0),
-            Vec3::new(-2.6, 0.0, -1.8),
-            (12.0, 22.0),
-            [0.75, 0.85, 1.0],
-            70.0,
-            10.0,
-        ),
+        spot(Vec3::new(1.9, 4.2, 1.2), Vec3::new(2.1, 0.0, 0.4), (14.0, 24.0), [1.0, 0.95, 0.85], 80.0, 9.0),
+        spot(Vec3::new(-3.0, 4.0, 1.0), Vec3::new(-2.6, 0.0, -1.8), (12.0, 22.0), [0.75, 0.85, 1.0], 70.0, 10.0),
     ]
 }
 
@@ -215,34 +143,16 @@ fn lights() -> Vec<Light> {
 fn upright(normal: Vec3, center: Vec3) -> Mat4 {
     let x = Vec3::Y.cross(normal).normalize();
     // Local z (the plane's depth) becomes -Y, so the frame stays right-handed.
-    Mat4::from_cols(
-        x.extend(0.0),
-        normal.extend(0.0),
-        x.cross(normal).extend(0.0),
-        center.extend(1.0),
-    )
+    Mat4::from_cols(x.extend(0.0), normal.extend(0.0), x.cross(normal).extend(0.0), center.extend(1.0))
 }
 
 fn mesh(name: &str, (mut vertices, mut indices): (Vec<Vertex>, Vec<u32>), material: usize) -> Mesh {
     tangents::generate(&mut vertices, &mut indices);
-    Mesh {
-        name: name.into(),
-        primitives: vec![Primitive {
-            vertices,
-            indices,
-            material,
-        }],
-    }
+    Mesh { name: name.into(), primitives: vec![Primitive { vertices, indices, material }] }
 }
 
 fn vertex(position: Vec3, normal: Vec3, u: f32, v: f32) -> Vertex {
-    Vertex {
-        position: position.to_array(),
-        u,
-        normal: normal.to_array(),
-        v,
-        tangent: [0.0; 4],
-    }
+    Vertex { position: position.to_array(), u, normal: normal.to_array(), v, tangent: [0.0; 4] }
 }
 
 /// A `width` × `depth` rectangle in the XZ plane facing +Y, its texture repeated `repeat` times
@@ -250,19 +160,9 @@ fn vertex(position: Vec3, normal: Vec3, u: f32, v: f32) -> Vertex {
 fn plane(width: f32, depth: f32, repeat: f32) -> (Vec<Vertex>, Vec<u32>) {
     let corner = |s: f32, t: f32| {
         let position = Vec3::new(s * width * 0.5, 0.0, t * depth * 0.5);
-        vertex(
-            position,
-            Vec3::Y,
-            (s + 1.0) * 0.5 * repeat,
-            (t + 1.0) * 0.5 * repeat,
-        )
+        vertex(position, Vec3::Y, (s + 1.0) * 0.5 * repeat, (t + 1.0) * 0.5 * repeat)
     };
-    let vertices = vec![
-        corner(-1.0, -1.0),
-        corner(1.0, -1.0),
-        corner(1.0, 1.0),
-        corner(-1.0, 1.0),
-    ];
+    let vertices = vec![corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)];
     (vertices, vec![0, 3, 1, 1, 3, 2])
 }
 
@@ -271,20 +171,9 @@ fn plane(width: f32, depth: f32, repeat: f32) -> (Vec<Vertex>, Vec<u32>) {
 fn cuboid(size: Vec3) -> (Vec<Vertex>, Vec<u32>) {
     let mut vertices = Vec::new();
     let mut indices = Vec::new();
-    for normal in [
-        Vec3::X,
-        Vec3::NEG_X,
-        Vec3::Y,
-        Vec3::NEG_Y,
-        Vec3::Z,
-        Vec3::NEG_Z,
-    ] {
+    for normal in [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z] {
         // u × v = normal, so corners in (s, t) order are counter-clockwise seen from outside.
-        let u = if normal.y.abs() > 0.5 {
-            Vec3::X
-        } else {
-            Vec3::Y.cross(normal)
-        };
+        let u = if normal.y.abs() > 0.5 { Vec3::X } else { Vec3::Y.cross(normal) };
         let v = normal.cross(u);
         let first = vertices.len() as u32;
         for (s, t) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
@@ -305,17 +194,8 @@ fn sphere(radius: f32) -> (Vec<Vertex>, Vec<u32>) {
         let theta = PI * i as f32 / STACKS as f32;
         for j in 0..=SLICES {
             let phi = 2.0 * PI * j as f32 / SLICES as f32;
-            let normal = Vec3::new(
-                theta.sin() * phi.sin(),
-                theta.cos(),
-                theta.sin() * phi.cos(),
-            );
-            vertices.push(vertex(
-                normal * radius,
-                normal,
-                j as f32 / SLICES as f32,
-                i as f32 / STACKS as f32,
-            ));
+            let normal = Vec3::new(theta.sin() * phi.sin(), theta.cos(), theta.sin() * phi.cos());
+            vertices.push(vertex(normal * radius, normal, j as f32 / SLICES as f32, i as f32 / STACKS as f32));
         }
     }
     let at = |i: u32, j: u32| i * (SLICES + 1) + j;
@@ -359,16 +239,8 @@ fn hash(x: u32, y: u32) -> f32 {
 }
 
 fn texture(name: &str, size: u32, texel: impl Fn(u32, u32) -> [u8; 4]) -> Texture {
-    let rgba8 = (0..size)
-        .flat_map(|y| (0..size).map(move |x| (x, y)))
-        .flat_map(|(x, y)| texel(x, y))
-        .collect();
-    Texture {
-        name: name.into(),
-        width: size,
-        height: size,
-        rgba8,
-    }
+    let rgba8 = (0..size).flat_map(|y| (0..size).map(move |x| (x, y))).flat_map(|(x, y)| texel(x, y)).collect();
+    Texture { name: name.into(), width: size, height: size, rgba8 }
 }
 
 fn unorm8(value: f32) -> u8 {
@@ -404,12 +276,7 @@ fn tile_normal() -> Texture {
         let (left, right) = (height(x + n - 1, y), height(x + 1, y));
         let (up, down) = (height(x, y + n - 1), height(x, y + 1));
         // Rows run down the image and green points up it, hence the sign of the y slope.
-        let normal = Vec3::new(
-            (left - right) * 0.5 * STRENGTH,
-            (down - up) * 0.5 * STRENGTH,
-            1.0,
-        )
-        .normalize();
+        let normal = Vec3::new((left - right) * 0.5 * STRENGTH, (down - up) * 0.5 * STRENGTH, 1.0).normalize();
         (normal * 0.5 + 0.5).extend(1.0).to_array().map(unorm8)
     })
 }
@@ -417,13 +284,7 @@ fn tile_normal() -> Texture {
 /// glTF metallic-roughness layout (G = roughness, B = metallic): polished metal stripes alternating
 /// with rough dielectric ones.
 fn metal_stripes() -> Texture {
-    texture("demo metal stripes", 64, |x, _| {
-        if (x / 8) % 2 == 0 {
-            [255, unorm8(0.2), 255, 255]
-        } else {
-            [255, unorm8(0.8), 0, 255]
-        }
-    })
+    texture("demo metal stripes", 64, |x, _| if (x / 8) % 2 == 0 { [255, unorm8(0.2), 255, 255] } else { [255, unorm8(0.8), 0, 255] })
 }
 
 /// Painted sheet metal with a grid of round holes (alpha 0) inside a solid rim.
@@ -450,51 +311,24 @@ mod tests {
         let scene = demo_scene();
         scene.validate().unwrap();
         assert!(!scene.cameras.is_empty());
-        assert!(scene
-            .materials
-            .iter()
-            .any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }) && m.double_sided));
-        assert!(scene
-            .materials
-            .iter()
-            .any(|m| m.emissive_factor.max_element() > 1.0));
-        assert!(scene
-            .materials
-            .iter()
-            .any(|m| m.metallic_roughness_texture.is_some()));
+        assert!(scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }) && m.double_sided));
+        assert!(scene.materials.iter().any(|m| m.emissive_factor.max_element() > 1.0));
+        assert!(scene.materials.iter().any(|m| m.metallic_roughness_texture.is_some()));
         assert!(scene.materials.iter().any(|m| m.normal_texture.is_some()));
         let uses = |mesh| scene.instances.iter().filter(|i| i.mesh == mesh).count();
-        assert!(
-            (0..scene.meshes.len()).any(|m| uses(m) >= 2),
-            "a mesh is instanced"
-        );
-        let spots = scene
-            .lights
-            .iter()
-            .filter(|l| matches!(l.kind, LightKind::Spot { .. }))
-            .count();
+        assert!((0..scene.meshes.len()).any(|m| uses(m) >= 2), "a mesh is instanced");
+        let spots = scene.lights.iter().filter(|l| matches!(l.kind, LightKind::Spot { .. })).count();
         assert!((3..=6).contains(&(scene.lights.len() - spots)) && (1..=2).contains(&spots));
         assert!(scene.sun.is_some());
-        assert!(scene
-            .textures
-            .iter()
-            .all(|t| t.width <= 256 && t.height <= 256));
+        assert!(scene.textures.iter().all(|t| t.width <= 256 && t.height <= 256));
     }
 
     #[test]
     fn demo_scene_is_deterministic() {
         let (a, b) = (demo_scene(), demo_scene());
         assert_eq!(a.lights, b.lights);
-        assert!(a
-            .textures
-            .iter()
-            .zip(&b.textures)
-            .all(|(x, y)| x.rgba8 == y.rgba8));
-        assert!(a
-            .meshes
-            .iter()
-            .zip(&b.meshes)
-            .all(|(x, y)| x.primitives[0].vertices == y.primitives[0].vertices));
+        assert!(a.textures.iter().zip(&b.textures).all(|(x, y)| x.rgba8 == y.rgba8));
+        assert!(a.meshes.iter().zip(&b.meshes).all(|(x, y)| x.primitives[0].vertices == y.primitives[0].vertices));
     }
 
     #[test]
@@ -506,18 +340,11 @@ mod tests {
                 let [pa, pb, pc] = [a, b, c].map(|v| Vec3::from(v.position));
                 let geometric = (pb - pa).cross(pc - pa);
                 let shading = Vec3::from(a.normal) + Vec3::from(b.normal) + Vec3::from(c.normal);
-                assert!(
-                    geometric.dot(shading) > 0.0,
-                    "{}: clockwise triangle",
-                    mesh.name
-                );
+                assert!(geometric.dot(shading) > 0.0, "{}: clockwise triangle", mesh.name);
             }
             for v in &p.vertices {
                 let t = Vec4::from(v.tangent);
-                assert!(
-                    (t.truncate().length() - 1.0).abs() < 1e-3
-                        && t.truncate().dot(Vec3::from(v.normal)).abs() < 1e-3
-                );
+                assert!((t.truncate().length() - 1.0).abs() < 1e-3 && t.truncate().dot(Vec3::from(v.normal)).abs() < 1e-3);
                 // Every layout is an upright, unmirrored image.
                 assert_eq!(t.w, 1.0, "{}", mesh.name);
             }
@@ -537,9 +364,7 @@ mod tests {
         // Floor and walls (the first three instances) extend beyond the frame by design.
         for instance in &scene.instances[3..] {
             for v in &scene.meshes[instance.mesh].primitives[0].vertices {
-                let p = instance
-                    .world_from_local
-                    .transform_point3(Vec3::from(v.position));
+                let p = instance.world_from_local.transform_point3(Vec3::from(v.position));
                 assert!(in_view(p), "{} at {p}", scene.meshes[instance.mesh].name);
             }
         }
@@ -553,10 +378,7 @@ mod tests {
         let panel = perforated_paint();
         let alpha: Vec<u8> = panel.rgba8.chunks_exact(4).map(|p| p[3]).collect();
         let holes = alpha.iter().filter(|&&a| a == 0).count();
-        assert!(
-            holes > alpha.len() / 10 && holes < alpha.len() / 2,
-            "{holes}"
-        );
+        assert!(holes > alpha.len() / 10 && holes < alpha.len() / 2, "{holes}");
         assert_eq!(alpha[0], 255);
     }
 }

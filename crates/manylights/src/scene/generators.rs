@@ -28,13 +28,7 @@ pub struct ScatterLights {
 
 impl Default for ScatterLights {
     fn default() -> Self {
-        Self {
-            count: 256,
-            seed: 1,
-            offset: None,
-            range: None,
-            intensity: None,
-        }
+        Self { count: 256, seed: 1, offset: None, range: None, intensity: None }
     }
 }
 
@@ -50,10 +44,7 @@ pub fn scatter_lights(scene: &Scene, params: &ScatterLights) -> Result<Vec<Light
     let surfaces = Surfaces::new(scene);
     let area = surfaces.total_area();
     if !(area.is_finite() && area > 0.0) {
-        return Err(Error::InvalidConfig(format!(
-            "cannot scatter {} lights: the scene has no triangles with any area",
-            params.count
-        )));
+        return Err(Error::InvalidConfig(format!("cannot scatter {} lights: the scene has no triangles with any area", params.count)));
     }
     let range = params.range.unwrap_or_else(|| {
         let typical = (scene.bounds().diagonal() * 0.04).max(1e-3);
@@ -93,10 +84,7 @@ pub fn add_scattered_lights(scene: &mut Scene, params: &ScatterLights) -> Result
 fn check(params: &ScatterLights) -> Result<()> {
     let invalid = |m: String| Err(Error::InvalidConfig(format!("scattered lights: {m}")));
     if params.count > MAX_SCATTERED_LIGHTS {
-        return invalid(format!(
-            "count {} exceeds the maximum of {MAX_SCATTERED_LIGHTS}",
-            params.count
-        ));
+        return invalid(format!("count {} exceeds the maximum of {MAX_SCATTERED_LIGHTS}", params.count));
     }
     if let Some(offset) = params.offset {
         if !(offset.is_finite() && offset >= 0.0) {
@@ -105,16 +93,12 @@ fn check(params: &ScatterLights) -> Result<()> {
     }
     if let Some((min, max)) = params.range {
         if !(min.is_finite() && max.is_finite() && min > 0.0 && min <= max) {
-            return invalid(format!(
-                "range [{min}, {max}] must be finite with 0 < min ≤ max"
-            ));
+            return invalid(format!("range [{min}, {max}] must be finite with 0 < min ≤ max"));
         }
     }
     if let Some((min, max)) = params.intensity {
         if !(min.is_finite() && max.is_finite() && min >= 0.0 && min <= max) {
-            return invalid(format!(
-                "intensity [{min}, {max}] must be finite with 0 ≤ min ≤ max"
-            ));
+            return invalid(format!("intensity [{min}, {max}] must be finite with 0 ≤ min ≤ max"));
         }
     }
     Ok(())
@@ -149,17 +133,8 @@ impl<'a> Surfaces<'a> {
                 }
             }
         }
-        let world_from_local_normal = scene
-            .instances
-            .iter()
-            .map(|i| Mat3::from_mat4(i.world_from_local).inverse().transpose())
-            .collect();
-        Self {
-            scene,
-            world_from_local_normal,
-            triangles,
-            cumulative_area,
-        }
+        let world_from_local_normal = scene.instances.iter().map(|i| Mat3::from_mat4(i.world_from_local).inverse().transpose()).collect();
+        Self { scene, world_from_local_normal, triangles, cumulative_area }
     }
 
     fn total_area(&self) -> f64 {
@@ -169,14 +144,10 @@ impl<'a> Surfaces<'a> {
     /// World-space positions and normals of one triangle's corners.
     fn corners(&self, instance: usize, primitive: usize, first: usize) -> [(Vec3, Vec3); 3] {
         let world_from_local = self.scene.instances[instance].world_from_local;
-        let primitive =
-            &self.scene.meshes[self.scene.instances[instance].mesh].primitives[primitive];
+        let primitive = &self.scene.meshes[self.scene.instances[instance].mesh].primitives[primitive];
         [0, 1, 2].map(|k| {
             let v = &primitive.vertices[primitive.indices[first + k] as usize];
-            (
-                world_from_local.transform_point3(Vec3::from(v.position)),
-                self.world_from_local_normal[instance] * Vec3::from(v.normal),
-            )
+            (world_from_local.transform_point3(Vec3::from(v.position)), self.world_from_local_normal[instance] * Vec3::from(v.normal))
         })
     }
 
@@ -185,10 +156,7 @@ impl<'a> Surfaces<'a> {
     fn sample(&self, rng: &mut Pcg64) -> (Vec3, Vec3) {
         let target = rng.random::<f64>() * self.total_area();
         // Zero-area triangles have no width in the table, so they are never picked.
-        let t = self
-            .cumulative_area
-            .partition_point(|&a| a <= target)
-            .min(self.triangles.len() - 1);
+        let t = self.cumulative_area.partition_point(|&a| a <= target).min(self.triangles.len() - 1);
         let (ii, pi, first) = self.triangles[t];
         let [(a, na), (b, nb), (c, nc)] = self.corners(ii as usize, pi as usize, first as usize);
 
@@ -198,11 +166,7 @@ impl<'a> Surfaces<'a> {
         let point = a * wa + b * wb + c * wc;
         let geometric = (b - a).cross(c - a).normalize_or_zero();
         let shading = na * wa + nb * wb + nc * wc;
-        let normal = if geometric.dot(shading) < 0.0 {
-            -geometric
-        } else {
-            geometric
-        };
+        let normal = if geometric.dot(shading) < 0.0 { -geometric } else { geometric };
         (point, normal)
     }
 }
@@ -229,37 +193,18 @@ mod tests {
 
     /// A 4 × 4 floor at y = 0 facing up, placed twice: as is and flipped upside down at y = 2.
     fn two_floors() -> Scene {
-        let corner = |x: f32, z: f32| Vertex {
-            position: [x, 0.0, z],
-            normal: [0.0, 1.0, 0.0],
-            ..Vertex::default()
-        };
+        let corner = |x: f32, z: f32| Vertex { position: [x, 0.0, z], normal: [0.0, 1.0, 0.0], ..Vertex::default() };
         let floor = Primitive {
-            vertices: vec![
-                corner(-2.0, -2.0),
-                corner(-2.0, 2.0),
-                corner(2.0, 2.0),
-                corner(2.0, -2.0),
-            ],
+            vertices: vec![corner(-2.0, -2.0), corner(-2.0, 2.0), corner(2.0, 2.0), corner(2.0, -2.0)],
             indices: vec![0, 1, 2, 0, 2, 3],
             material: 0,
         };
         Scene {
-            meshes: vec![Mesh {
-                name: "floor".into(),
-                primitives: vec![floor],
-            }],
+            meshes: vec![Mesh { name: "floor".into(), primitives: vec![floor] }],
             materials: vec![Material::default()],
             instances: vec![
-                Instance {
-                    mesh: 0,
-                    world_from_local: Mat4::IDENTITY,
-                },
-                Instance {
-                    mesh: 0,
-                    world_from_local: Mat4::from_translation(Vec3::Y * 2.0)
-                        * Mat4::from_rotation_x(std::f32::consts::PI),
-                },
+                Instance { mesh: 0, world_from_local: Mat4::IDENTITY },
+                Instance { mesh: 0, world_from_local: Mat4::from_translation(Vec3::Y * 2.0) * Mat4::from_rotation_x(std::f32::consts::PI) },
             ],
             ..Scene::default()
         }
@@ -268,10 +213,7 @@ mod tests {
     #[test]
     fn same_seed_same_lights_different_seed_different_lights() {
         let scene = two_floors();
-        let params = ScatterLights {
-            count: 100,
-            ..Default::default()
-        };
+        let params = ScatterLights { count: 100, ..Default::default() };
         let a = scatter_lights(&scene, &params).unwrap();
         assert_eq!(a, scatter_lights(&scene, &params).unwrap());
         let b = scatter_lights(&scene, &ScatterLights { seed: 2, ..params }).unwrap();
@@ -282,11 +224,7 @@ mod tests {
     #[test]
     fn lights_sit_at_the_offset_on_the_normal_side_of_a_surface() {
         let scene = two_floors();
-        let params = ScatterLights {
-            count: 500,
-            offset: Some(0.25),
-            ..Default::default()
-        };
+        let params = ScatterLights { count: 500, offset: Some(0.25), ..Default::default() };
         let lights = scatter_lights(&scene, &params).unwrap();
         for l in &lights {
             let p = l.position;
@@ -298,10 +236,7 @@ mod tests {
             assert!(crate::scene::validate_light(l).is_ok());
         }
         let lower = lights.iter().filter(|l| l.position.y < 1.0).count();
-        assert!(
-            (200..300).contains(&lower),
-            "equal areas get about equal shares: {lower} of 500"
-        );
+        assert!((200..300).contains(&lower), "equal areas get about equal shares: {lower} of 500");
     }
 
     #[test]
@@ -311,28 +246,15 @@ mod tests {
         assert_eq!(lights.len(), 256);
         let diagonal = scene.bounds().diagonal();
         for l in &lights {
-            assert!(
-                l.range >= diagonal * 0.02 - 1e-6 && l.range <= diagonal * 0.06 + 1e-6,
-                "{}",
-                l.range
-            );
+            assert!(l.range >= diagonal * 0.02 - 1e-6 && l.range <= diagonal * 0.06 + 1e-6, "{}", l.range);
             assert!((l.intensity - (l.range * 0.5).powi(2)).abs() < 1e-5);
-            assert!(
-                (l.color.max_element() - 1.0).abs() < 1e-6,
-                "saturated: {}",
-                l.color
-            );
+            assert!((l.color.max_element() - 1.0).abs() < 1e-6, "saturated: {}", l.color);
         }
     }
 
     #[test]
     fn intervals_are_honoured() {
-        let params = ScatterLights {
-            count: 64,
-            range: Some((0.5, 2.0)),
-            intensity: Some((3.0, 3.0)),
-            ..Default::default()
-        };
+        let params = ScatterLights { count: 64, range: Some((0.5, 2.0)), intensity: Some((3.0, 3.0)), ..Default::default() };
         for l in scatter_lights(&two_floors(), &params).unwrap() {
             assert!((0.5..=2.0).contains(&l.range));
             assert_eq!(l.intensity, 3.0);
@@ -341,21 +263,13 @@ mod tests {
 
     #[test]
     fn lights_lie_on_the_surface_of_a_real_mesh() {
-        let scene = crate::scene::gltf::import(
-            &crate::scene::test_support::assets_dir().join("box/Box.glb"),
-        )
-        .unwrap();
-        let params = ScatterLights {
-            count: 200,
-            offset: Some(0.1),
-            ..Default::default()
-        };
+        let scene = crate::scene::gltf::import(&crate::scene::test_support::assets_dir().join("box/Box.glb")).unwrap();
+        let params = ScatterLights { count: 200, offset: Some(0.1), ..Default::default() };
         let lights = scatter_lights(&scene, &params).unwrap();
         let surfaces = Surfaces::new(&scene);
         for l in &lights {
             let near_a_face = surfaces.triangles.iter().any(|&(ii, pi, first)| {
-                let [(a, na), (b, _), (c, _)] =
-                    surfaces.corners(ii as usize, pi as usize, first as usize);
+                let [(a, na), (b, _), (c, _)] = surfaces.corners(ii as usize, pi as usize, first as usize);
                 let n = (b - a).cross(c - a).normalize();
                 let n = if n.dot(na) < 0.0 { -n } else { n };
                 let height = (l.position - a).dot(n);
@@ -368,78 +282,33 @@ mod tests {
 
     fn inside(p: Vec3, [a, b, c]: [Vec3; 3], n: Vec3) -> bool {
         let eps = -1e-4;
-        (b - a).cross(p - a).dot(n) >= eps
-            && (c - b).cross(p - b).dot(n) >= eps
-            && (a - c).cross(p - c).dot(n) >= eps
+        (b - a).cross(p - a).dot(n) >= eps && (c - b).cross(p - b).dot(n) >= eps && (a - c).cross(p - c).dot(n) >= eps
     }
 
     #[test]
     fn zero_lights_are_fine_but_impossible_requests_are_errors() {
-        assert!(scatter_lights(
-            &Scene::default(),
-            &ScatterLights {
-                count: 0,
-                ..Default::default()
-            }
-        )
-        .unwrap()
-        .is_empty());
+        assert!(scatter_lights(&Scene::default(), &ScatterLights { count: 0, ..Default::default() }).unwrap().is_empty());
         let empty = scatter_lights(&Scene::default(), &ScatterLights::default()).unwrap_err();
         assert!(empty.to_string().contains("no triangles"), "{empty}");
-        let too_many = ScatterLights {
-            count: MAX_SCATTERED_LIGHTS + 1,
-            ..Default::default()
-        };
+        let too_many = ScatterLights { count: MAX_SCATTERED_LIGHTS + 1, ..Default::default() };
         let err = scatter_lights(&two_floors(), &too_many).unwrap_err();
-        assert!(
-            matches!(err, Error::InvalidConfig(_)) && err.to_string().contains("16777216"),
-            "{err}"
-        );
-        let bad_range = ScatterLights {
-            range: Some((2.0, 1.0)),
-            ..Default::default()
-        };
-        assert!(matches!(
-            scatter_lights(&two_floors(), &bad_range),
-            Err(Error::InvalidConfig(_))
-        ));
+        assert!(matches!(err, Error::InvalidConfig(_)) && err.to_string().contains("16777216"), "{err}");
+        let bad_range = ScatterLights { range: Some((2.0, 1.0)), ..Default::default() };
+        assert!(matches!(scatter_lights(&two_floors(), &bad_range), Err(Error::InvalidConfig(_))));
     }
 
     #[test]
     fn hues_map_to_saturated_colours() {
-        for (hue, rgb) in [
-            (0.0, Vec3::X),
-            (1.0 / 3.0, Vec3::Y),
-            (2.0 / 3.0, Vec3::Z),
-            (0.5, Vec3::new(0.0, 1.0, 1.0)),
-        ] {
-            assert!(
-                saturated_color(hue).abs_diff_eq(rgb, 1e-5),
-                "{hue}: {}",
-                saturated_color(hue)
-            );
+        for (hue, rgb) in [(0.0, Vec3::X), (1.0 / 3.0, Vec3::Y), (2.0 / 3.0, Vec3::Z), (0.5, Vec3::new(0.0, 1.0, 1.0))] {
+            assert!(saturated_color(hue).abs_diff_eq(rgb, 1e-5), "{hue}: {}", saturated_color(hue));
         }
     }
 
     #[test]
     fn add_scattered_lights_appends() {
         let mut scene = two_floors();
-        add_scattered_lights(
-            &mut scene,
-            &ScatterLights {
-                count: 10,
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        add_scattered_lights(
-            &mut scene,
-            &ScatterLights {
-                count: 5,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        add_scattered_lights(&mut scene, &ScatterLights { count: 10, ..Default::default() }).unwrap();
+        add_scattered_lights(&mut scene, &ScatterLights { count: 5, ..Default::default() }).unwrap();
         assert_eq!(scene.lights.len(), 15);
         scene.validate().unwrap();
     }

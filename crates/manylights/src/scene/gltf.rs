@@ -16,8 +16,8 @@ use ::gltf::{Document, Node};
 use glam::{Mat4, Quat, Vec3, Vec4};
 
 use super::{
-    tangents, AlphaMode, Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Projection,
-    Scene, Sun, Texture, TextureRef, Vertex, Wrap, DEFAULT_LIGHT_CUTOFF,
+    tangents, AlphaMode, Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Projection, Scene, Sun, Texture, TextureRef,
+    Vertex, Wrap, DEFAULT_LIGHT_CUTOFF,
 };
 use crate::{Error, Result};
 
@@ -26,18 +26,11 @@ const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_e
 
 /// Loads a glTF 2.0 file and everything it references (buffers and images next to it).
 pub fn import(path: &Path) -> Result<Scene> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    let invalid = |reason: String| Error::Gltf {
-        path: path.to_owned(),
-        reason,
-    };
+    let bytes = std::fs::read(path).map_err(|error| Error::Io { path: path.to_owned(), error })?;
+    let invalid = |reason: String| Error::Gltf { path: path.to_owned(), reason };
     // Parsed without validation first: the gltf crate reports an unsupported required extension as
     // a generic validation failure, and this check names it.
-    let ::gltf::Gltf { document, blob } = ::gltf::Gltf::from_slice_without_validation(&bytes)
-        .map_err(|e| invalid(parse_reason(e)))?;
+    let ::gltf::Gltf { document, blob } = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(parse_reason(e)))?;
     check_required_extensions(path, &document)?;
     let document = Document::from_json(document.into_json()).map_err(|e| invalid(e.to_string()))?;
 
@@ -56,12 +49,9 @@ pub fn import(path: &Path) -> Result<Scene> {
 fn parse_reason(error: ::gltf::Error) -> String {
     use ::gltf::binary::Error as Glb;
     match error {
-        ::gltf::Error::Binary(Glb::Length {
-            length,
-            length_read,
-        }) => format!(
-            "the GLB header declares {length} bytes of content but only {length_read} follow it; the file is truncated"
-        ),
+        ::gltf::Error::Binary(Glb::Length { length, length_read }) => {
+            format!("the GLB header declares {length} bytes of content but only {length_read} follow it; the file is truncated")
+        }
         ::gltf::Error::Binary(e) => format!("corrupt GLB container: {e}"),
         ::gltf::Error::Deserialize(e) => format!("invalid glTF JSON: {e}"),
         e => e.to_string(),
@@ -69,10 +59,7 @@ fn parse_reason(error: ::gltf::Error) -> String {
 }
 
 fn check_required_extensions(path: &Path, document: &Document) -> Result<()> {
-    match document
-        .extensions_required()
-        .find(|e| !SUPPORTED_EXTENSIONS.contains(e))
-    {
+    match document.extensions_required().find(|e| !SUPPORTED_EXTENSIONS.contains(e)) {
         Some(extension) => Err(Error::UnsupportedGltfExtension {
             path: path.to_owned(),
             extension: extension.to_owned(),
@@ -83,11 +70,7 @@ fn check_required_extensions(path: &Path, document: &Document) -> Result<()> {
 }
 
 /// Like `gltf::import_buffers`, with errors that say which buffer failed.
-fn load_buffers(
-    document: &Document,
-    base: &Path,
-    mut blob: Option<Vec<u8>>,
-) -> Result<Vec<buffer::Data>, String> {
+fn load_buffers(document: &Document, base: &Path, mut blob: Option<Vec<u8>>) -> Result<Vec<buffer::Data>, String> {
     document
         .buffers()
         .map(|buffer| {
@@ -99,12 +82,7 @@ fn load_buffers(
             let data = buffer::Data::from_source_and_blob(buffer.source(), Some(base), &mut blob)
                 .map_err(|e| format!("buffer {} ({what}): {e}", buffer.index()))?;
             if data.len() < buffer.length() {
-                return Err(format!(
-                    "buffer {} ({what}) has {} bytes, the file declares {}",
-                    buffer.index(),
-                    data.len(),
-                    buffer.length()
-                ));
+                return Err(format!("buffer {} ({what}) has {} bytes, the file declares {}", buffer.index(), data.len(), buffer.length()));
             }
             Ok(data)
         })
@@ -140,10 +118,8 @@ fn percent_decodes_to_utf8(uri: &str) -> bool {
     let mut bytes = Vec::with_capacity(uri.len());
     let mut rest = uri.as_bytes();
     while let Some((&first, tail)) = rest.split_first() {
-        let escaped = (first == b'%')
-            .then(|| tail.get(..2))
-            .flatten()
-            .and_then(|hex| u8::from_str_radix(std::str::from_utf8(hex).ok()?, 16).ok());
+        let escaped =
+            (first == b'%').then(|| tail.get(..2)).flatten().and_then(|hex| u8::from_str_radix(std::str::from_utf8(hex).ok()?, 16).ok());
         match escaped {
             Some(byte) => {
                 bytes.push(byte);
@@ -163,11 +139,7 @@ fn percent_decodes_to_utf8(uri: &str) -> bool {
 fn check_views(document: &Document, buffers: &[buffer::Data]) -> Result<(), String> {
     for view in document.views() {
         let buffer_len = buffers.get(view.buffer().index()).map_or(0, |b| b.len());
-        if view
-            .offset()
-            .checked_add(view.length())
-            .is_none_or(|end| end > buffer_len)
-        {
+        if view.offset().checked_add(view.length()).is_none_or(|end| end > buffer_len) {
             return Err(format!(
                 "buffer view {} (bytes {}..+{}) lies outside buffer {} ({buffer_len} bytes)",
                 view.index(),
@@ -181,15 +153,9 @@ fn check_views(document: &Document, buffers: &[buffer::Data]) -> Result<(), Stri
 }
 
 /// Decodes every image to an RGBA8 texture, on all cores: PNG decoding dominates loading Sponza.
-fn decode_images(
-    document: &Document,
-    base: &Path,
-    buffers: &[buffer::Data],
-) -> Result<Vec<Texture>, String> {
+fn decode_images(document: &Document, base: &Path, buffers: &[buffer::Data]) -> Result<Vec<Texture>, String> {
     let images: Vec<_> = document.images().collect();
-    let workers = std::thread::available_parallelism()
-        .map_or(1, usize::from)
-        .min(images.len());
+    let workers = std::thread::available_parallelism().map_or(1, usize::from).min(images.len());
     let next = AtomicUsize::new(0);
     let mut decoded: Vec<(usize, Result<Texture, String>)> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..workers)
@@ -203,40 +169,23 @@ fn decode_images(
                 })
             })
             .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| {
-                h.join()
-                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
-            })
-            .collect()
+        handles.into_iter().flat_map(|h| h.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))).collect()
     });
     decoded.sort_by_key(|(index, _)| *index);
     decoded.into_iter().map(|(_, texture)| texture).collect()
 }
 
-fn decode_image(
-    image: &::gltf::Image,
-    base: &Path,
-    buffers: &[buffer::Data],
-) -> Result<Texture, String> {
+fn decode_image(image: &::gltf::Image, base: &Path, buffers: &[buffer::Data]) -> Result<Texture, String> {
     let uri = match image.source() {
         ::gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => Some(uri),
         _ => None,
     };
     // A file name is the most recognisable label; embedded images fall back to their name or index.
-    let name = uri
-        .map(|u| u.rsplit('/').next().unwrap_or(u))
-        .or(image.name())
-        .map_or_else(|| format!("image {}", image.index()), str::to_owned);
+    let name =
+        uri.map(|u| u.rsplit('/').next().unwrap_or(u)).or(image.name()).map_or_else(|| format!("image {}", image.index()), str::to_owned);
     let data = ::gltf::image::Data::from_source(image.source(), Some(base), buffers)
         .map_err(|e| format!("image {} ({name}): {e}", image.index()))?;
-    Ok(Texture {
-        name,
-        width: data.width,
-        height: data.height,
-        rgba8: to_rgba8(data),
-    })
+    Ok(Texture { name, width: data.width, height: data.height, rgba8: to_rgba8(data) })
 }
 
 /// Expands any decoded pixel format to 8-bit RGBA: grey replicates to RGB, missing alpha is opaque,
@@ -273,35 +222,16 @@ fn to_rgba8(data: ::gltf::image::Data) -> Vec<u8> {
     rgba
 }
 
-fn build_scene(
-    document: &Document,
-    buffers: &[buffer::Data],
-    textures: Vec<Texture>,
-) -> Result<Scene, String> {
+fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Texture>) -> Result<Scene, String> {
     let mut materials: Vec<Material> = document.materials().map(|m| material(&m)).collect();
     // Primitives without a material use the glTF default material, appended only when needed.
     let default_material = materials.len();
-    let meshes = document
-        .meshes()
-        .map(|m| mesh(&m, buffers, default_material))
-        .collect::<Result<Vec<_>, _>>()?;
-    if meshes
-        .iter()
-        .flat_map(|m| &m.primitives)
-        .any(|p| p.material == default_material)
-    {
+    let meshes = document.meshes().map(|m| mesh(&m, buffers, default_material)).collect::<Result<Vec<_>, _>>()?;
+    if meshes.iter().flat_map(|m| &m.primitives).any(|p| p.material == default_material) {
         materials.push(Material::default());
     }
-    let mut scene = Scene {
-        meshes,
-        materials,
-        textures,
-        ..Scene::default()
-    };
-    match document
-        .default_scene()
-        .or_else(|| document.scenes().next())
-    {
+    let mut scene = Scene { meshes, materials, textures, ..Scene::default() };
+    match document.default_scene().or_else(|| document.scenes().next()) {
         Some(root) => place_nodes(&mut scene, &root, document.nodes().len())?,
         None => log::warn!("the glTF file has no scene: nothing is placed"),
     }
@@ -311,23 +241,16 @@ fn build_scene(
 /// Walks the node hierarchy depth first, adding an instance, camera or light for each node that has one.
 fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Result<(), String> {
     let mut cameras = Vec::new();
-    let mut stack: Vec<(Node, Mat4, usize)> =
-        root.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    let mut stack: Vec<(Node, Mat4, usize)> = root.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
     stack.reverse();
     while let Some((node, parent, depth)) = stack.pop() {
         // Validation does not rule out cycles; a path longer than the node count must contain one.
         if depth > node_count {
-            return Err(format!(
-                "node {} is its own ancestor: the node hierarchy has a cycle",
-                node.index()
-            ));
+            return Err(format!("node {} is its own ancestor: the node hierarchy has a cycle", node.index()));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if let Some(mesh) = node.mesh() {
-            scene.instances.push(Instance {
-                mesh: mesh.index(),
-                world_from_local: world,
-            });
+            scene.instances.push(Instance { mesh: mesh.index(), world_from_local: world });
         }
         if let Some(camera) = node.camera() {
             cameras.push((camera.index(), place_camera(&camera, &node, world)));
@@ -351,30 +274,17 @@ fn place_camera(camera: &::gltf::Camera, node: &Node, world: Mat4) -> Camera {
     let rotation = if rotation.is_finite() {
         rotation.normalize()
     } else {
-        log::warn!(
-            "camera on node {}: degenerate transform, using no rotation",
-            node.index()
-        );
+        log::warn!("camera on node {}: degenerate transform, using no rotation", node.index());
         Quat::IDENTITY
     };
     let projection = match camera.projection() {
-        ::gltf::camera::Projection::Perspective(p) => Projection::Perspective {
-            yfov: p.yfov(),
-            znear: p.znear(),
-            zfar: p.zfar(),
-        },
-        ::gltf::camera::Projection::Orthographic(o) => Projection::Orthographic {
-            xmag: o.xmag(),
-            ymag: o.ymag(),
-            znear: o.znear(),
-            zfar: o.zfar(),
-        },
+        ::gltf::camera::Projection::Perspective(p) => Projection::Perspective { yfov: p.yfov(), znear: p.znear(), zfar: p.zfar() },
+        ::gltf::camera::Projection::Orthographic(o) => {
+            Projection::Orthographic { xmag: o.xmag(), ymag: o.ymag(), znear: o.znear(), zfar: o.zfar() }
+        }
     };
     Camera {
-        name: camera
-            .name()
-            .or(node.name())
-            .map_or_else(|| format!("camera {}", camera.index()), str::to_owned),
+        name: camera.name().or(node.name()).map_or_else(|| format!("camera {}", camera.index()), str::to_owned),
         world_from_view: Mat4::from_rotation_translation(rotation, translation),
         projection,
     }
@@ -387,75 +297,41 @@ fn place_light(scene: &mut Scene, light: &::gltf::khr_lights_punctual::Light, wo
     let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
     let kind = match light.kind() {
         Kind::Directional if scene.sun.is_some() => {
-            log::warn!(
-                "light {}: only the first directional light is used",
-                light.index()
-            );
+            log::warn!("light {}: only the first directional light is used", light.index());
             return;
         }
         Kind::Directional => {
-            scene.sun = Some(Sun {
-                direction,
-                color,
-                illuminance: intensity,
-            });
+            scene.sun = Some(Sun { direction, color, illuminance: intensity });
             return;
         }
         Kind::Point => LightKind::Point,
-        Kind::Spot {
-            inner_cone_angle,
-            outer_cone_angle,
-        } => LightKind::Spot {
-            inner_cone_angle,
-            outer_cone_angle,
-        },
+        Kind::Spot { inner_cone_angle, outer_cone_angle } => LightKind::Spot { inner_cone_angle, outer_cone_angle },
     };
-    let range = light
-        .range()
-        .unwrap_or_else(|| Light::range_from_cutoff(intensity, color, DEFAULT_LIGHT_CUTOFF));
+    let range = light.range().unwrap_or_else(|| Light::range_from_cutoff(intensity, color, DEFAULT_LIGHT_CUTOFF));
     if light.range().is_none() && range <= 0.0 {
-        log::warn!(
-            "light {}: no intensity and no range, skipped",
-            light.index()
-        );
+        log::warn!("light {}: no intensity and no range, skipped", light.index());
         return;
     }
-    scene.lights.push(Light {
-        kind,
-        position: world.transform_point3(Vec3::ZERO),
-        direction,
-        color,
-        intensity,
-        range,
-    });
+    scene.lights.push(Light { kind, position: world.transform_point3(Vec3::ZERO), direction, color, intensity, range });
 }
 
 fn material(m: &::gltf::Material) -> Material {
-    let name = m.name().map_or_else(
-        || format!("material {}", m.index().unwrap_or_default()),
-        str::to_owned,
-    );
+    let name = m.name().map_or_else(|| format!("material {}", m.index().unwrap_or_default()), str::to_owned);
     let pbr = m.pbr_metallic_roughness();
-    let texture = |info: Option<::gltf::texture::Info>| {
-        info.map(|i| texture_ref(&i.texture(), i.tex_coord(), &name))
-    };
+    let texture = |info: Option<::gltf::texture::Info>| info.map(|i| texture_ref(&i.texture(), i.tex_coord(), &name));
     Material {
         base_color_factor: Vec4::from(pbr.base_color_factor()),
         base_color_texture: texture(pbr.base_color_texture()),
         metallic_factor: pbr.metallic_factor(),
         roughness_factor: pbr.roughness_factor(),
         metallic_roughness_texture: texture(pbr.metallic_roughness_texture()),
-        normal_texture: m
-            .normal_texture()
-            .map(|t| texture_ref(&t.texture(), t.tex_coord(), &name)),
+        normal_texture: m.normal_texture().map(|t| texture_ref(&t.texture(), t.tex_coord(), &name)),
         normal_scale: m.normal_texture().map_or(1.0, |t| t.scale()),
         emissive_factor: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
         emissive_texture: texture(m.emissive_texture()),
         alpha_mode: match m.alpha_mode() {
             ::gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
-            ::gltf::material::AlphaMode::Mask => AlphaMode::Mask {
-                cutoff: m.alpha_cutoff().unwrap_or(0.5),
-            },
+            ::gltf::material::AlphaMode::Mask => AlphaMode::Mask { cutoff: m.alpha_cutoff().unwrap_or(0.5) },
             ::gltf::material::AlphaMode::Blend => AlphaMode::Blend,
         },
         double_sided: m.double_sided(),
@@ -473,70 +349,34 @@ fn texture_ref(texture: &::gltf::Texture, tex_coord: u32, material: &str) -> Tex
         ::gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
     };
     let sampler = texture.sampler();
-    TextureRef {
-        texture: texture.source().index(),
-        wrap_u: wrap(sampler.wrap_s()),
-        wrap_v: wrap(sampler.wrap_t()),
-    }
+    TextureRef { texture: texture.source().index(), wrap_u: wrap(sampler.wrap_s()), wrap_v: wrap(sampler.wrap_t()) }
 }
 
-fn mesh(
-    mesh: &::gltf::Mesh,
-    buffers: &[buffer::Data],
-    default_material: usize,
-) -> Result<Mesh, String> {
-    let name = mesh
-        .name()
-        .map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned);
+fn mesh(mesh: &::gltf::Mesh, buffers: &[buffer::Data], default_material: usize) -> Result<Mesh, String> {
+    let name = mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned);
     let mut primitives = Vec::new();
     for p in mesh.primitives() {
         let at = || format!("mesh {} ({name}) primitive {}", mesh.index(), p.index());
-        if !matches!(
-            p.mode(),
-            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-        ) {
+        if !matches!(p.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
             log::warn!("{}: {:?} are not rendered, skipped", at(), p.mode());
             continue;
         }
-        primitives
-            .push(primitive(&p, buffers, default_material).map_err(|e| format!("{}: {e}", at()))?);
+        primitives.push(primitive(&p, buffers, default_material).map_err(|e| format!("{}: {e}", at()))?);
     }
     Ok(Mesh { name, primitives })
 }
 
-fn primitive(
-    p: &::gltf::Primitive,
-    buffers: &[buffer::Data],
-    default_material: usize,
-) -> Result<Primitive, String> {
+fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: usize) -> Result<Primitive, String> {
     let reader = p.reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()));
-    let positions: Vec<[f32; 3]> = reader
-        .read_positions()
-        .ok_or("POSITION is missing or lies outside its buffer")?
-        .collect();
+    let positions: Vec<[f32; 3]> = reader.read_positions().ok_or("POSITION is missing or lies outside its buffer")?.collect();
     if positions.iter().flatten().any(|c| !c.is_finite()) {
         return Err("a vertex position is NaN or infinite".into());
     }
     let count = positions.len();
     let has = |semantic| p.get(&semantic).is_some();
-    let normals = attribute(
-        "NORMAL",
-        has(Semantic::Normals),
-        reader.read_normals(),
-        count,
-    )?;
-    let uvs = attribute(
-        "TEXCOORD_0",
-        has(Semantic::TexCoords(0)),
-        reader.read_tex_coords(0).map(|t| t.into_f32()),
-        count,
-    )?;
-    let file_tangents = attribute(
-        "TANGENT",
-        has(Semantic::Tangents),
-        reader.read_tangents(),
-        count,
-    )?;
+    let normals = attribute("NORMAL", has(Semantic::Normals), reader.read_normals(), count)?;
+    let uvs = attribute("TEXCOORD_0", has(Semantic::TexCoords(0)), reader.read_tex_coords(0).map(|t| t.into_f32()), count)?;
+    let file_tangents = attribute("TANGENT", has(Semantic::Tangents), reader.read_tangents(), count)?;
     let indices: Vec<u32> = match reader.read_indices() {
         Some(indices) => indices.into_u32().collect(),
         None if p.indices().is_some() => return Err("the indices lie outside their buffer".into()),
@@ -547,27 +387,18 @@ fn primitive(
     }
     let mut indices = triangle_list(p.mode(), indices);
     if !indices.len().is_multiple_of(3) {
-        return Err(format!(
-            "index count {} is not a multiple of 3",
-            indices.len()
-        ));
+        return Err(format!("index count {} is not a multiple of 3", indices.len()));
     }
 
     let mut vertices: Vec<Vertex> = (0..count)
         .map(|i| {
             let [u, v] = uvs.as_ref().map_or([0.0; 2], |t| t[i]);
-            let (u, v) = if u.is_finite() && v.is_finite() {
-                (u, v)
-            } else {
-                (0.0, 0.0)
-            };
+            let (u, v) = if u.is_finite() && v.is_finite() { (u, v) } else { (0.0, 0.0) };
             Vertex {
                 position: positions[i],
                 u,
                 // Broken normals get a placeholder rather than spreading NaN through shading.
-                normal: normals.as_ref().map_or([0.0; 3], |n| {
-                    Vec3::from(n[i]).normalize_or(Vec3::Y).to_array()
-                }),
+                normal: normals.as_ref().map_or([0.0; 3], |n| Vec3::from(n[i]).normalize_or(Vec3::Y).to_array()),
                 v,
                 tangent: file_tangents.as_ref().map_or([0.0; 4], |t| t[i]),
             }
@@ -581,20 +412,11 @@ fn primitive(
     } else {
         tangents::orthonormalize(&mut vertices);
     }
-    Ok(Primitive {
-        vertices,
-        indices,
-        material: p.material().index().unwrap_or(default_material),
-    })
+    Ok(Primitive { vertices, indices, material: p.material().index().unwrap_or(default_material) })
 }
 
 /// Reads an optional vertex attribute, telling an absent one (`None`) from one that cannot be read.
-fn attribute<T>(
-    name: &str,
-    present: bool,
-    read: Option<impl Iterator<Item = T>>,
-    count: usize,
-) -> Result<Option<Vec<T>>, String> {
+fn attribute<T>(name: &str, present: bool, read: Option<impl Iterator<Item = T>>, count: usize) -> Result<Option<Vec<T>>, String> {
     match (present, read) {
         (false, _) => Ok(None),
         (true, None) => Err(format!("{name} lies outside its buffer")),
@@ -603,10 +425,7 @@ fn attribute<T>(
             if values.len() == count {
                 Ok(Some(values))
             } else {
-                Err(format!(
-                    "{name} has {} elements, POSITION has {count}",
-                    values.len()
-                ))
+                Err(format!("{name} has {} elements, POSITION has {count}", values.len()))
             }
         }
     }
@@ -615,17 +434,9 @@ fn attribute<T>(
 /// Strips and fans as triangle lists (counter-clockwise kept: odd strip triangles are swapped).
 fn triangle_list(mode: Mode, indices: Vec<u32>) -> Vec<u32> {
     match mode {
-        Mode::TriangleStrip => indices
-            .windows(3)
-            .enumerate()
-            .flat_map(|(i, w)| {
-                if i % 2 == 0 {
-                    [w[0], w[1], w[2]]
-                } else {
-                    [w[1], w[0], w[2]]
-                }
-            })
-            .collect(),
+        Mode::TriangleStrip => {
+            indices.windows(3).enumerate().flat_map(|(i, w)| if i % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] }).collect()
+        }
         Mode::TriangleFan => match indices.split_first() {
             Some((&hub, rim)) => rim.windows(2).flat_map(|w| [hub, w[0], w[1]]).collect(),
             None => Vec::new(),
@@ -666,10 +477,8 @@ mod tests {
         for mesh in &scene.meshes {
             for v in mesh.primitives.iter().flat_map(|p| &p.vertices) {
                 let (n, t) = (Vec3::from(v.normal), Vec4::from(v.tangent));
-                let ok = t.is_finite()
-                    && (t.truncate().length() - 1.0).abs() < 1e-3
-                    && t.truncate().dot(n).abs() < 1e-3
-                    && t.w.abs() == 1.0;
+                let ok =
+                    t.is_finite() && (t.truncate().length() - 1.0).abs() < 1e-3 && t.truncate().dot(n).abs() < 1e-3 && t.w.abs() == 1.0;
                 assert!(ok, "{}: tangent {t} with normal {n}", mesh.name);
             }
         }
@@ -684,13 +493,9 @@ mod tests {
         assert_eq!(scene.materials.len(), 24);
         assert_eq!(scene.textures.len(), 49);
         assert_eq!(scene.cameras.len(), 4);
-        let masked =
-            |m: &Material| matches!(m.alpha_mode, AlphaMode::Mask { cutoff } if cutoff == 0.5);
+        let masked = |m: &Material| matches!(m.alpha_mode, AlphaMode::Mask { cutoff } if cutoff == 0.5);
         assert_eq!(count_materials(&scene, masked), 3);
-        assert!(scene
-            .textures
-            .iter()
-            .all(|t| t.rgba8.len() == (t.width * t.height * 4) as usize));
+        assert!(scene.textures.iter().all(|t| t.rgba8.len() == (t.width * t.height * 4) as usize));
         assert_tangent_frames(&scene);
     }
 
@@ -702,10 +507,7 @@ mod tests {
         assert_eq!(scene.meshes.len(), 473);
         assert_eq!(scene.cameras.len(), 2);
         assert_eq!(scene.materials.len(), 95);
-        assert_eq!(
-            count_materials(&scene, |m| m.alpha_mode == AlphaMode::Blend),
-            2
-        );
+        assert_eq!(count_materials(&scene, |m| m.alpha_mode == AlphaMode::Blend), 2);
         assert_tangent_frames(&scene);
     }
 
@@ -727,18 +529,10 @@ mod tests {
         assert_eq!(scene.cameras.len(), 1);
         // The camera node sits under a node scaled by 0.01.
         let camera = &scene.cameras[0];
-        assert!(
-            camera
-                .position()
-                .abs_diff_eq(Vec3::new(4.00113, 4.63264, -4.31078), 1e-4),
-            "{}",
-            camera.position()
-        );
+        assert!(camera.position().abs_diff_eq(Vec3::new(4.00113, 4.63264, -4.31078), 1e-4), "{}", camera.position());
         let (scale, _, _) = camera.world_from_view.to_scale_rotation_translation();
         assert!(scale.abs_diff_eq(Vec3::ONE, 1e-5), "{scale}");
-        assert!(
-            matches!(camera.projection, Projection::Perspective { zfar: Some(zfar), .. } if zfar == 10_000.0)
-        );
+        assert!(matches!(camera.projection, Projection::Perspective { zfar: Some(zfar), .. } if zfar == 10_000.0));
     }
 
     #[test]
@@ -754,15 +548,9 @@ mod tests {
         assert_eq!(textured.textures.len(), 1);
         let logo = &textured.textures[0];
         // A 211 × 211 palette PNG, expanded to RGBA.
-        assert_eq!(
-            (logo.width, logo.height, logo.rgba8.len()),
-            (211, 211, 211 * 211 * 4)
-        );
+        assert_eq!((logo.width, logo.height, logo.rgba8.len()), (211, 211, 211 * 211 * 4));
         let base = textured.materials[0].base_color_texture.unwrap();
-        assert_eq!(
-            (base.texture, base.wrap_u, base.wrap_v),
-            (0, Wrap::Repeat, Wrap::Repeat)
-        );
+        assert_eq!((base.texture, base.wrap_u, base.wrap_v), (0, Wrap::Repeat, Wrap::Repeat));
     }
 
     #[test]
@@ -810,10 +598,7 @@ mod tests {
             "nodes": [{"children": [1]}, {"children": [0]}], "scenes": [{"nodes": [0]}]}"#;
         std::fs::write(&path, json).unwrap();
         let result = import(&path);
-        assert!(
-            matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("cycle")),
-            "{result:?}"
-        );
+        assert!(matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("cycle")), "{result:?}");
     }
 
     #[test]
@@ -852,34 +637,17 @@ mod tests {
         assert!(point.position.abs_diff_eq(Vec3::new(1.0, 2.0, 0.0), 1e-6));
         assert_eq!(point.color, Vec3::new(1.0, 0.5, 0.25));
         // No range in the file: where 20 cd / d² falls to the cutoff.
-        assert!(
-            (point.range - (20.0f32 / DEFAULT_LIGHT_CUTOFF).sqrt()).abs() < 1e-3,
-            "{}",
-            point.range
-        );
+        assert!((point.range - (20.0f32 / DEFAULT_LIGHT_CUTOFF).sqrt()).abs() < 1e-3, "{}", point.range);
 
         let spot = scene.lights[1];
-        assert_eq!(
-            spot.kind,
-            LightKind::Spot {
-                inner_cone_angle: 0.2,
-                outer_cone_angle: 0.5
-            }
-        );
+        assert_eq!(spot.kind, LightKind::Spot { inner_cone_angle: 0.2, outer_cone_angle: 0.5 });
         assert!(spot.position.abs_diff_eq(Vec3::new(0.0, 4.0, 0.0), 1e-6));
-        assert!(
-            spot.direction.abs_diff_eq(Vec3::NEG_Y, 1e-5),
-            "{}",
-            spot.direction
-        );
+        assert!(spot.direction.abs_diff_eq(Vec3::NEG_Y, 1e-5), "{}", spot.direction);
         assert_eq!((spot.intensity, spot.range), (50.0, 8.0));
 
         let sun = scene.sun.unwrap();
         assert!(sun.direction.abs_diff_eq(Vec3::NEG_Y, 1e-5));
-        assert_eq!(
-            (sun.color, sun.illuminance),
-            (Vec3::new(1.0, 0.9, 0.8), 3.0)
-        );
+        assert_eq!((sun.color, sun.illuminance), (Vec3::new(1.0, 0.9, 0.8), 3.0));
 
         let material = &scene.materials[0];
         assert_eq!(material.emissive_factor, Vec3::new(4.0, 2.0, 0.0));
@@ -888,17 +656,8 @@ mod tests {
 
     /// Writes a quad's four corners (no normals, no UVs) and one index list as `quad.bin`.
     fn write_quad_buffer(dir: &Path) {
-        let positions = [
-            [0.0f32, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [1.0, 1.0, 0.0],
-        ];
-        let mut bytes: Vec<u8> = positions
-            .iter()
-            .flatten()
-            .flat_map(|c| c.to_le_bytes())
-            .collect();
+        let positions = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+        let mut bytes: Vec<u8> = positions.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
         bytes.extend([0u16, 1, 3, 2].iter().flat_map(|i| i.to_le_bytes()));
         std::fs::write(dir.join("quad.bin"), bytes).unwrap();
     }
@@ -946,15 +705,8 @@ mod tests {
 
         assert_eq!(scene.instances.len(), 2);
         assert!(scene.instances.iter().all(|i| i.mesh == 0));
-        let origin = |i: usize| {
-            scene.instances[i]
-                .world_from_local
-                .transform_point3(Vec3::ZERO)
-        };
-        assert_eq!(
-            (origin(0), origin(1)),
-            (Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 2.0))
-        );
+        let origin = |i: usize| scene.instances[i].world_from_local.transform_point3(Vec3::ZERO);
+        assert_eq!((origin(0), origin(1)), (Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 2.0)));
         assert_eq!(scene.drawn_triangle_count(), 8);
     }
 
@@ -969,10 +721,7 @@ mod tests {
         }"#;
         std::fs::write(dir.join("bounds.gltf"), json).unwrap();
         let result = import(&dir.join("bounds.gltf"));
-        assert!(
-            matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("outside buffer 0")),
-            "{result:?}"
-        );
+        assert!(matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("outside buffer 0")), "{result:?}");
     }
 
     #[test]
@@ -980,25 +729,16 @@ mod tests {
         assert!(percent_decodes_to_utf8("a%20b%C3%A9.png") && percent_decodes_to_utf8("100%.png"));
         let dir = temp_dir("gltf_uri");
         let path = dir.join("uri.gltf");
-        let json =
-            r#"{"asset": {"version": "2.0"}, "buffers": [{"uri": "%FF.bin", "byteLength": 4}]}"#;
+        let json = r#"{"asset": {"version": "2.0"}, "buffers": [{"uri": "%FF.bin", "byteLength": 4}]}"#;
         std::fs::write(&path, json).unwrap();
         let result = import(&path);
-        assert!(
-            matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("UTF-8")),
-            "{result:?}"
-        );
+        assert!(matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("UTF-8")), "{result:?}");
     }
 
     #[test]
     fn every_pixel_format_expands_to_rgba8() {
         use ::gltf::image::{Data, Format};
-        let data = |format, pixels: Vec<u8>| Data {
-            pixels,
-            format,
-            width: 1,
-            height: 1,
-        };
+        let data = |format, pixels: Vec<u8>| Data { pixels, format, width: 1, height: 1 };
         let u16s = |v: &[u16]| v.iter().flat_map(|c| c.to_ne_bytes()).collect();
         let f32s = |v: &[f32]| v.iter().flat_map(|c| c.to_ne_bytes()).collect();
         let cases = [
@@ -1008,25 +748,10 @@ mod tests {
             (data(Format::R8G8B8A8, vec![1, 2, 3, 4]), [1, 2, 3, 4]),
             (data(Format::R16, u16s(&[65535])), [255, 255, 255, 255]),
             (data(Format::R16G16, u16s(&[0, 32896])), [0, 0, 0, 128]),
-            (
-                data(Format::R16G16B16, u16s(&[257, 514, 65535])),
-                [1, 2, 255, 255],
-            ),
-            (
-                data(Format::R16G16B16A16, u16s(&[0, 257, 0, 65535])),
-                [0, 1, 0, 255],
-            ),
-            (
-                data(Format::R32G32B32FLOAT, f32s(&[0.0, 0.5, 2.0])),
-                [0, 128, 255, 255],
-            ),
-            (
-                data(
-                    Format::R32G32B32A32FLOAT,
-                    f32s(&[1.0, -1.0, f32::NAN, 0.25]),
-                ),
-                [255, 0, 0, 64],
-            ),
+            (data(Format::R16G16B16, u16s(&[257, 514, 65535])), [1, 2, 255, 255]),
+            (data(Format::R16G16B16A16, u16s(&[0, 257, 0, 65535])), [0, 1, 0, 255]),
+            (data(Format::R32G32B32FLOAT, f32s(&[0.0, 0.5, 2.0])), [0, 128, 255, 255]),
+            (data(Format::R32G32B32A32FLOAT, f32s(&[1.0, -1.0, f32::NAN, 0.25])), [255, 0, 0, 64]),
         ];
         for (image, rgba) in cases {
             let format = image.format;

@@ -29,10 +29,7 @@ pub fn load_path(path: &Path) -> crate::Result<Scene> {
     match extension.as_deref() {
         Some("gltf" | "glb") => self::gltf::import(path),
         Some("toml") => scene_file::load(path),
-        _ => Err(crate::Error::InvalidConfig(format!(
-            "{}: unknown scene type; expected .gltf, .glb or .toml",
-            path.display()
-        ))),
+        _ => Err(crate::Error::InvalidConfig(format!("{}: unknown scene type; expected .gltf, .glb or .toml", path.display()))),
     }
 }
 
@@ -79,7 +76,9 @@ pub struct Instance {
 pub enum AlphaMode {
     Opaque,
     /// Discard where alpha < cutoff.
-    Mask { cutoff: f32 },
+    Mask {
+        cutoff: f32,
+    },
     /// Drawn as opaque until the forward transparent pass exists (see docs/ARCHITECTURE.md).
     Blend,
 }
@@ -226,10 +225,7 @@ pub struct Bounds {
 }
 
 impl Bounds {
-    pub const EMPTY: Bounds = Bounds {
-        min: Vec3::splat(f32::INFINITY),
-        max: Vec3::splat(f32::NEG_INFINITY),
-    };
+    pub const EMPTY: Bounds = Bounds { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
     pub fn grow(&mut self, p: Vec3) {
         self.min = self.min.min(p);
         self.max = self.max.max(p);
@@ -248,10 +244,7 @@ impl Bounds {
 impl Scene {
     /// Triangles as drawn: each mesh counted once per instance.
     pub fn drawn_triangle_count(&self) -> usize {
-        self.instances
-            .iter()
-            .map(|i| self.meshes[i.mesh].primitives.iter().map(Primitive::triangle_count).sum::<usize>())
-            .sum()
+        self.instances.iter().map(|i| self.meshes[i.mesh].primitives.iter().map(Primitive::triangle_count).sum::<usize>()).sum()
     }
 
     /// World-space bounds of all instances.
@@ -306,7 +299,12 @@ impl Scene {
             validate_light(l).map_err(|m| crate::Error::InvalidScene(format!("light {li}: {m}")))?;
         }
         if let Some(sun) = &self.sun {
-            if !(sun.direction.is_finite() && sun.direction.length() > 0.0 && sun.color.is_finite() && sun.illuminance.is_finite() && sun.illuminance >= 0.0) {
+            if !(sun.direction.is_finite()
+                && sun.direction.length() > 0.0
+                && sun.color.is_finite()
+                && sun.illuminance.is_finite()
+                && sun.illuminance >= 0.0)
+            {
                 return err("sun: direction, colour and illuminance must be finite, illuminance ≥ 0 and the direction non-zero".into());
             }
         }

@@ -54,16 +54,9 @@ use crate::{Error, Result};
 
 /// Loads a TOML scene file and the glTF it references.
 pub fn load(path: &Path) -> Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    let invalid = |reason: String| Error::SceneFile {
-        path: path.to_owned(),
-        reason,
-    };
-    let file: SceneFile =
-        toml::from_str(&text).map_err(|e| invalid(e.to_string().trim_end().to_owned()))?;
+    let text = std::fs::read_to_string(path).map_err(|error| Error::Io { path: path.to_owned(), error })?;
+    let invalid = |reason: String| Error::SceneFile { path: path.to_owned(), reason };
+    let file: SceneFile = toml::from_str(&text).map_err(|e| invalid(e.to_string().trim_end().to_owned()))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut scene = match &file.gltf {
         Some(gltf) => super::gltf::import(&dir.join(gltf))?,
@@ -153,9 +146,7 @@ impl SceneFile {
             scene.ambient = Vec3::from(ambient);
         }
         if let Some(camera) = &self.camera {
-            camera
-                .apply(&mut scene.cameras)
-                .map_err(|m| format!("camera: {m}"))?;
+            camera.apply(&mut scene.cameras).map_err(|m| format!("camera: {m}"))?;
         }
         if let Some(sun) = &self.sun {
             scene.sun = Some(Sun {
@@ -166,13 +157,10 @@ impl SceneFile {
         }
         for (i, spec) in self.lights.iter().enumerate() {
             let light = spec.to_light().and_then(|l| validate_light(&l).map(|()| l));
-            scene
-                .lights
-                .push(light.map_err(|m| format!("light {i}: {m}"))?);
+            scene.lights.push(light.map_err(|m| format!("light {i}: {m}"))?);
         }
         for (i, spec) in self.scatter_lights.iter().enumerate() {
-            generators::add_scattered_lights(scene, &spec.to_params())
-                .map_err(|e| format!("scatter_lights {i}: {}", inner_message(e)))?;
+            generators::add_scattered_lights(scene, &spec.to_params()).map_err(|e| format!("scatter_lights {i}: {}", inner_message(e)))?;
         }
         // Exposure, ambient and sun are checked here; the glTF part was checked on import.
         scene.validate().map_err(inner_message)
@@ -191,21 +179,14 @@ fn inner_message(e: Error) -> String {
 impl CameraSpec {
     /// Puts the chosen camera at index 0.
     fn apply(&self, cameras: &mut Vec<Camera>) -> Result<(), String> {
-        let look_at = [
-            self.position.is_some(),
-            self.target.is_some(),
-            self.yfov_degrees.is_some(),
-            self.near.is_some(),
-        ];
+        let look_at = [self.position.is_some(), self.target.is_some(), self.yfov_degrees.is_some(), self.near.is_some()];
         match (self.index, self.position, self.target) {
-            (Some(_), ..) if look_at.contains(&true) => Err(
-                "give either `index` or a look-at camera (`position`, `target`, …), not both"
-                    .into(),
-            ),
-            (Some(index), ..) if index >= cameras.len() => Err(format!(
-                "index {index} does not exist: the glTF has {} camera(s)",
-                cameras.len()
-            )),
+            (Some(_), ..) if look_at.contains(&true) => {
+                Err("give either `index` or a look-at camera (`position`, `target`, …), not both".into())
+            }
+            (Some(index), ..) if index >= cameras.len() => {
+                Err(format!("index {index} does not exist: the glTF has {} camera(s)", cameras.len()))
+            }
             (Some(index), ..) => {
                 let camera = cameras.remove(index);
                 cameras.insert(0, camera);
@@ -215,9 +196,7 @@ impl CameraSpec {
                 cameras.insert(0, self.look_at(Vec3::from(position), Vec3::from(target))?);
                 Ok(())
             }
-            (None, ..) => {
-                Err("a look-at camera needs both `position` and `target` (or give `index`)".into())
-            }
+            (None, ..) => Err("a look-at camera needs both `position` and `target` (or give `index`)".into()),
         }
     }
 
@@ -230,36 +209,22 @@ impl CameraSpec {
         let forward = (target - position).normalize_or_zero();
         // The camera's up is +Y, so it cannot look straight up or down.
         if forward.cross(Vec3::Y).length() < 1e-4 {
-            return Err(
-                "target must differ from position, and not lie straight above or below it".into(),
-            );
+            return Err("target must differ from position, and not lie straight above or below it".into());
         }
         if !(yfov_degrees > 0.0 && yfov_degrees < 180.0) {
-            return Err(format!(
-                "yfov_degrees {yfov_degrees} must lie strictly between 0 and 180"
-            ));
+            return Err(format!("yfov_degrees {yfov_degrees} must lie strictly between 0 and 180"));
         }
         if !(near.is_finite() && near > 0.0) {
             return Err(format!("near {near} must be finite and > 0"));
         }
-        Ok(Camera::look_at(
-            "scene file",
-            position,
-            target,
-            yfov_degrees.to_radians(),
-            near,
-        ))
+        Ok(Camera::look_at("scene file", position, target, yfov_degrees.to_radians(), near))
     }
 }
 
 impl LightSpec {
     fn to_light(&self) -> Result<Light, String> {
         let color = Vec3::from(self.color);
-        let spot_only = [
-            self.direction.is_some(),
-            self.inner_cone_degrees.is_some(),
-            self.outer_cone_degrees.is_some(),
-        ];
+        let spot_only = [self.direction.is_some(), self.inner_cone_degrees.is_some(), self.outer_cone_degrees.is_some()];
         let (kind, direction) = match self.kind {
             LightType::Point if spot_only.contains(&true) => {
                 return Err("`direction`, `inner_cone_degrees` and `outer_cone_degrees` apply to spot lights only".into())
@@ -280,9 +245,7 @@ impl LightSpec {
             direction,
             color,
             intensity: self.intensity,
-            range: self.range.unwrap_or_else(|| {
-                Light::range_from_cutoff(self.intensity, color, DEFAULT_LIGHT_CUTOFF)
-            }),
+            range: self.range.unwrap_or_else(|| Light::range_from_cutoff(self.intensity, color, DEFAULT_LIGHT_CUTOFF)),
         })
     }
 }
@@ -325,11 +288,7 @@ mod tests {
         let dir = temp_dir("complete");
         std::fs::create_dir(dir.join("models")).unwrap();
         for file in ["Box.gltf", "Box0.bin"] {
-            std::fs::copy(
-                assets_dir().join("box").join(file),
-                dir.join("models").join(file),
-            )
-            .unwrap();
+            std::fs::copy(assets_dir().join("box").join(file), dir.join("models").join(file)).unwrap();
         }
         let path = dir.join("scene.toml");
         std::fs::write(
@@ -378,38 +337,20 @@ intensity = [1.0, 2.0]
         assert_eq!(scene.exposure, 2.0);
         assert_eq!(scene.ambient, Vec3::new(0.1, 0.2, 0.3));
         assert_eq!(scene.cameras.len(), 1);
-        assert!(scene.cameras[0]
-            .position()
-            .abs_diff_eq(Vec3::new(3.0, 2.0, 3.0), 1e-5));
-        assert!(
-            matches!(scene.cameras[0].projection, Projection::Perspective { yfov, .. } if (yfov - 45f32.to_radians()).abs() < 1e-6)
-        );
+        assert!(scene.cameras[0].position().abs_diff_eq(Vec3::new(3.0, 2.0, 3.0), 1e-5));
+        assert!(matches!(scene.cameras[0].projection, Projection::Perspective { yfov, .. } if (yfov - 45f32.to_radians()).abs() < 1e-6));
         let sun = scene.sun.unwrap();
         assert_eq!((sun.direction, sun.illuminance), (Vec3::NEG_Y, 2.5));
 
         assert_eq!(scene.lights.len(), 2 + 16);
         let point = scene.lights[0];
-        assert_eq!(
-            point.range,
-            Light::range_from_cutoff(4.0, Vec3::new(1.0, 0.5, 0.5), DEFAULT_LIGHT_CUTOFF)
-        );
+        assert_eq!(point.range, Light::range_from_cutoff(4.0, Vec3::new(1.0, 0.5, 0.5), DEFAULT_LIGHT_CUTOFF));
         let spot = scene.lights[1];
         assert_eq!(spot.direction, Vec3::NEG_Y);
         assert_eq!(spot.range, 6.0);
-        let LightKind::Spot {
-            inner_cone_angle,
-            outer_cone_angle,
-        } = spot.kind
-        else {
-            panic!("{spot:?}")
-        };
-        assert!(
-            (inner_cone_angle - 20f32.to_radians()).abs() < 1e-6
-                && (outer_cone_angle - 30f32.to_radians()).abs() < 1e-6
-        );
-        assert!(scene.lights[2..]
-            .iter()
-            .all(|l| (0.5..=1.0).contains(&l.range) && (1.0..=2.0).contains(&l.intensity)));
+        let LightKind::Spot { inner_cone_angle, outer_cone_angle } = spot.kind else { panic!("{spot:?}") };
+        assert!((inner_cone_angle - 20f32.to_radians()).abs() < 1e-6 && (outer_cone_angle - 30f32.to_radians()).abs() < 1e-6);
+        assert!(scene.lights[2..].iter().all(|l| (0.5..=1.0).contains(&l.range) && (1.0..=2.0).contains(&l.intensity)));
 
         let again = load(&path).unwrap();
         assert_eq!(scene.lights, again.lights, "scattering is seeded");
@@ -437,75 +378,44 @@ intensity = [1.0, 2.0]
         std::fs::write(dir.join("cameras.gltf"), gltf).unwrap();
         let path = dir.join("scene.toml");
         std::fs::write(&path, "gltf = 'cameras.gltf'\n[camera]\nindex = 1\n").unwrap();
-        let names: Vec<String> = load(&path)
-            .unwrap()
-            .cameras
-            .into_iter()
-            .map(|c| c.name)
-            .collect();
+        let names: Vec<String> = load(&path).unwrap().cameras.into_iter().map(|c| c.name).collect();
         assert_eq!(names, ["B", "A"]);
 
         std::fs::write(&path, "gltf = 'cameras.gltf'\n[camera]\nindex = 2\n").unwrap();
         assert!(reason(load(&path)).contains("index 2 does not exist"));
-        std::fs::write(
-            &path,
-            "gltf = 'cameras.gltf'\n[camera]\nindex = 0\nnear = 1.0\n",
-        )
-        .unwrap();
+        std::fs::write(&path, "gltf = 'cameras.gltf'\n[camera]\nindex = 0\nnear = 1.0\n").unwrap();
         assert!(reason(load(&path)).contains("not both"));
     }
 
     #[test]
     fn bad_lights_are_reported_with_their_index() {
-        let nan = reason(load_text(
-            "nan",
-            "[[lights]]\ntype = 'point'\nposition = [nan, 0, 0]\nintensity = 1.0\n",
-        ));
-        assert!(
-            nan.starts_with("light 0: position [NaN, 0.0, 0.0] is NaN or infinite"),
-            "{nan}"
-        );
+        let nan = reason(load_text("nan", "[[lights]]\ntype = 'point'\nposition = [nan, 0, 0]\nintensity = 1.0\n"));
+        assert!(nan.starts_with("light 0: position [NaN, 0.0, 0.0] is NaN or infinite"), "{nan}");
 
         let negative = reason(load_text(
             "negative_range",
             "[[lights]]\ntype = 'point'\nposition = [0, 0, 0]\nintensity = 1.0\n\
              [[lights]]\ntype = 'point'\nposition = [0, 0, 0]\nintensity = 1.0\nrange = -2.0\n",
         ));
-        assert!(
-            negative.starts_with("light 1: range -2 must be finite and > 0"),
-            "{negative}"
-        );
+        assert!(negative.starts_with("light 1: range -2 must be finite and > 0"), "{negative}");
 
-        let spot = reason(load_text(
-            "spot",
-            "[[lights]]\ntype = 'spot'\nposition = [0, 0, 0]\nintensity = 1.0\n",
-        ));
+        let spot = reason(load_text("spot", "[[lights]]\ntype = 'spot'\nposition = [0, 0, 0]\nintensity = 1.0\n"));
         assert!(spot.contains("needs `direction`"), "{spot}");
     }
 
     #[test]
     fn unknown_keys_and_syntax_errors_carry_the_line() {
-        let unknown = reason(load_text(
-            "unknown",
-            "exposure = 1.0\n[sun]\ndirection = [0, -1, 0]\nilluminance = 1\nbrightness = 2\n",
-        ));
-        assert!(
-            unknown.contains("line 5") && unknown.contains("unknown field `brightness`"),
-            "{unknown}"
-        );
+        let unknown = reason(load_text("unknown", "exposure = 1.0\n[sun]\ndirection = [0, -1, 0]\nilluminance = 1\nbrightness = 2\n"));
+        assert!(unknown.contains("line 5") && unknown.contains("unknown field `brightness`"), "{unknown}");
         let syntax = reason(load_text("syntax", "exposure = 1.0\nambient = [0.1, 0.1\n"));
         assert!(syntax.contains("line 2"), "{syntax}");
     }
 
     #[test]
     fn invalid_globals_and_scatter_settings_are_scene_file_errors() {
-        assert!(reason(load_text("exposure", "exposure = 0.0\n"))
-            .contains("exposure must be finite and > 0"));
+        assert!(reason(load_text("exposure", "exposure = 0.0\n")).contains("exposure must be finite and > 0"));
         let scatter = reason(load_text("scatter", "[[scatter_lights]]\ncount = 4\n"));
-        assert!(
-            scatter.starts_with("scatter_lights 0:") && scatter.contains("no triangles"),
-            "{scatter}"
-        );
+        assert!(scatter.starts_with("scatter_lights 0:") && scatter.contains("no triangles"), "{scatter}");
     }
 
     #[test]
@@ -514,9 +424,6 @@ intensity = [1.0, 2.0]
         let missing = dir.join("nope.toml");
         assert!(matches!(load(&missing), Err(Error::Io { .. })));
         let gltf = load_text("missing_gltf", "gltf = 'nope.gltf'\n");
-        assert!(
-            matches!(&gltf, Err(Error::Io { path, .. }) if path.ends_with("nope.gltf")),
-            "{gltf:?}"
-        );
+        assert!(matches!(&gltf, Err(Error::Io { path, .. }) if path.ends_with("nope.gltf")), "{gltf:?}");
     }
 }

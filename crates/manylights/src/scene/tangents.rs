@@ -17,11 +17,7 @@ use super::Vertex;
 /// seams, mirrored UVs), the vertex is split so that each copy keeps its own; `indices` are updated.
 /// Normals must be unit length.
 pub(crate) fn generate(vertices: &mut Vec<Vertex>, indices: &mut [u32]) {
-    let mut corners = Corners {
-        vertices,
-        indices,
-        tangents: vec![[0.0; 4]; indices.len()],
-    };
+    let mut corners = Corners { vertices, indices, tangents: vec![[0.0; 4]; indices.len()] };
     // On failure (no usable triangles) the tangents stay zero and orthonormalize() substitutes
     // arbitrary ones, which is all a mesh without a usable UV layout can have.
     if mikktspace::generate_tangents(&mut corners) {
@@ -41,8 +37,7 @@ pub(crate) fn orthonormalize(vertices: &mut [Vertex]) {
         let sign = if tangent.w < 0.0 { -1.0 } else { 1.0 };
         let projected = tangent.truncate() - normal * normal.dot(tangent.truncate());
         // Below this length the projection is dominated by rounding error.
-        let usable =
-            projected.is_finite() && projected.length() > 1e-3 * tangent.truncate().length();
+        let usable = projected.is_finite() && projected.length() > 1e-3 * tangent.truncate().length();
         v.tangent = match projected.try_normalize() {
             Some(t) if usable => t.extend(sign),
             _ => normal.any_orthonormal_vector().extend(1.0),
@@ -61,16 +56,11 @@ fn weld(vertices: &mut Vec<Vertex>, indices: &mut [u32], tangents: &[[f32; 4]]) 
             assigned[v] = true;
             vertices[v].tangent = tangent;
         } else if vertices[v].tangent.map(f32::to_bits) != tangent.map(f32::to_bits) {
-            *index = *splits
-                .entry((*index, tangent.map(f32::to_bits)))
-                .or_insert_with(|| {
-                    let copy = Vertex {
-                        tangent,
-                        ..vertices[v]
-                    };
-                    vertices.push(copy);
-                    (vertices.len() - 1) as u32
-                });
+            *index = *splits.entry((*index, tangent.map(f32::to_bits))).or_insert_with(|| {
+                let copy = Vertex { tangent, ..vertices[v] };
+                vertices.push(copy);
+                (vertices.len() - 1) as u32
+            });
         }
     }
 }
@@ -123,13 +113,7 @@ mod tests {
     use super::*;
 
     fn vertex(position: [f32; 3], uv: [f32; 2]) -> Vertex {
-        Vertex {
-            position,
-            u: uv[0],
-            normal: [0.0, 0.0, 1.0],
-            v: uv[1],
-            tangent: [0.0; 4],
-        }
+        Vertex { position, u: uv[0], normal: [0.0, 0.0, 1.0], v: uv[1], tangent: [0.0; 4] }
     }
 
     /// A quad facing +Z with the image upright on it (u right, v down), counter-clockwise.
@@ -165,10 +149,7 @@ mod tests {
         indices.extend([1, 4, 5, 1, 5, 2]);
         generate(&mut vertices, &mut indices);
         assert!(vertices.len() > 6, "the shared edge's vertices are split");
-        let signs: Vec<f32> = indices
-            .iter()
-            .map(|&i| vertices[i as usize].tangent[3])
-            .collect();
+        let signs: Vec<f32> = indices.iter().map(|&i| vertices[i as usize].tangent[3]).collect();
         assert!(signs[..6].iter().all(|&w| w == 1.0), "{signs:?}");
         assert!(signs[6..].iter().all(|&w| w == -1.0), "{signs:?}");
     }
@@ -176,32 +157,16 @@ mod tests {
     #[test]
     fn degenerate_tangents_get_a_perpendicular_fallback() {
         let mut vertices = vec![
-            Vertex {
-                tangent: [f32::NAN, 0.0, 0.0, 1.0],
-                ..vertex([0.0; 3], [0.0; 2])
-            },
-            Vertex {
-                tangent: [0.0, 0.0, 2.0, -1.0],
-                ..vertex([0.0; 3], [0.0; 2])
-            },
-            Vertex {
-                tangent: [3.0, 0.0, 1.0, -1.0],
-                ..vertex([0.0; 3], [0.0; 2])
-            },
+            Vertex { tangent: [f32::NAN, 0.0, 0.0, 1.0], ..vertex([0.0; 3], [0.0; 2]) },
+            Vertex { tangent: [0.0, 0.0, 2.0, -1.0], ..vertex([0.0; 3], [0.0; 2]) },
+            Vertex { tangent: [3.0, 0.0, 1.0, -1.0], ..vertex([0.0; 3], [0.0; 2]) },
         ];
         orthonormalize(&mut vertices);
         for v in &vertices {
             let t = Vec4::from(v.tangent);
-            assert!(
-                (t.truncate().length() - 1.0).abs() < 1e-5 && t.z.abs() < 1e-5,
-                "{t}"
-            );
+            assert!((t.truncate().length() - 1.0).abs() < 1e-5 && t.z.abs() < 1e-5, "{t}");
         }
         assert_eq!(vertices[1].tangent[3], 1.0, "fallback tangents have w = 1");
-        assert_eq!(
-            vertices[2].tangent,
-            [1.0, 0.0, 0.0, -1.0],
-            "usable tangents keep their sign"
-        );
+        assert_eq!(vertices[2].tangent, [1.0, 0.0, 0.0, -1.0], "usable tangents keep their sign");
     }
 }

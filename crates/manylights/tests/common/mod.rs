@@ -16,14 +16,7 @@ pub const HEIGHT: u32 = 144;
 
 pub fn renderer(scene: &Scene, width: u32, height: u32) -> Renderer {
     let ctx = GpuContext::new().expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)");
-    let config = RenderConfig {
-        width,
-        height,
-        tonemapper: Tonemapper::Aces,
-        max_texture_size: 256,
-        anisotropy: 1,
-        ..Default::default()
-    };
+    let config = RenderConfig { width, height, tonemapper: Tonemapper::Aces, max_texture_size: 256, anisotropy: 1, ..Default::default() };
     Renderer::new(ctx, scene, config).expect("renderer")
 }
 
@@ -62,16 +55,8 @@ pub fn quad_mesh() -> Mesh {
 pub fn wall_scene(lights: Vec<Light>) -> (Scene, Camera) {
     let scene = Scene {
         meshes: vec![quad_mesh()],
-        materials: vec![Material {
-            base_color_factor: Vec4::ONE,
-            metallic_factor: 0.0,
-            roughness_factor: 1.0,
-            ..Default::default()
-        }],
-        instances: vec![Instance {
-            mesh: 0,
-            world_from_local: Mat4::from_scale(Vec3::new(10.0, 10.0, 1.0)),
-        }],
+        materials: vec![Material { base_color_factor: Vec4::ONE, metallic_factor: 0.0, roughness_factor: 1.0, ..Default::default() }],
+        instances: vec![Instance { mesh: 0, world_from_local: Mat4::from_scale(Vec3::new(10.0, 10.0, 1.0)) }],
         lights,
         ambient: Vec3::ZERO,
         ..Default::default()
@@ -81,14 +66,7 @@ pub fn wall_scene(lights: Vec<Light>) -> (Scene, Camera) {
 }
 
 pub fn point_light(position: Vec3, intensity: f32, range: f32) -> Light {
-    Light {
-        kind: LightKind::Point,
-        position,
-        direction: Vec3::NEG_Z,
-        color: Vec3::ONE,
-        intensity,
-        range,
-    }
+    Light { kind: LightKind::Point, position, direction: Vec3::NEG_Z, color: Vec3::ONE, intensity, range }
 }
 
 pub fn pixel<T: Copy>(image: &Image<T>, x: u32, y: u32) -> T {
