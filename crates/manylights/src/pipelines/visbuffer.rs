@@ -86,6 +86,6 @@ impl VisbufferPipeline {
         let (width, height) = (self.targets.width, self.targets.height);
         self.raster.record(encoder, timer.as_deref_mut(), scene, eye, &self.visibility_view, &self.depth_view);
         self.shade.record(encoder, timer.as_deref_mut(), scene, width, height);
-        self.tonemap.record(encoder, timer.as_deref_mut(), width, height);
+        self.tonemap.record(encoder, timer, width, height);
     }
 }
