@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see BENCHMARKS.md): expects the release binary and sponza_lite under
-# .bench/, and the Vulkan loader packages under .gl/ (the device tool's recipe). Writes JSON, PNGs and
-# logs to $OUT.
+# .bench/, and the Vulkan loader packages under .gl/ (the device tool's recipe). Writes JSON, two PNGs
+# and the GPU description to $OUT.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
@@ -10,16 +10,16 @@ export XDG_RUNTIME_DIR=/tmp
 out=${OUT:-/tmp/out}
 mkdir -p "$out"
 bin=.bench/manylights
-nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem --format=csv | tee "$out/gpu.txt"
+sponza=.bench/sponza_lite/Sponza.gltf
+nvidia-smi --query-gpu=name,driver_version --format=csv | tee "$out/gpu.txt"
 $bin info | tee -a "$out/gpu.txt"
-run() { # name, then render arguments
-  local name=$1; shift
+run() { # name, image folder, then render arguments
+  local name=$1 images=$2; shift 2
   echo "== $name"
   $bin render --width 1920 --height 1080 --warmup 100 --frames 300 --timings \
-    --timings-json "$out/$name.json" -o "$out/$name.png" "$@" 2>&1 | grep -v XDG_RUNTIME
+    --timings-json "$out/$name.json" -o "$images/$name.png" "$@" 2>&1
 }
-run sponza_256 --scene .bench/sponza_lite/Sponza.gltf --lights 256 --seed 1
-run sponza_1024 --scene .bench/sponza_lite/Sponza.gltf --lights 1024 --seed 1
-run demo_256 --scene demo --lights 256 --seed 1
-run sponza_0 --scene .bench/sponza_lite/Sponza.gltf
-run sponza_256_again --scene .bench/sponza_lite/Sponza.gltf --lights 256 --seed 1
+run sponza_256 "$out" --scene $sponza --lights 256 --seed 1
+run demo_256 "$out" --scene demo --lights 256 --seed 1
+run sponza_0 /tmp --scene $sponza
+run sponza_1024 /tmp --scene $sponza --lights 1024 --seed 1
