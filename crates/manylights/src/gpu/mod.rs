@@ -1,6 +1,7 @@
 //! GPU plumbing: device context, the uploaded scene, per-frame uniforms, timestamps, readback and
 //! shader composition. Passes build on these; nothing here knows about a particular pipeline.
 
+pub mod bindings;
 pub mod context;
 pub mod frame;
 pub mod readback;

@@ -7,6 +7,7 @@ use glam::Mat3;
 use wgpu::util::DeviceExt;
 
 use super::{
+    bindings,
     frame::SceneLighting,
     textures::{TextureArray, TextureSpace},
     FrameUniforms, GpuContext,
@@ -38,17 +39,13 @@ pub struct GpuMaterial {
     pub metallic_factor: f32,
     pub roughness_factor: f32,
     pub normal_scale: f32,
-    pub flags: u32,
+    pub wrap_modes: u32,
     pub base_color_layer: i32,
     pub emissive_layer: i32,
     pub metallic_roughness_layer: i32,
     pub normal_layer: i32,
-    pub wrap_modes: u32,
-    pub _pad: [u32; 3],
 }
 
-const MATERIAL_ALPHA_MASK: u32 = 1;
-const MATERIAL_DOUBLE_SIDED: u32 = 2;
 const NO_TEXTURE: i32 = -1;
 
 /// Keep in sync with `Light` in `shading/types.wgsl`.
@@ -112,7 +109,6 @@ pub struct GpuScene {
     pub draw_commands: Vec<DrawCommand>,
     pub lighting: SceneLighting,
     pub triangle_count: u64,
-    pub vertex_count: u64,
 }
 
 impl GpuScene {
@@ -212,21 +208,22 @@ impl GpuScene {
         });
 
         let bind_group_layout = Self::create_bind_group_layout(device);
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scene"),
-            layout: &bind_group_layout,
-            entries: &[
-                entry(0, frame_uniforms.as_entire_binding()),
-                entry(1, vertex_buffer.as_entire_binding()),
-                entry(2, index_buffer.as_entire_binding()),
-                entry(3, draw_buffer.as_entire_binding()),
-                entry(4, material_buffer.as_entire_binding()),
-                entry(5, light_buffer.as_entire_binding()),
-                entry(6, wgpu::BindingResource::TextureView(&color_textures.view)),
-                entry(7, wgpu::BindingResource::TextureView(&data_textures.view)),
-                entry(8, wgpu::BindingResource::Sampler(&sampler)),
+        let bind_group = bindings::bind_group(
+            device,
+            "scene",
+            &bind_group_layout,
+            vec![
+                frame_uniforms.as_entire_binding(),
+                vertex_buffer.as_entire_binding(),
+                index_buffer.as_entire_binding(),
+                draw_buffer.as_entire_binding(),
+                material_buffer.as_entire_binding(),
+                light_buffer.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&color_textures.view),
+                wgpu::BindingResource::TextureView(&data_textures.view),
+                wgpu::BindingResource::Sampler(&sampler),
             ],
-        });
+        );
         ctx.check_errors()?;
 
         Ok(Self {
@@ -236,72 +233,33 @@ impl GpuScene {
             draw_commands,
             lighting: SceneLighting { sun: scene.sun, ambient: scene.ambient, exposure: scene.exposure, light_count: lights.len() as u32 },
             triangle_count: scene.drawn_triangle_count() as u64,
-            vertex_count: vertices.len() as u64,
         })
     }
 
     /// Keep in sync with `shading/scene_bindings.wgsl`.
     fn create_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        let storage = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: all,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let texture_array = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: all,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                view_dimension: wgpu::TextureViewDimension::D2Array,
-                multisampled: false,
-            },
-            count: None,
-        };
-        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("scene"),
-            entries: &[
-                // 0: frame uniforms
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: all,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                storage(1),       // vertices
-                storage(2),       // indices
-                storage(3),       // draws
-                storage(4),       // materials
-                storage(5),       // lights
-                texture_array(6), // colour textures (sRGB)
-                texture_array(7), // data textures (linear)
-                // 8: material sampler
-                wgpu::BindGroupLayoutEntry {
-                    binding: 8,
-                    visibility: all,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
+        let float_array = wgpu::TextureSampleType::Float { filterable: true };
+        bindings::layout(
+            device,
+            "scene",
+            &[
+                bindings::uniform(0, all),                                                   // frame uniforms
+                bindings::storage_read(1, all),                                              // vertices
+                bindings::storage_read(2, all),                                              // indices
+                bindings::storage_read(3, all),                                              // draws
+                bindings::storage_read(4, all),                                              // materials
+                bindings::storage_read(5, all),                                              // lights
+                bindings::texture(6, all, float_array, wgpu::TextureViewDimension::D2Array), // colour textures (sRGB)
+                bindings::texture(7, all, float_array, wgpu::TextureViewDimension::D2Array), // data textures (linear)
+                bindings::sampler(8, all),                                                   // material sampler
             ],
-        })
+        )
     }
 
     pub fn write_frame(&self, queue: &wgpu::Queue, uniforms: &FrameUniforms) {
         queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(uniforms));
     }
-}
-
-fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry { binding, resource }
 }
 
 /// A read-only storage buffer; empty arrays get one zeroed element because bindings cannot be empty.
@@ -353,9 +311,9 @@ fn wrap_bits(t: Option<TextureRef>) -> u32 {
 
 fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuMaterial {
     let layer = |t: Option<TextureRef>, array: &TextureArray| t.map_or(NO_TEXTURE, |t| array.layers[&t.texture]);
-    let (alpha_cutoff, mask_flag) = match m.alpha_mode {
-        AlphaMode::Mask { cutoff } => (cutoff, MATERIAL_ALPHA_MASK),
-        AlphaMode::Opaque | AlphaMode::Blend => (0.0, 0),
+    let alpha_cutoff = match m.alpha_mode {
+        AlphaMode::Mask { cutoff } => cutoff,
+        AlphaMode::Opaque | AlphaMode::Blend => 0.0,
     };
     GpuMaterial {
         base_color_factor: m.base_color_factor.to_array(),
@@ -364,7 +322,6 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
         metallic_factor: m.metallic_factor,
         roughness_factor: m.roughness_factor,
         normal_scale: m.normal_scale,
-        flags: mask_flag | if m.double_sided { MATERIAL_DOUBLE_SIDED } else { 0 },
         base_color_layer: layer(m.base_color_texture, color),
         emissive_layer: layer(m.emissive_texture, color),
         metallic_roughness_layer: layer(m.metallic_roughness_texture, data),
@@ -374,6 +331,92 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
             | wrap_bits(m.emissive_texture) << 8
             | wrap_bits(m.metallic_roughness_texture) << 16
             | wrap_bits(m.normal_texture) << 24,
-        _pad: [0; 3],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::mem::{offset_of, size_of};
+
+    use super::*;
+    use crate::{gpu::FrameUniforms, scene::Vertex};
+
+    /// Each WGSL struct in `shading/types.wgsl` against its Rust twin: same size, same members at the
+    /// same offsets, so uploads are read as written.
+    #[test]
+    fn rust_structs_match_their_wgsl_layout() {
+        let module = naga::front::wgsl::parse_str(include_str!("../shading/types.wgsl")).unwrap();
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        let wgsl_layout = |name: &str| -> (u32, Vec<(String, u32)>) {
+            let (_, ty) = module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)).unwrap_or_else(|| panic!("no struct {name}"));
+            match &ty.inner {
+                naga::TypeInner::Struct { members, span } => (*span, members.iter().map(|m| (m.name.clone().unwrap(), m.offset)).collect()),
+                _ => panic!("{name} is not a struct"),
+            }
+        };
+        macro_rules! check {
+            ($wgsl:literal, $rust:ty, [$($field:ident),* $(,)?]) => {{
+                let (size, members) = wgsl_layout($wgsl);
+                assert_eq!(size as usize, size_of::<$rust>(), "size of {}", $wgsl);
+                let rust: Vec<(String, u32)> = vec![$((stringify!($field).to_string(), offset_of!($rust, $field) as u32)),*];
+                let wgsl: Vec<(String, u32)> = members.into_iter().filter(|(n, _)| !n.starts_with("_pad")).collect();
+                assert_eq!(wgsl, rust, "members of {}", $wgsl);
+            }};
+        }
+        check!("Vertex", Vertex, [position, u, normal, v, tangent]);
+        check!("Draw", GpuDraw, [world_from_local, normal_from_local, first_index, first_visibility_id, base_vertex, material]);
+        check!(
+            "Material",
+            GpuMaterial,
+            [
+                base_color_factor,
+                emissive_factor,
+                alpha_cutoff,
+                metallic_factor,
+                roughness_factor,
+                normal_scale,
+                wrap_modes,
+                base_color_layer,
+                emissive_layer,
+                metallic_roughness_layer,
+                normal_layer
+            ]
+        );
+        check!("Light", GpuLight, [position, range, radiant, kind, direction, spot_scale, spot_offset]);
+        check!(
+            "FrameUniforms",
+            FrameUniforms,
+            [
+                clip_from_world,
+                world_from_clip,
+                camera_position,
+                viewport,
+                sun_direction,
+                sun_radiance,
+                ambient,
+                light_count,
+                exposure,
+                tonemapper
+            ]
+        );
+    }
+
+    #[test]
+    fn spot_cone_follows_khr_lights_punctual() {
+        let spot = Light {
+            kind: LightKind::Spot { inner_cone_angle: 0.2, outer_cone_angle: 0.5 },
+            position: glam::Vec3::ZERO,
+            direction: glam::Vec3::new(0.0, -2.0, 0.0),
+            color: glam::Vec3::new(1.0, 0.5, 0.25),
+            intensity: 4.0,
+            range: 3.0,
+        };
+        let gpu = GpuLight::from(&spot);
+        let attenuation = |angle: f32| (angle.cos() * gpu.spot_scale + gpu.spot_offset).clamp(0.0, 1.0);
+        assert!((attenuation(0.2) - 1.0).abs() < 1e-5, "full intensity at the inner angle");
+        assert!(attenuation(0.5).abs() < 1e-5, "zero at the outer angle");
+        assert_eq!(gpu.direction, [0.0, -1.0, 0.0]);
+        assert_eq!(gpu.radiant, [4.0, 2.0, 1.0]);
     }
 }

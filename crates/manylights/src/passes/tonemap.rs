@@ -1,6 +1,6 @@
 //! Exposure, tonemapping and sRGB encoding into the 8-bit output. See `tonemap.wgsl`.
 
-use crate::gpu::{shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::Result;
 
 /// Storage textures cannot be sRGB, so the shader encodes sRGB itself into a plain RGBA8 texture.
@@ -12,71 +12,30 @@ pub struct Tonemap {
 }
 
 impl Tonemap {
-    /// Keep the layout in sync with `tonemap.wgsl`.
     pub fn new(ctx: &GpuContext, scene: &GpuScene, hdr: &wgpu::TextureView, ldr: &wgpu::TextureView) -> Result<Self> {
         let device = &ctx.device;
-        let module = shaders::create_module(device, &ShaderDesc::new("passes/tonemap.wgsl"))?;
         let compute = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("tonemap"),
-            entries: &[
-                // 0: frame uniforms (exposure, tonemapper, viewport)
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: compute,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                // 1: HDR input
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: compute,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                // 2: LDR output
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: compute,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: LDR_FORMAT,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                    },
-                    count: None,
-                },
+        // Keep in sync with `tonemap.wgsl`.
+        let layout = bindings::layout(
+            device,
+            "tonemap",
+            &[
+                bindings::uniform(0, compute), // frame uniforms (exposure, tonemapper, viewport)
+                bindings::texture(1, compute, wgpu::TextureSampleType::Float { filterable: false }, wgpu::TextureViewDimension::D2), // HDR input
+                bindings::storage_texture_write(2, compute, LDR_FORMAT), // LDR output
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("tonemap"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("tonemap"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("tonemap"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("tonemap"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: scene.frame_uniforms.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(hdr) },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(ldr) },
+        );
+        let pipeline = bindings::compute_pipeline(device, "tonemap", &ShaderDesc::new("passes/tonemap.wgsl"), &[&layout])?;
+        let bind_group = bindings::bind_group(
+            device,
+            "tonemap",
+            &layout,
+            vec![
+                scene.frame_uniforms.as_entire_binding(),
+                wgpu::BindingResource::TextureView(hdr),
+                wgpu::BindingResource::TextureView(ldr),
             ],
-        });
+        );
         Ok(Self { pipeline, bind_group })
     }
 

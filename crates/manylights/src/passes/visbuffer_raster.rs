@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 
 use crate::gpu::scene::{DrawCommand, RasterState};
-use crate::gpu::{shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::Result;
 
 pub const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
@@ -16,11 +16,7 @@ pub struct VisbufferRaster {
 impl VisbufferRaster {
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Result<Self> {
         let module = shaders::create_module(&ctx.device, &ShaderDesc::new("passes/visbuffer_raster.wgsl"))?;
-        let layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("visbuffer_raster"),
-            bind_group_layouts: &[Some(&scene.bind_group_layout)],
-            immediate_size: 0,
-        });
+        let layout = bindings::pipeline_layout(&ctx.device, "visbuffer_raster", &[&scene.bind_group_layout]);
         let mut pipelines = HashMap::new();
         for alpha_mask in [false, true] {
             for double_sided in [false, true] {

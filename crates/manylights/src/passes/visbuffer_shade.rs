@@ -1,6 +1,6 @@
 //! Visibility-buffer resolve and shading in compute. See `visbuffer_shade.wgsl`.
 
-use crate::gpu::{shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::pipelines::LightMethod;
 use crate::Result;
 
@@ -12,7 +12,6 @@ pub struct VisbufferShade {
 }
 
 impl VisbufferShade {
-    /// Keep the layout in sync with group 1 of `visbuffer_shade.wgsl`.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
@@ -21,56 +20,24 @@ impl VisbufferShade {
         hdr: &wgpu::TextureView,
     ) -> Result<Self> {
         let device = &ctx.device;
+        let compute = wgpu::ShaderStages::COMPUTE;
+        // Group 1 of `visbuffer_shade.wgsl`; group 0 is the scene.
+        let layout = bindings::layout(
+            device,
+            "visbuffer_shade",
+            &[
+                bindings::texture(0, compute, wgpu::TextureSampleType::Uint, wgpu::TextureViewDimension::D2), // visibility ids
+                bindings::storage_texture_write(1, compute, HDR_FORMAT),                                      // HDR output
+            ],
+        );
         let shader = ShaderDesc::new("passes/visbuffer_shade.wgsl").with("LIGHT_ENUMERATION", method.enumeration_module());
-        let module = shaders::create_module(device, &shader)?;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("visbuffer_shade"),
-            entries: &[
-                // 0: visibility buffer
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Uint,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                // 1: HDR output
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: HDR_FORMAT,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                    },
-                    count: None,
-                },
-            ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("visbuffer_shade"),
-            bind_group_layouts: &[Some(&scene.bind_group_layout), Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("visbuffer_shade"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("visbuffer_shade"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("visbuffer_shade"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(visibility) },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(hdr) },
-            ],
-        });
+        let pipeline = bindings::compute_pipeline(device, "visbuffer_shade", &shader, &[&scene.bind_group_layout, &layout])?;
+        let bind_group = bindings::bind_group(
+            device,
+            "visbuffer_shade",
+            &layout,
+            vec![wgpu::BindingResource::TextureView(visibility), wgpu::BindingResource::TextureView(hdr)],
+        );
         Ok(Self { pipeline, bind_group })
     }
 

@@ -27,8 +27,6 @@ struct Draw {
     material: u32,
 }
 
-const MATERIAL_ALPHA_MASK: u32 = 1u;
-const MATERIAL_DOUBLE_SIDED: u32 = 2u;
 const NO_TEXTURE: i32 = -1;
 
 // Texture wrap modes, two bits per axis: (wrap_v << 2) | wrap_u, per texture slot.
@@ -36,25 +34,23 @@ const WRAP_REPEAT: u32 = 0u;
 const WRAP_MIRRORED_REPEAT: u32 = 1u;
 const WRAP_CLAMP_TO_EDGE: u32 = 2u;
 
+// Alpha masking and double-sidedness are raster state (`gpu::scene::RasterState`), not fields here.
 struct Material {
     base_color_factor: vec4<f32>,
     emissive_factor: vec3<f32>,
+    // Alpha-masked materials discard below it in `visbuffer_raster`.
     alpha_cutoff: f32,
     metallic_factor: f32,
     roughness_factor: f32,
     normal_scale: f32,
-    flags: u32,
+    // Four bytes, one per texture slot in the order below, each `(wrap_v << 2) | wrap_u`.
+    wrap_modes: u32,
     // Layers in `color_textures` (base colour, emissive) and `data_textures` (metallic-roughness,
     // normal); NO_TEXTURE when absent.
     base_color_layer: i32,
     emissive_layer: i32,
     metallic_roughness_layer: i32,
     normal_layer: i32,
-    // Four bytes, one per slot in the order above, each `(wrap_v << 2) | wrap_u`.
-    wrap_modes: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 const LIGHT_POINT: u32 = 0u;
