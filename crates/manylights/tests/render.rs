@@ -156,3 +156,18 @@ fn shading_matches_the_analytic_brdf_and_falloff() {
         assert!(error < 0.01, "pixel ({x}, {y}): GPU {actual}, reference {expected}, relative error {error}");
     }
 }
+
+#[test]
+fn mirrored_instances_are_drawn_and_lit_like_their_originals() {
+    // A light on the mirror plane: the mirrored wall must look exactly like the original, not be
+    // culled for its reversed winding, and not have its normal flipped.
+    let light = point_light(Vec3::new(0.0, 0.4, 1.5), 4.0, 6.0);
+    let (original, camera) = wall_scene(vec![light]);
+    let mut mirrored = original.clone();
+    mirrored.instances[0].world_from_local = glam::Mat4::from_scale(Vec3::new(-10.0, 10.0, 1.0));
+    let (_, a) = render(&original, &camera);
+    let (_, b) = render(&mirrored, &camera);
+    assert!(luminance(pixel(&b, WIDTH / 2, HEIGHT / 2)) > 0.05, "the mirrored wall is missing or unlit");
+    let max_difference = a.pixels.iter().zip(&b.pixels).flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs())).fold(0.0f32, f32::max);
+    assert!(max_difference < 1e-3, "mirrored wall differs by {max_difference}");
+}

@@ -90,6 +90,8 @@ impl From<&Light> for GpuLight {
 pub struct RasterState {
     pub alpha_mask: bool,
     pub double_sided: bool,
+    /// The instance's transform has a negative determinant, which reverses its triangles' winding.
+    pub mirrored: bool,
 }
 
 /// One instance of one primitive, as the raster pass draws it.
@@ -162,6 +164,7 @@ impl GpuScene {
                     state: RasterState {
                         alpha_mask: matches!(material.alpha_mode, AlphaMode::Mask { .. }),
                         double_sided: material.double_sided,
+                        mirrored: handedness < 0.0,
                     },
                 });
                 draws.push(GpuDraw {

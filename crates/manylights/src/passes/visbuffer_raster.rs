@@ -20,8 +20,10 @@ impl VisbufferRaster {
         let mut pipelines = HashMap::new();
         for alpha_mask in [false, true] {
             for double_sided in [false, true] {
-                let state = RasterState { alpha_mask, double_sided };
-                pipelines.insert(state, Self::create_pipeline(&ctx.device, &layout, &module, state));
+                for mirrored in [false, true] {
+                    let state = RasterState { alpha_mask, double_sided, mirrored };
+                    pipelines.insert(state, Self::create_pipeline(&ctx.device, &layout, &module, state));
+                }
             }
         }
         Ok(Self { pipelines })
@@ -44,7 +46,7 @@ impl VisbufferRaster {
             },
             primitive: wgpu::PrimitiveState {
                 topology: wgpu::PrimitiveTopology::TriangleList,
-                front_face: wgpu::FrontFace::Ccw,
+                front_face: if state.mirrored { wgpu::FrontFace::Cw } else { wgpu::FrontFace::Ccw },
                 cull_mode: if state.double_sided { None } else { Some(wgpu::Face::Back) },
                 ..Default::default()
             },

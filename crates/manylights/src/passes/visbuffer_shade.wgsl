@@ -110,7 +110,8 @@ fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     surface.tangent = world_direction(draw, interpolate3(b, v0.tangent.xyz, v1.tangent.xyz, v2.tangent.xyz));
     surface.bitangent_sign = v0.tangent.w * sign(draw.normal_from_local[0].w);
     // Back faces only reach here on double-sided materials: light them as seen from the viewer's side.
-    let geometric_normal = cross(p1 - p0, p2 - p0);
+    // Mirrored instances reverse the winding, hence the handedness sign.
+    let geometric_normal = cross(p1 - p0, p2 - p0) * sign(draw.normal_from_local[0].w);
     if dot(geometric_normal, view_dir) < 0.0 {
         surface.normal = -surface.normal;
     }
