@@ -4,7 +4,8 @@
 # which runs everything manylights does, slowly.
 set -euo pipefail
 
-have_loader() { ldconfig -p 2>/dev/null | grep 'libvulkan\.so\.1' >/dev/null; } # not grep -q: with pipefail, ldconfig's SIGPIPE would fail the check
+# File tests rather than ldconfig, which is not on a normal user's PATH on Debian.
+have_loader() { compgen -G '/usr/lib/*/libvulkan.so.1' >/dev/null || compgen -G '/usr/lib*/libvulkan.so.1' >/dev/null; }
 have_driver() {
   [ -n "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ] && return 0
   compgen -G '/usr/share/vulkan/icd.d/*.json' >/dev/null || compgen -G '/etc/vulkan/icd.d/*.json' >/dev/null ||
@@ -31,5 +32,5 @@ if [ "$(id -u)" != 0 ]; then
 fi
 echo "Installing the Vulkan loader and Mesa's software Vulkan driver (lavapipe)..." >&2
 $sudo apt-get update -qq
-DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq libvulkan1 mesa-vulkan-drivers >/dev/null
+$sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libvulkan1 mesa-vulkan-drivers >/dev/null
 have_loader && have_driver || { echo "error: Vulkan still unavailable after installing mesa-vulkan-drivers" >&2; exit 1; }

@@ -13,6 +13,9 @@ use manylights::{
     scene::{self, generators::ScatterLights, Camera, Scene},
 };
 
+/// Most frames one run may time or warm up with: a few minutes even on a fast GPU.
+const MAX_FRAMES: u32 = 100_000;
+
 #[derive(Args)]
 pub struct RenderArgs {
     /// `demo` (built in), or a .gltf, .glb or .toml scene file.
@@ -75,8 +78,8 @@ enum TonemapArg {
 }
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    if args.frames == 0 {
-        bail!("--frames must be at least 1");
+    if !(1..=MAX_FRAMES).contains(&args.frames) || args.warmup > MAX_FRAMES {
+        bail!("--frames must be between 1 and {MAX_FRAMES} and --warmup at most {MAX_FRAMES} (got {} and {})", args.frames, args.warmup);
     }
     let mut scene = load_scene(&args.scene)?;
     if args.lights > 0 {

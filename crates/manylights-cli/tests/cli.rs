@@ -124,6 +124,12 @@ fn nan_in_a_scene_file_light() {
 }
 
 #[test]
+fn huge_frame_counts_are_refused_not_allocated() {
+    let err = failure(&["render", "--frames", "4294967295", "--width", "64", "--height", "36"]);
+    assert!(err.contains("--frames must be between 1 and"), "{err}");
+}
+
+#[test]
 fn camera_out_of_range() {
     let err = failure(&["render", "--camera", "7", "--width", "64", "--height", "36"]);
     assert!(err.contains("--camera 7"), "{err}");

@@ -54,6 +54,17 @@ impl RenderConfig {
                 self.width, self.height
             )));
         }
+        // The HDR image (8 bytes a pixel) must fit one buffer to be read back.
+        let hdr_bytes = u64::from(self.width) * u64::from(self.height) * 8;
+        if hdr_bytes > ctx.limits.max_buffer_size {
+            return Err(Error::InvalidConfig(format!(
+                "resolution {}×{} needs a {} MiB readback buffer, over this GPU's {} MiB limit; choose a smaller --width/--height",
+                self.width,
+                self.height,
+                hdr_bytes >> 20,
+                ctx.limits.max_buffer_size >> 20
+            )));
+        }
         if self.max_texture_size == 0 {
             return Err(Error::InvalidConfig("the maximum texture size must be at least 1".into()));
         }

@@ -51,7 +51,7 @@ impl Renderer {
     pub fn render_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<PassTimings>> {
         let uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.lighting, self.config.tonemapper);
         self.scene.write_frame(&self.ctx.queue, &uniforms);
-        let mut timings = Vec::with_capacity(count as usize);
+        let mut timings = Vec::new();
         for _ in 0..count {
             let mut encoder = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
             if let Some(timer) = &mut self.timer {

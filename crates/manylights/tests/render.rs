@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use common::*;
 use glam::Vec3;
-use manylights::scene::{demo::demo_scene, Light, LightKind};
+use manylights::scene::{demo::demo_scene, Camera, Light, LightKind, Texture, TextureRef, Wrap};
 
 fn demo_frame() -> (manylights::renderer::Image<[u8; 4]>, manylights::renderer::Image<[f32; 4]>) {
     let scene = demo_scene();
@@ -170,4 +170,72 @@ fn mirrored_instances_are_drawn_and_lit_like_their_originals() {
     assert!(luminance(pixel(&b, WIDTH / 2, HEIGHT / 2)) > 0.05, "the mirrored wall is missing or unlit");
     let max_difference = a.pixels.iter().zip(&b.pixels).flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs())).fold(0.0f32, f32::max);
     assert!(max_difference < 1e-3, "mirrored wall differs by {max_difference}");
+}
+
+/// An unlit quad whose emissive texture is a horizontal ramp, with u running 0..2 across it: the
+/// second half shows what each wrap mode makes of u > 1.
+fn wrap_probe(wrap: Wrap) -> (manylights::renderer::Image<[f32; 4]>, Camera) {
+    let ramp: Vec<u8> = (0..8 * 8)
+        .flat_map(|i| {
+            let c = ((i % 8) * 32 + 16) as u8;
+            [c, c, c, 255]
+        })
+        .collect();
+    let (mut scene, camera) = wall_scene(vec![]);
+    scene.textures = vec![Texture { name: "ramp".into(), width: 8, height: 8, rgba8: ramp }];
+    scene.materials[0].base_color_factor = glam::Vec4::new(0.0, 0.0, 0.0, 1.0);
+    scene.materials[0].emissive_factor = Vec3::ONE;
+    scene.materials[0].emissive_texture = Some(TextureRef { texture: 0, wrap_u: wrap, wrap_v: Wrap::Repeat });
+    for v in &mut scene.meshes[0].primitives[0].vertices {
+        v.u *= 2.0;
+    }
+    scene.instances[0].world_from_local = glam::Mat4::from_scale(Vec3::new(2.0, 2.0, 1.0));
+    let (_, hdr) = render(&scene, &camera);
+    (hdr, camera)
+}
+
+/// Radiance at the wall point where u (0..2 over x in -2..2) takes the given value.
+fn at_u(image: &manylights::renderer::Image<[f32; 4]>, camera: &Camera, u: f32) -> f32 {
+    let world = Vec3::new((u - 1.0) * 2.0, 0.0, 0.0);
+    let clip = camera.clip_from_view(WIDTH as f32 / HEIGHT as f32) * camera.world_from_view.inverse() * world.extend(1.0);
+    let x = ((clip.x / clip.w * 0.5 + 0.5) * WIDTH as f32) as u32;
+    pixel(image, x, HEIGHT / 2)[0]
+}
+
+#[test]
+fn texture_wrap_modes_follow_gltf() {
+    let close = |a: f32, b: f32| (a - b).abs() < 0.03;
+    let (repeat, camera) = wrap_probe(Wrap::Repeat);
+    let (low, high) = (at_u(&repeat, &camera, 0.375), at_u(&repeat, &camera, 0.625));
+    assert!(high - low > 0.1, "the ramp must rise along u: {low} → {high}");
+    assert!(close(at_u(&repeat, &camera, 1.375), low), "repeat: u 1.375 must look like 0.375");
+
+    let (mirrored, _) = wrap_probe(Wrap::MirroredRepeat);
+    assert!(close(at_u(&mirrored, &camera, 1.375), high), "mirrored repeat: u 1.375 must look like 0.625");
+
+    let (clamped, _) = wrap_probe(Wrap::ClampToEdge);
+    let edge = at_u(&clamped, &camera, 0.97);
+    assert!(edge > high, "the last texel is the brightest");
+    for u in [1.375, 1.625, 1.9] {
+        assert!(close(at_u(&clamped, &camera, u), edge), "clamp to edge: u {u} must show the edge texel");
+    }
+}
+
+#[test]
+fn a_scene_far_from_the_origin_renders_like_one_at_the_origin() {
+    // Pixel rays are rebuilt relative to the camera, so moving scene and camera 5 km away must not
+    // change the image beyond f32 rounding of the positions themselves.
+    let shift = Vec3::new(5000.0, 0.0, -5000.0);
+    let light = point_light(Vec3::new(0.5, 0.3, 1.2), 4.0, 5.0);
+    let (near, camera) = wall_scene(vec![light]);
+    let mut far = near.clone();
+    far.instances[0].world_from_local = glam::Mat4::from_translation(shift) * far.instances[0].world_from_local;
+    far.lights[0].position += shift;
+    let mut far_camera = camera.clone();
+    far_camera.world_from_view = glam::Mat4::from_translation(shift) * far_camera.world_from_view;
+    let (_, a) = render(&near, &camera);
+    let (_, b) = render(&far, &far_camera);
+    let total: f32 = a.pixels.iter().map(|&p| luminance(p)).sum();
+    let difference: f32 = a.pixels.iter().zip(&b.pixels).map(|(&p, &q)| (luminance(p) - luminance(q)).abs()).sum();
+    assert!(difference / total < 0.01, "relative difference {}", difference / total);
 }

@@ -85,6 +85,9 @@ impl From<&Light> for GpuLight {
     }
 }
 
+/// Samplers for every pair of glTF wrap modes (3 × 3).
+const WRAP_SAMPLERS: u32 = 9;
+
 /// How the raster pass must draw a primitive.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct RasterState {
@@ -199,16 +202,22 @@ impl GpuScene {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("material sampler"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            anisotropy_clamp: anisotropy,
-            ..Default::default()
-        });
+        // One sampler per (wrap u, wrap v) pair, in the order of `shading/scene_bindings.wgsl`.
+        let address_modes = [wgpu::AddressMode::Repeat, wgpu::AddressMode::MirrorRepeat, wgpu::AddressMode::ClampToEdge];
+        let samplers: Vec<wgpu::Sampler> = (0..WRAP_SAMPLERS)
+            .map(|i| {
+                device.create_sampler(&wgpu::SamplerDescriptor {
+                    label: Some("material sampler"),
+                    address_mode_u: address_modes[i as usize % 3],
+                    address_mode_v: address_modes[i as usize / 3],
+                    mag_filter: wgpu::FilterMode::Linear,
+                    min_filter: wgpu::FilterMode::Linear,
+                    mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                    anisotropy_clamp: anisotropy,
+                    ..Default::default()
+                })
+            })
+            .collect();
 
         let bind_group_layout = Self::create_bind_group_layout(device);
         let bind_group = bindings::bind_group(
@@ -224,8 +233,10 @@ impl GpuScene {
                 light_buffer.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&color_textures.view),
                 wgpu::BindingResource::TextureView(&data_textures.view),
-                wgpu::BindingResource::Sampler(&sampler),
-            ],
+            ]
+            .into_iter()
+            .chain(samplers.iter().map(wgpu::BindingResource::Sampler))
+            .collect(),
         );
         ctx.check_errors()?;
 
@@ -243,21 +254,19 @@ impl GpuScene {
     fn create_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let float_array = wgpu::TextureSampleType::Float { filterable: true };
-        bindings::layout(
-            device,
-            "scene",
-            &[
-                bindings::uniform(0, all),                                                   // frame uniforms
-                bindings::storage_read(1, all),                                              // vertices
-                bindings::storage_read(2, all),                                              // indices
-                bindings::storage_read(3, all),                                              // draws
-                bindings::storage_read(4, all),                                              // materials
-                bindings::storage_read(5, all),                                              // lights
-                bindings::texture(6, all, float_array, wgpu::TextureViewDimension::D2Array), // colour textures (sRGB)
-                bindings::texture(7, all, float_array, wgpu::TextureViewDimension::D2Array), // data textures (linear)
-                bindings::sampler(8, all),                                                   // material sampler
-            ],
-        )
+        let mut entries = vec![
+            bindings::uniform(0, all),                                                   // frame uniforms
+            bindings::storage_read(1, all),                                              // vertices
+            bindings::storage_read(2, all),                                              // indices
+            bindings::storage_read(3, all),                                              // draws
+            bindings::storage_read(4, all),                                              // materials
+            bindings::storage_read(5, all),                                              // lights
+            bindings::texture(6, all, float_array, wgpu::TextureViewDimension::D2Array), // colour textures (sRGB)
+            bindings::texture(7, all, float_array, wgpu::TextureViewDimension::D2Array), // data textures (linear)
+        ];
+        // 8..=16: one material sampler per pair of wrap modes
+        entries.extend((0..WRAP_SAMPLERS).map(|i| bindings::sampler(8 + i, all)));
+        bindings::layout(device, "scene", &entries)
     }
 
     pub fn write_frame(&self, queue: &wgpu::Queue, uniforms: &FrameUniforms) {
@@ -392,8 +401,8 @@ mod tests {
             FrameUniforms,
             [
                 clip_from_world,
-                world_from_clip,
-                camera_position,
+                view_from_clip,
+                world_from_view,
                 viewport,
                 sun_direction,
                 sun_radiance,

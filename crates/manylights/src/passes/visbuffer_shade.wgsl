@@ -10,6 +10,7 @@
 @group(1) @binding(0) var visibility: texture_2d<u32>;
 @group(1) @binding(1) var hdr_output: texture_storage_2d<rgba16float, write>;
 
+// A ray whose origin is relative to the camera position (`frame.world_from_view[3]`).
 struct Ray {
     origin: vec3<f32>,
     dir: vec3<f32>,
@@ -19,10 +20,11 @@ struct Ray {
 fn camera_ray(pixel: vec2<f32>) -> Ray {
     let ndc = vec2<f32>(pixel.x * frame.viewport.z * 2.0 - 1.0, 1.0 - pixel.y * frame.viewport.w * 2.0);
     // Reverse Z: depth 1 is the near plane; 0.5 is a second point on the ray even for infinite far.
-    let near = frame.world_from_clip * vec4<f32>(ndc, 1.0, 1.0);
-    let mid = frame.world_from_clip * vec4<f32>(ndc, 0.5, 1.0);
+    let near = frame.view_from_clip * vec4<f32>(ndc, 1.0, 1.0);
+    let mid = frame.view_from_clip * vec4<f32>(ndc, 0.5, 1.0);
     let origin = near.xyz / near.w;
-    return Ray(origin, normalize(mid.xyz / mid.w - origin));
+    let world_from_view = mat3x3<f32>(frame.world_from_view[0].xyz, frame.world_from_view[1].xyz, frame.world_from_view[2].xyz);
+    return Ray(world_from_view * origin, normalize(world_from_view * (mid.xyz / mid.w - origin)));
 }
 
 // Barycentrics (b0, b1, b2) where the ray meets the triangle's plane (Möller–Trumbore without the
@@ -89,9 +91,11 @@ fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     let v0 = vertices[draw.base_vertex + indices[first]];
     let v1 = vertices[draw.base_vertex + indices[first + 1u]];
     let v2 = vertices[draw.base_vertex + indices[first + 2u]];
-    let p0 = (draw.world_from_local * vec4<f32>(v0.position, 1.0)).xyz;
-    let p1 = (draw.world_from_local * vec4<f32>(v1.position, 1.0)).xyz;
-    let p2 = (draw.world_from_local * vec4<f32>(v2.position, 1.0)).xyz;
+    // Camera-relative positions, like the rays.
+    let eye = frame.world_from_view[3].xyz;
+    let p0 = (draw.world_from_local * vec4<f32>(v0.position, 1.0)).xyz - eye;
+    let p1 = (draw.world_from_local * vec4<f32>(v1.position, 1.0)).xyz - eye;
+    let p2 = (draw.world_from_local * vec4<f32>(v2.position, 1.0)).xyz - eye;
 
     let b = ray_plane_barycentrics(ray, p0, p1, p2);
     let b_dx = ray_plane_barycentrics(camera_ray(pixel + vec2<f32>(1.0, 0.0)), p0, p1, p2);
@@ -103,7 +107,7 @@ fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     let uv = interpolate2(b, uv0, uv1, uv2);
     let g = UvGradients(uv, interpolate2(b_dx, uv0, uv1, uv2) - uv, interpolate2(b_dy, uv0, uv1, uv2) - uv);
 
-    let position = interpolate3(b, p0, p1, p2);
+    let position = interpolate3(b, p0, p1, p2) + eye;
     let view_dir = -ray.dir;
     var surface: SurfaceFrame;
     surface.normal = normalize(world_normal(draw, interpolate3(b, v0.normal, v1.normal, v2.normal)));
@@ -113,7 +117,10 @@ fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     // Mirrored instances reverse the winding, hence the handedness sign.
     let geometric_normal = cross(p1 - p0, p2 - p0) * sign(draw.normal_from_local[0].w);
     if dot(geometric_normal, view_dir) < 0.0 {
+        // The whole tangent frame turns over, so normal maps bump the same way on both sides.
         surface.normal = -surface.normal;
+        surface.tangent = -surface.tangent;
+        surface.bitangent_sign = -surface.bitangent_sign;
     }
 
     let material = materials[draw.material];

@@ -11,36 +11,27 @@ struct UvGradients {
     ddy: vec2<f32>,
 }
 
-fn wrap_coordinate(x: f32, mode: u32, size: f32) -> f32 {
-    switch mode {
-        case WRAP_MIRRORED_REPEAT: {
-            let t = fract(x * 0.5) * 2.0;
-            return select(t, 2.0 - t, t > 1.0);
-        }
-        case WRAP_CLAMP_TO_EDGE: {
-            // Clamp to texel centres: the sampler repeats, and must not blend in the opposite edge.
-            let half_texel = 0.5 / size;
-            return clamp(x, half_texel, 1.0 - half_texel);
-        }
-        default: {
-            return x;
-        }
+// Samples a layer with the sampler of a slot's wrap modes (`Material.wrap_modes`).
+fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Material, slot: u32, g: UvGradients) -> vec4<f32> {
+    switch (material.wrap_modes >> (slot * 8u)) & 0xFu {
+        case 1u: { return textureSampleGrad(textures, wrap_u1_v0, g.uv, layer, g.ddx, g.ddy); }
+        case 2u: { return textureSampleGrad(textures, wrap_u2_v0, g.uv, layer, g.ddx, g.ddy); }
+        case 4u: { return textureSampleGrad(textures, wrap_u0_v1, g.uv, layer, g.ddx, g.ddy); }
+        case 5u: { return textureSampleGrad(textures, wrap_u1_v1, g.uv, layer, g.ddx, g.ddy); }
+        case 6u: { return textureSampleGrad(textures, wrap_u2_v1, g.uv, layer, g.ddx, g.ddy); }
+        case 8u: { return textureSampleGrad(textures, wrap_u0_v2, g.uv, layer, g.ddx, g.ddy); }
+        case 9u: { return textureSampleGrad(textures, wrap_u1_v2, g.uv, layer, g.ddx, g.ddy); }
+        case 10u: { return textureSampleGrad(textures, wrap_u2_v2, g.uv, layer, g.ddx, g.ddy); }
+        default: { return textureSampleGrad(textures, wrap_u0_v0, g.uv, layer, g.ddx, g.ddy); }
     }
 }
 
-fn wrap_uv(uv: vec2<f32>, material: Material, slot: u32, size: f32) -> vec2<f32> {
-    let modes = (material.wrap_modes >> (slot * 8u)) & 0xFu;
-    return vec2<f32>(wrap_coordinate(uv.x, modes & 3u, size), wrap_coordinate(uv.y, modes >> 2u, size));
-}
-
 fn sample_color(layer: i32, material: Material, slot: u32, g: UvGradients) -> vec4<f32> {
-    let size = f32(textureDimensions(color_textures).x);
-    return textureSampleGrad(color_textures, material_sampler, wrap_uv(g.uv, material, slot, size), layer, g.ddx, g.ddy);
+    return sample_wrapped(color_textures, layer, material, slot, g);
 }
 
 fn sample_data(layer: i32, material: Material, slot: u32, g: UvGradients) -> vec4<f32> {
-    let size = f32(textureDimensions(data_textures).x);
-    return textureSampleGrad(data_textures, material_sampler, wrap_uv(g.uv, material, slot, size), layer, g.ddx, g.ddy);
+    return sample_wrapped(data_textures, layer, material, slot, g);
 }
 
 // Base colour with alpha; used for alpha masking too.

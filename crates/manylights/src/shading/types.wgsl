@@ -29,10 +29,8 @@ struct Draw {
 
 const NO_TEXTURE: i32 = -1;
 
-// Texture wrap modes, two bits per axis: (wrap_v << 2) | wrap_u, per texture slot.
-const WRAP_REPEAT: u32 = 0u;
-const WRAP_MIRRORED_REPEAT: u32 = 1u;
-const WRAP_CLAMP_TO_EDGE: u32 = 2u;
+// Texture wrap modes: per texture slot (wrap_v << 2) | wrap_u, each 0 repeat, 1 mirrored repeat,
+// 2 clamp to edge; they select a sampler in `material.wgsl`.
 
 // Alpha masking and double-sidedness are raster state (`gpu::scene::RasterState`), not fields here.
 struct Material {
@@ -78,8 +76,10 @@ const TONEMAP_NONE: u32 = 2u;
 
 struct FrameUniforms {
     clip_from_world: mat4x4<f32>,
-    world_from_clip: mat4x4<f32>,
-    camera_position: vec4<f32>,
+    // Pixel rays are rebuilt in view space and rotated into the world relative to the camera
+    // (world_from_view[3] is its position), which keeps f32 precision far from the world origin.
+    view_from_clip: mat4x4<f32>,
+    world_from_view: mat4x4<f32>,
     // width, height, 1 / width, 1 / height
     viewport: vec4<f32>,
     // xyz: direction the sunlight travels; w: 1 when there is a sun
