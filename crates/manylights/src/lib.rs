@@ -4,6 +4,7 @@
 //! [`passes`] (one file per pass, WGSL beside it) → an image. [`pipelines`] holds the frame graphs that
 //! order the passes; [`renderer::Renderer`] ties a device, a scene and a pipeline together.
 
+pub mod accel;
 pub mod config;
 pub mod error;
 pub mod gpu;

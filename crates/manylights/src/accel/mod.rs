@@ -1,0 +1,13 @@
+//! Acceleration structures over the volumes of lights (and, later, decals), after Hansen & Peters,
+//! "Rendering Decals and Many Lights with Ray Tracing Acceleration Structures" (i3D 2021): one AABB
+//! per volume in a BVH, and at each shading point a point query (the paper's "zero-length ray")
+//! that visits exactly the AABBs containing the point, followed by the volume's tight test.
+//!
+//! `bvh.rs` holds the node layout shared with WGSL (`accel/bvh.wgsl`) and the CPU builder and query,
+//! which serve static sets and are the oracle for the GPU. `volumes.rs` bounds each light's volume.
+
+pub mod bvh;
+pub mod volumes;
+
+pub use bvh::{Bvh, BvhNode};
+pub use volumes::Aabb;
