@@ -17,3 +17,10 @@ pub struct BvhNode {
     pub max: [f32; 3],
     pub b: u32,
 }
+
+/// A BVH as uploaded: nodes (root first) and the primitive indices its leaves point into.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Bvh {
+    pub nodes: Vec<BvhNode>,
+    pub primitive_indices: Vec<u32>,
+}
