@@ -1,7 +1,38 @@
 //! BVH node layout shared with WGSL, the CPU builder and the CPU point query.
+//!
+//! The builder is a binned SAH builder for static sets; its output is also the reference a GPU build
+//! is checked against ([`Bvh::validate`]), and [`Bvh::query_point`] is the oracle for the GPU query.
+
+use glam::{DVec3, Vec3};
+
+use super::volumes::Aabb;
 
 /// Set in `BvhNode::a` of a leaf.
 pub const LEAF: u32 = 1 << 31;
+
+/// The deepest root-to-leaf path [`Bvh::build`] produces, in nodes (a root that is a leaf has depth 1).
+/// The GPU traversal keeps pending nodes on a fixed stack of 64 entries and holds at most one pending
+/// sibling per level (plus the two children just pushed), so 48 leaves headroom; the builder forces
+/// median splits wherever the SAH's choice could exceed it.
+pub const MAX_DEPTH: u32 = 48;
+
+/// Leaves hold between 1 and this many primitives: nodes of at most 4 are always leaves, and the SAH
+/// keeps up to 8 in a leaf when splitting them does not pay. The GPU can rely on this bound to size
+/// per-leaf work.
+pub const MAX_LEAF_SIZE: u32 = 8;
+
+/// Nodes with more primitives than this are split unless the SAH prefers a leaf.
+const MIN_SPLIT_SIZE: usize = 4;
+
+/// SAH bins along the longest axis of the centroids' box.
+const BINS: usize = 16;
+
+/// SAH cost of visiting an internal node, relative to testing one primitive's box.
+const TRAVERSAL_COST: f64 = 1.0;
+
+/// Most volumes one BVH indexes: a BVH of n primitives has up to 2n − 1 nodes, and node indices must
+/// stay clear of the [`LEAF`] bit.
+const MAX_PRIMITIVES: usize = 1 << 30;
 
 /// One BVH node, 32 bytes. Keep in sync with `BvhNode` in `accel/bvh.wgsl`.
 ///
@@ -18,9 +49,571 @@ pub struct BvhNode {
     pub b: u32,
 }
 
+impl BvhNode {
+    /// The node's box: the union of its children's, or of its primitives' boxes.
+    pub fn bounds(&self) -> Aabb {
+        Aabb::new(Vec3::from(self.min), Vec3::from(self.max))
+    }
+
+    pub fn is_leaf(&self) -> bool {
+        self.a & LEAF != 0
+    }
+
+    /// The leaf's range in `Bvh::primitive_indices`.
+    fn leaf_range(&self) -> std::ops::Range<usize> {
+        let first = (self.a & !LEAF) as usize;
+        first..first + self.b as usize
+    }
+}
+
 /// A BVH as uploaded: nodes (root first) and the primitive indices its leaves point into.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Bvh {
     pub nodes: Vec<BvhNode>,
     pub primitive_indices: Vec<u32>,
+}
+
+impl Bvh {
+    /// Builds a BVH over `aabbs`; primitive `i` is `aabbs[i]`.
+    ///
+    /// Every box must be finite and non-empty (flat or point boxes are fine): a NaN bound would make
+    /// every comparison false and silently drop lights, so it is an error here instead. Nodes are laid
+    /// out depth-first (a left child directly follows its parent), leaves hold 1 to
+    /// [`MAX_LEAF_SIZE`] primitives, and no path is deeper than [`MAX_DEPTH`].
+    pub fn build(aabbs: &[Aabb]) -> crate::Result<Bvh> {
+        let invalid = |message: String| Err(crate::Error::InvalidScene(message));
+        if aabbs.len() > MAX_PRIMITIVES {
+            return invalid(format!("{} volumes; one BVH holds at most {MAX_PRIMITIVES}", aabbs.len()));
+        }
+        for (i, b) in aabbs.iter().enumerate() {
+            if !b.is_finite() {
+                return invalid(format!("volume {i} has a NaN or infinite bound (min {:?}, max {:?})", b.min.to_array(), b.max.to_array()));
+            }
+            if !b.is_valid() {
+                return invalid(format!("volume {i} is empty: min {:?} > max {:?} on some axis", b.min.to_array(), b.max.to_array()));
+            }
+        }
+        if aabbs.is_empty() {
+            return Ok(Bvh::default());
+        }
+        let mut prims: Vec<Prim> = aabbs
+            .iter()
+            .enumerate()
+            .map(|(i, b)| Prim { bounds: *b, centroid: (b.min.as_dvec3() + b.max.as_dvec3()) * 0.5, index: i as u32 })
+            .collect();
+        let mut nodes = Vec::with_capacity(2 * aabbs.len() - 1);
+        build_node(&mut nodes, &mut prims, 0, 1);
+        Ok(Bvh { nodes, primitive_indices: prims.iter().map(|p| p.index).collect() })
+    }
+
+    /// Calls `visit(i)` once for every primitive whose own box `aabbs[i]` contains `p` (faces
+    /// included), as the GPU query does: node boxes prune, and each leaf primitive's box decides. The
+    /// caller then runs the volume's tight test. `aabbs` must be the slice the BVH was built from.
+    ///
+    /// # Panics
+    /// On a BVH that fails [`Bvh::validate`] for `aabbs` (an index out of range); built ones pass.
+    pub fn query_point(&self, aabbs: &[Aabb], p: Vec3, mut visit: impl FnMut(u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = Vec::with_capacity(MAX_DEPTH as usize + 1);
+        stack.push(0u32);
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            if !node.bounds().contains(p) {
+                continue;
+            }
+            if node.is_leaf() {
+                for &i in &self.primitive_indices[node.leaf_range()] {
+                    if aabbs[i as usize].contains(p) {
+                        visit(i);
+                    }
+                }
+            } else {
+                stack.push(node.b);
+                stack.push(node.a);
+            }
+        }
+    }
+
+    /// Nodes on the longest root-to-leaf path: 0 when empty, 1 when the root is a leaf.
+    ///
+    /// # Panics
+    /// On a child index out of range (a BVH that fails [`Bvh::validate`]).
+    pub fn depth(&self) -> u32 {
+        if self.nodes.is_empty() {
+            return 0;
+        }
+        let mut deepest = 0;
+        let mut stack = vec![(0u32, 1u32)];
+        while let Some((n, level)) = stack.pop() {
+            deepest = deepest.max(level);
+            let node = &self.nodes[n as usize];
+            if !node.is_leaf() {
+                stack.push((node.a, level + 1));
+                stack.push((node.b, level + 1));
+            }
+        }
+        deepest
+    }
+
+    /// Checks everything the GPU traversal relies on, for this BVH over `aabbs`: child and primitive
+    /// indices in range, every node reached exactly once from the root (no cycles, no orphans), depth
+    /// ≤ [`MAX_DEPTH`], non-empty leaves covering `primitive_indices` exactly once, every primitive in
+    /// exactly one leaf, and every node's box containing its children's or its primitives' boxes.
+    pub fn validate(&self, aabbs: &[Aabb]) -> Result<(), String> {
+        if self.nodes.is_empty() {
+            return if self.primitive_indices.is_empty() && aabbs.is_empty() {
+                Ok(())
+            } else {
+                Err(format!("no nodes, but {} primitive indices over {} volumes", self.primitive_indices.len(), aabbs.len()))
+            };
+        }
+        if self.primitive_indices.len() != aabbs.len() {
+            return Err(format!("{} primitive indices for {} volumes", self.primitive_indices.len(), aabbs.len()));
+        }
+        let mut node_seen = vec![false; self.nodes.len()];
+        let mut slot_seen = vec![false; self.primitive_indices.len()];
+        let mut primitive_seen = vec![false; aabbs.len()];
+        let mut stack = vec![(0u32, 1u32)];
+        while let Some((n, level)) = stack.pop() {
+            let seen = node_seen.get_mut(n as usize).ok_or_else(|| format!("node index {n} out of range ({} nodes)", self.nodes.len()))?;
+            if *seen {
+                return Err(format!("node {n} is reached twice"));
+            }
+            *seen = true;
+            if level > MAX_DEPTH {
+                return Err(format!("node {n} is at depth {level} > MAX_DEPTH = {MAX_DEPTH}"));
+            }
+            let node = &self.nodes[n as usize];
+            let bounds = node.bounds();
+            if !bounds.is_valid() {
+                return Err(format!("node {n} has an empty or non-finite box {bounds:?}"));
+            }
+            if node.is_leaf() {
+                let range = node.leaf_range();
+                if range.is_empty() || range.end > self.primitive_indices.len() {
+                    return Err(format!("leaf {n} covers {range:?} of {} primitive indices", self.primitive_indices.len()));
+                }
+                for slot in range {
+                    if std::mem::replace(&mut slot_seen[slot], true) {
+                        return Err(format!("primitive slot {slot} is in two leaves (the second is node {n})"));
+                    }
+                    let i = self.primitive_indices[slot];
+                    let b =
+                        aabbs.get(i as usize).ok_or_else(|| format!("leaf {n}: primitive {i} out of range ({} volumes)", aabbs.len()))?;
+                    if std::mem::replace(&mut primitive_seen[i as usize], true) {
+                        return Err(format!("primitive {i} is listed twice (again in leaf {n})"));
+                    }
+                    if !bounds.contains_box(b) {
+                        return Err(format!("leaf {n}'s box {bounds:?} does not contain primitive {i}'s {b:?}"));
+                    }
+                }
+            } else {
+                for child in [node.a, node.b] {
+                    let child_node = self.nodes.get(child as usize).ok_or_else(|| format!("node {n}: child {child} out of range"))?;
+                    if !bounds.contains_box(&child_node.bounds()) {
+                        return Err(format!("node {n}'s box {bounds:?} does not contain child {child}'s {:?}", child_node.bounds()));
+                    }
+                    stack.push((child, level + 1));
+                }
+            }
+        }
+        if let Some(n) = node_seen.iter().position(|seen| !seen) {
+            return Err(format!("node {n} is not reachable from the root"));
+        }
+        // Each of the n slots is in one leaf and names a distinct primitive below n: all n are listed.
+        if let Some(slot) = slot_seen.iter().position(|seen| !seen) {
+            return Err(format!("primitive slot {slot} is in no leaf"));
+        }
+        Ok(())
+    }
+}
+
+/// A primitive during the build. Boxes and centroids travel with the indices being partitioned so
+/// that every pass over a node's primitives reads memory in order.
+#[derive(Clone, Copy)]
+struct Prim {
+    bounds: Aabb,
+    /// In f64: centroids of boxes near ±f32::MAX, and their spread, must not overflow.
+    centroid: DVec3,
+    index: u32,
+}
+
+/// Appends the subtree over `prims` (which start at `first` in the final primitive order) at `level`
+/// (the root is 1); returns its node index. Recursion depth is bounded by [`MAX_DEPTH`].
+fn build_node(nodes: &mut Vec<BvhNode>, prims: &mut [Prim], first: usize, level: u32) -> u32 {
+    let index = nodes.len() as u32;
+    let bounds = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
+    nodes.push(BvhNode { min: bounds.min.to_array(), a: 0, max: bounds.max.to_array(), b: 0 });
+    let (a, b) = match split(prims, bounds, level) {
+        None => (LEAF | first as u32, prims.len() as u32),
+        Some(mid) => {
+            let (left, right) = prims.split_at_mut(mid);
+            let a = build_node(nodes, left, first, level + 1);
+            let b = build_node(nodes, right, first + mid, level + 1);
+            (a, b)
+        }
+    };
+    let node = &mut nodes[index as usize];
+    node.a = a;
+    node.b = b;
+    index
+}
+
+/// Levels below a node of `count` primitives if it and its descendants are split at the median.
+fn median_levels(count: usize) -> u32 {
+    let mut levels = 0;
+    let mut count = count;
+    while count > MIN_SPLIT_SIZE {
+        count = count.div_ceil(2);
+        levels += 1;
+    }
+    levels
+}
+
+/// Decides how to split a node: `None` for a leaf, or `Some(mid)` after reordering `prims` so that
+/// `prims[..mid]` and `prims[mid..]` are the children (both non-empty).
+///
+/// A SAH split is taken only if its larger child can still be finished by median splits within
+/// [`MAX_DEPTH`]; median splits halve the count, so from the root (at most 2^30 primitives, 29
+/// levels) that bound always holds.
+fn split(prims: &mut [Prim], bounds: Aabb, level: u32) -> Option<usize> {
+    let count = prims.len();
+    if count <= MIN_SPLIT_SIZE {
+        return None;
+    }
+    let (cmin, cmax) = prims.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p.centroid), hi.max(p.centroid)));
+    let extent = cmax - cmin;
+    let axis = extent.max_position();
+    if extent[axis] <= 0.0 {
+        // All centroids coincide: no split separates them, so halve the list to bound the depth.
+        return Some(count / 2);
+    }
+    let area = bounds.surface_area();
+    // A zero-area node is a segment of points or flat boxes: its SAH costs are all 0/0.
+    if area > 0.0 {
+        let bin_of = |p: &Prim| (((p.centroid[axis] - cmin[axis]) * (BINS as f64 / extent[axis])) as usize).min(BINS - 1);
+        let mut bin_counts = [0usize; BINS];
+        let mut bin_bounds = [Aabb::EMPTY; BINS];
+        for p in prims.iter() {
+            let bin = bin_of(p);
+            bin_counts[bin] += 1;
+            bin_bounds[bin] = bin_bounds[bin].union(p.bounds);
+        }
+        // Costs of splitting after bin i: sweep the right sides first, then the left ones.
+        let mut right_cost = [0.0f64; BINS];
+        let (mut right_box, mut right_count) = (Aabb::EMPTY, 0);
+        for i in (1..BINS).rev() {
+            right_box = right_box.union(bin_bounds[i]);
+            right_count += bin_counts[i];
+            right_cost[i] = right_box.surface_area() * right_count as f64;
+        }
+        let mut best: Option<(usize, f64, usize)> = None;
+        let (mut left_box, mut left_count) = (Aabb::EMPTY, 0);
+        for i in 1..BINS {
+            left_box = left_box.union(bin_bounds[i - 1]);
+            left_count += bin_counts[i - 1];
+            if left_count == 0 || left_count == count {
+                continue;
+            }
+            let cost = TRAVERSAL_COST + (left_box.surface_area() * left_count as f64 + right_cost[i]) / area;
+            if best.is_none_or(|(_, best_cost, _)| cost < best_cost) {
+                best = Some((i, cost, left_count));
+            }
+        }
+        if let Some((bin, cost, left_count)) = best {
+            if cost >= count as f64 && count <= MAX_LEAF_SIZE as usize {
+                return None;
+            }
+            if level + 1 + median_levels(left_count.max(count - left_count)) <= MAX_DEPTH {
+                return Some(partition(prims, |p| bin_of(p) < bin));
+            }
+        }
+    }
+    let mid = count / 2;
+    prims.select_nth_unstable_by(mid, |p, q| p.centroid[axis].total_cmp(&q.centroid[axis]));
+    Some(mid)
+}
+
+/// Moves the primitives for which `left` holds to the front; returns how many there are.
+fn partition(prims: &mut [Prim], left: impl Fn(&Prim) -> bool) -> usize {
+    let mut mid = 0;
+    for i in 0..prims.len() {
+        if left(&prims[i]) {
+            prims.swap(i, mid);
+            mid += 1;
+        }
+    }
+    mid
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Instant;
+
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64;
+
+    use super::*;
+    use crate::accel::volumes::{light_aabb, light_contains};
+    use crate::scene::{Light, LightKind};
+
+    fn query(bvh: &Bvh, aabbs: &[Aabb], p: Vec3) -> Vec<u32> {
+        let mut visited = Vec::new();
+        bvh.query_point(aabbs, p, |i| visited.push(i));
+        visited.sort_unstable();
+        visited
+    }
+
+    fn brute_force(aabbs: &[Aabb], p: Vec3) -> Vec<u32> {
+        (0..aabbs.len() as u32).filter(|&i| aabbs[i as usize].contains(p)).collect()
+    }
+
+    /// The invariants every build must meet, beyond `validate`: depth and leaf sizes.
+    fn check_structure(bvh: &Bvh, aabbs: &[Aabb]) {
+        bvh.validate(aabbs).unwrap();
+        assert!(bvh.depth() <= MAX_DEPTH, "depth {}", bvh.depth());
+        for node in bvh.nodes.iter().filter(|n| n.is_leaf()) {
+            assert!((1..=MAX_LEAF_SIZE).contains(&node.b), "leaf of {} primitives", node.b);
+        }
+    }
+
+    /// Compares the query with brute force at `p`: same set, each primitive once.
+    fn check_point(bvh: &Bvh, aabbs: &[Aabb], p: Vec3) {
+        let visited = query(bvh, aabbs, p);
+        assert!(visited.windows(2).all(|w| w[0] != w[1]), "a primitive visited twice at {p:?}");
+        assert_eq!(visited, brute_force(aabbs, p), "at {p:?}");
+    }
+
+    fn random_vec(rng: &mut Pcg64, scale: f32) -> Vec3 {
+        Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)) * scale
+    }
+
+    /// Random boxes mixing the cases a builder gets wrong: flat and point boxes, exact duplicates,
+    /// and scales from 1e-30 to 1e30 within one set.
+    fn random_boxes(rng: &mut Pcg64, count: usize) -> Vec<Aabb> {
+        let scale = [1.0, 1e-30, 1e30, 0.0][rng.random_range(0..4)];
+        let mut boxes: Vec<Aabb> = Vec::with_capacity(count);
+        for _ in 0..count {
+            // Scale 0.0: mixed, each box picks its own.
+            let s = if scale == 0.0 { [1e-30, 1e-3, 1.0, 1e3, 1e30][rng.random_range(0..5)] } else { scale };
+            let center = random_vec(rng, s);
+            let mut half = Vec3::new(rng.random(), rng.random(), rng.random()) * s * rng.random_range(0.001..0.5);
+            let mut b = match rng.random_range(0..10) {
+                0 if !boxes.is_empty() => boxes[rng.random_range(0..boxes.len())],
+                1 => Aabb::new(center, center),
+                2 => Aabb::new(Vec3::splat(-1e30), Vec3::splat(1e30)),
+                _ => {
+                    if rng.random_bool(0.3) {
+                        half[rng.random_range(0..3)] = 0.0;
+                    }
+                    Aabb::new(center - half, center + half)
+                }
+            };
+            if rng.random_bool(0.05) {
+                // A box tiny in size but far from the origin, or spanning a whole axis.
+                let axis = rng.random_range(0..3);
+                b.min[axis] = -1e30;
+                b.max[axis] = b.max[axis].max(1e-30);
+            }
+            boxes.push(b);
+        }
+        boxes
+    }
+
+    /// Random points and points on the boxes' faces, edges and corners: each coordinate is a random
+    /// value, a box's min or max, or one ulp beside it.
+    fn random_points(rng: &mut Pcg64, boxes: &[Aabb], count: usize) -> Vec<Vec3> {
+        let mut points = Vec::with_capacity(count);
+        for _ in 0..count {
+            let scale = [1e-30, 1.0, 1e30][rng.random_range(0..3)];
+            let mut p = random_vec(rng, scale);
+            if !boxes.is_empty() && rng.random_bool(0.8) {
+                let b = boxes[rng.random_range(0..boxes.len())];
+                for axis in 0..3 {
+                    p[axis] = match rng.random_range(0..6) {
+                        0 => b.min[axis],
+                        1 => b.max[axis],
+                        2 => b.min[axis].next_down(),
+                        3 => b.max[axis].next_up(),
+                        4 => boxes[rng.random_range(0..boxes.len())].max[axis],
+                        _ => b.min[axis] + (b.max[axis] - b.min[axis]) * rng.random::<f32>(),
+                    };
+                }
+            }
+            points.push(p);
+        }
+        points
+    }
+
+    #[test]
+    fn query_matches_brute_force_on_random_sets() {
+        let mut rng = Pcg64::seed_from_u64(0x5eed);
+        for &(size, sets, points) in &[(0, 4, 50), (1, 40, 100), (2, 40, 100), (3, 40, 100), (7, 60, 200), (100, 40, 500), (5000, 6, 1000)]
+        {
+            for _ in 0..sets {
+                let boxes = random_boxes(&mut rng, size);
+                let bvh = Bvh::build(&boxes).unwrap();
+                check_structure(&bvh, &boxes);
+                for p in random_points(&mut rng, &boxes, points) {
+                    check_point(&bvh, &boxes, p);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn degenerate_inputs() {
+        let empty = Bvh::build(&[]).unwrap();
+        assert!(empty.nodes.is_empty() && empty.primitive_indices.is_empty() && empty.depth() == 0);
+        empty.validate(&[]).unwrap();
+        check_point(&empty, &[], Vec3::ZERO);
+
+        let one = [Aabb::new(Vec3::ZERO, Vec3::ONE)];
+        let bvh = Bvh::build(&one).unwrap();
+        assert_eq!(bvh.nodes, [BvhNode { min: [0.0; 3], a: LEAF, max: [1.0; 3], b: 1 }], "the root is a leaf");
+        assert_eq!(bvh.primitive_indices, [0]);
+        assert_eq!(bvh.depth(), 1);
+
+        let cases: [(&str, Vec<Aabb>); 5] = [
+            ("identical", vec![Aabb::new(Vec3::ZERO, Vec3::ONE); 1000]),
+            ("identical points", vec![Aabb::new(Vec3::ONE, Vec3::ONE); 1000]),
+            (
+                "a flat grid",
+                (0..900)
+                    .map(|i| {
+                        Aabb::new(
+                            Vec3::new((i % 30) as f32, (i / 30) as f32, 0.0),
+                            Vec3::new((i % 30) as f32 + 1.0, (i / 30) as f32 + 1.0, 0.0),
+                        )
+                    })
+                    .collect(),
+            ),
+            ("points on a line", (0..500).map(|i| Aabb::new(Vec3::X * i as f32, Vec3::X * i as f32)).collect()),
+            // Centroids spaced geometrically: linear bins put all but the last few in bin 0, so the SAH
+            // alone would peel off one box per level.
+            ("geometric", (0..200).map(|i| Aabb::new(Vec3::X * 1.5f32.powi(i), Vec3::X * 1.5f32.powi(i) + 1.0)).collect()),
+        ];
+        for (name, boxes) in cases {
+            let bvh = Bvh::build(&boxes).unwrap();
+            check_structure(&bvh, &boxes);
+            let mut rng = Pcg64::seed_from_u64(1);
+            for p in random_points(&mut rng, &boxes, 300) {
+                check_point(&bvh, &boxes, p);
+            }
+            println!("{name}: {} boxes, {} nodes, depth {}", boxes.len(), bvh.nodes.len(), bvh.depth());
+        }
+    }
+
+    #[test]
+    fn non_finite_and_empty_volumes_are_rejected() {
+        let mut boxes = vec![Aabb::new(Vec3::ZERO, Vec3::ONE); 20];
+        boxes[17].max.y = f32::NAN;
+        let err = Bvh::build(&boxes).unwrap_err().to_string();
+        assert!(err.contains("volume 17 has a NaN or infinite bound"), "{err}");
+        boxes[17].max.y = f32::INFINITY;
+        assert!(Bvh::build(&boxes).is_err());
+        boxes[17] = Aabb::EMPTY;
+        let err = Bvh::build(&boxes).unwrap_err().to_string();
+        assert!(err.contains("volume 17"), "{err}");
+        boxes[17] = Aabb::new(Vec3::ONE, Vec3::ZERO);
+        let err = Bvh::build(&boxes).unwrap_err().to_string();
+        assert!(err.contains("volume 17 is empty"), "{err}");
+    }
+
+    #[test]
+    fn validate_catches_broken_trees() {
+        let mut rng = Pcg64::seed_from_u64(3);
+        let boxes = random_boxes(&mut rng, 50);
+        let good = Bvh::build(&boxes).unwrap();
+        good.validate(&boxes).unwrap();
+        let leaf = good.nodes.iter().position(|n| n.is_leaf()).unwrap();
+        let internal = good.nodes.iter().position(|n| !n.is_leaf()).unwrap();
+        // Each breakage gets the tree, a leaf's index and an internal node's index.
+        type Breakage = fn(&mut Bvh, usize, usize);
+        let breakages: [(&str, Breakage); 6] = [
+            ("duplicate primitive", |b, _, _| b.primitive_indices[0] = b.primitive_indices[1]),
+            ("primitive out of range", |b, _, _| b.primitive_indices[0] = 50),
+            ("child out of range", |b, _, internal| b.nodes[internal].b = 1000),
+            ("cycle", |b, _, internal| b.nodes[internal].b = 0),
+            ("shrunken box", |b, leaf, _| b.nodes[leaf].max[0] = b.nodes[leaf].min[0] - 1.0),
+            ("empty leaf", |b, leaf, _| b.nodes[leaf].b = 0),
+        ];
+        for (name, breakage) in breakages {
+            let mut bvh = good.clone();
+            breakage(&mut bvh, leaf, internal);
+            assert!(bvh.validate(&boxes).is_err(), "{name} passed validation");
+        }
+        assert!(good.validate(&boxes[..49]).is_err(), "a volume too few");
+    }
+
+    #[test]
+    fn builds_a_million_boxes() {
+        let mut rng = Pcg64::seed_from_u64(11);
+        let boxes: Vec<Aabb> = (0..1_000_000)
+            .map(|_| {
+                let c = random_vec(&mut rng, 1000.0);
+                let h = Vec3::splat(rng.random_range(0.1..10.0));
+                Aabb::new(c - h, c + h)
+            })
+            .collect();
+        let start = Instant::now();
+        let bvh = Bvh::build(&boxes).unwrap();
+        let elapsed = start.elapsed();
+        println!("1M boxes: built in {elapsed:.2?}, {} nodes, depth {}", bvh.nodes.len(), bvh.depth());
+        check_structure(&bvh, &boxes);
+        for p in random_points(&mut rng, &boxes, 20) {
+            check_point(&bvh, &boxes, p);
+        }
+    }
+
+    #[test]
+    fn light_query_matches_brute_force() {
+        let mut rng = Pcg64::seed_from_u64(21);
+        let lights: Vec<Light> = (0..3000)
+            .map(|i| {
+                let kind = if i % 2 == 0 {
+                    LightKind::Point
+                } else {
+                    let outer = rng.random_range(0.01..std::f32::consts::FRAC_PI_2);
+                    LightKind::Spot { inner_cone_angle: outer * 0.5, outer_cone_angle: outer }
+                };
+                let direction = loop {
+                    let d = random_vec(&mut rng, 1.0);
+                    if d.length() > 0.1 {
+                        break d.normalize();
+                    }
+                };
+                Light {
+                    kind,
+                    position: random_vec(&mut rng, 50.0),
+                    direction: if i % 7 == 0 { Vec3::AXES[i % 3] } else { direction },
+                    color: Vec3::ONE,
+                    intensity: 1.0,
+                    range: rng.random_range(0.5..15.0),
+                }
+            })
+            .collect();
+        let boxes: Vec<Aabb> = lights.iter().map(light_aabb).collect();
+        let bvh = Bvh::build(&boxes).unwrap();
+        check_structure(&bvh, &boxes);
+        let mut points: Vec<Vec3> = (0..3000).map(|_| random_vec(&mut rng, 60.0)).collect();
+        // Points on the volumes' boundaries: apexes, and just inside each sphere along the spot's axis.
+        points.extend(lights.iter().take(500).flat_map(|l| [l.position, l.position + l.direction * l.range.next_down()]));
+        let mut total = 0;
+        for p in points {
+            let mut lit = Vec::new();
+            bvh.query_point(&boxes, p, |i| {
+                if light_contains(&lights[i as usize], p) {
+                    lit.push(i);
+                }
+            });
+            lit.sort_unstable();
+            let expected: Vec<u32> = (0..lights.len() as u32).filter(|&i| light_contains(&lights[i as usize], p)).collect();
+            assert_eq!(lit, expected, "at {p:?}");
+            total += lit.len();
+        }
+        assert!(total > 1000, "the test must exercise lit points: {total}");
+    }
 }

@@ -9,5 +9,5 @@
 pub mod bvh;
 pub mod volumes;
 
-pub use bvh::{Bvh, BvhNode};
-pub use volumes::Aabb;
+pub use bvh::{Bvh, BvhNode, LEAF, MAX_DEPTH, MAX_LEAF_SIZE};
+pub use volumes::{light_aabb, light_contains, Aabb};
