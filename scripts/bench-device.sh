@@ -23,3 +23,7 @@ run sponza_256 "$out" --scene $sponza --lights 256 --seed 1
 run demo_256 "$out" --scene demo --lights 256 --seed 1
 run sponza_0 /tmp --scene $sponza
 run sponza_1024 /tmp --scene $sponza --lights 1024 --seed 1
+# The paper's 28k small lights: BVH against brute force (brute is slow: fewer frames).
+run sponza_28k_bvh /tmp --scene $sponza --lights 28000 --seed 1 --light-method bvh
+$bin render --width 1920 --height 1080 --warmup 3 --frames 10 --timings --scene $sponza --lights 28000 --seed 1 \
+  --light-method brute --timings-json "$out/sponza_28k_brute.json" -o /tmp/brute.png 2>&1

@@ -68,6 +68,7 @@ pub struct RenderArgs {
 #[derive(Clone, Copy, ValueEnum)]
 enum MethodArg {
     Brute,
+    Bvh,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -92,6 +93,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         height: args.height,
         light_method: match args.light_method {
             MethodArg::Brute => LightMethod::Brute,
+            MethodArg::Bvh => LightMethod::Bvh,
         },
         tonemapper: match args.tonemap {
             TonemapArg::Aces => Tonemapper::Aces,

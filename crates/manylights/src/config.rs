@@ -54,8 +54,8 @@ impl RenderConfig {
                 self.width, self.height
             )));
         }
-        // The HDR image (8 bytes a pixel) must fit one buffer to be read back.
-        let hdr_bytes = u64::from(self.width) * u64::from(self.height) * 8;
+        // The HDR image (16 bytes a pixel) must fit one buffer to be read back.
+        let hdr_bytes = u64::from(self.width) * u64::from(self.height) * 16;
         if hdr_bytes > ctx.limits.max_buffer_size {
             return Err(Error::InvalidConfig(format!(
                 "resolution {}×{} needs a {} MiB readback buffer, over this GPU's {} MiB limit; choose a smaller --width/--height",

@@ -2,9 +2,10 @@
 //! images are read back on request so benchmarks time frames without readback in the way.
 
 use crate::{
+    accel::gpu::LightBvhBuffers,
     config::RenderConfig,
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
-    pipelines::VisbufferPipeline,
+    pipelines::{LightMethod, VisbufferPipeline},
     scene::{Camera, Scene},
     Result,
 };
@@ -29,7 +30,11 @@ impl Renderer {
     pub fn new(ctx: GpuContext, scene: &Scene, config: RenderConfig) -> Result<Self> {
         config.validate(&ctx)?;
         let gpu_scene = GpuScene::upload(&ctx, scene, config.max_texture_size, config.anisotropy)?;
-        let pipeline = VisbufferPipeline::new(&ctx, &gpu_scene, config.light_method, config.width, config.height)?;
+        let light_bvh = match config.light_method {
+            LightMethod::Brute => None,
+            LightMethod::Bvh => Some(LightBvhBuffers::build_static(&ctx, &scene.lights)?),
+        };
+        let pipeline = VisbufferPipeline::new(&ctx, &gpu_scene, config.light_method, light_bvh.as_ref(), config.width, config.height)?;
         let timer = GpuTimer::new(&ctx);
         ctx.check_errors()?;
         Ok(Self { ctx, scene: gpu_scene, config, pipeline, timer })
@@ -82,10 +87,8 @@ impl Renderer {
 
     /// The last frame before exposure and tonemapping: linear RGBA radiance.
     pub fn read_hdr(&self) -> Result<Image<[f32; 4]>> {
-        let bytes = readback::read_texture(&self.ctx, &self.pipeline.targets.hdr, 8)?;
-        let halves: &[half::f16] = bytemuck::cast_slice(&bytes);
-        let pixels = halves.chunks_exact(4).map(|p| [p[0].to_f32(), p[1].to_f32(), p[2].to_f32(), p[3].to_f32()]).collect();
-        Ok(self.image(pixels))
+        let bytes = readback::read_texture(&self.ctx, &self.pipeline.targets.hdr, 16)?;
+        Ok(self.image(bytemuck::pod_collect_to_vec(&bytes)))
     }
 
     fn image<T>(&self, pixels: Vec<T>) -> Image<T> {

@@ -168,7 +168,7 @@ fn mirrored_instances_are_drawn_and_lit_like_their_originals() {
     let (_, a) = render(&original, &camera);
     let (_, b) = render(&mirrored, &camera);
     assert!(luminance(pixel(&b, WIDTH / 2, HEIGHT / 2)) > 0.05, "the mirrored wall is missing or unlit");
-    let max_difference = a.pixels.iter().zip(&b.pixels).flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs())).fold(0.0f32, f32::max);
+    let max_difference = max_abs_difference(&a, &b);
     assert!(max_difference < 1e-3, "mirrored wall differs by {max_difference}");
 }
 

@@ -15,6 +15,8 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/material.wgsl", include_str!("../shading/material.wgsl")),
     ("shading/shade.wgsl", include_str!("../shading/shade.wgsl")),
     ("shading/enumerate/brute.wgsl", include_str!("../shading/enumerate/brute.wgsl")),
+    ("shading/enumerate/bvh.wgsl", include_str!("../shading/enumerate/bvh.wgsl")),
+    ("accel/bvh.wgsl", include_str!("../accel/bvh.wgsl")),
     ("passes/visbuffer_raster.wgsl", include_str!("../passes/visbuffer_raster.wgsl")),
     ("passes/visbuffer_shade.wgsl", include_str!("../passes/visbuffer_shade.wgsl")),
     ("passes/tonemap.wgsl", include_str!("../passes/tonemap.wgsl")),

@@ -1,21 +1,26 @@
 //! Visibility-buffer resolve and shading in compute. See `visbuffer_shade.wgsl`.
 
+use crate::accel::gpu::LightBvhBuffers;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::pipelines::LightMethod;
 use crate::Result;
 
-pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// f32 rather than f16: methods are compared in linear HDR to 1e-3, finer than f16 steps above 1.
+pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 pub struct VisbufferShade {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
+    light_bvh: Option<wgpu::BindGroup>,
 }
 
 impl VisbufferShade {
+    /// `light_bvh` is bound as group 2 when the method needs it.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         method: LightMethod,
+        light_bvh: Option<&LightBvhBuffers>,
         visibility: &wgpu::TextureView,
         hdr: &wgpu::TextureView,
     ) -> Result<Self> {
@@ -31,14 +36,16 @@ impl VisbufferShade {
             ],
         );
         let shader = ShaderDesc::new("passes/visbuffer_shade.wgsl").with("LIGHT_ENUMERATION", method.enumeration_module());
-        let pipeline = bindings::compute_pipeline(device, "visbuffer_shade", &shader, &[&scene.bind_group_layout, &layout])?;
+        let mut layouts = vec![&scene.bind_group_layout, &layout];
+        layouts.extend(light_bvh.map(|b| &b.bind_group_layout));
+        let pipeline = bindings::compute_pipeline(device, "visbuffer_shade", &shader, &layouts)?;
         let bind_group = bindings::bind_group(
             device,
             "visbuffer_shade",
             &layout,
             vec![wgpu::BindingResource::TextureView(visibility), wgpu::BindingResource::TextureView(hdr)],
         );
-        Ok(Self { pipeline, bind_group })
+        Ok(Self { pipeline, bind_group, light_bvh: light_bvh.map(|b| b.bind_group.clone()) })
     }
 
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, width: u32, height: u32) {
@@ -49,6 +56,9 @@ impl VisbufferShade {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &scene.bind_group, &[]);
         pass.set_bind_group(1, &self.bind_group, &[]);
+        if let Some(light_bvh) = &self.light_bvh {
+            pass.set_bind_group(2, light_bvh, &[]);
+        }
         let (x, y) = super::dispatch_size(width, height);
         pass.dispatch_workgroups(x, y, 1);
     }

@@ -8,7 +8,7 @@
 #include "shading/material.wgsl"
 
 @group(1) @binding(0) var visibility: texture_2d<u32>;
-@group(1) @binding(1) var hdr_output: texture_storage_2d<rgba16float, write>;
+@group(1) @binding(1) var hdr_output: texture_storage_2d<rgba32float, write>;
 
 // A ray whose origin is relative to the camera position (`frame.world_from_view[3]`).
 struct Ray {

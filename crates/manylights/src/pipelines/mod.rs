@@ -12,21 +12,25 @@ pub enum LightMethod {
     /// Loop over every light.
     #[default]
     Brute,
+    /// Point queries in a BVH over the lights' volumes (`accel`).
+    Bvh,
 }
 
 impl LightMethod {
-    pub const ALL: [LightMethod; 1] = [LightMethod::Brute];
+    pub const ALL: [LightMethod; 2] = [LightMethod::Brute, LightMethod::Bvh];
 
     /// The WGSL module that defines `shade_local_lights` for this method.
     pub fn enumeration_module(self) -> &'static str {
         match self {
             LightMethod::Brute => "shading/enumerate/brute.wgsl",
+            LightMethod::Bvh => "shading/enumerate/bvh.wgsl",
         }
     }
 
     pub fn name(self) -> &'static str {
         match self {
             LightMethod::Brute => "brute",
+            LightMethod::Bvh => "bvh",
         }
     }
 }

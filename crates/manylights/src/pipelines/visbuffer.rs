@@ -6,12 +6,13 @@
 //! GpuScene ─▶ visbuffer_raster ─▶ visibility (R32Uint) + depth
 //!                                   │
 //!                                   ▼
-//!             visbuffer_shade (material + shading core) ─▶ hdr (Rgba16Float)
+//!             visbuffer_shade (material + shading core) ─▶ hdr (Rgba32Float)
 //!                                   │
 //!                                   ▼
 //!             tonemap ─▶ ldr (Rgba8Unorm, sRGB-encoded)
 //! ```
 
+use crate::accel::gpu::LightBvhBuffers;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
     tonemap::{Tonemap, LDR_FORMAT},
@@ -66,14 +67,21 @@ pub struct VisbufferPipeline {
 }
 
 impl VisbufferPipeline {
-    pub fn new(ctx: &GpuContext, scene: &GpuScene, method: LightMethod, width: u32, height: u32) -> Result<Self> {
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        method: LightMethod,
+        light_bvh: Option<&LightBvhBuffers>,
+        width: u32,
+        height: u32,
+    ) -> Result<Self> {
         let targets = FrameTargets::new(&ctx.device, width, height);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let (visibility_view, depth_view, hdr_view, ldr_view) =
             (view(&targets.visibility), view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
         Ok(Self {
             raster: VisbufferRaster::new(ctx, scene)?,
-            shade: VisbufferShade::new(ctx, scene, method, &visibility_view, &hdr_view)?,
+            shade: VisbufferShade::new(ctx, scene, method, light_bvh, &visibility_view, &hdr_view)?,
             tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
             targets,
             visibility_view,

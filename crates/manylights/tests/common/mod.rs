@@ -7,6 +7,7 @@ use glam::{Mat4, Vec3, Vec4};
 use manylights::{
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
+    pipelines::LightMethod,
     renderer::{Image, Renderer},
     scene::{Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Vertex},
 };
@@ -14,17 +15,31 @@ use manylights::{
 pub const WIDTH: u32 = 256;
 pub const HEIGHT: u32 = 144;
 
-pub fn renderer(scene: &Scene, width: u32, height: u32) -> Renderer {
+/// The test configuration: small, trilinear filtering, small textures (lavapipe is slow).
+pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfig {
+    RenderConfig { width, height, light_method, tonemapper: Tonemapper::Aces, max_texture_size: 256, anisotropy: 1 }
+}
+
+pub fn renderer(scene: &Scene, config: RenderConfig) -> Renderer {
     let ctx = GpuContext::new().expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)");
-    let config = RenderConfig { width, height, tonemapper: Tonemapper::Aces, max_texture_size: 256, anisotropy: 1, ..Default::default() };
     Renderer::new(ctx, scene, config).expect("renderer")
 }
 
-/// Renders one frame; returns the tonemapped and the linear image.
-pub fn render(scene: &Scene, camera: &Camera) -> (Image<[u8; 4]>, Image<[f32; 4]>) {
-    let mut r = renderer(scene, WIDTH, HEIGHT);
+/// Renders one frame with the given settings; returns the tonemapped and the linear image.
+pub fn render_with(scene: &Scene, camera: &Camera, config: RenderConfig) -> (Image<[u8; 4]>, Image<[f32; 4]>) {
+    let mut r = renderer(scene, config);
     r.render(camera).expect("frame");
     (r.read_ldr().expect("ldr"), r.read_hdr().expect("hdr"))
+}
+
+/// Renders one frame at the default test size with brute-force lights.
+pub fn render(scene: &Scene, camera: &Camera) -> (Image<[u8; 4]>, Image<[f32; 4]>) {
+    render_with(scene, camera, config(WIDTH, HEIGHT, LightMethod::Brute))
+}
+
+/// Largest difference of any channel between two linear images.
+pub fn max_abs_difference(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>) -> f32 {
+    a.pixels.iter().zip(&b.pixels).flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs())).fold(0.0, f32::max)
 }
 
 pub fn luminance(p: [f32; 4]) -> f32 {
