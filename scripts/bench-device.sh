@@ -20,7 +20,7 @@ run() { # name, image folder, then render arguments
     --timings-json "$out/$name.json" -o "$images/$name.png" "$@" 2>&1
 }
 run sponza_256 "$out" --scene $sponza --lights 256 --seed 1
-run demo_256 "$out" --scene demo --lights 256 --seed 1
+run demo_256 /tmp --scene demo --lights 256 --seed 1
 run sponza_0 /tmp --scene $sponza
 run sponza_1024 /tmp --scene $sponza --lights 1024 --seed 1
 # The paper's 28k small lights: BVH against brute force (brute is slow: fewer frames).
