@@ -71,3 +71,18 @@ fn no_lights() {
     scene.lights.clear();
     assert_methods_agree(&scene, 64, 36);
 }
+
+#[test]
+fn a_million_lights_fit_and_light_the_scene() {
+    // 1M lights (64 MiB) and their BVH stay under lavapipe's 128 MiB storage bindings.
+    let base = demo_scene();
+    let mut scene = base.clone();
+    let params = ScatterLights { count: 1 << 20, seed: 5, range: Some((0.05, 0.15)), intensity: Some((0.01, 0.02)), ..Default::default() };
+    scene::generators::add_scattered_lights(&mut scene, &params).unwrap();
+    let camera = &scene.cameras[0];
+    let (_, without) = render_with(&base, camera, config(64, 36, LightMethod::Bvh));
+    let (_, with) = render_with(&scene, camera, config(64, 36, LightMethod::Bvh));
+    assert!(with.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    let added: f32 = with.pixels.iter().zip(&without.pixels).map(|(a, b)| luminance(*a) - luminance(*b)).sum();
+    assert!(added > 0.0, "a million lights added no light");
+}

@@ -12,11 +12,14 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/shading_input.wgsl", include_str!("../shading/shading_input.wgsl")),
     ("shading/brdf.wgsl", include_str!("../shading/brdf.wgsl")),
     ("shading/lights.wgsl", include_str!("../shading/lights.wgsl")),
+    ("shading/light_volume.wgsl", include_str!("../shading/light_volume.wgsl")),
     ("shading/material.wgsl", include_str!("../shading/material.wgsl")),
     ("shading/shade.wgsl", include_str!("../shading/shade.wgsl")),
     ("shading/enumerate/brute.wgsl", include_str!("../shading/enumerate/brute.wgsl")),
     ("shading/enumerate/bvh.wgsl", include_str!("../shading/enumerate/bvh.wgsl")),
     ("accel/bvh.wgsl", include_str!("../accel/bvh.wgsl")),
+    ("accel/bvh_bindings.wgsl", include_str!("../accel/bvh_bindings.wgsl")),
+    ("accel/bvh_query_probe.wgsl", include_str!("../accel/bvh_query_probe.wgsl")),
     ("passes/visbuffer_raster.wgsl", include_str!("../passes/visbuffer_raster.wgsl")),
     ("passes/visbuffer_shade.wgsl", include_str!("../passes/visbuffer_shade.wgsl")),
     ("passes/tonemap.wgsl", include_str!("../passes/tonemap.wgsl")),
@@ -110,7 +113,11 @@ pub fn create_module(device: &wgpu::Device, desc: &ShaderDesc) -> crate::Result<
 
 /// Every shader the renderer builds, with every substitution it uses: the naga test validates each.
 pub fn all_shaders() -> Vec<ShaderDesc> {
-    let mut shaders = vec![ShaderDesc::new("passes/visbuffer_raster.wgsl"), ShaderDesc::new("passes/tonemap.wgsl")];
+    let mut shaders = vec![
+        ShaderDesc::new("passes/visbuffer_raster.wgsl"),
+        ShaderDesc::new("passes/tonemap.wgsl"),
+        ShaderDesc::new("accel/bvh_query_probe.wgsl"),
+    ];
     for method in crate::pipelines::LightMethod::ALL {
         shaders.push(ShaderDesc::new("passes/visbuffer_shade.wgsl").with("LIGHT_ENUMERATION", method.enumeration_module()));
     }
