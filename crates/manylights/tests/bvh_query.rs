@@ -113,7 +113,7 @@ fn gpu_query(ctx: &GpuContext, lights: &[Light], points: &[Vec3]) -> Vec<[u32; 4
 
 fn cpu_oracle(lights: &[Light], p: Vec3) -> [u32; 4] {
     let mut summary = [0u32; 4];
-    for (i, light) in lights.iter().enumerate().filter(|(_, l)| light_contains(l, p)) {
+    for (i, _) in lights.iter().enumerate().filter(|(_, l)| light_contains(l, p)) {
         let i = i as u32;
         summary[0] += 1;
         summary[1] = summary[1].wrapping_add(i);
