@@ -16,10 +16,13 @@ fn bvh_query_probe(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let p = points[id.x].xyz;
     var summary = vec4<u32>(0u);
-    var query = bvh_query_begin(p, arrayLength(&bvh_nodes));
-    for (var light = bvh_query_next(&query); light != BVH_NONE; light = bvh_query_next(&query)) {
-        if light_reaches(lights[light], p) {
-            summary += vec4<u32>(1u, light, light * light, 0u);
+    bvh_query_begin(p, arrayLength(&bvh_nodes));
+    for (var leaf = bvh_query_next_leaf(); leaf.x < leaf.y; leaf = bvh_query_next_leaf()) {
+        for (var k = leaf.x; k < leaf.y; k += 1u) {
+            let light = bvh_primitives[k];
+            if light_reaches(lights[light], p) {
+                summary += vec4<u32>(1u, light, light * light, 0u);
+            }
         }
     }
     results[id.x] = summary;

@@ -7,9 +7,11 @@
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
-    var query = bvh_query_begin(s.position, select(0u, arrayLength(&bvh_nodes), frame.light_count > 0u));
-    for (var light = bvh_query_next(&query); light != BVH_NONE; light = bvh_query_next(&query)) {
-        radiance += light_contribution(lights[light], s);
+    bvh_query_begin(s.position, select(0u, arrayLength(&bvh_nodes), frame.light_count > 0u));
+    for (var leaf = bvh_query_next_leaf(); leaf.x < leaf.y; leaf = bvh_query_next_leaf()) {
+        for (var k = leaf.x; k < leaf.y; k += 1u) {
+            radiance += light_contribution(lights[bvh_primitives[k]], s);
+        }
     }
     return radiance;
 }
