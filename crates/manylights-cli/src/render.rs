@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use manylights::{
+    accel::gpu::BvhBuild,
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
     image_io,
@@ -37,6 +38,9 @@ pub struct RenderArgs {
     seed: u64,
     #[arg(long, value_enum, default_value_t = MethodArg::Brute)]
     light_method: MethodArg,
+    /// How the light BVH is built (with --light-method bvh): once on the CPU, or every frame on the GPU.
+    #[arg(long, value_enum, default_value_t = BvhBuildArg::CpuOnce)]
+    light_bvh_build: BvhBuildArg,
     #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
     tonemap: TonemapArg,
     /// Largest texture size kept on the GPU (larger images are downsampled).
@@ -72,6 +76,12 @@ enum MethodArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum BvhBuildArg {
+    CpuOnce,
+    GpuEveryFrame,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum TonemapArg {
     Aces,
     Agx,
@@ -94,6 +104,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         light_method: match args.light_method {
             MethodArg::Brute => LightMethod::Brute,
             MethodArg::Bvh => LightMethod::Bvh,
+        },
+        light_bvh_build: match args.light_bvh_build {
+            BvhBuildArg::CpuOnce => BvhBuild::CpuOnce,
+            BvhBuildArg::GpuEveryFrame => BvhBuild::GpuEveryFrame,
         },
         tonemapper: match args.tonemap {
             TonemapArg::Aces => Tonemapper::Aces,

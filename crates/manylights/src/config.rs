@@ -1,6 +1,6 @@
 //! Render settings chosen by the caller (the CLI's flags), validated against the device.
 
-use crate::{gpu::GpuContext, pipelines::LightMethod, Error, Result};
+use crate::{accel::gpu::BvhBuild, gpu::GpuContext, pipelines::LightMethod, Error, Result};
 
 /// Keep the discriminants in sync with `TONEMAP_*` in `shading/types.wgsl`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -17,6 +17,8 @@ pub struct RenderConfig {
     pub width: u32,
     pub height: u32,
     pub light_method: LightMethod,
+    /// How the light BVH is built, for `LightMethod::Bvh`.
+    pub light_bvh_build: BvhBuild,
     pub tonemapper: Tonemapper,
     /// Largest texture layer size; larger images are downsampled at upload.
     pub max_texture_size: u32,
@@ -31,6 +33,7 @@ impl Default for RenderConfig {
             width: 1280,
             height: 720,
             light_method: LightMethod::Brute,
+            light_bvh_build: BvhBuild::CpuOnce,
             tonemapper: Tonemapper::Aces,
             max_texture_size: 1024,
             anisotropy: 8,

@@ -15,6 +15,7 @@ pub struct Renderer {
     pub scene: GpuScene,
     pub config: RenderConfig,
     pipeline: VisbufferPipeline,
+    light_bvh: Option<LightBvhBuffers>,
     timer: Option<GpuTimer>,
 }
 
@@ -32,12 +33,12 @@ impl Renderer {
         let gpu_scene = GpuScene::upload(&ctx, scene, config.max_texture_size, config.anisotropy)?;
         let light_bvh = match config.light_method {
             LightMethod::Brute => None,
-            LightMethod::Bvh => Some(LightBvhBuffers::build_static(&ctx, &scene.lights)?),
+            LightMethod::Bvh => Some(LightBvhBuffers::new(&ctx, &scene.lights, config.light_bvh_build)?),
         };
         let pipeline = VisbufferPipeline::new(&ctx, &gpu_scene, config.light_method, light_bvh.as_ref(), config.width, config.height)?;
         let timer = GpuTimer::new(&ctx);
         ctx.check_errors()?;
-        Ok(Self { ctx, scene: gpu_scene, config, pipeline, timer })
+        Ok(Self { ctx, scene: gpu_scene, config, pipeline, light_bvh, timer })
     }
 
     /// Whether `render` returns per-pass GPU timings.
@@ -64,6 +65,9 @@ impl Renderer {
                     timings.extend(timer.read(&self.ctx)?);
                 }
                 timer.begin_frame();
+            }
+            if let Some(light_bvh) = &mut self.light_bvh {
+                light_bvh.record_rebuild(&mut encoder, self.timer.as_mut())?;
             }
             self.pipeline.record(&mut encoder, self.timer.as_mut(), &self.scene, camera.position());
             if let Some(timer) = &self.timer {

@@ -7,6 +7,8 @@ use std::path::PathBuf;
 use common::*;
 use glam::Vec3;
 use manylights::{
+    accel::gpu::BvhBuild,
+    config::RenderConfig,
     pipelines::LightMethod,
     scene::{self, demo::demo_scene, generators::ScatterLights, Light, LightKind, Scene},
 };
@@ -19,10 +21,17 @@ fn assert_methods_agree(scene: &Scene, width: u32, height: u32) {
     let (_, brute) = render_with(scene, camera, config(width, height, LightMethod::Brute));
     let lit = brute.pixels.iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count();
     assert!(lit > brute.pixels.len() / 2, "the reference image is mostly black");
-    for method in LightMethod::ALL {
-        let (_, image) = render_with(scene, camera, config(width, height, method));
+    let gpu_built = RenderConfig { light_bvh_build: BvhBuild::GpuEveryFrame, ..config(width, height, LightMethod::Bvh) };
+    let configs = LightMethod::ALL.iter().map(|&method| config(width, height, method)).chain([gpu_built]);
+    for config in configs {
+        let (_, image) = render_with(scene, camera, config.clone());
         let difference = max_abs_difference(&brute, &image);
-        assert!(difference <= TOLERANCE, "{}: max abs difference {difference} from brute force", method.name());
+        assert!(
+            difference <= TOLERANCE,
+            "{} ({:?}): max abs difference {difference} from brute force",
+            config.light_method.name(),
+            config.light_bvh_build
+        );
     }
 }
 

@@ -1,29 +1,9 @@
+#include "accel/bvh_types.wgsl"
 #include "accel/bvh_bindings.wgsl"
 
-// BVH nodes as `accel/bvh.rs` lays them out (keep in sync with `BvhNode` there): an internal node's
-// `a` and `b` are its children; a leaf has `a` = BVH_LEAF | first and `b` = count, naming
-// `bvh_primitives[first .. first + count]`. The root is node 0.
-//
 // The point query — the paper's zero-length ray — is a cursor: `bvh_query_next_leaf` returns every leaf
 // whose box contains the point, and the caller applies its own tight test to the leaf's primitives
 // (light range and cone, decal box) without a copy of the traversal per use.
-
-struct BvhNode {
-    min: vec3<f32>,
-    a: u32,
-    max: vec3<f32>,
-    b: u32,
-}
-
-const BVH_LEAF: u32 = 0x80000000u;
-// Depth-first traversal keeps at most one pending sibling per level: builders keep depth ≤ 48
-// (`bvh::MAX_DEPTH`), so 64 entries never overflow.
-const BVH_STACK_SIZE: u32 = 64u;
-
-// Inclusive on the faces, like the CPU query: a point on a volume's boundary is inside its box.
-fn bvh_node_contains(node: BvhNode, p: vec3<f32>) -> bool {
-    return all(p >= node.min) && all(p <= node.max);
-}
 
 // The query in flight, one per invocation. It hands out whole leaves, and the caller loops over their
 // primitives: a cursor returning one primitive per call measured 20 % slower shading on the H200.

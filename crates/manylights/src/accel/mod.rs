@@ -5,10 +5,12 @@
 //!
 //! `bvh.rs` holds the node layout shared with WGSL (`accel/bvh.wgsl`) and the CPU builder and query,
 //! which serve static sets and are the oracle for the GPU. `volumes.rs` bounds each light's volume.
-//! `gpu.rs` uploads a light BVH as bind group 2 for `shading/enumerate/bvh.wgsl`.
+//! `gpu.rs` uploads a light BVH as bind group 2 for `shading/enumerate/bvh.wgsl`; `lbvh.rs` builds
+//! BVHs on the GPU (Karras LBVH) in the same layout.
 
 pub mod bvh;
 pub mod gpu;
+pub mod lbvh;
 pub mod volumes;
 
 pub use bvh::{Bvh, BvhNode, LEAF, MAX_DEPTH, MAX_LEAF_SIZE};

@@ -18,6 +18,8 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/enumerate/brute.wgsl", include_str!("../shading/enumerate/brute.wgsl")),
     ("shading/enumerate/bvh.wgsl", include_str!("../shading/enumerate/bvh.wgsl")),
     ("accel/bvh.wgsl", include_str!("../accel/bvh.wgsl")),
+    ("accel/bvh_types.wgsl", include_str!("../accel/bvh_types.wgsl")),
+    ("accel/lbvh.wgsl", include_str!("../accel/lbvh.wgsl")),
     ("accel/bvh_bindings.wgsl", include_str!("../accel/bvh_bindings.wgsl")),
     ("accel/bvh_query_probe.wgsl", include_str!("../accel/bvh_query_probe.wgsl")),
     ("passes/visbuffer_raster.wgsl", include_str!("../passes/visbuffer_raster.wgsl")),
@@ -117,6 +119,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("passes/visbuffer_raster.wgsl"),
         ShaderDesc::new("passes/tonemap.wgsl"),
         ShaderDesc::new("accel/bvh_query_probe.wgsl"),
+        ShaderDesc::new("accel/lbvh.wgsl"),
     ];
     for method in crate::pipelines::LightMethod::ALL {
         shaders.push(ShaderDesc::new("passes/visbuffer_shade.wgsl").with("LIGHT_ENUMERATION", method.enumeration_module()));

@@ -83,6 +83,28 @@ impl GpuTimer {
         }
     }
 
+    /// Starts a scope spanning several compute passes: pass these writes to its first pass and
+    /// `span_end` to its last.
+    pub fn span_start(&mut self, name: &'static str) -> wgpu::ComputePassTimestampWrites<'_> {
+        let first = self.allocate(name);
+        wgpu::ComputePassTimestampWrites {
+            query_set: &self.query_set,
+            beginning_of_pass_write_index: Some(first),
+            end_of_pass_write_index: None,
+        }
+    }
+
+    /// Ends the most recent scope named `name`, started by `span_start`.
+    pub fn span_end(&mut self, name: &'static str) -> wgpu::ComputePassTimestampWrites<'_> {
+        let frame = self.frames.len() as u32 - 1;
+        let scope = self.frames[frame as usize].iter().rposition(|n| *n == name).expect("span_end without span_start") as u32;
+        wgpu::ComputePassTimestampWrites {
+            query_set: &self.query_set,
+            beginning_of_pass_write_index: None,
+            end_of_pass_write_index: Some((frame * MAX_SCOPES + scope) * 2 + 1),
+        }
+    }
+
     /// Records the resolve and copy of the current frame; call before submitting its encoder.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
         let frame = self.frames.len() as u32 - 1;

@@ -5,6 +5,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 use manylights::{
+    accel::gpu::BvhBuild,
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
     pipelines::LightMethod,
@@ -17,7 +18,15 @@ pub const HEIGHT: u32 = 144;
 
 /// The test configuration: small, trilinear filtering, small textures (lavapipe is slow).
 pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfig {
-    RenderConfig { width, height, light_method, tonemapper: Tonemapper::Aces, max_texture_size: 256, anisotropy: 1 }
+    RenderConfig {
+        width,
+        height,
+        light_method,
+        light_bvh_build: BvhBuild::CpuOnce,
+        tonemapper: Tonemapper::Aces,
+        max_texture_size: 256,
+        anisotropy: 1,
+    }
 }
 
 pub fn renderer(scene: &Scene, config: RenderConfig) -> Renderer {

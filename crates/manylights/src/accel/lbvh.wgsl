@@ -1,0 +1,202 @@
+// LBVH build on the GPU (Karras 2012), over `params.count` boxes, into the node layout of
+// `accel/bvh.wgsl`: scene bounds of the box centres → 30-bit Morton codes → (radix sort, lampshade)
+// → one thread per internal node finds its range and split → bounds propagated from the leaves up.
+// Node indices: internal nodes 0 .. count - 2 (root 0), leaf k at count - 1 + k.
+#include "accel/bvh_types.wgsl"
+
+struct LbvhParams {
+    count: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+struct Box {
+    min: vec4<f32>,
+    max: vec4<f32>,
+}
+
+const NO_PARENT: u32 = 0xffffffffu;
+
+@group(0) @binding(0) var<uniform> params: LbvhParams;
+@group(0) @binding(1) var<storage, read> boxes: array<Box>;
+// Centre bounds as order-preserving integers: 0..2 hold ~min (maximised), 3..5 max.
+@group(0) @binding(2) var<storage, read_write> centre_bounds: array<atomic<u32>, 6>;
+// (Morton code, box index): the sort's input ...
+@group(0) @binding(3) var<storage, read_write> keys: array<vec2<u32>>;
+// ... and its output.
+@group(0) @binding(4) var<storage, read> sorted_keys: array<vec2<u32>>;
+@group(0) @binding(5) var<storage, read_write> nodes: array<BvhNode>;
+@group(0) @binding(6) var<storage, read_write> primitives: array<u32>;
+@group(0) @binding(7) var<storage, read_write> parents: array<u32>;
+// Node bounds as order-preserving integers, 6 per node like `centre_bounds`; cleared to 0.
+@group(0) @binding(8) var<storage, read_write> node_bounds: array<atomic<u32>>;
+
+// f32 → u32 keeping the order, so atomicMax works on floats; ~ordered(x) turns max into min.
+fn ordered(x: f32) -> u32 {
+    let bits = bitcast<u32>(x);
+    return select(bits | 0x80000000u, ~bits, (bits & 0x80000000u) != 0u);
+}
+
+fn unordered(u: u32) -> f32 {
+    return bitcast<f32>(select(~u, u & 0x7fffffffu, (u & 0x80000000u) != 0u));
+}
+
+fn box_centre(b: Box) -> vec3<f32> {
+    return b.min.xyz * 0.5 + b.max.xyz * 0.5;
+}
+
+var<workgroup> group_bounds: array<atomic<u32>, 6>;
+
+@compute @workgroup_size(256)
+fn lbvh_centre_bounds(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    if local < 6u {
+        atomicStore(&group_bounds[local], 0u);
+    }
+    workgroupBarrier();
+    if id.x < params.count {
+        let c = box_centre(boxes[id.x]);
+        for (var axis = 0u; axis < 3u; axis += 1u) {
+            atomicMax(&group_bounds[axis], ~ordered(c[axis]));
+            atomicMax(&group_bounds[axis + 3u], ordered(c[axis]));
+        }
+    }
+    workgroupBarrier();
+    // One global atomic per workgroup and slot instead of one per box.
+    if local < 6u {
+        atomicMax(&centre_bounds[local], atomicLoad(&group_bounds[local]));
+    }
+}
+
+// Spreads the low 10 bits of v to every third bit.
+fn spread_bits(v: u32) -> u32 {
+    var x = v & 0x3ffu;
+    x = (x | (x << 16u)) & 0x030000ffu;
+    x = (x | (x << 8u)) & 0x0300f00fu;
+    x = (x | (x << 4u)) & 0x030c30c3u;
+    x = (x | (x << 2u)) & 0x09249249u;
+    return x;
+}
+
+@compute @workgroup_size(256)
+fn lbvh_morton(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= params.count {
+        return;
+    }
+    let low = vec3<f32>(unordered(~atomicLoad(&centre_bounds[0])), unordered(~atomicLoad(&centre_bounds[1])), unordered(~atomicLoad(&centre_bounds[2])));
+    let high = vec3<f32>(unordered(atomicLoad(&centre_bounds[3])), unordered(atomicLoad(&centre_bounds[4])), unordered(atomicLoad(&centre_bounds[5])));
+    let extent = max(high - low, vec3<f32>(1e-30));
+    let cell = vec3<u32>(clamp((box_centre(boxes[id.x]) - low) / extent * 1024.0, vec3<f32>(0.0), vec3<f32>(1023.0)));
+    let code = (spread_bits(cell.x) << 2u) | (spread_bits(cell.y) << 1u) | spread_bits(cell.z);
+    keys[id.x] = vec2<u32>(code, id.x);
+}
+
+// Length of the common prefix of sorted keys i and j, ties broken by position (Karras); -1 out of range.
+fn common_prefix(i: i32, j: i32) -> i32 {
+    if j < 0 || j >= i32(params.count) {
+        return -1;
+    }
+    let a = sorted_keys[i].x;
+    let b = sorted_keys[j].x;
+    if a == b {
+        return 32 + i32(countLeadingZeros(u32(i) ^ u32(j)));
+    }
+    return i32(countLeadingZeros(a ^ b));
+}
+
+fn child_node(index: i32, is_leaf: bool) -> u32 {
+    return select(u32(index), params.count - 1u + u32(index), is_leaf);
+}
+
+@compute @workgroup_size(256)
+fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
+    let n = params.count;
+    if id.x >= n {
+        return;
+    }
+    // Every thread writes its leaf; threads below n - 1 also build internal node id.x.
+    let leaf = n - 1u + id.x;
+    nodes[leaf].a = BVH_LEAF | id.x;
+    nodes[leaf].b = 1u;
+    primitives[id.x] = sorted_keys[id.x].y;
+    if id.x == 0u {
+        parents[0] = NO_PARENT;
+    }
+    if id.x + 1u >= n {
+        return;
+    }
+
+    let i = i32(id.x);
+    // Direction of the range and its other end (Karras, "Maximizing parallelism in the construction
+    // of BVHs, octrees, and k-d trees", 2012).
+    let d = select(-1, 1, common_prefix(i, i + 1) > common_prefix(i, i - 1));
+    let min_prefix = common_prefix(i, i - d);
+    var max_length = 2;
+    while common_prefix(i, i + max_length * d) > min_prefix {
+        max_length *= 2;
+    }
+    var length = 0;
+    for (var step = max_length / 2; step >= 1; step /= 2) {
+        if common_prefix(i, i + (length + step) * d) > min_prefix {
+            length += step;
+        }
+    }
+    let j = i + length * d;
+    // The split: the last position sharing more than the range's common prefix with i.
+    let node_prefix = common_prefix(i, j);
+    var split = 0;
+    var step = length;
+    loop {
+        step = (step + 1) / 2;
+        if common_prefix(i, i + (split + step) * d) > node_prefix {
+            split += step;
+        }
+        if step <= 1 {
+            break;
+        }
+    }
+    let gamma = i + split * d + min(d, 0);
+    let left = child_node(gamma, min(i, j) == gamma);
+    let right = child_node(gamma + 1, max(i, j) == gamma + 1);
+    nodes[id.x].a = left;
+    nodes[id.x].b = right;
+    parents[left] = id.x;
+    parents[right] = id.x;
+}
+
+fn grow_node_bounds(node: u32, b: Box) {
+    for (var axis = 0u; axis < 3u; axis += 1u) {
+        atomicMax(&node_bounds[node * 6u + axis], ~ordered(b.min[axis]));
+        atomicMax(&node_bounds[node * 6u + 3u + axis], ordered(b.max[axis]));
+    }
+}
+
+// Each leaf adds its box to itself and every ancestor. Atomic max is order-independent, so no
+// thread waits for another and no memory ordering between threads is assumed.
+@compute @workgroup_size(256)
+fn lbvh_bounds(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= params.count {
+        return;
+    }
+    let b = boxes[primitives[id.x]];
+    var node = params.count - 1u + id.x;
+    loop {
+        grow_node_bounds(node, b);
+        if node == 0u {
+            break;
+        }
+        node = parents[node];
+    }
+}
+
+@compute @workgroup_size(256)
+fn lbvh_write_nodes(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= 2u * params.count - 1u {
+        return;
+    }
+    let base = id.x * 6u;
+    for (var axis = 0u; axis < 3u; axis += 1u) {
+        nodes[id.x].min[axis] = unordered(~atomicLoad(&node_bounds[base + axis]));
+        nodes[id.x].max[axis] = unordered(atomicLoad(&node_bounds[base + 3u + axis]));
+    }
+}
