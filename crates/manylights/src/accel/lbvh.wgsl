@@ -164,25 +164,31 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
     parents[right] = id.x;
 }
 
-fn grow_node_bounds(node: u32, b: Box) {
-    for (var axis = 0u; axis < 3u; axis += 1u) {
-        atomicMax(&node_bounds[node * 6u + axis], ~ordered(b.min[axis]));
-        atomicMax(&node_bounds[node * 6u + 3u + axis], ordered(b.max[axis]));
-    }
-}
-
-// Each leaf adds its box to itself and every ancestor. Atomic max is order-independent, so no
-// thread waits for another and no memory ordering between threads is assumed.
+// Each leaf carries its box up the tree with atomic max, one slot (min or max of an axis) at a time,
+// and stops carrying a slot once a node already holds as much: whoever put that value there carries
+// it (or found it) above, so every ancestor still ends up exact. Atomic max is order-independent, so
+// no thread waits for another and no memory ordering between threads is assumed; stopping early
+// keeps thousands of threads from queueing on the root (6.2 → see BENCHMARKS.md at 1M boxes).
 @compute @workgroup_size(256)
 fn lbvh_bounds(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= params.count {
         return;
     }
     let b = boxes[primitives[id.x]];
+    var values: array<u32, 6>;
+    for (var axis = 0u; axis < 3u; axis += 1u) {
+        values[axis] = ~ordered(b.min[axis]);
+        values[axis + 3u] = ordered(b.max[axis]);
+    }
+    var rising = 0x3fu;
     var node = params.count - 1u + id.x;
     loop {
-        grow_node_bounds(node, b);
-        if node == 0u {
+        for (var slot = 0u; slot < 6u; slot += 1u) {
+            if (rising & (1u << slot)) != 0u && atomicMax(&node_bounds[node * 6u + slot], values[slot]) >= values[slot] {
+                rising &= ~(1u << slot);
+            }
+        }
+        if rising == 0u || node == 0u {
             break;
         }
         node = parents[node];
