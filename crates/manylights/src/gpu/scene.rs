@@ -294,9 +294,9 @@ fn storage_buffer<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, data: &[
 }
 
 fn primitive_center(primitive: &crate::scene::Primitive) -> glam::Vec3 {
-    let mut bounds = crate::scene::Bounds::EMPTY;
+    let mut bounds = crate::scene::Aabb::EMPTY;
     for v in &primitive.vertices {
-        bounds.grow(glam::Vec3::from(v.position));
+        bounds.grow_point(glam::Vec3::from(v.position));
     }
     bounds.center()
 }

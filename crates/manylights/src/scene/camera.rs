@@ -57,7 +57,7 @@ impl Camera {
     }
 
     /// A camera that frames `bounds` from the front-right and above.
-    pub fn framing(bounds: &super::Bounds) -> Self {
+    pub fn framing(bounds: &super::Aabb) -> Self {
         let center = bounds.center();
         let radius = (bounds.diagonal() * 0.5).max(1e-3);
         let yfov = 50f32.to_radians();

@@ -5,6 +5,7 @@
 //!
 //! Conventions: right-handed, +Y up, metres; a camera looks down its local -Z (as in glTF).
 
+mod aabb;
 pub mod camera;
 pub mod demo;
 pub mod generators;
@@ -16,6 +17,7 @@ use std::path::Path;
 
 use glam::{Mat4, Vec3, Vec4};
 
+pub use aabb::Aabb;
 pub use camera::{Camera, Projection};
 
 /// Illuminance (intensity / d²) at which a light without an explicit range is cut off: its range is
@@ -217,30 +219,6 @@ impl Default for Scene {
     }
 }
 
-/// Axis-aligned bounds.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Bounds {
-    pub min: Vec3,
-    pub max: Vec3,
-}
-
-impl Bounds {
-    pub const EMPTY: Bounds = Bounds { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
-    pub fn grow(&mut self, p: Vec3) {
-        self.min = self.min.min(p);
-        self.max = self.max.max(p);
-    }
-    pub fn is_empty(&self) -> bool {
-        self.min.cmpgt(self.max).any()
-    }
-    pub fn center(&self) -> Vec3 {
-        (self.min + self.max) * 0.5
-    }
-    pub fn diagonal(&self) -> f32 {
-        (self.max - self.min).length()
-    }
-}
-
 impl Scene {
     /// Triangles as drawn: each mesh counted once per instance.
     pub fn drawn_triangle_count(&self) -> usize {
@@ -248,12 +226,12 @@ impl Scene {
     }
 
     /// World-space bounds of all instances.
-    pub fn bounds(&self) -> Bounds {
-        let mut b = Bounds::EMPTY;
+    pub fn bounds(&self) -> Aabb {
+        let mut b = Aabb::EMPTY;
         for inst in &self.instances {
             for prim in &self.meshes[inst.mesh].primitives {
                 for v in &prim.vertices {
-                    b.grow(inst.world_from_local.transform_point3(Vec3::from(v.position)));
+                    b.grow_point(inst.world_from_local.transform_point3(Vec3::from(v.position)));
                 }
             }
         }

@@ -1,0 +1,76 @@
+//! Axis-aligned boxes: scene bounds and the volumes of the acceleration structures.
+
+use glam::Vec3;
+
+/// An axis-aligned box, closed on all faces. A box with `min > max` on some axis is empty.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The empty box: the identity of [`Aabb::union`] and [`Aabb::grow_point`]; it contains nothing.
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+
+    pub fn new(min: Vec3, max: Vec3) -> Aabb {
+        Aabb { min, max }
+    }
+
+    /// Extends the box to contain `p`.
+    pub fn grow_point(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// The smallest box containing both.
+    pub fn union(self, other: Aabb) -> Aabb {
+        Aabb { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    /// Inclusive on every face (`min ≤ p ≤ max`), as the GPU query tests, so a point on a shared face
+    /// or a flat box's plane is found.
+    pub fn contains(&self, p: Vec3) -> bool {
+        self.min.cmple(p).all() && p.cmple(self.max).all()
+    }
+
+    /// Whether `other` lies inside this box (faces may touch).
+    pub fn contains_box(&self, other: &Aabb) -> bool {
+        self.min.cmple(other.min).all() && other.max.cmple(self.max).all()
+    }
+
+    /// No NaN or infinite bound.
+    pub fn is_finite(&self) -> bool {
+        self.min.is_finite() && self.max.is_finite()
+    }
+
+    /// Finite and non-empty (`min ≤ max` on every axis; zero thickness is allowed): what the BVH
+    /// builder accepts.
+    pub fn is_valid(&self) -> bool {
+        self.is_finite() && self.min.cmple(self.max).all()
+    }
+
+    /// True when `min > max` on some axis, like `EMPTY`.
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+
+    pub fn diagonal(&self) -> f32 {
+        (self.max - self.min).length()
+    }
+
+    /// Computed as `min / 2 + max / 2` so that boxes near `f32::MAX` do not overflow.
+    pub fn center(&self) -> Vec3 {
+        self.min * 0.5 + self.max * 0.5
+    }
+
+    /// Surface area in f64: the SAH compares areas of boxes from 1e-30 to 1e30 in size, whose squares
+    /// underflow or overflow f32. Zero for an invalid box.
+    pub fn surface_area(&self) -> f64 {
+        if !self.is_valid() {
+            return 0.0;
+        }
+        let e = self.max.as_dvec3() - self.min.as_dvec3();
+        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+}
