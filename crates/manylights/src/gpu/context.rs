@@ -9,8 +9,9 @@ use std::sync::{Arc, Mutex};
 
 use crate::{Error, Result};
 
-/// Features the renderer uses when the adapter has them; none is required.
-const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY;
+/// Features the renderer uses when the adapter has them; none is required. Subgroups let the GPU BVH
+/// builder's radix sort (lampshade) use its fast kernels.
+const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::SUBGROUP);
 
 pub struct GpuContext {
     pub adapter: wgpu::Adapter,
@@ -106,6 +107,8 @@ impl GpuContext {
             max_storage_buffer_binding_size: available.max_storage_buffer_binding_size,
             max_texture_dimension_2d: available.max_texture_dimension_2d,
             max_texture_array_layers: available.max_texture_array_layers,
+            // lampshade's fastest sort kernel needs a little over WebGPU's default 16 KiB.
+            max_compute_workgroup_storage_size: available.max_compute_workgroup_storage_size,
             ..wgpu::Limits::default().using_resolution(available.clone())
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
