@@ -65,7 +65,7 @@ impl ShaderDesc {
         if !seen.insert(path) {
             return Ok(());
         }
-        let source = source(path).ok_or_else(|| format!("unknown shader file `{path}` (included from {:?})", stack.last()))?;
+        let (_, source) = embedded(path).ok_or_else(|| format!("unknown shader file `{path}` (included from {:?})", stack.last()))?;
         stack.push(path);
         for line in source.lines() {
             match include_target(line) {
@@ -77,7 +77,7 @@ impl ShaderDesc {
                             .find(|(n, _)| *n == name)
                             .map(|(_, p)| *p)
                             .ok_or_else(|| format!("{path}: no value given for `${name}`"))?,
-                        None => source_path(target).ok_or_else(|| format!("{path}: unknown include `{target}`"))?,
+                        None => embedded(target).map(|(p, _)| p).ok_or_else(|| format!("{path}: unknown include `{target}`"))?,
                     };
                     self.append(resolved, out, seen, stack)?;
                 }
@@ -92,13 +92,9 @@ impl ShaderDesc {
     }
 }
 
-fn source(path: &str) -> Option<&'static str> {
-    SOURCES.iter().find(|(p, _)| *p == path).map(|(_, s)| *s)
-}
-
-/// The embedded path equal to `path`, with the `'static` lifetime the composer keeps.
-fn source_path(path: &str) -> Option<&'static str> {
-    SOURCES.iter().find(|(p, _)| *p == path).map(|(p, _)| *p)
+/// The embedded file at `path`: its path with the `'static` lifetime the composer keeps, and its text.
+fn embedded(path: &str) -> Option<(&'static str, &'static str)> {
+    SOURCES.iter().find(|(p, _)| *p == path).copied()
 }
 
 fn include_target(line: &str) -> Option<&str> {
