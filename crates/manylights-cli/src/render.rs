@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use manylights::{
-    accel::gpu::BvhBuild,
+    accel::BvhBuild,
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
     image_io,
@@ -109,6 +109,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             BvhBuildArg::CpuOnce => BvhBuild::CpuOnce,
             BvhBuildArg::GpuEveryFrame => BvhBuild::GpuEveryFrame,
         },
+        decal_method: manylights::pipelines::DecalMethod::Brute,
+        decal_bvh_build: BvhBuild::CpuOnce,
         tonemapper: match args.tonemap {
             TonemapArg::Aces => Tonemapper::Aces,
             TonemapArg::Agx => Tonemapper::Agx,

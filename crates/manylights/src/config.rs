@@ -1,6 +1,11 @@
 //! Render settings chosen by the caller (the CLI's flags), validated against the device.
 
-use crate::{accel::gpu::BvhBuild, gpu::GpuContext, pipelines::LightMethod, Error, Result};
+use crate::{
+    accel::BvhBuild,
+    gpu::GpuContext,
+    pipelines::{DecalMethod, LightMethod},
+    Error, Result,
+};
 
 /// Keep the discriminants in sync with `TONEMAP_*` in `shading/types.wgsl`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -17,8 +22,11 @@ pub struct RenderConfig {
     pub width: u32,
     pub height: u32,
     pub light_method: LightMethod,
-    /// How the light BVH is built, for `LightMethod::Bvh`.
+    /// How the light groups' BVHs are built, for `LightMethod::Bvh`.
     pub light_bvh_build: BvhBuild,
+    pub decal_method: DecalMethod,
+    /// How the decal groups' BVHs are built, for `DecalMethod::Bvh`.
+    pub decal_bvh_build: BvhBuild,
     pub tonemapper: Tonemapper,
     /// Largest texture layer size; larger images are downsampled at upload.
     pub max_texture_size: u32,
@@ -34,6 +42,8 @@ impl Default for RenderConfig {
             height: 720,
             light_method: LightMethod::Brute,
             light_bvh_build: BvhBuild::CpuOnce,
+            decal_method: DecalMethod::Brute,
+            decal_bvh_build: BvhBuild::CpuOnce,
             tonemapper: Tonemapper::Aces,
             max_texture_size: 1024,
             anisotropy: 8,

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use common::*;
 use glam::Vec3;
 use manylights::{
-    accel::gpu::BvhBuild,
+    accel::BvhBuild,
     config::RenderConfig,
     pipelines::LightMethod,
     scene::{self, demo::demo_scene, generators::ScatterLights, Light, LightKind, Scene},

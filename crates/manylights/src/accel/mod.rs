@@ -14,4 +14,5 @@ pub mod lbvh;
 pub mod volumes;
 
 pub use bvh::{Bvh, BvhNode, LEAF, MAX_DEPTH, MAX_LEAF_SIZE};
+pub use gpu::BvhBuild;
 pub use volumes::{light_aabb, light_contains, Aabb};

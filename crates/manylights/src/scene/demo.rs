@@ -54,6 +54,7 @@ pub fn demo_scene() -> Scene {
         sun: Some(Sun { direction: Vec3::new(-0.45, -0.35, -0.82).normalize(), color: Vec3::new(1.0, 0.82, 0.62), illuminance: 2.5 }),
         ambient: Vec3::new(0.025, 0.03, 0.04),
         exposure: 1.0,
+        ..Scene::default()
     }
 }
 

@@ -15,7 +15,7 @@ mod tangents;
 
 use std::path::Path;
 
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Affine3A, Mat4, Vec3, Vec4};
 
 pub use aabb::Aabb;
 pub use camera::{Camera, Projection};
@@ -188,13 +188,167 @@ pub struct Sun {
     pub illuminance: f32,
 }
 
+/// Number of decal layers: layers are blended bottom (0) to top, decals within a layer
+/// order-independently (weighted blended OIT, `shading/decals.wgsl`).
+pub const DECAL_LAYERS: u32 = 4;
+
+/// A decal: a material projected onto every surface inside an oriented box.
+///
+/// Decal space is the unit box [-0.5, 0.5]³. The decal projects along its local -Z onto surfaces whose
+/// normal faces +Z (it fades out on surfaces seen edge-on from the projector and is absent on surfaces
+/// facing away); the image's u runs along +X and v along -Y, like a picture looked at from +Z.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Decal {
+    /// Maps decal space into the decal's group space (world space when the decals are not grouped).
+    pub world_from_decal: Affine3A,
+    /// The material whose base colour (albedo and alpha), metallic-roughness and normal texture it
+    /// projects. Factors apply as on surfaces; without a normal texture the decal leaves normals alone.
+    pub material: usize,
+    /// 0 .. DECAL_LAYERS - 1; higher layers cover lower ones.
+    pub layer: u32,
+    /// Weight in its layer's weighted blend, > 0.
+    pub weight: f32,
+}
+
+/// A rigid motion over time: rotation about the vertical axis through `pivot`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spin {
+    pub pivot: Vec3,
+    pub radians_per_second: f32,
+}
+
+/// One placement of a group of lights or decals: the top level of their acceleration structure.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroupInstance {
+    pub group: usize,
+    /// Maps the group's space into the world: a rotation, a translation and a uniform scale (ranges
+    /// scale with it), so volumes keep their shape.
+    pub world_from_group: Affine3A,
+    /// Moves the instance rigidly over time; `None` keeps it still.
+    pub spin: Option<Spin>,
+}
+
+impl GroupInstance {
+    /// The instance's transform at `time` seconds.
+    pub fn world_from_group_at(&self, time: f32) -> Affine3A {
+        match self.spin {
+            Some(spin) => {
+                let rotation = Affine3A::from_rotation_y(spin.radians_per_second * time);
+                Affine3A::from_translation(spin.pivot) * rotation * Affine3A::from_translation(-spin.pivot) * self.world_from_group
+            }
+            None => self.world_from_group,
+        }
+    }
+}
+
+/// How lights or decals are grouped and placed. Items are stored group after group, each group's in
+/// its own space; instances place groups in the world, a group any number of times. The default,
+/// no groups, means one group of all items placed once where they are.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Groups {
+    /// Item count of each group, in storage order; they add up to the number of items.
+    pub sizes: Vec<usize>,
+    pub instances: Vec<GroupInstance>,
+}
+
+impl Groups {
+    /// The item range of each group and the instances, with the default applied for `item_count` items.
+    pub fn resolve(&self, item_count: usize) -> (Vec<std::ops::Range<usize>>, Vec<GroupInstance>) {
+        if self.sizes.is_empty() {
+            let identity = GroupInstance { group: 0, world_from_group: Affine3A::IDENTITY, spin: None };
+            return (vec![0..item_count], vec![identity]);
+        }
+        let mut start = 0;
+        let ranges = self
+            .sizes
+            .iter()
+            .map(|&n| {
+                start += n;
+                start - n..start
+            })
+            .collect();
+        (ranges, self.instances.clone())
+    }
+
+    /// Whether any instance moves over time.
+    pub fn is_animated(&self) -> bool {
+        self.instances.iter().any(|i| i.spin.is_some())
+    }
+
+    /// Checks the grouping of `item_count` items; the message names the bad group or instance.
+    pub fn validate(&self, item_count: usize) -> Result<(), String> {
+        if self.sizes.is_empty() {
+            return if self.instances.is_empty() { Ok(()) } else { Err("instances are given but no groups".into()) };
+        }
+        let total: usize = self.sizes.iter().sum();
+        if total != item_count {
+            return Err(format!("the groups hold {total} items but there are {item_count}"));
+        }
+        for (i, instance) in self.instances.iter().enumerate() {
+            if instance.group >= self.sizes.len() {
+                return Err(format!("instance {i}: group {} does not exist ({} groups)", instance.group, self.sizes.len()));
+            }
+            validate_similarity(&instance.world_from_group).map_err(|m| format!("instance {i}: {m}"))?;
+            if let Some(spin) = instance.spin {
+                if !(spin.pivot.is_finite() && spin.radians_per_second.is_finite()) {
+                    return Err(format!("instance {i}: spin pivot and speed must be finite"));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Checks that a transform is a rotation, translation and uniform scale, as group instances must be.
+fn validate_similarity(t: &Affine3A) -> Result<(), String> {
+    if !t.is_finite() {
+        return Err("transform is NaN or infinite".into());
+    }
+    let m = t.matrix3;
+    let scale = m.x_axis.length();
+    let unit = |v: glam::Vec3A| (v.length() - scale).abs() <= 1e-4 * scale;
+    let orthogonal = m.x_axis.dot(m.y_axis).abs() <= 1e-4 * scale * scale
+        && m.x_axis.dot(m.z_axis).abs() <= 1e-4 * scale * scale
+        && m.y_axis.dot(m.z_axis).abs() <= 1e-4 * scale * scale;
+    if !(scale > 0.0 && unit(m.y_axis) && unit(m.z_axis) && orthogonal && m.determinant() > 0.0) {
+        return Err("transform must be a rotation, translation and positive uniform scale".into());
+    }
+    Ok(())
+}
+
+/// Checks one decal; the message says which field is wrong.
+pub fn validate_decal(d: &Decal, material_count: usize) -> Result<(), String> {
+    if !d.world_from_decal.is_finite() {
+        return Err("transform is NaN or infinite".into());
+    }
+    let det = d.world_from_decal.matrix3.determinant();
+    if !(det.is_finite() && det.abs() > f32::MIN_POSITIVE) {
+        return Err("transform is degenerate: the box has no volume".into());
+    }
+    if d.material >= material_count {
+        return Err(format!("material {} does not exist", d.material));
+    }
+    if d.layer >= DECAL_LAYERS {
+        return Err(format!("layer {} is not below {DECAL_LAYERS}", d.layer));
+    }
+    if !(d.weight.is_finite() && d.weight > 0.0) {
+        return Err(format!("weight {} must be finite and > 0", d.weight));
+    }
+    Ok(())
+}
+
 #[derive(Clone, Debug)]
 pub struct Scene {
     pub meshes: Vec<Mesh>,
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub instances: Vec<Instance>,
+    /// Lights, in their group's space (`light_groups`).
     pub lights: Vec<Light>,
+    pub light_groups: Groups,
+    /// Decals, in their group's space (`decal_groups`).
+    pub decals: Vec<Decal>,
+    pub decal_groups: Groups,
     pub cameras: Vec<Camera>,
     pub sun: Option<Sun>,
     /// Uniform ambient radiance, a stand-in for indirect light.
@@ -211,6 +365,9 @@ impl Default for Scene {
             textures: Vec::new(),
             instances: Vec::new(),
             lights: Vec::new(),
+            light_groups: Groups::default(),
+            decals: Vec::new(),
+            decal_groups: Groups::default(),
             cameras: Vec::new(),
             sun: None,
             ambient: Vec3::splat(0.03),
@@ -276,6 +433,11 @@ impl Scene {
         for (li, l) in self.lights.iter().enumerate() {
             validate_light(l).map_err(|m| crate::Error::InvalidScene(format!("light {li}: {m}")))?;
         }
+        self.light_groups.validate(self.lights.len()).map_err(|m| crate::Error::InvalidScene(format!("light groups: {m}")))?;
+        for (di, d) in self.decals.iter().enumerate() {
+            validate_decal(d, self.materials.len()).map_err(|m| crate::Error::InvalidScene(format!("decal {di}: {m}")))?;
+        }
+        self.decal_groups.validate(self.decals.len()).map_err(|m| crate::Error::InvalidScene(format!("decal groups: {m}")))?;
         if let Some(sun) = &self.sun {
             if !(sun.direction.is_finite()
                 && sun.direction.length() > 0.0

@@ -5,7 +5,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 use manylights::{
-    accel::gpu::BvhBuild,
+    accel::BvhBuild,
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
     pipelines::LightMethod,
