@@ -2,21 +2,27 @@
 //! images are read back on request so benchmarks time frames without readback in the way.
 
 use crate::{
-    accel::gpu::LightBvhBuffers,
+    accel::VolumeStructure,
     config::RenderConfig,
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
-    pipelines::{LightMethod, VisbufferPipeline},
+    pipelines::{DecalMethod, LightMethod, VisbufferPipeline},
     scene::{Camera, Scene},
     Result,
 };
+
+/// Time between frames rendered back to back: animated groups move by this much per frame.
+pub const FRAME_INTERVAL: f32 = 1.0 / 60.0;
 
 pub struct Renderer {
     pub ctx: GpuContext,
     pub scene: GpuScene,
     pub config: RenderConfig,
     pipeline: VisbufferPipeline,
-    light_bvh: Option<LightBvhBuffers>,
+    lights: VolumeStructure,
+    decals: VolumeStructure,
     timer: Option<GpuTimer>,
+    /// Scene time of the next frame, in seconds: where animated groups are.
+    pub time: f32,
 }
 
 /// A read-back image, rows top to bottom.
@@ -31,14 +37,32 @@ impl Renderer {
     pub fn new(ctx: GpuContext, scene: &Scene, config: RenderConfig) -> Result<Self> {
         config.validate(&ctx)?;
         let gpu_scene = GpuScene::upload(&ctx, scene, config.max_texture_size, config.anisotropy)?;
-        let light_bvh = match config.light_method {
-            LightMethod::Brute => None,
-            LightMethod::Bvh => Some(LightBvhBuffers::new(&ctx, &scene.lights, config.light_bvh_build)?),
-        };
-        let pipeline = VisbufferPipeline::new(&ctx, &gpu_scene, config.light_method, light_bvh.as_ref(), config.width, config.height)?;
+        // Brute force reads the structures' items and instances only: their BVHs are built once on the
+        // CPU, so a GPU rebuild every frame is timed only where a method uses it.
+        let build = |uses_bvh: bool, build| if uses_bvh { build } else { crate::accel::BvhBuild::CpuOnce };
+        let lights = VolumeStructure::for_lights(
+            &ctx,
+            &scene.lights,
+            &scene.light_groups,
+            build(config.light_method == LightMethod::Bvh, config.light_bvh_build),
+        )?;
+        let decals = VolumeStructure::for_decals(
+            &ctx,
+            &scene.decals,
+            &scene.decal_groups,
+            build(config.decal_method == DecalMethod::Bvh, config.decal_bvh_build),
+        )?;
+        let pipeline = VisbufferPipeline::new(
+            &ctx,
+            &gpu_scene,
+            (config.light_method, config.decal_method),
+            (&lights, &decals),
+            config.width,
+            config.height,
+        )?;
         let timer = GpuTimer::new(&ctx);
         ctx.check_errors()?;
-        Ok(Self { ctx, scene: gpu_scene, config, pipeline, light_bvh, timer })
+        Ok(Self { ctx, scene: gpu_scene, config, pipeline, lights, decals, timer, time: 0.0 })
     }
 
     /// Whether `render` returns per-pass GPU timings.
@@ -53,9 +77,12 @@ impl Renderer {
     }
 
     /// Renders `count` frames submitted back to back, as an application's frame loop does, waiting
-    /// only when the timer's slots are full and at the end. Returns each frame's pass timings.
+    /// only when the timer's slots are full and at the end; each frame advances `time` by
+    /// [`FRAME_INTERVAL`]. Returns each frame's pass timings.
     pub fn render_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<PassTimings>> {
-        let uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.lighting, self.config.tonemapper);
+        let mut uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.lighting, self.config.tonemapper);
+        uniforms.light_instance_count = self.lights.instance_count();
+        uniforms.decal_instance_count = self.decals.instance_count();
         self.scene.write_frame(&self.ctx.queue, &uniforms);
         let mut timings = Vec::new();
         for _ in 0..count {
@@ -66,14 +93,14 @@ impl Renderer {
                 }
                 timer.begin_frame();
             }
-            if let Some(light_bvh) = &mut self.light_bvh {
-                light_bvh.record_rebuild(&mut encoder, self.timer.as_mut())?;
-            }
+            self.lights.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time)?;
+            self.decals.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time)?;
             self.pipeline.record(&mut encoder, self.timer.as_mut(), &self.scene, camera.position());
             if let Some(timer) = &self.timer {
                 timer.resolve(&mut encoder);
             }
             self.ctx.queue.submit([encoder.finish()]);
+            self.time += FRAME_INTERVAL;
         }
         match &mut self.timer {
             Some(timer) => timings.extend(timer.read(&self.ctx)?),

@@ -1,11 +1,12 @@
-//! The WGSL point query (`accel/bvh.wgsl`), run on the GPU, reaches exactly the lights the CPU oracle
-//! finds: for every point, the set of lights whose volume contains it (`accel::light_contains`).
+//! The WGSL point query (`accel/volume_query.wgsl`), run on the GPU through the two-level structure,
+//! reaches exactly the lights the CPU oracle finds: for every point, the lights of every group
+//! instance whose volume, placed in the world, contains it (`accel::light_contains`).
 
-use glam::Vec3;
+use glam::{Affine3A, Quat, Vec3};
 use manylights::{
-    accel::{gpu::LightBvhBuffers, light_contains},
-    gpu::{readback, scene::GpuLight, shaders, shaders::ShaderDesc, GpuContext},
-    scene::{Light, LightKind},
+    accel::{light_contains, BvhBuild, VolumeStructure},
+    gpu::{readback, shaders, shaders::ShaderDesc, GpuContext},
+    scene::{GroupInstance, Groups, Light, LightKind, Spin},
 };
 use rand::{Rng, SeedableRng};
 use wgpu::util::DeviceExt;
@@ -34,18 +35,13 @@ fn random_lights(count: usize, rng: &mut rand_pcg::Pcg64) -> Vec<Light> {
 }
 
 /// Per point: (count, Σ index, Σ index²) of the lights the GPU query reaches and the tight test keeps.
-fn gpu_query(ctx: &GpuContext, lights: &[Light], points: &[Vec3]) -> Vec<[u32; 4]> {
+fn gpu_query(ctx: &GpuContext, lights: &[Light], groups: &Groups, build: BvhBuild, time: f32, points: &[Vec3]) -> Vec<[u32; 4]> {
     let device = &ctx.device;
-    let bvh = LightBvhBuffers::build_static(ctx, lights).unwrap();
-    // Bindings cannot be empty; with no lights the query never reads the padding.
-    let mut gpu_lights: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
-    if gpu_lights.is_empty() {
-        gpu_lights.push(bytemuck::Zeroable::zeroed());
-    }
+    let mut structure = VolumeStructure::for_lights(ctx, lights, groups, build).unwrap();
     let gpu_points: Vec<[f32; 4]> = points.iter().map(|p| p.extend(1.0).to_array()).collect();
     let storage = |contents: &[u8], usage| device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents, usage });
-    let light_buffer = storage(bytemuck::cast_slice(&gpu_lights), wgpu::BufferUsages::STORAGE);
     let point_buffer = storage(bytemuck::cast_slice(&gpu_points), wgpu::BufferUsages::STORAGE);
+    let count_buffer = storage(bytemuck::bytes_of(&structure.instance_count()), wgpu::BufferUsages::STORAGE);
     let results_size = (points.len() * 16) as u64;
     let results = device.create_buffer(&wgpu::BufferDescriptor {
         label: None,
@@ -72,18 +68,18 @@ fn gpu_query(ctx: &GpuContext, lights: &[Light], points: &[Vec3]) -> Vec<[u32; 4
     };
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: None,
-        entries: &[entry(0, true), entry(1, true), entry(2, false)],
+        entries: &[entry(0, true), entry(1, false), entry(2, true)],
     });
-    let module = shaders::create_module(device, &ShaderDesc::new("accel/bvh_query_probe.wgsl")).unwrap();
+    let module = shaders::create_module(device, &ShaderDesc::new("accel/volume_query_probe.wgsl")).unwrap();
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("bvh_query_probe"),
+        label: Some("volume_query_probe"),
         layout: Some(&device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: None,
-            bind_group_layouts: &[Some(&layout), None, Some(&bvh.bind_group_layout)],
+            bind_group_layouts: &[None, Some(&layout), Some(&structure.bind_group_layout)],
             immediate_size: 0,
         })),
         module: &module,
-        entry_point: Some("bvh_query_probe"),
+        entry_point: Some("volume_query_probe"),
         compilation_options: Default::default(),
         cache: None,
     });
@@ -91,17 +87,18 @@ fn gpu_query(ctx: &GpuContext, lights: &[Light], points: &[Vec3]) -> Vec<[u32; 4
         label: None,
         layout: &layout,
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: light_buffer.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: point_buffer.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: results.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 0, resource: point_buffer.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: results.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: count_buffer.as_entire_binding() },
         ],
     });
     let mut encoder = device.create_command_encoder(&Default::default());
+    structure.record(ctx, &mut encoder, None, time).unwrap();
     {
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.set_bind_group(2, &bvh.bind_group, &[]);
+        pass.set_bind_group(1, &bind_group, &[]);
+        pass.set_bind_group(2, &structure.bind_group, &[]);
         pass.dispatch_workgroups((points.len() as u32).div_ceil(64), 1, 1);
     }
     encoder.copy_buffer_to_buffer(&results, 0, &readback_buffer, 0, results_size);
@@ -111,15 +108,48 @@ fn gpu_query(ctx: &GpuContext, lights: &[Light], points: &[Vec3]) -> Vec<[u32; 4
     out
 }
 
-fn cpu_oracle(lights: &[Light], p: Vec3) -> [u32; 4] {
+/// A light of a group placed by an instance transform (similarity), as `light_in_world` places it.
+fn placed(light: &Light, world_from_group: &Affine3A) -> Light {
+    let scale = world_from_group.matrix3.x_axis.length();
+    Light {
+        position: world_from_group.transform_point3(light.position),
+        direction: world_from_group.transform_vector3(light.direction) / scale,
+        range: light.range * scale,
+        ..*light
+    }
+}
+
+fn cpu_oracle(lights: &[Light], groups: &Groups, time: f32, p: Vec3) -> [u32; 4] {
+    let (ranges, instances) = groups.resolve(lights.len());
     let mut summary = [0u32; 4];
-    for (i, _) in lights.iter().enumerate().filter(|(_, l)| light_contains(l, p)) {
-        let i = i as u32;
-        summary[0] += 1;
-        summary[1] = summary[1].wrapping_add(i);
-        summary[2] = summary[2].wrapping_add(i.wrapping_mul(i));
+    for instance in &instances {
+        let transform = instance.world_from_group_at(time);
+        for i in ranges[instance.group].clone() {
+            if light_contains(&placed(&lights[i], &transform), p) {
+                let i = i as u32;
+                summary[0] += 1;
+                summary[1] = summary[1].wrapping_add(i);
+                summary[2] = summary[2].wrapping_add(i.wrapping_mul(i));
+            }
+        }
     }
     summary
+}
+
+fn check(ctx: &GpuContext, lights: &[Light], groups: &Groups, time: f32, rng: &mut rand_pcg::Pcg64) -> u32 {
+    let points: Vec<Vec3> =
+        (0..4096).map(|_| Vec3::new(rng.random_range(-12.0..12.0), rng.random_range(-12.0..12.0), rng.random_range(-12.0..12.0))).collect();
+    let mut reached = 0;
+    for build in [BvhBuild::CpuOnce, BvhBuild::GpuEveryFrame] {
+        let gpu = gpu_query(ctx, lights, groups, build, time, &points);
+        reached = 0;
+        for (p, got) in points.iter().zip(&gpu) {
+            let expected = cpu_oracle(lights, groups, time, *p);
+            assert_eq!(*got, expected, "{} lights, {build:?}, point {p}: GPU (count, Σi, Σi²) differs from the CPU oracle", lights.len());
+            reached += expected[0];
+        }
+    }
+    reached
 }
 
 #[test]
@@ -128,18 +158,35 @@ fn gpu_point_queries_equal_the_cpu_oracle() {
     let mut rng = rand_pcg::Pcg64::seed_from_u64(42);
     for count in [0, 1, 5, 3000] {
         let lights = random_lights(count, &mut rng);
-        let points: Vec<Vec3> = (0..4096)
-            .map(|_| Vec3::new(rng.random_range(-12.0..12.0), rng.random_range(-12.0..12.0), rng.random_range(-12.0..12.0)))
-            .collect();
-        let gpu = gpu_query(&ctx, &lights, &points);
-        let mut reached = 0;
-        for (p, got) in points.iter().zip(&gpu) {
-            let expected = cpu_oracle(&lights, *p);
-            assert_eq!(*got, expected, "{count} lights, point {p}: GPU (count, Σi, Σi²) differs from the CPU oracle");
-            reached += expected[0];
-        }
+        let reached = check(&ctx, &lights, &Groups::default(), 0.0, &mut rng);
         if count == 3000 {
             assert!(reached > 4096, "the test points reach too few lights ({reached}) to mean much");
         }
     }
+}
+
+/// Groups placed by instances: one group twice (rotated, scaled), an empty group, a spinning group
+/// seen at a later time, and one left where it is.
+#[test]
+fn instanced_and_moving_groups_are_queried_in_their_own_space() {
+    let ctx = GpuContext::new().expect("a GPU adapter");
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+    let lights = random_lights(3000, &mut rng);
+    let still = |world_from_group| GroupInstance { group: 0, world_from_group, spin: None };
+    let groups = Groups {
+        sizes: vec![1000, 0, 1500, 500],
+        instances: vec![
+            still(Affine3A::IDENTITY),
+            still(Affine3A::from_scale_rotation_translation(Vec3::splat(1.5), Quat::from_rotation_z(0.7), Vec3::new(3.0, -2.0, 1.0))),
+            GroupInstance { group: 1, ..still(Affine3A::IDENTITY) },
+            GroupInstance {
+                group: 2,
+                world_from_group: Affine3A::from_translation(Vec3::new(-1.0, 0.5, 2.0)),
+                spin: Some(Spin { pivot: Vec3::new(2.0, 0.0, -1.0), radians_per_second: 0.9 }),
+            },
+            GroupInstance { group: 3, ..still(Affine3A::IDENTITY) },
+        ],
+    };
+    let reached = check(&ctx, &lights, &groups, 0.7, &mut rng);
+    assert!(reached > 4096, "the test points reach too few lights ({reached}) to mean much");
 }

@@ -24,7 +24,7 @@ fn random_boxes(count: usize, rng: &mut rand_pcg::Pcg64) -> Vec<Aabb> {
 fn build(ctx: &GpuContext, lbvh: &mut GpuLbvh, boxes: &[Aabb]) -> manylights::accel::Bvh {
     lbvh.set_boxes(&ctx.queue, boxes).unwrap();
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    lbvh.record(&mut encoder, None).unwrap();
+    lbvh.record(&mut encoder, None, manylights::accel::lbvh::TimerSpan::whole("lbvh_build")).unwrap();
     ctx.queue.submit([encoder.finish()]);
     lbvh.read_back(ctx).unwrap()
 }

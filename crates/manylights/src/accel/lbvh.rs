@@ -1,9 +1,10 @@
 //! The LBVH builder on the GPU (`lbvh.wgsl`): rebuilds a BVH over up to `capacity` boxes in a handful
 //! of compute passes and lampshade's radix sort, writing the node layout the point query reads.
 //! Boxes are uploaded by the caller (a group's volumes in its local space; moving groups are placed by
-//! the top level, so their boxes change only when the group's contents change).
+//! the top level, so their boxes change only when the group's contents change). The nodes land in a
+//! region of a node array that may hold other BVHs too ([`LbvhTarget`]).
 
-use super::{Aabb, Bvh, BvhNode};
+use super::{Aabb, Bvh, BvhNode, LEAF};
 use crate::gpu::{bindings, readback, shaders::ShaderDesc, GpuContext, GpuTimer};
 use crate::{Error, Result};
 
@@ -13,6 +14,33 @@ use crate::{Error, Result};
 struct GpuBox {
     min: [f32; 4],
     max: [f32; 4],
+}
+
+/// Where a build writes: `2 × capacity − 1` nodes from `node_base` in `nodes`, and `capacity` primitive
+/// indices from `primitive_base` in `primitives`, each `item_base` + the box's index.
+#[derive(Clone, Debug)]
+pub struct LbvhTarget {
+    pub nodes: wgpu::Buffer,
+    pub primitives: wgpu::Buffer,
+    pub node_base: u32,
+    pub primitive_base: u32,
+    pub item_base: u32,
+}
+
+/// The timer scope a build is recorded in: `starts` opens it at the build's first pass, `ends` closes
+/// it at the last, so consecutive builds can share one scope.
+#[derive(Clone, Copy, Debug)]
+pub struct TimerSpan {
+    pub name: &'static str,
+    pub starts: bool,
+    pub ends: bool,
+}
+
+impl TimerSpan {
+    /// A scope of its own.
+    pub fn whole(name: &'static str) -> Self {
+        Self { name, starts: true, ends: true }
+    }
 }
 
 /// One entry point per pass, in dispatch order around the sort.
@@ -28,26 +56,43 @@ pub struct GpuLbvh {
     centre_bounds: wgpu::Buffer,
     keys: wgpu::Buffer,
     sorted_keys: wgpu::Buffer,
-    pub nodes: wgpu::Buffer,
-    pub primitives: wgpu::Buffer,
+    target: LbvhTarget,
     node_bounds: wgpu::Buffer,
     capacity: u32,
     count: u32,
 }
 
 impl GpuLbvh {
-    /// Allocates for up to `capacity` boxes; errors if the buffers would exceed the device's limits.
+    /// Allocates for up to `capacity` boxes, writing into buffers of its own; errors if the buffers
+    /// would exceed the device's limits.
     pub fn new(ctx: &GpuContext, capacity: u32) -> Result<Self> {
+        let capacity = capacity.max(1);
+        let node_bytes = u64::from(2 * capacity - 1) * std::mem::size_of::<BvhNode>() as u64;
+        check_binding_size(ctx, capacity, node_bytes)?;
+        let buffer = |label, size: u64| {
+            let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+            ctx.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+        };
+        let target = LbvhTarget {
+            nodes: buffer("lbvh nodes", node_bytes),
+            primitives: buffer("lbvh primitives", u64::from(capacity) * 4),
+            node_base: 0,
+            primitive_base: 0,
+            item_base: 0,
+        };
+        Self::with_target(ctx, capacity, target)
+    }
+
+    /// Allocates for up to `capacity` boxes, writing into `target`'s regions.
+    pub fn with_target(ctx: &GpuContext, capacity: u32, target: LbvhTarget) -> Result<Self> {
         let device = &ctx.device;
         let capacity = capacity.max(1);
         let node_capacity = u64::from(2 * capacity - 1);
-        let largest = node_capacity * std::mem::size_of::<BvhNode>() as u64;
-        if largest > ctx.limits.max_storage_buffer_binding_size {
-            return Err(Error::InvalidConfig(format!(
-                "a BVH over {capacity} volumes needs {} MiB buffers, over this GPU's storage binding limit of {} MiB",
-                largest >> 20,
-                ctx.limits.max_storage_buffer_binding_size >> 20
-            )));
+        check_binding_size(ctx, capacity, node_capacity * std::mem::size_of::<BvhNode>() as u64)?;
+        let node_end = (u64::from(target.node_base) + node_capacity) * std::mem::size_of::<BvhNode>() as u64;
+        let primitive_end = (u64::from(target.primitive_base) + u64::from(capacity)) * 4;
+        if node_end > target.nodes.size() || primitive_end > target.primitives.size() {
+            return Err(Error::Gpu(format!("an LBVH over {capacity} boxes does not fit its target's regions")));
         }
         use wgpu::BufferUsages as U;
         let buffer = |label, size: u64, usage| {
@@ -58,8 +103,6 @@ impl GpuLbvh {
         let centre_bounds = buffer("lbvh centre bounds", 24, U::STORAGE | U::COPY_DST);
         let keys = buffer("lbvh keys", u64::from(capacity) * 8, U::STORAGE);
         let sorted_keys = buffer("lbvh sorted keys", u64::from(capacity) * 8, U::STORAGE);
-        let nodes = buffer("lbvh nodes", node_capacity * 32, U::STORAGE | U::COPY_SRC);
-        let primitives = buffer("lbvh primitives", u64::from(capacity) * 4, U::STORAGE | U::COPY_SRC);
         let parents = buffer("lbvh parents", node_capacity * 4, U::STORAGE);
         let node_bounds = buffer("lbvh node bounds", node_capacity * 24, U::STORAGE | U::COPY_DST);
 
@@ -94,7 +137,7 @@ impl GpuLbvh {
             device,
             "lbvh",
             &layout,
-            [&params, &boxes, &centre_bounds, &keys, &sorted_keys, &nodes, &primitives, &parents, &node_bounds]
+            [&params, &boxes, &centre_bounds, &keys, &sorted_keys, &target.nodes, &target.primitives, &parents, &node_bounds]
                 .iter()
                 .map(|b| b.as_entire_binding())
                 .collect(),
@@ -110,8 +153,7 @@ impl GpuLbvh {
             centre_bounds,
             keys,
             sorted_keys,
-            nodes,
-            primitives,
+            target,
             node_bounds,
             capacity,
             count: 0,
@@ -132,7 +174,8 @@ impl GpuLbvh {
             queue.write_buffer(&self.boxes, 0, bytemuck::cast_slice(&gpu));
         }
         self.count = boxes.len() as u32;
-        queue.write_buffer(&self.params, 0, bytemuck::cast_slice(&[self.count, 0, 0, 0]));
+        let t = &self.target;
+        queue.write_buffer(&self.params, 0, bytemuck::cast_slice(&[self.count, t.node_base, t.primitive_base, t.item_base]));
         Ok(())
     }
 
@@ -141,8 +184,9 @@ impl GpuLbvh {
         (2 * self.count).saturating_sub(1)
     }
 
-    /// Records a full rebuild, timed as one scope `lbvh_build`.
-    pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>) -> Result<()> {
+    /// Records a full rebuild. `span` says which scope it is timed in: builds of several BVHs in a
+    /// row may share one.
+    pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, span: TimerSpan) -> Result<()> {
         if self.count == 0 {
             return Ok(());
         }
@@ -158,8 +202,8 @@ impl GpuLbvh {
                     .map_err(|e| Error::Gpu(format!("radix sort: {e}")))?;
             }
             let timestamp_writes = timer.as_deref_mut().and_then(|t| match index {
-                0 => Some(t.span_start("lbvh_build")),
-                i if i == last => Some(t.span_end("lbvh_build")),
+                0 if span.starts => Some(t.span_start(span.name)),
+                i if i == last && span.ends => Some(t.span_end(span.name)),
                 _ => None,
             });
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(entry), timestamp_writes });
@@ -170,9 +214,10 @@ impl GpuLbvh {
         Ok(())
     }
 
-    /// Reads the last build back: for tests and validation.
+    /// Reads the last build back, with indices local to it (as if `node_base`, `primitive_base` and
+    /// `item_base` were 0): for tests and validation.
     pub fn read_back(&self, ctx: &GpuContext) -> Result<Bvh> {
-        let copy = |source: &wgpu::Buffer, size: u64| -> Result<Vec<u8>> {
+        let copy = |source: &wgpu::Buffer, offset: u64, size: u64| -> Result<Vec<u8>> {
             let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("lbvh readback"),
                 size: size.max(4),
@@ -181,16 +226,41 @@ impl GpuLbvh {
             });
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             if size > 0 {
-                encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
+                encoder.copy_buffer_to_buffer(source, offset, &staging, 0, size);
             }
             ctx.queue.submit([encoder.finish()]);
             let mut bytes: Vec<u8> = readback::map_buffer(ctx, &staging, 0, size.max(4))?;
             bytes.truncate(size as usize);
             Ok(bytes)
         };
-        let nodes = copy(&self.nodes, u64::from(self.node_count()) * 32)?;
-        let primitives = copy(&self.primitives, u64::from(self.count) * 4)?;
+        let t = &self.target;
+        let nodes = copy(&t.nodes, u64::from(t.node_base) * 32, u64::from(self.node_count()) * 32)?;
+        let primitives = copy(&t.primitives, u64::from(t.primitive_base) * 4, u64::from(self.count) * 4)?;
         ctx.check_errors()?;
-        Ok(Bvh { nodes: bytemuck::pod_collect_to_vec(&nodes), primitive_indices: bytemuck::pod_collect_to_vec(&primitives) })
+        let mut bvh = Bvh { nodes: bytemuck::pod_collect_to_vec(&nodes), primitive_indices: bytemuck::pod_collect_to_vec(&primitives) };
+        for node in &mut bvh.nodes {
+            if node.is_leaf() {
+                node.a = LEAF | (node.a & !LEAF).wrapping_sub(t.primitive_base);
+            } else {
+                node.a = node.a.wrapping_sub(t.node_base);
+                node.b = node.b.wrapping_sub(t.node_base);
+            }
+        }
+        for primitive in &mut bvh.primitive_indices {
+            *primitive = primitive.wrapping_sub(t.item_base);
+        }
+        Ok(bvh)
     }
+}
+
+fn check_binding_size(ctx: &GpuContext, capacity: u32, node_bytes: u64) -> Result<()> {
+    let limit = ctx.limits.max_storage_buffer_binding_size;
+    if node_bytes > limit {
+        return Err(Error::InvalidConfig(format!(
+            "a BVH over {capacity} volumes needs {} MiB of nodes, over this GPU's storage binding limit of {} MiB",
+            node_bytes >> 20,
+            limit >> 20
+        )));
+    }
+    Ok(())
 }

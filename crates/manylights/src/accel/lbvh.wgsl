@@ -1,14 +1,17 @@
 // LBVH build on the GPU (Karras 2012), over `params.count` boxes, into the node layout of
 // `accel/bvh.wgsl`: scene bounds of the box centres → 30-bit Morton codes → (radix sort, lampshade)
 // → one thread per internal node finds its range and split → bounds propagated from the leaves up.
-// Node indices: internal nodes 0 .. count - 2 (root 0), leaf k at count - 1 + k.
+// Node indices: internal nodes 0 .. count - 2 (root 0), leaf k at count - 1 + k, all offset by
+// `node_base` in `nodes`: several BVHs (a top level and the groups' BVHs) share one node array, so the
+// query needs no binding per BVH. Leaves name `primitives[primitive_base + k]`, which holds
+// `item_base` + the index of the box among this build's boxes.
 #include "accel/bvh_types.wgsl"
 
 struct LbvhParams {
     count: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    node_base: u32,
+    primitive_base: u32,
+    item_base: u32,
 }
 
 struct Box {
@@ -104,6 +107,7 @@ fn common_prefix(i: i32, j: i32) -> i32 {
     return i32(countLeadingZeros(a ^ b));
 }
 
+// Local node index (within this build) of a child.
 fn child_node(index: i32, is_leaf: bool) -> u32 {
     return select(u32(index), params.count - 1u + u32(index), is_leaf);
 }
@@ -115,10 +119,10 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     // Every thread writes its leaf; threads below n - 1 also build internal node id.x.
-    let leaf = n - 1u + id.x;
-    nodes[leaf].a = BVH_LEAF | id.x;
+    let leaf = params.node_base + n - 1u + id.x;
+    nodes[leaf].a = BVH_LEAF | (params.primitive_base + id.x);
     nodes[leaf].b = 1u;
-    primitives[id.x] = sorted_keys[id.x].y;
+    primitives[params.primitive_base + id.x] = params.item_base + sorted_keys[id.x].y;
     if id.x == 0u {
         parents[0] = NO_PARENT;
     }
@@ -158,8 +162,8 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
     let gamma = i + split * d + min(d, 0);
     let left = child_node(gamma, min(i, j) == gamma);
     let right = child_node(gamma + 1, max(i, j) == gamma + 1);
-    nodes[id.x].a = left;
-    nodes[id.x].b = right;
+    nodes[params.node_base + id.x].a = params.node_base + left;
+    nodes[params.node_base + id.x].b = params.node_base + right;
     parents[left] = id.x;
     parents[right] = id.x;
 }
@@ -174,7 +178,7 @@ fn lbvh_bounds(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= params.count {
         return;
     }
-    let b = boxes[primitives[id.x]];
+    let b = boxes[sorted_keys[id.x].y];
     var values: array<u32, 6>;
     for (var axis = 0u; axis < 3u; axis += 1u) {
         values[axis] = ~ordered(b.min[axis]);
@@ -201,8 +205,9 @@ fn lbvh_write_nodes(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let base = id.x * 6u;
+    let node = params.node_base + id.x;
     for (var axis = 0u; axis < 3u; axis += 1u) {
-        nodes[id.x].min[axis] = unordered(~atomicLoad(&node_bounds[base + axis]));
-        nodes[id.x].max[axis] = unordered(atomicLoad(&node_bounds[base + 3u + axis]));
+        nodes[node].min[axis] = unordered(~atomicLoad(&node_bounds[base + axis]));
+        nodes[node].max[axis] = unordered(atomicLoad(&node_bounds[base + 3u + axis]));
     }
 }

@@ -1,4 +1,4 @@
-//! The volumes of influence of lights and their boxes.
+//! The volumes of influence of lights and decals and their boxes.
 //!
 //! A light's volume is the set of points it can light: the sphere of its `range` (the shader gives no
 //! light at or beyond it) and, for a spot, the part of it inside the outer cone. [`light_aabb`] bounds
@@ -8,7 +8,7 @@
 use glam::{Vec3, Vec3Swizzles};
 
 pub use crate::scene::Aabb;
-use crate::scene::{Light, LightKind};
+use crate::scene::{Decal, Light, LightKind};
 
 /// The unit axis a spot points along, as the GPU uploads it (`GpuLight` normalises it too).
 fn spot_axis(light: &Light) -> Vec3 {
@@ -64,6 +64,19 @@ pub fn light_contains(light: &Light, p: Vec3) -> bool {
     }
 }
 
+/// The box around a decal's oriented box, widened by a few ulps like [`light_aabb`] so that every
+/// point [`decal_contains`] accepts is inside.
+pub fn decal_aabb(decal: &Decal) -> Aabb {
+    Aabb::new(Vec3::splat(-0.5), Vec3::splat(0.5)).transformed(&decal.world_from_decal)
+}
+
+/// The exact test behind [`decal_aabb`]: whether `p` lies in the decal's box (faces included).
+/// The shader runs the same test in decal space (`shading/decals.wgsl`).
+pub fn decal_contains(decal: &Decal, p: Vec3) -> bool {
+    let local = decal.world_from_decal.inverse().transform_point3(p);
+    local.abs().cmple(Vec3::splat(0.5)).all()
+}
+
 #[cfg(test)]
 mod tests {
     use std::f32::consts::{FRAC_PI_2, PI};
@@ -72,6 +85,42 @@ mod tests {
     use rand_pcg::Pcg64;
 
     use super::*;
+
+    #[test]
+    fn decal_boxes_hold_their_oriented_boxes() {
+        let mut rng = Pcg64::seed_from_u64(11);
+        for _ in 0..200 {
+            let rotation = glam::Quat::from_euler(
+                glam::EulerRot::XYZ,
+                rng.random::<f32>() * 6.3,
+                rng.random::<f32>() * 6.3,
+                rng.random::<f32>() * 6.3,
+            );
+            let scale = Vec3::new(rng.random_range(0.01..3.0), rng.random_range(0.01..3.0), rng.random_range(0.001..1.0));
+            let centre = Vec3::new(rng.random_range(-1e3..1e3), rng.random_range(-1e3..1e3), rng.random_range(-1e3..1e3));
+            let decal = Decal {
+                world_from_decal: glam::Affine3A::from_scale_rotation_translation(scale, rotation, centre),
+                material: 0,
+                layer: 0,
+                weight: 1.0,
+            };
+            let aabb = decal_aabb(&decal);
+            for _ in 0..50 {
+                // Points inside the box, including its faces and corners.
+                let local = Vec3::new(rng.random_range(-0.5..=0.5), rng.random_range(-0.5..=0.5), rng.random_range(-0.5..=0.5));
+                let snapped = local.map(|c| if c.abs() > 0.45 { 0.5f32.copysign(c) } else { c });
+                for point in [local, snapped] {
+                    let p = decal.world_from_decal.transform_point3(point);
+                    if decal_contains(&decal, p) {
+                        assert!(aabb.contains(p), "{p} passes the decal test but is outside {aabb:?}");
+                    }
+                }
+            }
+            assert!(decal_contains(&decal, centre));
+            let outside = decal.world_from_decal.transform_point3(Vec3::new(0.0, 0.0, 0.6));
+            assert!(!decal_contains(&decal, outside));
+        }
+    }
 
     fn spot(position: Vec3, direction: Vec3, outer: f32, range: f32) -> Light {
         Light {

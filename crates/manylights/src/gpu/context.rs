@@ -11,6 +11,9 @@ use crate::{Error, Result};
 
 /// Features the renderer uses when the adapter has them; none is required. Subgroups let the GPU BVH
 /// builder's radix sort (lampshade) use its fast kernels.
+/// Storage buffers the shading passes bind at once: the scene's four, the lights' and the decals'
+/// four each (`shading/*_bindings.wgsl`).
+const REQUIRED_STORAGE_BUFFERS: u32 = 12;
 const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::SUBGROUP);
 
 pub struct GpuContext {
@@ -98,6 +101,15 @@ impl GpuContext {
 
     fn open(adapter: wgpu::Adapter) -> Result<Self> {
         let info = adapter.get_info();
+        if adapter.limits().max_storage_buffers_per_shader_stage < REQUIRED_STORAGE_BUFFERS {
+            return Err(Error::NoAdapter {
+                detail: format!(
+                    ": {} offers {} storage buffers per shader stage and manylights needs {REQUIRED_STORAGE_BUFFERS}",
+                    info.name,
+                    adapter.limits().max_storage_buffers_per_shader_stage
+                ),
+            });
+        }
         let features = adapter.features() & OPTIONAL_FEATURES;
         let available = adapter.limits();
         // Large scenes need large buffers and texture arrays: take what the adapter offers for the
@@ -109,6 +121,8 @@ impl GpuContext {
             max_texture_array_layers: available.max_texture_array_layers,
             // lampshade's fastest sort kernel needs a little over WebGPU's default 16 KiB.
             max_compute_workgroup_storage_size: available.max_compute_workgroup_storage_size,
+            // Shading binds the scene's, the lights' and the decals' buffers at once.
+            max_storage_buffers_per_shader_stage: available.max_storage_buffers_per_shader_stage,
             ..wgpu::Limits::default().using_resolution(available.clone())
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

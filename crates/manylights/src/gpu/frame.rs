@@ -13,10 +13,11 @@ pub struct FrameUniforms {
     pub sun_direction: [f32; 4],
     pub sun_radiance: [f32; 4],
     pub ambient: [f32; 4],
-    pub light_count: u32,
+    /// Instances of light and decal groups (`accel::structure`), set by the renderer.
+    pub light_instance_count: u32,
     pub exposure: f32,
     pub tonemapper: u32,
-    pub _pad0: u32,
+    pub decal_instance_count: u32,
 }
 
 /// The scene-wide lighting a frame needs, kept by `GpuScene` from the CPU scene.
@@ -25,7 +26,6 @@ pub struct SceneLighting {
     pub sun: Option<crate::scene::Sun>,
     pub ambient: glam::Vec3,
     pub exposure: f32,
-    pub light_count: u32,
 }
 
 impl FrameUniforms {
@@ -46,10 +46,10 @@ impl FrameUniforms {
             sun_direction: sun_direction.to_array(),
             sun_radiance: sun_radiance.to_array(),
             ambient: lighting.ambient.extend(0.0).to_array(),
-            light_count: lighting.light_count,
+            light_instance_count: 0,
             exposure: lighting.exposure,
             tonemapper: tonemapper as u32,
-            _pad0: 0,
+            decal_instance_count: 0,
         }
     }
 }

@@ -13,7 +13,7 @@ use super::{
     FrameUniforms, GpuContext,
 };
 use crate::{
-    scene::{AlphaMode, Light, LightKind, Material, Scene, TextureRef, Wrap},
+    scene::{AlphaMode, Decal, Light, LightKind, Material, Scene, TextureRef, Wrap},
     Error, Result,
 };
 
@@ -81,6 +81,31 @@ impl From<&Light> for GpuLight {
             spot_scale,
             spot_offset,
             _pad: [0; 3],
+        }
+    }
+}
+
+/// Keep in sync with `Decal` in `shading/types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuDecal {
+    /// Rows of the affine map from group space into decal space.
+    pub decal_from_group: [[f32; 4]; 3],
+    pub material: u32,
+    pub layer: u32,
+    pub weight: f32,
+    pub _pad: u32,
+}
+
+impl From<&Decal> for GpuDecal {
+    fn from(d: &Decal) -> Self {
+        let m = glam::Mat4::from(d.world_from_decal.inverse());
+        Self {
+            decal_from_group: [m.row(0).to_array(), m.row(1).to_array(), m.row(2).to_array()],
+            material: d.material as u32,
+            layer: d.layer,
+            weight: d.weight,
+            _pad: 0,
         }
     }
 }
@@ -189,13 +214,11 @@ impl GpuScene {
             )));
         }
 
-        let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::from).collect();
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let vertex_buffer = storage_buffer(device, "vertices", &vertices, limit)?;
         let index_buffer = storage_buffer(device, "indices", &indices, limit)?;
         let draw_buffer = storage_buffer(device, "draws", &draws, limit)?;
         let material_buffer = storage_buffer(device, "materials", &materials, limit)?;
-        let light_buffer = storage_buffer(device, "lights", &lights, limit)?;
         let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
             size: std::mem::size_of::<FrameUniforms>() as u64,
@@ -230,7 +253,6 @@ impl GpuScene {
                 index_buffer.as_entire_binding(),
                 draw_buffer.as_entire_binding(),
                 material_buffer.as_entire_binding(),
-                light_buffer.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&color_textures.view),
                 wgpu::BindingResource::TextureView(&data_textures.view),
             ]
@@ -245,7 +267,7 @@ impl GpuScene {
             bind_group,
             frame_uniforms,
             draw_commands,
-            lighting: SceneLighting { sun: scene.sun, ambient: scene.ambient, exposure: scene.exposure, light_count: lights.len() as u32 },
+            lighting: SceneLighting { sun: scene.sun, ambient: scene.ambient, exposure: scene.exposure },
             triangle_count: scene.drawn_triangle_count() as u64,
         })
     }
@@ -260,12 +282,11 @@ impl GpuScene {
             bindings::storage_read(2, all),                                              // indices
             bindings::storage_read(3, all),                                              // draws
             bindings::storage_read(4, all),                                              // materials
-            bindings::storage_read(5, all),                                              // lights
-            bindings::texture(6, all, float_array, wgpu::TextureViewDimension::D2Array), // colour textures (sRGB)
-            bindings::texture(7, all, float_array, wgpu::TextureViewDimension::D2Array), // data textures (linear)
+            bindings::texture(5, all, float_array, wgpu::TextureViewDimension::D2Array), // colour textures (sRGB)
+            bindings::texture(6, all, float_array, wgpu::TextureViewDimension::D2Array), // data textures (linear)
         ];
-        // 8..=16: one material sampler per pair of wrap modes
-        entries.extend((0..WRAP_SAMPLERS).map(|i| bindings::sampler(8 + i, all)));
+        // 7..=15: one material sampler per pair of wrap modes
+        entries.extend((0..WRAP_SAMPLERS).map(|i| bindings::sampler(7 + i, all)));
         bindings::layout(device, "scene", &entries)
     }
 
@@ -396,6 +417,7 @@ mod tests {
             ]
         );
         check!("Light", GpuLight, [position, range, radiant, kind, direction, spot_scale, spot_offset]);
+        check!("Decal", GpuDecal, [decal_from_group, material, layer, weight]);
         check!(
             "FrameUniforms",
             FrameUniforms,
@@ -407,9 +429,10 @@ mod tests {
                 sun_direction,
                 sun_radiance,
                 ambient,
-                light_count,
+                light_instance_count,
                 exposure,
-                tonemapper
+                tonemapper,
+                decal_instance_count
             ]
         );
     }

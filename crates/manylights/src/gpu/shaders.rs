@@ -2,6 +2,9 @@
 //! resolved here against the sources embedded in the binary, each file once, dependencies first.
 //! `#include "$NAME"` takes the path from a substitution: that is how a pass picks an enumeration
 //! method (`shading/enumerate/*.wgsl`) without copies of the shading core.
+//! `#include "path" with KEY=value` includes a template: every name starting `KEY_` in it becomes
+//! `value_` (once per distinct value), which is how lights and decals each get a point query over their
+//! own bindings without binding-array support.
 
 use std::collections::HashSet;
 
@@ -15,13 +18,17 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/light_volume.wgsl", include_str!("../shading/light_volume.wgsl")),
     ("shading/material.wgsl", include_str!("../shading/material.wgsl")),
     ("shading/shade.wgsl", include_str!("../shading/shade.wgsl")),
-    ("shading/enumerate/brute.wgsl", include_str!("../shading/enumerate/brute.wgsl")),
-    ("shading/enumerate/bvh.wgsl", include_str!("../shading/enumerate/bvh.wgsl")),
-    ("accel/bvh.wgsl", include_str!("../accel/bvh.wgsl")),
+    ("shading/light_bindings.wgsl", include_str!("../shading/light_bindings.wgsl")),
+    ("shading/decal_bindings.wgsl", include_str!("../shading/decal_bindings.wgsl")),
+    ("shading/decals.wgsl", include_str!("../shading/decals.wgsl")),
+    ("shading/enumerate/lights_brute.wgsl", include_str!("../shading/enumerate/lights_brute.wgsl")),
+    ("shading/enumerate/lights_bvh.wgsl", include_str!("../shading/enumerate/lights_bvh.wgsl")),
+    ("shading/enumerate/decals_brute.wgsl", include_str!("../shading/enumerate/decals_brute.wgsl")),
+    ("shading/enumerate/decals_bvh.wgsl", include_str!("../shading/enumerate/decals_bvh.wgsl")),
+    ("accel/volume_query.wgsl", include_str!("../accel/volume_query.wgsl")),
     ("accel/bvh_types.wgsl", include_str!("../accel/bvh_types.wgsl")),
     ("accel/lbvh.wgsl", include_str!("../accel/lbvh.wgsl")),
-    ("accel/bvh_bindings.wgsl", include_str!("../accel/bvh_bindings.wgsl")),
-    ("accel/bvh_query_probe.wgsl", include_str!("../accel/bvh_query_probe.wgsl")),
+    ("accel/volume_query_probe.wgsl", include_str!("../accel/volume_query_probe.wgsl")),
     ("passes/visbuffer_raster.wgsl", include_str!("../passes/visbuffer_raster.wgsl")),
     ("passes/visbuffer_shade.wgsl", include_str!("../passes/visbuffer_shade.wgsl")),
     ("passes/tonemap.wgsl", include_str!("../passes/tonemap.wgsl")),
@@ -48,28 +55,44 @@ impl ShaderDesc {
     pub fn compose(&self) -> Result<String, String> {
         let mut out = String::new();
         let mut seen = HashSet::new();
-        self.append(self.entry, &mut out, &mut seen, &mut Vec::new())?;
+        self.append(self.entry, None, &mut out, &mut seen, &mut Vec::new())?;
         Ok(out)
     }
 
+    /// Appends `path` (with its template argument, if any) and its includes, unless already there.
     fn append(
         &self,
         path: &'static str,
+        template: Option<(&str, &str)>,
         out: &mut String,
-        seen: &mut HashSet<&'static str>,
+        seen: &mut HashSet<String>,
         stack: &mut Vec<&'static str>,
     ) -> Result<(), String> {
         if stack.contains(&path) {
             return Err(format!("include cycle: {} -> {path}", stack.join(" -> ")));
         }
-        if !seen.insert(path) {
+        let key = match template {
+            Some((name, value)) => format!("{path} with {name}={value}"),
+            None => path.to_string(),
+        };
+        if !seen.insert(key) {
             return Ok(());
         }
         let (_, source) = embedded(path).ok_or_else(|| format!("unknown shader file `{path}` (included from {:?})", stack.last()))?;
         stack.push(path);
         for line in source.lines() {
             match include_target(line) {
-                Some(target) => {
+                Some((target, arguments)) => {
+                    let template = match arguments {
+                        Some(arguments) => Some(
+                            arguments
+                                .split_once('=')
+                                .map(|(n, v)| (n.trim(), v.trim()))
+                                .filter(|(n, v)| !n.is_empty() && !v.is_empty())
+                                .ok_or_else(|| format!("{path}: expected `with NAME=value`, got `with {arguments}`"))?,
+                        ),
+                        None => None,
+                    };
                     let resolved = match target.strip_prefix('$') {
                         Some(name) => self
                             .substitutions
@@ -79,10 +102,13 @@ impl ShaderDesc {
                             .ok_or_else(|| format!("{path}: no value given for `${name}`"))?,
                         None => embedded(target).map(|(p, _)| p).ok_or_else(|| format!("{path}: unknown include `{target}`"))?,
                     };
-                    self.append(resolved, out, seen, stack)?;
+                    self.append(resolved, template, out, seen, stack)?;
                 }
                 None => {
-                    out.push_str(line);
+                    match template {
+                        Some((name, value)) => out.push_str(&line.replace(&format!("{name}_"), &format!("{value}_"))),
+                        None => out.push_str(line),
+                    }
                     out.push('\n');
                 }
             }
@@ -97,8 +123,16 @@ fn embedded(path: &str) -> Option<(&'static str, &'static str)> {
     SOURCES.iter().find(|(p, _)| *p == path).copied()
 }
 
-fn include_target(line: &str) -> Option<&str> {
-    line.trim().strip_prefix("#include")?.trim().strip_prefix('"')?.strip_suffix('"')
+/// The path of an `#include "path"` line, and the text after `with` if it has one.
+fn include_target(line: &str) -> Option<(&str, Option<&str>)> {
+    let rest = line.trim().strip_prefix("#include")?.trim().strip_prefix('"')?;
+    let (path, after) = rest.split_once('"')?;
+    let after = after.trim();
+    match after.strip_prefix("with ") {
+        Some(arguments) => Some((path, Some(arguments.trim()))),
+        None if after.is_empty() => Some((path, None)),
+        None => None,
+    }
 }
 
 /// Compiles a composed shader into a module. Composition errors are programming errors caught by the
@@ -114,11 +148,13 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
     let mut shaders = vec![
         ShaderDesc::new("passes/visbuffer_raster.wgsl"),
         ShaderDesc::new("passes/tonemap.wgsl"),
-        ShaderDesc::new("accel/bvh_query_probe.wgsl"),
+        ShaderDesc::new("accel/volume_query_probe.wgsl"),
         ShaderDesc::new("accel/lbvh.wgsl"),
     ];
-    for method in crate::pipelines::LightMethod::ALL {
-        shaders.push(ShaderDesc::new("passes/visbuffer_shade.wgsl").with("LIGHT_ENUMERATION", method.enumeration_module()));
+    for lights in crate::pipelines::LightMethod::ALL {
+        for decals in crate::pipelines::DecalMethod::ALL {
+            shaders.push(crate::passes::visbuffer_shade::shader(lights, decals));
+        }
     }
     shaders
 }
@@ -147,11 +183,11 @@ mod tests {
         let mut used = HashSet::new();
         for desc in all_shaders() {
             let mut seen = HashSet::new();
-            desc.append(desc.entry, &mut String::new(), &mut seen, &mut Vec::new()).unwrap();
-            used.extend(seen);
+            desc.append(desc.entry, None, &mut String::new(), &mut seen, &mut Vec::new()).unwrap();
+            used.extend(seen.into_iter().map(|key| key.split(" with ").next().unwrap().to_string()));
         }
         for (path, _) in SOURCES {
-            assert!(used.contains(path), "{path} is embedded but no shader includes it");
+            assert!(used.contains(*path), "{path} is embedded but no shader includes it");
         }
     }
 
@@ -162,5 +198,17 @@ mod tests {
         assert!(!source.contains("#include"));
         let err = ShaderDesc::new("passes/visbuffer_shade.wgsl").compose().unwrap_err();
         assert!(err.contains("$LIGHT_ENUMERATION"), "{err}");
+    }
+
+    #[test]
+    fn templates_are_instantiated_once_per_value() {
+        let source = crate::passes::visbuffer_shade::shader(crate::pipelines::LightMethod::Bvh, crate::pipelines::DecalMethod::Bvh)
+            .compose()
+            .unwrap();
+        assert_eq!(source.matches("fn light_query_next_leaf(").count(), 1);
+        assert_eq!(source.matches("fn decal_query_next_leaf(").count(), 1);
+        assert!(!source.contains("VOLUMES_"));
+        assert_eq!(include_target(r#"#include "a.wgsl" with X=y"#), Some(("a.wgsl", Some("X=y"))));
+        assert_eq!(include_target(r#"#include "a.wgsl""#), Some(("a.wgsl", None)));
     }
 }

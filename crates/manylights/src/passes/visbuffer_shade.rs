@@ -1,26 +1,34 @@
 //! Visibility-buffer resolve and shading in compute. See `visbuffer_shade.wgsl`.
 
-use crate::accel::gpu::LightBvhBuffers;
+use crate::accel::VolumeStructure;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
-use crate::pipelines::LightMethod;
+use crate::pipelines::{DecalMethod, LightMethod};
 use crate::Result;
 
 /// f32 rather than f16: methods are compared in linear HDR to 1e-3, finer than f16 steps above 1.
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
+/// The shader for a pair of enumeration methods.
+pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
+    ShaderDesc::new("passes/visbuffer_shade.wgsl")
+        .with("LIGHT_ENUMERATION", lights.enumeration_module())
+        .with("DECAL_ENUMERATION", decals.enumeration_module())
+}
+
 pub struct VisbufferShade {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
-    light_bvh: Option<wgpu::BindGroup>,
+    lights: wgpu::BindGroup,
+    decals: wgpu::BindGroup,
 }
 
 impl VisbufferShade {
-    /// `light_bvh` is bound as group 2 when the method needs it.
+    /// The light and decal structures are bound as groups 2 and 3, whichever the methods.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
-        method: LightMethod,
-        light_bvh: Option<&LightBvhBuffers>,
+        methods: (LightMethod, DecalMethod),
+        (lights, decals): (&VolumeStructure, &VolumeStructure),
         visibility: &wgpu::TextureView,
         hdr: &wgpu::TextureView,
     ) -> Result<Self> {
@@ -35,17 +43,15 @@ impl VisbufferShade {
                 bindings::storage_texture_write(1, compute, HDR_FORMAT),                                      // HDR output
             ],
         );
-        let shader = ShaderDesc::new("passes/visbuffer_shade.wgsl").with("LIGHT_ENUMERATION", method.enumeration_module());
-        let mut layouts = vec![&scene.bind_group_layout, &layout];
-        layouts.extend(light_bvh.map(|b| &b.bind_group_layout));
-        let pipeline = bindings::compute_pipeline(device, "visbuffer_shade", &shader, &layouts)?;
+        let layouts = [&scene.bind_group_layout, &layout, &lights.bind_group_layout, &decals.bind_group_layout];
+        let pipeline = bindings::compute_pipeline(device, "visbuffer_shade", &shader(methods.0, methods.1), &layouts)?;
         let bind_group = bindings::bind_group(
             device,
             "visbuffer_shade",
             &layout,
             vec![wgpu::BindingResource::TextureView(visibility), wgpu::BindingResource::TextureView(hdr)],
         );
-        Ok(Self { pipeline, bind_group, light_bvh: light_bvh.map(|b| b.bind_group.clone()) })
+        Ok(Self { pipeline, bind_group, lights: lights.bind_group.clone(), decals: decals.bind_group.clone() })
     }
 
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, width: u32, height: u32) {
@@ -56,9 +62,8 @@ impl VisbufferShade {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &scene.bind_group, &[]);
         pass.set_bind_group(1, &self.bind_group, &[]);
-        if let Some(light_bvh) = &self.light_bvh {
-            pass.set_bind_group(2, light_bvh, &[]);
-        }
+        pass.set_bind_group(2, &self.lights, &[]);
+        pass.set_bind_group(3, &self.decals, &[]);
         let (x, y) = super::dispatch_size(width, height);
         pass.dispatch_workgroups(x, y, 1);
     }

@@ -3,7 +3,8 @@
 //
 // Barycentrics come from intersecting the pixel's camera ray with the triangle's plane; the rays
 // through the neighbouring pixels give their screen-space derivatives analytically, which select
-// texture mips (no helper lanes or quad derivatives exist in compute).
+// texture mips (no helper lanes or quad derivatives exist in compute); decals get the same from the
+// position's derivatives.
 #include "shading/shade.wgsl"
 #include "shading/material.wgsl"
 
@@ -107,7 +108,9 @@ fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     let uv = interpolate2(b, uv0, uv1, uv2);
     let g = UvGradients(uv, interpolate2(b_dx, uv0, uv1, uv2) - uv, interpolate2(b_dy, uv0, uv1, uv2) - uv);
 
-    let position = interpolate3(b, p0, p1, p2) + eye;
+    let relative_position = interpolate3(b, p0, p1, p2);
+    let position = relative_position + eye;
+    let dp = PositionGradients(interpolate3(b_dx, p0, p1, p2) - relative_position, interpolate3(b_dy, p0, p1, p2) - relative_position);
     let view_dir = -ray.dir;
     var surface: SurfaceFrame;
     surface.normal = normalize(world_normal(draw, interpolate3(b, v0.normal, v1.normal, v2.normal)));
@@ -124,6 +127,6 @@ fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 
     let material = materials[draw.material];
-    let s = evaluate_material(material, surface, g, position, view_dir);
+    let s = apply_decals(evaluate_material(material, surface, g, position, view_dir), dp);
     textureStore(hdr_output, id.xy, vec4<f32>(shade(s), 1.0));
 }

@@ -3,23 +3,27 @@
 //! same shading loop ran 35× slower as a fragment shader.
 //!
 //! ```text
+//! light / decal structures ─▶ (tlas/blas builds, when groups move or change)
 //! GpuScene ─▶ visbuffer_raster ─▶ visibility (R32Uint) + depth
 //!                                   │
 //!                                   ▼
-//!             visbuffer_shade (material + shading core) ─▶ hdr (Rgba32Float)
+//!             visbuffer_shade (material, decals, lights) ─▶ hdr (Rgba32Float)
 //!                                   │
 //!                                   ▼
 //!             tonemap ─▶ ldr (Rgba8Unorm, sRGB-encoded)
 //! ```
 
-use crate::accel::gpu::LightBvhBuffers;
+use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
     tonemap::{Tonemap, LDR_FORMAT},
     visbuffer_raster::{VisbufferRaster, DEPTH_FORMAT, VISIBILITY_FORMAT},
     visbuffer_shade::{VisbufferShade, HDR_FORMAT},
 };
-use crate::{pipelines::LightMethod, Result};
+use crate::{
+    pipelines::{DecalMethod, LightMethod},
+    Result,
+};
 
 /// The images a frame writes; `hdr` and `ldr` can be read back.
 pub struct FrameTargets {
@@ -70,8 +74,8 @@ impl VisbufferPipeline {
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
-        method: LightMethod,
-        light_bvh: Option<&LightBvhBuffers>,
+        methods: (LightMethod, DecalMethod),
+        structures: (&VolumeStructure, &VolumeStructure),
         width: u32,
         height: u32,
     ) -> Result<Self> {
@@ -81,7 +85,7 @@ impl VisbufferPipeline {
             (view(&targets.visibility), view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
         Ok(Self {
             raster: VisbufferRaster::new(ctx, scene)?,
-            shade: VisbufferShade::new(ctx, scene, method, light_bvh, &visibility_view, &hdr_view)?,
+            shade: VisbufferShade::new(ctx, scene, methods, structures, &visibility_view, &hdr_view)?,
             tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
             targets,
             visibility_view,

@@ -1,6 +1,6 @@
 //! Axis-aligned boxes: scene bounds and the volumes of the acceleration structures.
 
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 
 /// An axis-aligned box, closed on all faces. A box with `min > max` on some axis is empty.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,6 +26,20 @@ impl Aabb {
     /// The smallest box containing both.
     pub fn union(self, other: Aabb) -> Aabb {
         Aabb { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    /// The box around this box's image under `transform` (empty stays empty), widened by a few ulps
+    /// so that points transformed the other way with rounding still land inside.
+    pub fn transformed(&self, transform: &Affine3A) -> Aabb {
+        if self.is_empty() {
+            return Aabb::EMPTY;
+        }
+        let centre = transform.transform_point3(self.center());
+        let m = transform.matrix3;
+        let half = (self.max - self.min) * 0.5;
+        let extent = m.x_axis.abs() * half.x + m.y_axis.abs() * half.y + m.z_axis.abs() * half.z;
+        let pad = 8.0 * f32::EPSILON * (centre.abs() + Vec3::from(extent));
+        Aabb::new(centre - Vec3::from(extent) - pad, centre + Vec3::from(extent) + pad)
     }
 
     /// Inclusive on every face (`min ≤ p ≤ max`), as the GPU query tests, so a point on a shared face

@@ -1,5 +1,6 @@
 // A light's volume of influence, as the acceleration structures bound it (`accel/volumes.rs`).
 #include "shading/types.wgsl"
+#include "accel/bvh_types.wgsl"
 
 // The tight test: whether `p` lies inside the light's range (and cone). `light_contribution` (lights.wgsl)
 // is zero wherever this is false; the CPU twin is `accel::volumes::light_contains`.
@@ -15,3 +16,12 @@ fn light_reaches(light: Light, p: vec3<f32>) -> bool {
     return true;
 }
 
+// A light stored in its group's space, placed in the world by an instance. The range scales with the
+// instance; the intensity does not.
+fn light_in_world(light: Light, instance: VolumeInstance) -> Light {
+    var placed = light;
+    placed.position = instance_point_to_world(instance, light.position);
+    placed.direction = instance_direction_to_world(instance, light.direction);
+    placed.range = light.range * instance.scale;
+    return placed;
+}

@@ -1,5 +1,6 @@
 #include "shading/scene_bindings.wgsl"
 #include "shading/brdf.wgsl"
+#include "shading/light_volume.wgsl"
 
 // Punctual lights with the KHR_lights_punctual falloff: inverse square, windowed to reach zero at the
 // light's range, and the glTF smooth spot cone.
@@ -23,3 +24,4 @@ fn light_contribution(light: Light, s: ShadingInput) -> vec3<f32> {
     }
     return light.radiant * attenuation * brdf_times_cosine(s, light_dir);
 }
+

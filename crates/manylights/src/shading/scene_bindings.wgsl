@@ -7,17 +7,18 @@
 @group(0) @binding(2) var<storage, read> indices: array<u32>;
 @group(0) @binding(3) var<storage, read> draws: array<Draw>;
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
-@group(0) @binding(5) var<storage, read> lights: array<Light>;
-@group(0) @binding(6) var color_textures: texture_2d_array<f32>;
-@group(0) @binding(7) var data_textures: texture_2d_array<f32>;
+@group(0) @binding(5) var color_textures: texture_2d_array<f32>;
+@group(0) @binding(6) var data_textures: texture_2d_array<f32>;
+// Lights and decals are bound with their acceleration structures: `light_bindings.wgsl`,
+// `decal_bindings.wgsl`.
 // One sampler per pair of glTF wrap modes, `wrap_u<U>_v<V>` with 0 repeat, 1 mirrored repeat, 2 clamp
 // to edge: wrapping in the sampler stays exact at every mip level, which emulating it cannot.
-@group(0) @binding(8) var wrap_u0_v0: sampler;
-@group(0) @binding(9) var wrap_u1_v0: sampler;
-@group(0) @binding(10) var wrap_u2_v0: sampler;
-@group(0) @binding(11) var wrap_u0_v1: sampler;
-@group(0) @binding(12) var wrap_u1_v1: sampler;
-@group(0) @binding(13) var wrap_u2_v1: sampler;
-@group(0) @binding(14) var wrap_u0_v2: sampler;
-@group(0) @binding(15) var wrap_u1_v2: sampler;
-@group(0) @binding(16) var wrap_u2_v2: sampler;
+@group(0) @binding(7) var wrap_u0_v0: sampler;
+@group(0) @binding(8) var wrap_u1_v0: sampler;
+@group(0) @binding(9) var wrap_u2_v0: sampler;
+@group(0) @binding(10) var wrap_u0_v1: sampler;
+@group(0) @binding(11) var wrap_u1_v1: sampler;
+@group(0) @binding(12) var wrap_u2_v1: sampler;
+@group(0) @binding(13) var wrap_u0_v2: sampler;
+@group(0) @binding(14) var wrap_u1_v2: sampler;
+@group(0) @binding(15) var wrap_u2_v2: sampler;

@@ -1,10 +1,13 @@
 // The shading core: one function, used by every pipeline, that lights a `ShadingInput`.
-// The light enumeration module (`shading/enumerate/*.wgsl`) is chosen when the shader is composed.
+// The light and decal enumeration modules (`shading/enumerate/*.wgsl`) are chosen when the shader is
+// composed: they define `shade_local_lights` and `apply_decals`, which pipelines call on the surface
+// before `shade`.
 #include "shading/scene_bindings.wgsl"
 #include "shading/shading_input.wgsl"
 #include "shading/brdf.wgsl"
 #include "shading/lights.wgsl"
 #include "$LIGHT_ENUMERATION"
+#include "$DECAL_ENUMERATION"
 
 // Outgoing radiance towards the viewer.
 fn shade(s: ShadingInput) -> vec3<f32> {

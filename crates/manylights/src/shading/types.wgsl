@@ -1,5 +1,5 @@
 // GPU scene types. Keep in sync with `gpu/scene.rs` (GpuVertex = scene::Vertex, GpuDraw, GpuMaterial,
-// GpuLight) and `gpu/frame.rs` (FrameUniforms): field order, sizes and padding match the repr(C) structs.
+// GpuLight, GpuDecal) and `gpu/frame.rs` (FrameUniforms): field order, sizes and padding match the repr(C) structs.
 //
 // Spaces: `world_from_local` maps a mesh into the world, `clip_from_world` the world into reverse-Z clip
 // space (near → 1, far → 0). Directions named `*_dir` are unit vectors.
@@ -70,6 +70,18 @@ struct Light {
     _pad2: u32,
 }
 
+// A decal (`scene::Decal`): projects its material onto surfaces inside the unit box [-0.5, 0.5]³ of
+// decal space, along -Z.
+struct Decal {
+    // Rows of the affine map from the decal's group space into decal space, applied as
+    // `vec4(p, 1.0) * decal_from_group`.
+    decal_from_group: mat3x4<f32>,
+    material: u32,
+    layer: u32,
+    weight: f32,
+    _pad0: u32,
+}
+
 const TONEMAP_ACES: u32 = 0u;
 const TONEMAP_AGX: u32 = 1u;
 const TONEMAP_NONE: u32 = 2u;
@@ -87,8 +99,9 @@ struct FrameUniforms {
     // rgb: colour × illuminance
     sun_radiance: vec4<f32>,
     ambient: vec4<f32>,
-    light_count: u32,
+    // Instances of light and decal groups (`light_instances`, `decal_instances`).
+    light_instance_count: u32,
     exposure: f32,
     tonemapper: u32,
-    _pad0: u32,
+    decal_instance_count: u32,
 }

@@ -8,7 +8,7 @@ use manylights::{
     accel::BvhBuild,
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
-    pipelines::LightMethod,
+    pipelines::{DecalMethod, LightMethod},
     renderer::{Image, Renderer},
     scene::{Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Vertex},
 };
@@ -23,6 +23,8 @@ pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfi
         height,
         light_method,
         light_bvh_build: BvhBuild::CpuOnce,
+        decal_method: DecalMethod::Brute,
+        decal_bvh_build: BvhBuild::CpuOnce,
         tonemapper: Tonemapper::Aces,
         max_texture_size: 256,
         anisotropy: 1,

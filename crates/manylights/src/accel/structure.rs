@@ -1,0 +1,331 @@
+//! The two-level acceleration structure over the volumes of lights or of decals, the paper's TLAS
+//! over BLASes: each group of volumes has a BVH in its own space (built once on the CPU, or on the
+//! GPU whenever it must be rebuilt), and a top level over the group instances, rebuilt on the GPU
+//! whenever an instance moves, places them in the world. Moving or instancing a group never touches
+//! its BVH.
+//!
+//! One bind group per structure, read by `accel/volume_query.wgsl` and the enumeration modules:
+//! `items` (lights or decals, group after group, each in its group's space), `nodes` (the top level
+//! first, then each group's BVH), `primitives` (the top level's instance indices, then item indices)
+//! and `instances`. Sharing one node array between all BVHs keeps the binding count fixed; a
+//! structure over 1M volumes still stays under lavapipe's 128 MiB per binding.
+
+use std::ops::Range;
+
+use glam::Affine3A;
+use wgpu::util::DeviceExt;
+
+use super::{
+    decal_aabb,
+    lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
+    light_aabb, Aabb, Bvh, BvhNode, LEAF,
+};
+use crate::{
+    gpu::{
+        bindings,
+        scene::{GpuDecal, GpuLight},
+        GpuContext, GpuTimer,
+    },
+    scene::{Decal, GroupInstance, Groups, Light},
+    Error, Result,
+};
+
+/// Where and when the groups' BVHs are built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BvhBuild {
+    /// Once, on the CPU (binned SAH): for groups whose volumes do not change.
+    #[default]
+    CpuOnce,
+    /// Every frame, on the GPU (LBVH), as groups whose volumes change need: timed as
+    /// `<label>_blas_build`.
+    GpuEveryFrame,
+}
+
+/// Keep in sync with `VolumeInstance` in `accel/bvh_types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuVolumeInstance {
+    /// Rows of the affine map from the world into the group's space.
+    pub group_from_world: [[f32; 4]; 3],
+    /// Rows of its inverse.
+    pub world_from_group: [[f32; 4]; 3],
+    pub first_item: u32,
+    pub item_count: u32,
+    /// Node index of the group's BVH root.
+    pub blas_root: u32,
+    /// Uniform scale of `world_from_group`: ranges grow with it.
+    pub scale: f32,
+}
+
+impl GpuVolumeInstance {
+    fn new(world_from_group: Affine3A, items: &Range<u32>, blas_root: u32) -> Self {
+        Self {
+            group_from_world: rows(&world_from_group.inverse()),
+            world_from_group: rows(&world_from_group),
+            first_item: items.start,
+            item_count: items.len() as u32,
+            blas_root,
+            scale: world_from_group.matrix3.x_axis.length(),
+        }
+    }
+}
+
+fn rows(t: &Affine3A) -> [[f32; 4]; 3] {
+    let m = glam::Mat4::from(*t);
+    [m.row(0).to_array(), m.row(1).to_array(), m.row(2).to_array()]
+}
+
+/// A group's items and its BVH in the shared arrays.
+struct Group {
+    items: Range<u32>,
+    blas_root: u32,
+    /// Bounds of the group's volumes, in its space: the top level's boxes are their images.
+    bounds: Aabb,
+    /// Present when the group is rebuilt on the GPU.
+    builder: Option<GpuLbvh>,
+}
+
+/// What a structure holds; names its buffers and timer scopes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VolumeKind {
+    Lights,
+    Decals,
+}
+
+impl VolumeKind {
+    fn label(self) -> &'static str {
+        match self {
+            VolumeKind::Lights => "light",
+            VolumeKind::Decals => "decal",
+        }
+    }
+
+    /// Timer scopes of the top-level build and of the groups' rebuilds.
+    fn scopes(self) -> (&'static str, &'static str) {
+        match self {
+            VolumeKind::Lights => ("light_tlas_build", "light_blas_build"),
+            VolumeKind::Decals => ("decal_tlas_build", "decal_blas_build"),
+        }
+    }
+}
+
+/// The volumes a structure is built over: the GPU items (one record per volume) and their boxes, in
+/// group space, grouped as `groups` says.
+pub struct Volumes<'a> {
+    pub kind: VolumeKind,
+    pub items: &'a [u8],
+    pub boxes: &'a [Aabb],
+    pub groups: &'a Groups,
+}
+
+pub struct VolumeStructure {
+    pub bind_group_layout: wgpu::BindGroupLayout,
+    pub bind_group: wgpu::BindGroup,
+    label: &'static str,
+    groups: Vec<Group>,
+    /// Instances of non-empty groups: instances of empty groups can contain nothing.
+    instances: Vec<GroupInstance>,
+    instance_buffer: wgpu::Buffer,
+    top_level: GpuLbvh,
+    top_level_scope: &'static str,
+    blas_scope: &'static str,
+    /// The time the top level was last built for; `None` before the first build.
+    built_for: Option<f32>,
+}
+
+impl VolumeStructure {
+    /// The structure over a scene's lights.
+    pub fn for_lights(ctx: &GpuContext, lights: &[Light], groups: &Groups, build: BvhBuild) -> Result<Self> {
+        let items: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
+        let boxes: Vec<Aabb> = lights.iter().map(light_aabb).collect();
+        Self::new(ctx, &Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups }, build)
+    }
+
+    /// The structure over a scene's decals.
+    pub fn for_decals(ctx: &GpuContext, decals: &[Decal], groups: &Groups, build: BvhBuild) -> Result<Self> {
+        let items: Vec<GpuDecal> = decals.iter().map(GpuDecal::from).collect();
+        let boxes: Vec<Aabb> = decals.iter().map(decal_aabb).collect();
+        Self::new(ctx, &Volumes { kind: VolumeKind::Decals, items: bytemuck::cast_slice(&items), boxes: &boxes, groups }, build)
+    }
+
+    pub fn new(ctx: &GpuContext, volumes: &Volumes, build: BvhBuild) -> Result<Self> {
+        let label = volumes.kind.label();
+        let count = volumes.boxes.len();
+        if let Some(i) = volumes.boxes.iter().position(|b| !b.is_valid()) {
+            return Err(Error::InvalidScene(format!(
+                "{label} {i}: its volume has a NaN, infinite or inverted bound {:?}",
+                volumes.boxes[i]
+            )));
+        }
+        let (ranges, all_instances) = volumes.groups.resolve(count);
+        let instances: Vec<GroupInstance> = all_instances.into_iter().filter(|i| !ranges[i.group].is_empty()).collect();
+        let instance_slots = instances.len().max(1) as u32;
+        let top_level_nodes = 2 * instance_slots - 1;
+
+        // Node and primitive layout: the top level, then every group's BVH (at most 2n − 1 nodes).
+        let mut node_base = top_level_nodes;
+        let mut group_bases = Vec::new();
+        for range in &ranges {
+            group_bases.push(node_base);
+            node_base += (2 * range.len() as u32).saturating_sub(1);
+        }
+        let node_count = u64::from(node_base);
+        let primitive_count = u64::from(instance_slots) + count as u64;
+
+        let limit = ctx.limits.max_storage_buffer_binding_size;
+        let node_bytes = node_count * std::mem::size_of::<BvhNode>() as u64;
+        for (what, bytes) in [("items", volumes.items.len() as u64), ("BVH nodes", node_bytes)] {
+            if bytes > limit {
+                return Err(Error::InvalidScene(format!(
+                    "the {label} {what} take {} MiB, over this GPU's storage binding limit of {} MiB; use fewer {label}s",
+                    bytes >> 20,
+                    limit >> 20
+                )));
+            }
+        }
+
+        let device = &ctx.device;
+        use wgpu::BufferUsages as U;
+        let storage = |name: &str, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(&format!("{label} {name}")),
+                size: size.max(4),
+                usage: U::STORAGE | usage,
+                mapped_at_creation: false,
+            })
+        };
+        let nodes = storage("bvh nodes", node_bytes, U::COPY_DST | U::COPY_SRC);
+        let primitives = storage("bvh primitives", primitive_count * 4, U::COPY_DST | U::COPY_SRC);
+        let instance_buffer =
+            storage("instances", u64::from(instance_slots) * std::mem::size_of::<GpuVolumeInstance>() as u64, U::COPY_DST);
+        let items = if volumes.items.is_empty() {
+            storage("items", 64, U::empty())
+        } else {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(&format!("{label} items")),
+                contents: volumes.items,
+                usage: U::STORAGE,
+            })
+        };
+
+        let mut groups = Vec::new();
+        for (range, &blas_root) in ranges.iter().zip(&group_bases) {
+            let items_range = range.start as u32..range.end as u32;
+            let boxes = &volumes.boxes[range.clone()];
+            let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
+            let builder = match build {
+                _ if boxes.is_empty() => None,
+                BvhBuild::CpuOnce => {
+                    let bvh = Bvh::build(boxes)?;
+                    let (group_nodes, group_primitives) = relocate(&bvh, blas_root, instance_slots + items_range.start, items_range.start);
+                    ctx.queue.write_buffer(&nodes, u64::from(blas_root) * 32, bytemuck::cast_slice(&group_nodes));
+                    ctx.queue.write_buffer(
+                        &primitives,
+                        u64::from(instance_slots + items_range.start) * 4,
+                        bytemuck::cast_slice(&group_primitives),
+                    );
+                    None
+                }
+                BvhBuild::GpuEveryFrame => {
+                    let target = LbvhTarget {
+                        nodes: nodes.clone(),
+                        primitives: primitives.clone(),
+                        node_base: blas_root,
+                        primitive_base: instance_slots + items_range.start,
+                        item_base: items_range.start,
+                    };
+                    let mut builder = GpuLbvh::with_target(ctx, boxes.len() as u32, target)?;
+                    builder.set_boxes(&ctx.queue, boxes)?;
+                    Some(builder)
+                }
+            };
+            groups.push(Group { items: items_range, blas_root, bounds, builder });
+        }
+        let top_level_target =
+            LbvhTarget { nodes: nodes.clone(), primitives: primitives.clone(), node_base: 0, primitive_base: 0, item_base: 0 };
+        let top_level = GpuLbvh::with_target(ctx, instance_slots, top_level_target)?;
+
+        let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        // Keep in sync with `shading/light_bindings.wgsl` and `shading/decal_bindings.wgsl`.
+        let bind_group_layout = bindings::layout(device, label, &[0, 1, 2, 3].map(|binding| bindings::storage_read(binding, all)));
+        let bind_group = bindings::bind_group(
+            device,
+            label,
+            &bind_group_layout,
+            [&items, &nodes, &primitives, &instance_buffer].iter().map(|b| b.as_entire_binding()).collect(),
+        );
+        let (top_level_scope, blas_scope) = volumes.kind.scopes();
+        Ok(Self {
+            bind_group_layout,
+            bind_group,
+            label,
+            groups,
+            instances,
+            instance_buffer,
+            top_level,
+            top_level_scope,
+            blas_scope,
+            built_for: None,
+        })
+    }
+
+    /// Instances the shaders visit (those of non-empty groups).
+    pub fn instance_count(&self) -> u32 {
+        self.instances.len() as u32
+    }
+
+    /// Records this frame's builds for time `time` (seconds): the groups rebuilt on the GPU, then the
+    /// top level, when an instance has moved since the last build or a group was rebuilt.
+    pub fn record(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        mut timer: Option<&mut GpuTimer>,
+        time: f32,
+    ) -> Result<()> {
+        let rebuilding: Vec<usize> = (0..self.groups.len()).filter(|&g| self.groups[g].builder.is_some()).collect();
+        for (k, &g) in rebuilding.iter().enumerate() {
+            let span = TimerSpan { name: self.blas_scope, starts: k == 0, ends: k + 1 == rebuilding.len() };
+            self.groups[g].builder.as_mut().expect("filtered on builders").record(encoder, timer.as_deref_mut(), span)?;
+        }
+        let moved = match self.built_for {
+            None => true,
+            Some(t) => t != time && self.instances.iter().any(|i| i.spin.is_some()),
+        };
+        if self.instances.is_empty() || !moved {
+            return Ok(());
+        }
+        let placed: Vec<(Affine3A, &Group)> = self.instances.iter().map(|i| (i.world_from_group_at(time), &self.groups[i.group])).collect();
+        let gpu: Vec<GpuVolumeInstance> = placed.iter().map(|(t, g)| GpuVolumeInstance::new(*t, &g.items, g.blas_root)).collect();
+        let boxes: Vec<Aabb> = placed.iter().map(|(t, g)| g.bounds.transformed(t)).collect();
+        if let Some(i) = boxes.iter().position(|b| !b.is_valid()) {
+            return Err(Error::InvalidScene(format!("{} instance {i}: its bounds are not finite at time {time}", self.label)));
+        }
+        ctx.queue.write_buffer(&self.instance_buffer, 0, bytemuck::cast_slice(&gpu));
+        self.top_level.set_boxes(&ctx.queue, &boxes)?;
+        self.top_level.record(encoder, timer, TimerSpan::whole(self.top_level_scope))?;
+        self.built_for = Some(time);
+        Ok(())
+    }
+}
+
+/// Moves a CPU-built BVH into the shared arrays: child indices by `node_base`, leaf ranges by
+/// `primitive_base`, primitive values by `item_base`.
+fn relocate(bvh: &Bvh, node_base: u32, primitive_base: u32, item_base: u32) -> (Vec<BvhNode>, Vec<u32>) {
+    let nodes = bvh
+        .nodes
+        .iter()
+        .map(|n| {
+            let mut n = *n;
+            if n.is_leaf() {
+                n.a = LEAF | ((n.a & !LEAF) + primitive_base);
+            } else {
+                n.a += node_base;
+                n.b += node_base;
+            }
+            n
+        })
+        .collect();
+    let primitives = bvh.primitive_indices.iter().map(|&p| p + item_base).collect();
+    (nodes, primitives)
+}

@@ -1,0 +1,66 @@
+// The point query — the paper's zero-length ray — through a two-level structure (`accel/structure.rs`):
+// the top level's leaves are group instances; entering one moves the point into the group's space
+// and continues in the group's BVH. A template: `VOLUMES` is replaced by the structure's prefix
+// (`#include "accel/volume_query.wgsl" with VOLUMES=light`), naming its bindings `VOLUMES_nodes`,
+// `VOLUMES_primitives`, `VOLUMES_instances`, so lights and decals each get their own cursor.
+//
+// A cursor: `VOLUMES_query_next_leaf` returns every group leaf whose box contains the point, and the
+// caller applies its own tight test to the leaf's items (light range and cone, decal box) without a
+// copy of the traversal per use. It hands out whole leaves: a cursor returning one item per call
+// measured 20 % slower shading on the H200.
+#include "accel/bvh_types.wgsl"
+
+// The query in flight, one per invocation.
+var<private> VOLUMES_query_world_point: vec3<f32>;
+// The point in the current level's space: the world's in the top level, the group's inside an
+// instance. Callers read it to test items in their group's space.
+var<private> VOLUMES_query_point: vec3<f32>;
+// The instance whose group the last leaf belongs to.
+var<private> VOLUMES_query_instance: VolumeInstance;
+var<private> VOLUMES_query_stack: array<u32, BVH_STACK_SIZE>;
+var<private> VOLUMES_query_top: u32;
+// Stack height below the current instance's BVH; NO_FLOOR while in the top level.
+var<private> VOLUMES_query_floor: u32;
+
+// Starts a point query (world space), replacing any in flight; with no instances it finds nothing.
+fn VOLUMES_query_begin(point: vec3<f32>, instance_count: u32) {
+    VOLUMES_query_world_point = point;
+    VOLUMES_query_point = point;
+    VOLUMES_query_stack[0] = 0u;
+    VOLUMES_query_top = select(0u, 1u, instance_count > 0u);
+    VOLUMES_query_floor = NO_FLOOR;
+}
+
+// The next group leaf whose box contains the point, as the range [x, y) of `VOLUMES_primitives`
+// (item indices); an empty range when the query is done (leaves are never empty).
+fn VOLUMES_query_next_leaf() -> vec2<u32> {
+    while VOLUMES_query_top > 0u {
+        if VOLUMES_query_top == VOLUMES_query_floor {
+            // The instance's BVH is done: back in the top level.
+            VOLUMES_query_floor = NO_FLOOR;
+            VOLUMES_query_point = VOLUMES_query_world_point;
+        }
+        VOLUMES_query_top -= 1u;
+        let node = VOLUMES_nodes[VOLUMES_query_stack[VOLUMES_query_top]];
+        if !bvh_node_contains(node, VOLUMES_query_point) {
+            continue;
+        }
+        if (node.a & BVH_LEAF) != 0u {
+            let first = node.a & ~BVH_LEAF;
+            if VOLUMES_query_floor != NO_FLOOR {
+                return vec2<u32>(first, first + node.b);
+            }
+            // A top-level leaf holds one instance (the top level is an LBVH): enter its group.
+            VOLUMES_query_instance = VOLUMES_instances[VOLUMES_primitives[first]];
+            VOLUMES_query_point = instance_point_to_group(VOLUMES_query_instance, VOLUMES_query_world_point);
+            VOLUMES_query_floor = VOLUMES_query_top;
+            VOLUMES_query_stack[VOLUMES_query_top] = VOLUMES_query_instance.blas_root;
+            VOLUMES_query_top += 1u;
+            continue;
+        }
+        VOLUMES_query_stack[VOLUMES_query_top] = node.a;
+        VOLUMES_query_stack[VOLUMES_query_top + 1u] = node.b;
+        VOLUMES_query_top += 2u;
+    }
+    return vec2<u32>(0u);
+}

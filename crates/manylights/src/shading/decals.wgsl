@@ -1,0 +1,124 @@
+// Decal application: each decal covering a shading point projects its material (albedo and alpha,
+// roughness and metallic, normal) onto the surface. Layers are blended bottom to top; decals of one
+// layer are blended order-independently (weighted blended OIT, McGuire & Bavoil 2013), per attribute c:
+//
+//     c = (Σ cᵢ αᵢ wᵢ / Σ αᵢ wᵢ) (1 − Π (1 − αᵢ)) + c₀ Π (1 − αᵢ)
+//
+// where c₀ is the value below the layer. The enumeration modules (`shading/enumerate/decals_*.wgsl`)
+// call `decal_blend_begin`, `decal_accumulate` per candidate decal, and `decal_blend_end`.
+#include "shading/scene_bindings.wgsl"
+#include "shading/shading_input.wgsl"
+#include "shading/material.wgsl"
+#include "accel/bvh_types.wgsl"
+
+// World-space change of the shading position from one pixel to the next in x and y: decal textures
+// are sampled with gradients from it (compute has no implicit derivatives).
+struct PositionGradients {
+    ddx: vec3<f32>,
+    ddy: vec3<f32>,
+}
+
+const DECAL_LAYERS: u32 = 4u;
+// Decals fade out as the surface turns edge-on to the projector: fully applied from this cosine up.
+const DECAL_FULL_FACING: f32 = 0.25;
+
+// One layer's sums: Σ c α w for each attribute, Σ α w and Π (1 − α). Normals have their own α sums,
+// because decals without a normal texture leave normals alone.
+struct DecalLayerSums {
+    albedo: vec3<f32>,
+    alpha_weight: f32,
+    normal: vec3<f32>,
+    normal_alpha_weight: f32,
+    roughness: f32,
+    metallic: f32,
+    transmittance: f32,
+    normal_transmittance: f32,
+}
+
+var<private> decal_layers: array<DecalLayerSums, DECAL_LAYERS>;
+
+fn decal_blend_begin() {
+    for (var layer = 0u; layer < DECAL_LAYERS; layer += 1u) {
+        decal_layers[layer] = DecalLayerSums(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, 0.0, 0.0, 1.0, 1.0);
+    }
+}
+
+// Adds one decal if the point (`local`, in the decal's group space) is inside its box. `s` is the
+// surface before any decal.
+fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, s: ShadingInput, dp: PositionGradients) {
+    let p = vec4<f32>(local, 1.0) * decal.decal_from_group;
+    if any(abs(p) > vec3<f32>(0.5)) {
+        return;
+    }
+    // The rows of decal_from_group are the gradients of the decal coordinates: along the box's axes.
+    let axis_x = normalize(instance_direction_to_world(instance, decal.decal_from_group[0].xyz));
+    let axis_y = normalize(instance_direction_to_world(instance, decal.decal_from_group[1].xyz));
+    let axis_z = normalize(instance_direction_to_world(instance, decal.decal_from_group[2].xyz));
+    let facing = dot(s.normal, axis_z);
+    if facing <= 0.0 {
+        return;
+    }
+    let to_decal = mat3x3<f32>(decal.decal_from_group[0].xyz, decal.decal_from_group[1].xyz, decal.decal_from_group[2].xyz);
+    let ddx = instance_vector_to_group(instance, dp.ddx) * to_decal;
+    let ddy = instance_vector_to_group(instance, dp.ddy) * to_decal;
+    // u along +x, v down along -y: the image as seen from the projector.
+    let g = UvGradients(vec2<f32>(p.x + 0.5, 0.5 - p.y), vec2<f32>(ddx.x, -ddx.y), vec2<f32>(ddy.x, -ddy.y));
+
+    let material = materials[decal.material];
+    let color = material_base_color(material, g);
+    let alpha = saturate(color.a) * smoothstep(0.0, DECAL_FULL_FACING, facing);
+    if alpha <= 0.0 {
+        return;
+    }
+    let aw = alpha * decal.weight;
+    var roughness = material.roughness_factor;
+    var metallic = material.metallic_factor;
+    if material.metallic_roughness_layer != NO_TEXTURE {
+        let mr = sample_data(material.metallic_roughness_layer, material, 2u, g);
+        roughness *= mr.g;
+        metallic *= mr.b;
+    }
+    let layer = min(decal.layer, DECAL_LAYERS - 1u);
+    decal_layers[layer].albedo += color.rgb * aw;
+    decal_layers[layer].roughness += saturate(roughness) * aw;
+    decal_layers[layer].metallic += saturate(metallic) * aw;
+    decal_layers[layer].alpha_weight += aw;
+    decal_layers[layer].transmittance *= 1.0 - alpha;
+
+    if material.normal_layer != NO_TEXTURE {
+        // The decal's tangent frame on the surface: its x and y axes made orthogonal to the surface
+        // normal, so the normal map bends the surface's own normal.
+        let n = s.normal;
+        let t = normalize(axis_x - n * dot(n, axis_x));
+        let b_raw = axis_y - n * dot(n, axis_y) - t * dot(t, axis_y);
+        let b = select(cross(n, t), normalize(b_raw), dot(b_raw, b_raw) > 1e-12);
+        var n_ts = sample_data(material.normal_layer, material, 3u, g).xyz * 2.0 - 1.0;
+        n_ts = vec3<f32>(n_ts.xy * material.normal_scale, n_ts.z);
+        let mapped = t * n_ts.x + b * n_ts.y + n * n_ts.z;
+        let decal_normal = select(n, normalize(mapped), dot(mapped, mapped) > 1e-12);
+        decal_layers[layer].normal += decal_normal * aw;
+        decal_layers[layer].normal_alpha_weight += aw;
+        decal_layers[layer].normal_transmittance *= 1.0 - alpha;
+    }
+}
+
+// The surface with every accumulated layer blended over it, bottom to top.
+fn decal_blend_end(s: ShadingInput) -> ShadingInput {
+    var out = s;
+    for (var layer = 0u; layer < DECAL_LAYERS; layer += 1u) {
+        let sums = decal_layers[layer];
+        if sums.alpha_weight > 0.0 {
+            let coverage = 1.0 - sums.transmittance;
+            let scale = coverage / sums.alpha_weight;
+            out.base_color = sums.albedo * scale + out.base_color * sums.transmittance;
+            out.roughness = sums.roughness * scale + out.roughness * sums.transmittance;
+            out.metallic = sums.metallic * scale + out.metallic * sums.transmittance;
+        }
+        if sums.normal_alpha_weight > 0.0 {
+            let coverage = 1.0 - sums.normal_transmittance;
+            let blended = sums.normal * (coverage / sums.normal_alpha_weight) + out.normal * sums.normal_transmittance;
+            out.normal = select(out.normal, normalize(blended), dot(blended, blended) > 1e-12);
+        }
+    }
+    return out;
+}

@@ -1,0 +1,17 @@
+// Decal enumeration through the decals' acceleration structure (Hansen & Peters 2021): the point
+// query reaches the leaves whose box contains the shading point; `decal_accumulate` applies the
+// exact box test, so the result equals the brute-force loop's.
+#include "shading/decal_bindings.wgsl"
+#include "shading/decals.wgsl"
+#include "accel/volume_query.wgsl" with VOLUMES=decal
+
+fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
+    decal_blend_begin();
+    decal_query_begin(s.position, frame.decal_instance_count);
+    for (var leaf = decal_query_next_leaf(); leaf.x < leaf.y; leaf = decal_query_next_leaf()) {
+        for (var k = leaf.x; k < leaf.y; k += 1u) {
+            decal_accumulate(decals[decal_primitives[k]], decal_query_instance, decal_query_point, s, dp);
+        }
+    }
+    return decal_blend_end(s);
+}

@@ -1,0 +1,23 @@
+// Light enumeration, brute force: every light of every instance for every shading point. The
+// reference the accelerated methods are compared against. Every light enumeration module defines
+// `shade_local_lights` with this shape.
+#include "shading/light_bindings.wgsl"
+#include "shading/lights.wgsl"
+
+fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
+    var radiance = vec3<f32>(0.0);
+    for (var i = 0u; i < frame.light_instance_count; i += 1u) {
+        let instance = light_instances[i];
+        let local = instance_point_to_group(instance, s.position);
+        for (var k = instance.first_item; k < instance.first_item + instance.item_count; k += 1u) {
+            // Most lights are out of range: test in group space with the struct's first 16 bytes
+            // (position and range) before loading the rest.
+            let to_light = lights[k].position - local;
+            let range = lights[k].range;
+            if dot(to_light, to_light) < range * range {
+                radiance += light_contribution(light_in_world(lights[k], instance), s);
+            }
+        }
+    }
+    return radiance;
+}

@@ -1,0 +1,9 @@
+// Group 2: the lights and their acceleration structure (`accel/structure.rs`, `VolumeStructure`).
+// Lights are stored group after group in their group's space; `light_instances` place the groups.
+#include "shading/types.wgsl"
+#include "accel/bvh_types.wgsl"
+
+@group(2) @binding(0) var<storage, read> lights: array<Light>;
+@group(2) @binding(1) var<storage, read> light_nodes: array<BvhNode>;
+@group(2) @binding(2) var<storage, read> light_primitives: array<u32>;
+@group(2) @binding(3) var<storage, read> light_instances: array<VolumeInstance>;
