@@ -5,26 +5,37 @@ mod common;
 use std::path::PathBuf;
 
 use common::*;
-use glam::Vec3;
+use glam::{Affine3A, Quat, Vec3};
 use manylights::{
     accel::BvhBuild,
     config::RenderConfig,
     pipelines::LightMethod,
-    scene::{self, demo::demo_scene, generators::ScatterLights, Light, LightKind, Scene},
+    scene::{self, demo::demo_scene, generators::ScatterLights, GroupInstance, Groups, Light, LightKind, Scene, Spin},
 };
 use rand::{Rng, SeedableRng};
 
 const TOLERANCE: f32 = 1e-3;
 
 fn assert_methods_agree(scene: &Scene, width: u32, height: u32) {
-    let camera = &scene.cameras[0];
-    let (_, brute) = render_with(scene, camera, config(width, height, LightMethod::Brute));
+    assert_methods_agree_at(scene, width, height, 0.0);
+}
+
+/// Renders one frame at scene time `time` (where spinning groups are).
+fn render_at(scene: &Scene, config: RenderConfig, time: f32) -> manylights::renderer::Image<[f32; 4]> {
+    let mut r = renderer(scene, config);
+    r.time = time;
+    r.render(&scene.cameras[0]).expect("frame");
+    r.read_hdr().expect("hdr")
+}
+
+fn assert_methods_agree_at(scene: &Scene, width: u32, height: u32, time: f32) {
+    let brute = render_at(scene, config(width, height, LightMethod::Brute), time);
     let lit = brute.pixels.iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count();
     assert!(lit > brute.pixels.len() / 2, "the reference image is mostly black");
     let gpu_built = RenderConfig { light_bvh_build: BvhBuild::GpuEveryFrame, ..config(width, height, LightMethod::Bvh) };
     let configs = LightMethod::ALL.iter().map(|&method| config(width, height, method)).chain([gpu_built]);
     for config in configs {
-        let (_, image) = render_with(scene, camera, config.clone());
+        let image = render_at(scene, config.clone(), time);
         let difference = max_abs_difference(&brute, &image);
         assert!(
             difference <= TOLERANCE,
@@ -94,4 +105,53 @@ fn a_million_lights_fit_and_light_the_scene() {
     assert!(with.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())));
     let added: f32 = with.pixels.iter().zip(&without.pixels).map(|(a, b)| luminance(*a) - luminance(*b)).sum();
     assert!(added > 0.0, "a million lights added no light");
+}
+
+/// The demo's lights split into groups: the first placed twice (once turned and shifted), the second
+/// spinning, the third left alone.
+fn grouped_demo() -> Scene {
+    let mut scene = with_scattered_lights(demo_scene(), 1200, 17);
+    scene.lights.extend(random_spots(300, 19));
+    let still = |group, world_from_group| GroupInstance { group, world_from_group, spin: None };
+    scene.light_groups = Groups {
+        sizes: vec![507, 400, 600],
+        instances: vec![
+            still(0, Affine3A::IDENTITY),
+            still(0, Affine3A::from_rotation_translation(Quat::from_rotation_y(0.8), Vec3::new(0.5, 0.2, -0.3))),
+            GroupInstance { spin: Some(Spin { pivot: Vec3::new(-0.5, 0.0, -1.0), radians_per_second: 1.3 }), ..still(1, Affine3A::IDENTITY) },
+            still(2, Affine3A::IDENTITY),
+        ],
+    };
+    scene
+}
+
+#[test]
+fn instanced_and_moving_light_groups() {
+    // At time 0.6 the spinning group has turned 0.78 rad: the top level is rebuilt for it.
+    assert_methods_agree_at(&grouped_demo(), 128, 72, 0.6);
+}
+
+#[test]
+fn an_instanced_group_lights_like_its_lights_copied_into_the_world() {
+    let grouped = grouped_demo();
+    let (ranges, instances) = grouped.light_groups.resolve(grouped.lights.len());
+    let mut expanded = grouped.clone();
+    expanded.light_groups = Groups::default();
+    expanded.lights = instances
+        .iter()
+        .flat_map(|instance| {
+            let t = instance.world_from_group_at(0.6);
+            grouped.lights[ranges[instance.group].clone()].iter().map(move |l| Light {
+                position: t.transform_point3(l.position),
+                direction: t.transform_vector3(l.direction),
+                ..*l
+            })
+        })
+        .collect();
+    let expected = render_at(&expanded, config(128, 72, LightMethod::Brute), 0.0);
+    for method in LightMethod::ALL {
+        let image = render_at(&grouped, config(128, 72, method), 0.6);
+        let difference = max_abs_difference(&expected, &image);
+        assert!(difference <= TOLERANCE, "{}: max abs difference {difference} from the expanded lights", method.name());
+    }
 }
