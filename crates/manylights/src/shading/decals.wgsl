@@ -36,11 +36,11 @@ struct DecalLayerSums {
 }
 
 var<private> decal_layers: array<DecalLayerSums, DECAL_LAYERS>;
+// Bit L set: layer L has sums. Most points are under no decal, and skip the layers entirely.
+var<private> decal_layers_touched: u32;
 
 fn decal_blend_begin() {
-    for (var layer = 0u; layer < DECAL_LAYERS; layer += 1u) {
-        decal_layers[layer] = DecalLayerSums(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, 0.0, 0.0, 1.0, 1.0);
-    }
+    decal_layers_touched = 0u;
 }
 
 // Adds one decal if the point (`local`, in the decal's group space) is inside its box. `s` is the
@@ -79,6 +79,10 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, s:
         metallic *= mr.b;
     }
     let layer = min(decal.layer, DECAL_LAYERS - 1u);
+    if (decal_layers_touched & (1u << layer)) == 0u {
+        decal_layers_touched |= 1u << layer;
+        decal_layers[layer] = DecalLayerSums(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, 0.0, 0.0, 1.0, 1.0);
+    }
     decal_layers[layer].albedo += color.rgb * aw;
     decal_layers[layer].roughness += saturate(roughness) * aw;
     decal_layers[layer].metallic += saturate(metallic) * aw;
@@ -105,7 +109,11 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, s:
 // The surface with every accumulated layer blended over it, bottom to top.
 fn decal_blend_end(s: ShadingInput) -> ShadingInput {
     var out = s;
-    for (var layer = 0u; layer < DECAL_LAYERS; layer += 1u) {
+    var touched = decal_layers_touched;
+    while touched != 0u {
+        // Lowest layer first: bottom to top.
+        let layer = firstTrailingBit(touched);
+        touched &= touched - 1u;
         let sums = decal_layers[layer];
         if sums.alpha_weight > 0.0 {
             let coverage = 1.0 - sums.transmittance;
