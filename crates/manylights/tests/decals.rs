@@ -36,7 +36,12 @@ fn wall() -> (Scene, Camera) {
 
 /// A solid decal material: colour and alpha from the factor.
 fn solid(scene: &mut Scene, color: Vec3, alpha: f32) -> usize {
-    scene.materials.push(Material { base_color_factor: color.extend(alpha), metallic_factor: 0.0, roughness_factor: 0.8, ..Default::default() });
+    scene.materials.push(Material {
+        base_color_factor: color.extend(alpha),
+        metallic_factor: 0.0,
+        roughness_factor: 0.8,
+        ..Default::default()
+    });
     scene.materials.len() - 1
 }
 
@@ -68,7 +73,11 @@ fn assert_centre(decals: Vec<Decal>, materials: &[(Vec3, f32)], expected: Vec3, 
     scene.decals = decals;
     for (method, centre, corner) in render_methods(&scene, &camera) {
         assert!((centre - expected).abs().max_element() <= 1e-4, "{rule} ({}): centre {centre}, expected {expected}", method.name());
-        assert!((corner - WALL_COLOR).abs().max_element() <= 1e-5, "{rule} ({}): corner {corner} outside the decals changed", method.name());
+        assert!(
+            (corner - WALL_COLOR).abs().max_element() <= 1e-5,
+            "{rule} ({}): corner {corner} outside the decals changed",
+            method.name()
+        );
     }
 }
 
@@ -118,7 +127,12 @@ fn higher_layers_cover_lower_ones_whatever_the_order_or_weight() {
 #[test]
 fn metallic_blends_like_albedo() {
     let (mut scene, camera) = wall();
-    scene.materials.push(Material { base_color_factor: RED.extend(0.5), metallic_factor: 1.0, roughness_factor: 0.8, ..Default::default() });
+    scene.materials.push(Material {
+        base_color_factor: RED.extend(0.5),
+        metallic_factor: 1.0,
+        roughness_factor: 0.8,
+        ..Default::default()
+    });
     scene.decals = vec![decal(1, 0, 1.0)];
     // Albedo 0.5 RED + 0.5 WALL, metallic 0.5: ambient reflects mix(albedo, albedo / 2, 0.5).
     let expected = (RED * 0.5 + WALL_COLOR * 0.5) * 0.75;
@@ -155,7 +169,12 @@ fn centre_difference(a: &manylights::renderer::Image<[f32; 4]>, b: &manylights::
 fn roughness_blends_like_albedo() {
     // A wall-coloured decal of roughness 0.2 at alpha 0.5 over roughness 0.8 looks like roughness 0.5.
     let (mut scene, camera) = lit_wall();
-    scene.materials.push(Material { base_color_factor: WALL_COLOR.extend(0.5), metallic_factor: 0.0, roughness_factor: 0.2, ..Default::default() });
+    scene.materials.push(Material {
+        base_color_factor: WALL_COLOR.extend(0.5),
+        metallic_factor: 0.0,
+        roughness_factor: 0.2,
+        ..Default::default()
+    });
     scene.decals = vec![decal(1, 0, 1.0)];
     let (mut reference, _) = lit_wall();
     reference.materials[0].roughness_factor = 0.5;
@@ -204,13 +223,15 @@ fn decals_skip_surfaces_facing_away_and_fade_edge_on() {
     let (mut scene, camera) = wall();
     solid(&mut scene, RED, 1.0);
     // Projecting from behind the wall: its +Z faces away from the wall's normal.
-    let behind = Affine3A::from_rotation_translation(Quat::from_rotation_y(std::f32::consts::PI), Vec3::ZERO) * Affine3A::from_scale(Vec3::new(2.0, 2.0, 0.5));
+    let behind = Affine3A::from_rotation_translation(Quat::from_rotation_y(std::f32::consts::PI), Vec3::ZERO)
+        * Affine3A::from_scale(Vec3::new(2.0, 2.0, 0.5));
     scene.decals = vec![Decal { world_from_decal: behind, material: 1, layer: 0, weight: 1.0 }];
     for (method, centre, _) in render_methods(&scene, &camera) {
         assert!((centre - WALL_COLOR).abs().max_element() <= 1e-5, "{}: a decal facing away changed the wall to {centre}", method.name());
     }
     // Tilted 80° from the wall's normal: cos 80° ≈ 0.17 is inside the fade (full from 0.25).
-    let tilted = Affine3A::from_rotation_translation(Quat::from_rotation_y(80f32.to_radians()), Vec3::ZERO) * Affine3A::from_scale(Vec3::new(2.0, 2.0, 2.0));
+    let tilted = Affine3A::from_rotation_translation(Quat::from_rotation_y(80f32.to_radians()), Vec3::ZERO)
+        * Affine3A::from_scale(Vec3::new(2.0, 2.0, 2.0));
     scene.decals = vec![Decal { world_from_decal: tilted, material: 1, layer: 0, weight: 1.0 }];
     for (method, centre, _) in render_methods(&scene, &camera) {
         let red_share = (centre - WALL_COLOR).length() / (RED - WALL_COLOR).length();
@@ -230,7 +251,12 @@ fn textured_decals_sample_their_image_in_decal_space() {
     }
     scene.textures.push(Texture { name: "halves".into(), width: 8, height: 8, rgba8: rgba });
     let texture = TextureRef { texture: 0, wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::ClampToEdge };
-    scene.materials.push(Material { base_color_factor: Vec4::ONE, base_color_texture: Some(texture), metallic_factor: 0.0, ..Default::default() });
+    scene.materials.push(Material {
+        base_color_factor: Vec4::ONE,
+        base_color_texture: Some(texture),
+        metallic_factor: 0.0,
+        ..Default::default()
+    });
     scene.decals = vec![decal(1, 0, 1.0)];
     for method in DecalMethod::ALL {
         let hdr = render_lit_ambient(&scene, &camera, method);

@@ -1,0 +1,152 @@
+//! Decals through the acceleration structure give the brute-force image (linear HDR, max abs
+//! difference ≤ 1e-3), with thousands of decals and lights, grouped and moving; 0 decals work, 1M
+//! decals fit, and bad decals are rejected.
+
+mod common;
+
+use std::path::PathBuf;
+
+use common::*;
+use glam::{Affine3A, Vec3};
+use manylights::{
+    accel::BvhBuild,
+    config::RenderConfig,
+    gpu::GpuContext,
+    pipelines::{DecalMethod, LightMethod},
+    renderer::{Image, Renderer},
+    scene::{
+        self,
+        demo::demo_scene,
+        generators::{self, ScatterDecals, ScatterLights},
+        Decal, Scene,
+    },
+};
+
+const TOLERANCE: f32 = 1e-3;
+
+fn decal_config(width: u32, height: u32, decals: DecalMethod, build: BvhBuild) -> RenderConfig {
+    RenderConfig { decal_method: decals, decal_bvh_build: build, ..config(width, height, LightMethod::Bvh) }
+}
+
+fn render_at(scene: &Scene, config: RenderConfig, time: f32) -> Image<[f32; 4]> {
+    let mut r = renderer(scene, config);
+    r.time = time;
+    r.render(&scene.cameras[0]).expect("frame");
+    r.read_hdr().expect("hdr")
+}
+
+fn assert_decal_methods_agree(scene: &Scene, width: u32, height: u32, time: f32) {
+    let brute = render_at(scene, decal_config(width, height, DecalMethod::Brute, BvhBuild::CpuOnce), time);
+    for build in [BvhBuild::CpuOnce, BvhBuild::GpuEveryFrame] {
+        let bvh = render_at(scene, decal_config(width, height, DecalMethod::Bvh, build), time);
+        let difference = max_abs_difference(&brute, &bvh);
+        assert!(difference <= TOLERANCE, "bvh decals ({build:?}): max abs difference {difference} from brute force");
+    }
+}
+
+fn with_decals_and_lights(mut scene: Scene, decals: usize, lights: usize, seed: u64) -> Scene {
+    generators::add_scattered_decals(&mut scene, &ScatterDecals { count: decals, seed, size: None }).unwrap();
+    generators::add_scattered_lights(&mut scene, &ScatterLights { count: lights, seed: seed + 1, ..Default::default() }).unwrap();
+    scene
+}
+
+/// Mean difference the decals make: the tests must exercise them, not an empty path.
+fn decal_effect(scene: &Scene, width: u32, height: u32) -> f32 {
+    let mut bare = scene.clone();
+    bare.decals.clear();
+    bare.decal_groups = Default::default();
+    let config = decal_config(width, height, DecalMethod::Brute, BvhBuild::CpuOnce);
+    let (with, without) = (render_at(scene, config.clone(), 0.0), render_at(&bare, config, 0.0));
+    with.pixels.iter().zip(&without.pixels).map(|(a, b)| (luminance(*a) - luminance(*b)).abs()).sum::<f32>() / with.pixels.len() as f32
+}
+
+#[test]
+fn demo_with_thousands_of_decals() {
+    let scene = with_decals_and_lights(demo_scene(), 2000, 500, 21);
+    assert!(decal_effect(&scene, 96, 54) > 1e-3, "the decals barely change the image");
+    assert_decal_methods_agree(&scene, 128, 72, 0.0);
+}
+
+#[test]
+fn sponza_with_thousands_of_decals_and_lights() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets/sponza/Sponza.gltf");
+    let mut scene = with_decals_and_lights(scene::load_path(&path).unwrap(), 3000, 2000, 5);
+    scene.ambient = Vec3::splat(0.05);
+    assert!(decal_effect(&scene, 64, 36) > 1e-4, "the decals barely change the image");
+    assert_decal_methods_agree(&scene, 96, 54, 0.0);
+}
+
+#[test]
+fn grouped_spinning_decals_and_lights() {
+    let mut scene = with_decals_and_lights(demo_scene(), 2000, 800, 8);
+    generators::group_for_animation(&mut scene, 12, 3).unwrap();
+    // Lights too: both structures' top levels are rebuilt for the time.
+    let brute = render_at(
+        &scene,
+        RenderConfig { light_method: LightMethod::Brute, ..decal_config(128, 72, DecalMethod::Brute, BvhBuild::CpuOnce) },
+        0.9,
+    );
+    for build in [BvhBuild::CpuOnce, BvhBuild::GpuEveryFrame] {
+        let config = RenderConfig { light_bvh_build: build, ..decal_config(128, 72, DecalMethod::Bvh, build) };
+        let bvh = render_at(&scene, config, 0.9);
+        let difference = max_abs_difference(&brute, &bvh);
+        assert!(difference <= TOLERANCE, "{build:?}: max abs difference {difference} from brute force");
+    }
+    // And moving them changes the picture.
+    let at_zero = render_at(&scene, decal_config(128, 72, DecalMethod::Bvh, BvhBuild::CpuOnce), 0.0);
+    assert!(max_abs_difference(&brute, &at_zero) > 0.01, "spinning groups did not move");
+}
+
+#[test]
+fn frames_rendered_back_to_back_move_the_groups() {
+    let mut scene = with_decals_and_lights(demo_scene(), 500, 300, 4);
+    generators::group_for_animation(&mut scene, 4, 9).unwrap();
+    let ctx = GpuContext::new().expect("a GPU adapter");
+    let mut r = Renderer::new(ctx, &scene, decal_config(64, 36, DecalMethod::Bvh, BvhBuild::CpuOnce)).unwrap();
+    r.render_frames(&scene.cameras[0], 30).unwrap();
+    let after_30 = r.read_hdr().unwrap();
+    // The last of 30 frames is drawn at 29 frame intervals.
+    let expected =
+        render_at(&scene, decal_config(64, 36, DecalMethod::Brute, BvhBuild::CpuOnce), 29.0 * manylights::renderer::FRAME_INTERVAL);
+    let difference = max_abs_difference(&expected, &after_30);
+    assert!(difference <= TOLERANCE, "frame 30 differs by {difference} from a frame rendered at its time");
+}
+
+#[test]
+fn no_decals() {
+    let scene = with_decals_and_lights(demo_scene(), 0, 100, 1);
+    assert!(scene.decals.is_empty());
+    assert_decal_methods_agree(&scene, 64, 36, 0.0);
+}
+
+#[test]
+fn a_million_decals_fit() {
+    // 1M decals (64 MiB) and their BVH (64 MiB) stay under lavapipe's 128 MiB storage bindings.
+    let base = demo_scene();
+    let mut scene = base.clone();
+    generators::add_scattered_decals(&mut scene, &ScatterDecals { count: 1 << 20, seed: 2, size: Some(0.05) }).unwrap();
+    let config = decal_config(64, 36, DecalMethod::Bvh, BvhBuild::GpuEveryFrame);
+    let with = render_at(&scene, config.clone(), 0.0);
+    let without = render_at(&base, config, 0.0);
+    assert!(with.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    assert!(max_abs_difference(&with, &without) > 0.01, "a million decals changed nothing");
+}
+
+#[test]
+fn non_finite_or_degenerate_decals_are_rejected() {
+    let mut scene = with_decals_and_lights(demo_scene(), 10, 0, 1);
+    let material = scene.decals[0].material;
+    let cases = [
+        (Affine3A::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)), "NaN or infinite"),
+        (Affine3A::from_scale(Vec3::new(1.0, f32::INFINITY, 1.0)), "NaN or infinite"),
+        (Affine3A::from_scale(Vec3::new(1.0, 0.0, 1.0)), "degenerate"),
+    ];
+    for (transform, reason) in cases {
+        scene.decals[3] = Decal { world_from_decal: transform, material, layer: 0, weight: 1.0 };
+        let ctx = GpuContext::new().expect("a GPU adapter");
+        let err =
+            Renderer::new(ctx, &scene, decal_config(64, 36, DecalMethod::Bvh, BvhBuild::CpuOnce)).err().expect("a bad decal is an error");
+        let message = err.to_string();
+        assert!(message.contains("decal 3") && message.contains(reason), "{message}");
+    }
+}
