@@ -1,8 +1,10 @@
-//! `manylights info`: what wgpu sees and what manylights would use.
+//! `manylights info`: what wgpu sees and what manylights would use, and what a scene holds.
 
 use manylights::gpu::{context, GpuContext};
 
-pub fn run() -> anyhow::Result<()> {
+use crate::scene_args::{describe_groups, SceneArgs};
+
+pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     let adapters = context::list_adapters();
     println!("adapters ({}):", adapters.len());
     for a in &adapters {
@@ -25,5 +27,15 @@ pub fn run() -> anyhow::Result<()> {
         ctx.limits.max_storage_buffer_binding_size / (1 << 20),
         ctx.limits.max_buffer_size / (1 << 20)
     );
+    let scene = args.load()?;
+    println!(
+        "scene {}: {} triangles drawn, {} materials, {} textures",
+        args.scene,
+        scene.drawn_triangle_count(),
+        scene.materials.len(),
+        scene.textures.len()
+    );
+    println!("  lights: {} in {}", scene.lights.len(), describe_groups(&scene.light_groups, scene.lights.len()));
+    println!("  decals: {} in {}", scene.decals.len(), describe_groups(&scene.decal_groups, scene.decals.len()));
     Ok(())
 }

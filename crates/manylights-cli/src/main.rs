@@ -2,6 +2,7 @@
 
 mod info;
 mod render;
+mod scene_args;
 
 use std::process::ExitCode;
 
@@ -18,8 +19,9 @@ struct Cli {
 enum Command {
     /// Render a scene to a PNG (and optionally EXR), with per-pass GPU timings.
     Render(render::RenderArgs),
-    /// List GPU adapters, the one manylights would choose, its driver and the features it uses.
-    Info,
+    /// List GPU adapters, the one manylights would choose, its driver and the features it uses; then
+    /// what the scene (with the same scene options as `render`) holds.
+    Info(scene_args::SceneArgs),
 }
 
 fn main() -> ExitCode {
@@ -27,7 +29,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render::run(&args),
-        Command::Info => info::run(),
+        Command::Info(args) => info::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

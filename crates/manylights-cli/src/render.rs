@@ -9,19 +9,20 @@ use manylights::{
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
     image_io,
-    pipelines::LightMethod,
+    pipelines::{DecalMethod, LightMethod},
     renderer::Renderer,
-    scene::{self, generators::ScatterLights, Camera, Scene},
+    scene::{Camera, Scene},
 };
+
+use crate::scene_args::SceneArgs;
 
 /// Most frames one run may time or warm up with: a few minutes even on a fast GPU.
 const MAX_FRAMES: u32 = 100_000;
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// `demo` (built in), or a .gltf, .glb or .toml scene file.
-    #[arg(long, default_value = "demo")]
-    scene: String,
+    #[command(flatten)]
+    scene: SceneArgs,
     #[arg(long, default_value_t = 1280)]
     width: u32,
     #[arg(long, default_value_t = 720)]
@@ -30,17 +31,17 @@ pub struct RenderArgs {
     /// scene is framed automatically.
     #[arg(long)]
     camera: Option<usize>,
-    /// Scatter this many extra point lights over the scene's surfaces.
-    #[arg(long, default_value_t = 0)]
-    lights: u32,
-    /// Seed of the light scatter.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
     #[arg(long, value_enum, default_value_t = MethodArg::Brute)]
     light_method: MethodArg,
     /// How the light BVH is built (with --light-method bvh): once on the CPU, or every frame on the GPU.
     #[arg(long, value_enum, default_value_t = BvhBuildArg::CpuOnce)]
     light_bvh_build: BvhBuildArg,
+    /// How shading finds the decals covering a point: loop over all, or point queries in a BVH.
+    #[arg(long, value_enum, default_value_t = MethodArg::Brute)]
+    decal_method: MethodArg,
+    /// How the decal BVH is built (with --decal-method bvh): once on the CPU, or every frame on the GPU.
+    #[arg(long, value_enum, default_value_t = BvhBuildArg::CpuOnce)]
+    decal_bvh_build: BvhBuildArg,
     #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
     tonemap: TonemapArg,
     /// Largest texture size kept on the GPU (larger images are downsampled).
@@ -81,6 +82,15 @@ enum BvhBuildArg {
     GpuEveryFrame,
 }
 
+impl From<BvhBuildArg> for BvhBuild {
+    fn from(arg: BvhBuildArg) -> Self {
+        match arg {
+            BvhBuildArg::CpuOnce => BvhBuild::CpuOnce,
+            BvhBuildArg::GpuEveryFrame => BvhBuild::GpuEveryFrame,
+        }
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum TonemapArg {
     Aces,
@@ -92,11 +102,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if !(1..=MAX_FRAMES).contains(&args.frames) || args.warmup > MAX_FRAMES {
         bail!("--frames must be between 1 and {MAX_FRAMES} and --warmup at most {MAX_FRAMES} (got {} and {})", args.frames, args.warmup);
     }
-    let mut scene = load_scene(&args.scene)?;
-    if args.lights > 0 {
-        let params = ScatterLights { count: args.lights as usize, seed: args.seed, ..Default::default() };
-        scene::generators::add_scattered_lights(&mut scene, &params)?;
-    }
+    let scene = args.scene.load()?;
     let camera = choose_camera(&scene, args.camera)?;
     let config = RenderConfig {
         width: args.width,
@@ -105,12 +111,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             MethodArg::Brute => LightMethod::Brute,
             MethodArg::Bvh => LightMethod::Bvh,
         },
-        light_bvh_build: match args.light_bvh_build {
-            BvhBuildArg::CpuOnce => BvhBuild::CpuOnce,
-            BvhBuildArg::GpuEveryFrame => BvhBuild::GpuEveryFrame,
+        light_bvh_build: args.light_bvh_build.into(),
+        decal_method: match args.decal_method {
+            MethodArg::Brute => DecalMethod::Brute,
+            MethodArg::Bvh => DecalMethod::Bvh,
         },
-        decal_method: manylights::pipelines::DecalMethod::Brute,
-        decal_bvh_build: BvhBuild::CpuOnce,
+        decal_bvh_build: args.decal_bvh_build.into(),
         tonemapper: match args.tonemap {
             TonemapArg::Aces => Tonemapper::Aces,
             TonemapArg::Agx => Tonemapper::Agx,
@@ -135,7 +141,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let report = TimingReport::new(&frames);
     if args.timings {
-        report.print(&device, args, &renderer);
+        report.print(&device, args, &renderer, &scene);
     }
     if let Some(path) = &args.timings_json {
         let json = report.to_json(&device, args, &renderer, &scene);
@@ -143,14 +149,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     println!("wrote {}", args.output.display());
     Ok(())
-}
-
-fn load_scene(spec: &str) -> manylights::Result<Scene> {
-    if spec == "demo" {
-        Ok(scene::demo::demo_scene())
-    } else {
-        scene::load_path(std::path::Path::new(spec))
-    }
 }
 
 fn choose_camera(scene: &Scene, index: Option<usize>) -> anyhow::Result<Camera> {
@@ -203,11 +201,18 @@ impl TimingReport {
         (percentile(&sorted, 0.5), percentile(&sorted, 0.95))
     }
 
-    fn print(&self, device: &str, args: &RenderArgs, renderer: &Renderer) {
+    fn print(&self, device: &str, args: &RenderArgs, renderer: &Renderer, scene: &Scene) {
         println!("GPU: {device}");
         println!(
-            "{}×{}, {} triangles, {} lights, {} timed frames after {} warm-up",
-            args.width, args.height, renderer.scene.triangle_count, renderer.scene.lighting.light_count, args.frames, args.warmup
+            "{}×{}, {} triangles, {} lights, {} decals{}, {} timed frames after {} warm-up",
+            args.width,
+            args.height,
+            renderer.scene.triangle_count,
+            scene.lights.len(),
+            scene.decals.len(),
+            if is_animated(scene) { " (animated)" } else { "" },
+            args.frames,
+            args.warmup
         );
         println!("{:<20} {:>10} {:>10}", "pass", "median ms", "p95 ms");
         for (name, samples) in &self.passes {
@@ -227,16 +232,23 @@ impl TimingReport {
         serde_json::json!({
             "device": device,
             "commit": env!("MANYLIGHTS_COMMIT"),
-            "scene": args.scene,
+            "scene": args.scene.scene,
             "width": args.width,
             "height": args.height,
             "triangles": renderer.scene.triangle_count,
             "lights": scene.lights.len(),
             "light_method": renderer.config.light_method.name(),
+            "decals": scene.decals.len(),
+            "decal_method": renderer.config.decal_method.name(),
+            "animated": is_animated(scene),
             "warmup_frames": args.warmup,
             "timed_frames": args.frames,
             "passes": passes,
             "frame": pass(&self.frame_totals),
         })
     }
+}
+
+fn is_animated(scene: &Scene) -> bool {
+    scene.light_groups.is_animated() || scene.decal_groups.is_animated()
 }

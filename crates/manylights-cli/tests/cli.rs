@@ -136,6 +136,66 @@ fn camera_out_of_range() {
 }
 
 #[test]
+fn renders_animated_decals_through_the_bvh() {
+    let dir = temp_dir("render_decals");
+    let json = dir.join("timings.json");
+    let out = render_to(&dir, &["--decals", "50", "--decal-method", "bvh", "--animate", "--timings-json", json.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let png = image::open(dir.join("out.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (64, 36));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(
+        (report["decals"].as_u64(), report["decal_method"].as_str(), report["animated"].as_bool()),
+        (Some(50), Some("bvh"), Some(true))
+    );
+}
+
+#[test]
+fn bad_decal_sizes_are_refused() {
+    for (size, shown) in [("-1", "-1"), ("nan", "NaN"), ("0", "0"), ("inf", "inf")] {
+        let err = failure(&["render", "--width", "64", "--height", "36", "--decals", "4", "--decal-size", size]);
+        assert!(err.contains(&format!("--decal-size {shown}:")) && err.contains("finite length > 0"), "{size}: {err}");
+    }
+    let err = failure(&["render", "--decal-size", "1"]);
+    assert!(err.contains("--decals"), "--decal-size without --decals: {err}");
+}
+
+#[test]
+fn bad_animation_groups_are_refused() {
+    let err = failure(&["render", "--width", "64", "--height", "36", "--animate", "--groups", "0"]);
+    assert!(err.contains("--groups 0") && err.contains("at least 1"), "{err}");
+    let err = failure(&["render", "--groups", "4"]);
+    assert!(err.contains("--animate"), "--groups without --animate: {err}");
+
+    let dir = temp_dir("animate_twice");
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, format!("gltf = '{}'\n[[scatter_lights]]\ncount = 8\n[animate]\n", assets().join("box/Box.glb").display()))
+        .unwrap();
+    let err = failure(&["render", "--width", "64", "--height", "36", "--scene", path.to_str().unwrap(), "--animate"]);
+    assert!(err.contains("grouped already") && err.contains("--animate"), "{err}");
+    let err = failure(&["render", "--width", "64", "--height", "36", "--scene", path.to_str().unwrap(), "--lights", "4"]);
+    assert!(err.contains("lights are grouped") && err.contains("--animate"), "{err}");
+}
+
+#[test]
+fn decals_need_surfaces() {
+    let dir = temp_dir("decals_without_surfaces");
+    let path = dir.join("empty.toml");
+    std::fs::write(&path, "").unwrap();
+    let err = failure(&["render", "--width", "64", "--height", "36", "--scene", path.to_str().unwrap(), "--decals", "5"]);
+    assert!(err.contains("cannot scatter 5 decals") && err.contains("no triangles"), "{err}");
+}
+
+#[test]
+fn bad_decals_in_a_scene_file_name_the_image() {
+    let dir = temp_dir("decal_image");
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, "[[decals]]\nposition = [0, 0, 0]\nnormal = [0, 1, 0]\nsize = [1, 1, 1]\nalbedo = 'missing.png'\n").unwrap();
+    let err = failure(&["render", "--width", "64", "--height", "36", "--scene", path.to_str().unwrap()]);
+    assert!(err.contains("scene.toml") && err.contains("decal 0: albedo image") && err.contains("missing.png"), "{err}");
+}
+
+#[test]
 fn no_matching_adapter_explains_how_to_install_a_driver() {
     let out = Command::new(env!("CARGO_BIN_EXE_manylights"))
         .args(["render", "--width", "64", "--height", "36"])
@@ -153,4 +213,14 @@ fn info_lists_the_chosen_adapter() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("chosen:") && stdout.contains("features used"), "{stdout}");
+}
+
+#[test]
+fn info_counts_decals_and_groups() {
+    let out = manylights(&["info", "--decals", "10", "--animate", "--groups", "3"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("scene demo:"), "{stdout}");
+    assert!(stdout.contains("decals: 10 in 3 group(s), 3 instance(s), animated"), "{stdout}");
+    assert!(stdout.contains("lights: 7 in 3 group(s), 3 instance(s), animated"), "{stdout}");
 }

@@ -118,7 +118,10 @@ fn grouped_demo() -> Scene {
         instances: vec![
             still(0, Affine3A::IDENTITY),
             still(0, Affine3A::from_rotation_translation(Quat::from_rotation_y(0.8), Vec3::new(0.5, 0.2, -0.3))),
-            GroupInstance { spin: Some(Spin { pivot: Vec3::new(-0.5, 0.0, -1.0), radians_per_second: 1.3 }), ..still(1, Affine3A::IDENTITY) },
+            GroupInstance {
+                spin: Some(Spin { pivot: Vec3::new(-0.5, 0.0, -1.0), radians_per_second: 1.3 }),
+                ..still(1, Affine3A::IDENTITY)
+            },
             still(2, Affine3A::IDENTITY),
         ],
     };

@@ -239,12 +239,12 @@ fn hash(x: u32, y: u32) -> f32 {
     (h & 0xffff) as f32 / 65536.0
 }
 
-fn texture(name: &str, size: u32, texel: impl Fn(u32, u32) -> [u8; 4]) -> Texture {
+pub(super) fn texture(name: &str, size: u32, texel: impl Fn(u32, u32) -> [u8; 4]) -> Texture {
     let rgba8 = (0..size).flat_map(|y| (0..size).map(move |x| (x, y))).flat_map(|(x, y)| texel(x, y)).collect();
     Texture { name: name.into(), width: size, height: size, rgba8 }
 }
 
-fn unorm8(value: f32) -> u8 {
+pub(super) fn unorm8(value: f32) -> u8 {
     (value.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 

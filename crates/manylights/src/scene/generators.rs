@@ -1,11 +1,14 @@
-//! Seeded generators that add content to a loaded scene: many point lights scattered over its
-//! surfaces, for scenes (like Sponza) that come without lights.
+//! Seeded generators that add content to a loaded scene: many point lights and decals scattered over
+//! its surfaces, for scenes (like Sponza) that come without them, and the grouping of lights and
+//! decals into spinning groups for animated benchmarks.
 
-use glam::{Mat3, Vec3};
+use std::ops::Range;
+
+use glam::{Affine3A, Mat3, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
-use super::{Light, LightKind, Scene};
+use super::{decal_textures, Aabb, Decal, GroupInstance, Groups, Light, LightKind, Scene, Spin, DECAL_LAYERS};
 use crate::{Error, Result};
 
 /// Most lights one generator call may create (2²⁴): far beyond real-time use, and a guard against
@@ -74,8 +77,9 @@ pub fn scatter_lights(scene: &Scene, params: &ScatterLights) -> Result<Vec<Light
     Ok(lights)
 }
 
-/// Appends [`scatter_lights`] to the scene's lights.
+/// Appends [`scatter_lights`] to the scene's lights, which must not be grouped yet.
 pub fn add_scattered_lights(scene: &mut Scene, params: &ScatterLights) -> Result<()> {
+    check_ungrouped(&scene.light_groups, "lights")?;
     let lights = scatter_lights(scene, params)?;
     scene.lights.extend(lights);
     Ok(())
@@ -102,6 +106,211 @@ fn check(params: &ScatterLights) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Most decals one generator call may create (2²⁴), a guard like [`MAX_SCATTERED_LIGHTS`].
+pub const MAX_SCATTERED_DECALS: usize = 1 << 24;
+
+/// Decals scattered uniformly by area over a scene's surfaces, after Hansen & Peters (2021): each box
+/// centred on a surface point, its +Z along the surface normal, turned randomly about it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScatterDecals {
+    pub count: usize,
+    pub seed: u64,
+    /// Mean edge of the box's square face; each decal's is uniform in [0.75, 1.25] × size and its depth
+    /// half that. `None`: 2.5 % of the scene's bounding-box diagonal.
+    pub size: Option<f32>,
+}
+
+impl Default for ScatterDecals {
+    fn default() -> Self {
+        Self { count: 256, seed: 1, size: None }
+    }
+}
+
+/// Generates `params.count` decals over the surfaces of `scene`'s instances, each with a material
+/// drawn from `materials`, a random layer and a weight in [0.5, 2]. Deterministic.
+pub fn scatter_decals(scene: &Scene, params: &ScatterDecals, materials: Range<usize>) -> Result<Vec<Decal>> {
+    check_decals(params)?;
+    if materials.is_empty() || materials.end > scene.materials.len() {
+        return Err(Error::InvalidConfig(format!(
+            "scattered decals: materials {materials:?} must be a non-empty range of the scene's {} materials",
+            scene.materials.len()
+        )));
+    }
+    scene.validate()?;
+    if params.count == 0 {
+        return Ok(Vec::new());
+    }
+    let surfaces = Surfaces::new(scene);
+    let area = surfaces.total_area();
+    if !(area.is_finite() && area > 0.0) {
+        return Err(Error::InvalidConfig(format!("cannot scatter {} decals: the scene has no triangles with any area", params.count)));
+    }
+    let size = params.size.unwrap_or_else(|| scene.bounds().diagonal() * 0.025);
+    if !(size.is_finite() && size > 0.0) {
+        return Err(Error::InvalidConfig(format!(
+            "scattered decals: the scene's bounds give no usable size ({size}); give one explicitly"
+        )));
+    }
+
+    let mut rng = Pcg64::seed_from_u64(params.seed);
+    let decals = (0..params.count)
+        .map(|_| {
+            let (point, normal) = surfaces.sample(&mut rng);
+            let (a, b) = normal.any_orthonormal_pair();
+            let (sin, cos) = (std::f32::consts::TAU * rng.random::<f32>()).sin_cos();
+            let x = a * cos + b * sin;
+            let edge = size * uniform(&mut rng, (0.75, 1.25));
+            Decal {
+                // Right-handed: x × (n × x) = n.
+                world_from_decal: Affine3A::from_cols(
+                    (x * edge).into(),
+                    (normal.cross(x) * edge).into(),
+                    (normal * (edge * 0.5)).into(),
+                    point.into(),
+                ),
+                material: rng.random_range(materials.clone()),
+                layer: rng.random_range(0..DECAL_LAYERS),
+                weight: uniform(&mut rng, (0.5, 2.0)),
+            }
+        })
+        .collect();
+    Ok(decals)
+}
+
+/// Appends [`scatter_decals`] to the scene's decals, which must not be grouped yet, with the
+/// procedural decal materials ([`decal_textures`]), which are added the first time only.
+pub fn add_scattered_decals(scene: &mut Scene, params: &ScatterDecals) -> Result<()> {
+    check_ungrouped(&scene.decal_groups, "decals")?;
+    check_decals(params)?;
+    if params.count == 0 {
+        return Ok(());
+    }
+    let (material_count, texture_count) = (scene.materials.len(), scene.textures.len());
+    let materials = decal_textures::find_decal_materials(scene).unwrap_or_else(|| decal_textures::add_decal_materials(scene));
+    match scatter_decals(scene, params, materials) {
+        Ok(decals) => {
+            scene.decals.extend(decals);
+            Ok(())
+        }
+        Err(e) => {
+            // Leave the scene as it was.
+            scene.materials.truncate(material_count);
+            scene.textures.truncate(texture_count);
+            Err(e)
+        }
+    }
+}
+
+/// World-space items appended to grouped ones would land in the wrong space and break the grouping.
+fn check_ungrouped(groups: &Groups, what: &str) -> Result<()> {
+    if *groups != Groups::default() {
+        return Err(Error::InvalidConfig(format!(
+            "cannot scatter {what} into a scene whose {what} are grouped; scatter them before grouping \
+             (use `--animate` rather than a scene file's `[animate]` with `--lights`/`--decals`)"
+        )));
+    }
+    Ok(())
+}
+
+fn check_decals(params: &ScatterDecals) -> Result<()> {
+    if params.count > MAX_SCATTERED_DECALS {
+        return Err(Error::InvalidConfig(format!(
+            "scattered decals: count {} exceeds the maximum of {MAX_SCATTERED_DECALS}",
+            params.count
+        )));
+    }
+    if let Some(size) = params.size {
+        if !(size.is_finite() && size > 0.0) {
+            return Err(Error::InvalidConfig(format!("scattered decals: size {size} must be a finite length > 0")));
+        }
+    }
+    Ok(())
+}
+
+/// Group count of [`group_for_animation`] when none is given.
+pub const DEFAULT_ANIMATION_GROUPS: usize = 16;
+
+/// Splits the scene's lights, and its decals, into up to `groups` spatially coherent groups that spin
+/// about their own vertical axes, for benchmarks of moving content: items are sorted along a Morton
+/// curve over their bounds and cut into equal runs (fewer groups when there are fewer items). Each
+/// group's items are stored relative to their centre and placed there by one instance spinning at
+/// ±[0.3, 1] rad/s (seeded). At time 0 everything is where it was. The scene must not be grouped yet.
+pub fn group_for_animation(scene: &mut Scene, groups: usize, seed: u64) -> Result<()> {
+    if groups == 0 {
+        return Err(Error::InvalidConfig("animation groups: the group count must be at least 1".into()));
+    }
+    for (what, existing) in [("lights", &scene.light_groups), ("decals", &scene.decal_groups)] {
+        if *existing != Groups::default() {
+            return Err(Error::InvalidConfig(format!(
+                "animation groups: the scene's {what} are grouped already; group them once (not both `[animate]` in a scene file and `--animate`)"
+            )));
+        }
+    }
+    let mut rng = Pcg64::seed_from_u64(seed);
+    scene.light_groups = group_items(&mut scene.lights, groups, &mut rng, |l| l.position, |l, centre| l.position -= centre);
+    scene.decal_groups = group_items(
+        &mut scene.decals,
+        groups,
+        &mut rng,
+        |d| d.world_from_decal.translation.into(),
+        |d, centre| d.world_from_decal = Affine3A::from_translation(-centre) * d.world_from_decal,
+    );
+    Ok(())
+}
+
+/// Sorts `items` by position along a Morton curve, cuts them into up to `groups` runs and moves each
+/// run into its own space, centred on its bounds; returns the groups with one spinning instance each.
+fn group_items<T>(
+    items: &mut [T],
+    groups: usize,
+    rng: &mut Pcg64,
+    position: impl Fn(&T) -> Vec3,
+    recentre: impl Fn(&mut T, Vec3),
+) -> Groups {
+    if items.is_empty() {
+        return Groups::default();
+    }
+    let mut bounds = Aabb::EMPTY;
+    items.iter().for_each(|item| bounds.grow_point(position(item)));
+    items.sort_by_cached_key(|item| morton_code(position(item), &bounds));
+
+    let (n, k) = (items.len(), groups.min(items.len()));
+    let mut result = Groups::default();
+    for g in 0..k {
+        let run = &mut items[g * n / k..(g + 1) * n / k];
+        let mut run_bounds = Aabb::EMPTY;
+        run.iter().for_each(|item| run_bounds.grow_point(position(item)));
+        let centre = run_bounds.center();
+        run.iter_mut().for_each(|item| recentre(item, centre));
+        let speed = uniform(rng, (0.3, 1.0));
+        let radians_per_second = if rng.random() { speed } else { -speed };
+        result.sizes.push(run.len());
+        result.instances.push(GroupInstance {
+            group: g,
+            world_from_group: Affine3A::from_translation(centre),
+            spin: Some(Spin { pivot: centre, radians_per_second }),
+        });
+    }
+    result
+}
+
+/// 30-bit Morton code of `p` quantised to 1024 steps per axis of `bounds`.
+fn morton_code(p: Vec3, bounds: &Aabb) -> u32 {
+    // A flat axis divides 0 by a tiny number; NaN saturates to 0.
+    let unit = ((p - bounds.min) / (bounds.max - bounds.min).max(Vec3::splat(f32::MIN_POSITIVE))).clamp(Vec3::ZERO, Vec3::ONE);
+    let q = (unit * 1023.0).as_uvec3();
+    spread_bits(q.x) << 2 | spread_bits(q.y) << 1 | spread_bits(q.z)
+}
+
+/// Moves bit i of a 10-bit value to bit 3i.
+fn spread_bits(v: u32) -> u32 {
+    let mut x = v & 0x3ff;
+    x = (x | x << 16) & 0x0300_00ff;
+    x = (x | x << 8) & 0x0300_f00f;
+    x = (x | x << 4) & 0x030c_30c3;
+    (x | x << 2) & 0x0924_9249
 }
 
 /// Every world-space triangle of the scene, for sampling by area.
@@ -302,6 +511,223 @@ mod tests {
         for (hue, rgb) in [(0.0, Vec3::X), (1.0 / 3.0, Vec3::Y), (2.0 / 3.0, Vec3::Z), (0.5, Vec3::new(0.0, 1.0, 1.0))] {
             assert!(saturated_color(hue).abs_diff_eq(rgb, 1e-5), "{hue}: {}", saturated_color(hue));
         }
+    }
+
+    fn decal_axes(d: &Decal) -> [Vec3; 4] {
+        let m = d.world_from_decal;
+        [m.matrix3.x_axis.into(), m.matrix3.y_axis.into(), m.matrix3.z_axis.into(), m.translation.into()]
+    }
+
+    #[test]
+    fn decals_sit_on_surfaces_facing_out_along_the_normal() {
+        let mut scene = two_floors();
+        let materials = decal_textures::add_decal_materials(&mut scene);
+        let params = ScatterDecals { count: 500, size: Some(0.4), ..Default::default() };
+        let decals = scatter_decals(&scene, &params, materials.clone()).unwrap();
+        assert_eq!(decals.len(), 500);
+        for d in &decals {
+            let [x, y, z, centre] = decal_axes(d);
+            assert!(centre.x.abs() <= 2.0 && centre.z.abs() <= 2.0, "{centre}");
+            // Facing up from the lower floor, down from the upside-down upper one.
+            let on_lower = centre.y.abs() < 1e-5 && z.normalize().abs_diff_eq(Vec3::Y, 1e-5);
+            let on_upper = (centre.y - 2.0).abs() < 1e-5 && z.normalize().abs_diff_eq(Vec3::NEG_Y, 1e-5);
+            assert!(on_lower || on_upper, "{centre} {z}");
+            let edge = x.length();
+            assert!((0.3 - 1e-5..=0.5 + 1e-5).contains(&edge), "{edge}");
+            assert!((y.length() - edge).abs() < 1e-5 && (z.length() - edge * 0.5).abs() < 1e-5);
+            assert!(x.dot(y).abs() < 1e-5 && x.dot(z).abs() < 1e-5 && x.cross(y).dot(z) > 0.0);
+            assert!(materials.contains(&d.material) && d.layer < DECAL_LAYERS && (0.5..=2.0).contains(&d.weight));
+            crate::scene::validate_decal(d, scene.materials.len()).unwrap();
+        }
+        let lower = decals.iter().filter(|d| d.world_from_decal.translation.y < 1.0).count();
+        assert!((200..300).contains(&lower), "equal areas get about equal shares: {lower} of 500");
+        for layer in 0..DECAL_LAYERS {
+            assert!(decals.iter().any(|d| d.layer == layer), "layer {layer} unused");
+        }
+        assert!(materials.clone().all(|m| decals.iter().any(|d| d.material == m)), "a material is unused");
+        // Turned randomly about the normal.
+        let lower_x: Vec<Vec3> =
+            decals.iter().filter(|d| d.world_from_decal.translation.y < 1.0).map(|d| decal_axes(d)[0].normalize()).collect();
+        assert!(lower_x.iter().any(|x| x.x > 0.9) && lower_x.iter().any(|x| x.x < -0.9) && lower_x.iter().any(|x| x.z > 0.9));
+    }
+
+    #[test]
+    fn decals_are_seeded_and_sized_by_the_scene() {
+        let mut scene = two_floors();
+        let materials = decal_textures::add_decal_materials(&mut scene);
+        let params = ScatterDecals { count: 64, ..Default::default() };
+        let a = scatter_decals(&scene, &params, materials.clone()).unwrap();
+        assert_eq!(a, scatter_decals(&scene, &params, materials.clone()).unwrap());
+        assert_ne!(a, scatter_decals(&scene, &ScatterDecals { seed: 2, ..params }, materials).unwrap());
+        let size = scene.bounds().diagonal() * 0.025;
+        for d in &a {
+            let edge = decal_axes(d)[0].length();
+            assert!(edge >= size * 0.75 - 1e-5 && edge <= size * 1.25 + 1e-5, "{edge} for size {size}");
+        }
+    }
+
+    #[test]
+    fn add_scattered_decals_adds_the_materials_once() {
+        let mut scene = two_floors();
+        add_scattered_decals(&mut scene, &ScatterDecals { count: 0, ..Default::default() }).unwrap();
+        assert_eq!((scene.materials.len(), scene.textures.len()), (1, 0), "no decals, no materials");
+        add_scattered_decals(&mut scene, &ScatterDecals { count: 10, ..Default::default() }).unwrap();
+        let materials = scene.materials.len();
+        add_scattered_decals(&mut scene, &ScatterDecals { count: 5, seed: 9, ..Default::default() }).unwrap();
+        assert_eq!(scene.materials.len(), materials);
+        assert_eq!(scene.decals.len(), 15);
+        assert!(scene.decals.iter().all(|d| d.material >= 1));
+        scene.validate().unwrap();
+
+        // A failed call leaves the scene as it was.
+        let mut empty = Scene::default();
+        let err = add_scattered_decals(&mut empty, &ScatterDecals::default()).unwrap_err();
+        assert!(err.to_string().contains("no triangles"), "{err}");
+        assert!(empty.materials.is_empty() && empty.textures.is_empty() && empty.decals.is_empty());
+    }
+
+    #[test]
+    fn impossible_decal_requests_are_errors() {
+        let mut scene = two_floors();
+        let materials = decal_textures::add_decal_materials(&mut scene);
+        for size in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            let err = scatter_decals(&scene, &ScatterDecals { size: Some(size), ..Default::default() }, materials.clone()).unwrap_err();
+            assert!(matches!(err, Error::InvalidConfig(_)) && err.to_string().contains(&format!("size {size} must be")), "{err}");
+        }
+        let too_many = ScatterDecals { count: MAX_SCATTERED_DECALS + 1, ..Default::default() };
+        let err = scatter_decals(&scene, &too_many, materials).unwrap_err();
+        assert!(err.to_string().contains("16777216"), "{err}");
+        for bad in [1..1, 0..100] {
+            let err = scatter_decals(&scene, &ScatterDecals::default(), bad).unwrap_err();
+            assert!(err.to_string().contains("non-empty range"), "{err}");
+        }
+        let err = scatter_decals(&Scene { materials: vec![Material::default()], ..Scene::default() }, &ScatterDecals::default(), 0..1);
+        assert!(err.unwrap_err().to_string().contains("no triangles"));
+    }
+
+    /// Two floors with 100 lights and 60 decals scattered over them.
+    fn populated() -> Scene {
+        let mut scene = two_floors();
+        add_scattered_lights(&mut scene, &ScatterLights { count: 100, ..Default::default() }).unwrap();
+        add_scattered_decals(&mut scene, &ScatterDecals { count: 60, ..Default::default() }).unwrap();
+        // A spot light, whose direction must survive grouping.
+        scene.lights[7].kind = LightKind::Spot { inner_cone_angle: 0.2, outer_cone_angle: 0.4 };
+        scene.lights[7].direction = Vec3::new(0.6, -0.8, 0.0);
+        scene
+    }
+
+    /// Each grouped item's world transform at `time`, with the item.
+    fn placed<T: Copy>(items: &[T], groups: &Groups, time: f32) -> Vec<(Affine3A, T)> {
+        let (ranges, instances) = groups.resolve(items.len());
+        instances.iter().flat_map(|i| ranges[i.group].clone().map(move |r| (i.world_from_group_at(time), items[r]))).collect()
+    }
+
+    #[test]
+    fn grouping_keeps_everything_in_place_at_time_zero() {
+        let original = populated();
+        let mut scene = original.clone();
+        group_for_animation(&mut scene, 7, 3).unwrap();
+        scene.validate().unwrap();
+        for groups in [&scene.light_groups, &scene.decal_groups] {
+            assert_eq!(groups.sizes.len(), 7);
+            assert_eq!(groups.instances.len(), 7);
+            assert!(groups.is_animated());
+        }
+        assert_eq!(scene.light_groups.sizes.iter().sum::<usize>(), 100);
+        assert_eq!(scene.decal_groups.sizes.iter().sum::<usize>(), 60);
+        assert!(scene.light_groups.sizes.iter().all(|&n| n == 14 || n == 15));
+
+        let mut unmatched = original.lights.clone();
+        for (world_from_group, light) in placed(&scene.lights, &scene.light_groups, 0.0) {
+            let world = Light { position: world_from_group.transform_point3(light.position), ..light };
+            let i = unmatched
+                .iter()
+                .position(|l| l.position.abs_diff_eq(world.position, 1e-5) && Light { position: l.position, ..world } == *l);
+            unmatched.swap_remove(i.unwrap_or_else(|| panic!("{world:?} was not in the scene")));
+        }
+        let mut unmatched = original.decals.clone();
+        for (world_from_group, decal) in placed(&scene.decals, &scene.decal_groups, 0.0) {
+            let world = world_from_group * decal.world_from_decal;
+            let i = unmatched.iter().position(|d| {
+                d.world_from_decal.abs_diff_eq(world, 1e-5)
+                    && (d.material, d.layer, d.weight) == (decal.material, decal.layer, decal.weight)
+            });
+            unmatched.swap_remove(i.unwrap_or_else(|| panic!("{world:?} was not in the scene")));
+        }
+    }
+
+    #[test]
+    fn groups_move_rigidly_and_are_spatially_coherent() {
+        let mut scene = populated();
+        let all = scene.bounds().diagonal();
+        group_for_animation(&mut scene, 8, 3).unwrap();
+        let mut moved = false;
+        let (t0, t1) = (placed(&scene.lights, &scene.light_groups, 0.0), placed(&scene.lights, &scene.light_groups, 2.3));
+        let (ranges, _) = scene.light_groups.resolve(scene.lights.len());
+        let mut diagonals = 0.0;
+        for range in ranges {
+            let mut bounds = Aabb::EMPTY;
+            for i in range.clone() {
+                let p = |placed: &[(Affine3A, Light)], i: usize| placed[i].0.transform_point3(placed[i].1.position);
+                bounds.grow_point(p(&t0, i));
+                moved |= p(&t0, i).distance(p(&t1, i)) > 1e-3;
+                for j in range.clone() {
+                    assert!((p(&t0, i).distance(p(&t0, j)) - p(&t1, i).distance(p(&t1, j))).abs() < 1e-4);
+                }
+                // Spot directions turn with their group.
+                let direction = |placed: &[(Affine3A, Light)]| placed[i].0.transform_vector3(placed[i].1.direction);
+                assert!((direction(&t1).length() - 1.0).abs() < 1e-5 && (direction(&t0).y - direction(&t1).y).abs() < 1e-5);
+            }
+            diagonals += bounds.diagonal();
+        }
+        assert!(moved, "nothing moved");
+        assert!(diagonals / 8.0 < 0.75 * all, "groups are not compact: mean diagonal {} of {all}", diagonals / 8.0);
+        let speeds: Vec<f32> = scene.light_groups.instances.iter().map(|i| i.spin.unwrap().radians_per_second).collect();
+        assert!(speeds.iter().all(|s| (0.3..=1.0).contains(&s.abs())), "{speeds:?}");
+        assert!(speeds.iter().any(|&s| s > 0.0) && speeds.iter().any(|&s| s < 0.0), "{speeds:?}");
+    }
+
+    #[test]
+    fn grouping_is_seeded_and_adapts_to_few_items() {
+        let (mut a, mut b, mut c) = (populated(), populated(), populated());
+        group_for_animation(&mut a, 5, 1).unwrap();
+        group_for_animation(&mut b, 5, 1).unwrap();
+        group_for_animation(&mut c, 5, 2).unwrap();
+        assert_eq!((&a.lights, &a.light_groups, &a.decal_groups), (&b.lights, &b.light_groups, &b.decal_groups));
+        assert_ne!(a.light_groups, c.light_groups);
+
+        let mut few = two_floors();
+        few.lights = populated().lights[..3].to_vec();
+        group_for_animation(&mut few, DEFAULT_ANIMATION_GROUPS, 1).unwrap();
+        assert_eq!(few.light_groups.sizes, [1, 1, 1]);
+        assert_eq!(few.decal_groups, Groups::default(), "no decals, no decal groups");
+        few.validate().unwrap();
+    }
+
+    #[test]
+    fn grouping_twice_or_into_no_groups_is_an_error() {
+        let mut scene = populated();
+        let err = group_for_animation(&mut scene, 0, 1).unwrap_err();
+        assert!(matches!(err, Error::InvalidConfig(_)) && err.to_string().contains("at least 1"), "{err}");
+        group_for_animation(&mut scene, 4, 1).unwrap();
+        let err = group_for_animation(&mut scene, 4, 1).unwrap_err();
+        assert!(err.to_string().contains("lights are grouped already"), "{err}");
+        // Nor can world-space items join grouped ones.
+        let err = add_scattered_lights(&mut scene, &ScatterLights::default()).unwrap_err();
+        assert!(err.to_string().contains("scene whose lights are grouped"), "{err}");
+        let err = add_scattered_decals(&mut scene, &ScatterDecals::default()).unwrap_err();
+        assert!(err.to_string().contains("scene whose decals are grouped"), "{err}");
+    }
+
+    #[test]
+    fn morton_codes_interleave_axes() {
+        let bounds = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        assert_eq!(morton_code(Vec3::ZERO, &bounds), 0);
+        assert_eq!(morton_code(Vec3::ONE, &bounds), (1 << 30) - 1);
+        assert_eq!(morton_code(Vec3::X, &bounds), 0x2492_4924);
+        assert_eq!(morton_code(Vec3::Z, &bounds), 0x0924_9249);
+        // Flat bounds and NaN do not panic.
+        assert_eq!(morton_code(Vec3::NAN, &Aabb::new(Vec3::ONE, Vec3::ONE)), 0);
     }
 
     #[test]

@@ -7,6 +7,7 @@
 
 mod aabb;
 pub mod camera;
+pub mod decal_textures;
 pub mod demo;
 pub mod generators;
 pub mod gltf;
@@ -256,7 +257,8 @@ impl Groups {
     pub fn resolve(&self, item_count: usize) -> (Vec<std::ops::Range<usize>>, Vec<GroupInstance>) {
         if self.sizes.is_empty() {
             let identity = GroupInstance { group: 0, world_from_group: Affine3A::IDENTITY, spin: None };
-            return (vec![0..item_count], vec![identity]);
+            let all = 0..item_count;
+            return (vec![all], vec![identity]);
         }
         let mut start = 0;
         let ranges = self

@@ -1,5 +1,5 @@
 //! TOML scene files: a glTF scene plus what it lacks for benchmarking (a camera, a sun, exposure,
-//! explicit lights and seeded scattered lights).
+//! explicit lights and decals, seeded scattered lights and decals, and animation).
 //!
 //! Every key is optional except where noted; unknown keys are errors. Relative paths are relative to
 //! the TOML file. Angles are in degrees, directions need not be normalized.
@@ -41,15 +41,47 @@
 //! offset = 0.2            # distance along the surface normal; default a tenth of the mean range
 //! range = [0.5, 2.0]      # uniform in [min, max]; default about 4 % of the scene's diagonal
 //! intensity = [0.5, 3.0]  # uniform in [min, max]; default (range / 2)² per light
+//!
+//! [[decals]]              # explicit decals: a box centred on `position` projecting an image
+//! position = [0.0, 0.0, -4.99]    # required
+//! normal = [0.0, 0.0, 1.0]        # required: the direction the decal faces out of the surface
+//! size = [1.0, 0.5, 0.2]  # required: width (image u), height (image v), depth (along the normal)
+//! rotation_degrees = 0.0  # about the normal, counter-clockwise as seen facing the decal; default 0:
+//!                         # the image's up is world +Y, or -Z where the normal is vertical
+//! layer = 0               # 0 to 3, higher layers cover lower ones; default 0
+//! weight = 1.0            # weight in its layer's blend, > 0; default 1
+//! albedo = "decals/logo.png"      # required: colour and alpha (sRGB PNG, JPEG or EXR)
+//! normal_map = "decals/logo_normal.png"   # tangent-space normals (glTF: green up); absent: normals
+//!                                         # are left alone
+//! roughness_metallic = "decals/logo_rm.png"   # G = roughness, B = metallic
+//! color = [1.0, 1.0, 1.0, 1.0]    # factor on the albedo and alpha, 0 to 1; default 1
+//! roughness = 0.5         # 0 to 1; default 1 (the texture's value, or fully rough)
+//! metallic = 0.0          # 0 to 1; default 1 with `roughness_metallic` (the texture's value), else 0
+//!
+//! [[scatter_decals]]      # decals with built-in materials scattered over the surfaces (generators::ScatterDecals)
+//! count = 256             # required
+//! seed = 1                # default 1
+//! size = 0.5              # mean edge; default 2.5 % of the scene's diagonal
+//!
+//! [animate]               # group all lights and decals into spinning groups (generators::group_for_animation)
+//! groups = 16             # default 16
+//! seed = 1                # default 1
 //! ```
+//!
+//! Images are loaded once per path however many decals use them, and decals with the same images and
+//! factors share one material.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Affine3A, Vec3, Vec4};
 use serde::Deserialize;
 
-use super::generators::{self, ScatterLights};
-use super::{validate_light, Camera, Light, LightKind, Scene, Sun, DEFAULT_LIGHT_CUTOFF};
+use super::generators::{self, ScatterDecals, ScatterLights};
+use super::{
+    validate_decal, validate_light, Camera, Decal, Light, LightKind, Material, Scene, Sun, Texture, TextureRef, Wrap, DECAL_LAYERS,
+    DEFAULT_LIGHT_CUTOFF,
+};
 use crate::{Error, Result};
 
 /// Loads a TOML scene file and the glTF it references.
@@ -62,7 +94,7 @@ pub fn load(path: &Path) -> Result<Scene> {
         Some(gltf) => super::gltf::import(&dir.join(gltf))?,
         None => Scene::default(),
     };
-    file.apply(&mut scene).map_err(invalid)?;
+    file.apply(&mut scene, dir).map_err(invalid)?;
     Ok(scene)
 }
 
@@ -82,6 +114,11 @@ struct SceneFile {
     lights: Vec<LightSpec>,
     #[serde(default)]
     scatter_lights: Vec<ScatterSpec>,
+    #[serde(default)]
+    decals: Vec<DecalSpec>,
+    #[serde(default)]
+    scatter_decals: Vec<ScatterDecalsSpec>,
+    animate: Option<AnimateSpec>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -136,9 +173,54 @@ struct ScatterSpec {
     intensity: Option<[f32; 2]>,
 }
 
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DecalSpec {
+    position: [f32; 3],
+    normal: [f32; 3],
+    #[serde(default)]
+    rotation_degrees: f32,
+    size: [f32; 3],
+    #[serde(default)]
+    layer: u32,
+    #[serde(default = "one")]
+    weight: f32,
+    albedo: PathBuf,
+    normal_map: Option<PathBuf>,
+    roughness_metallic: Option<PathBuf>,
+    #[serde(default = "opaque_white")]
+    color: [f32; 4],
+    roughness: Option<f32>,
+    metallic: Option<f32>,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn opaque_white() -> [f32; 4] {
+    [1.0; 4]
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScatterDecalsSpec {
+    count: usize,
+    seed: Option<u64>,
+    size: Option<f32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AnimateSpec {
+    groups: Option<usize>,
+    seed: Option<u64>,
+}
+
 impl SceneFile {
-    /// Applies the file's settings on top of the loaded glTF; errors are reasons for `Error::SceneFile`.
-    fn apply(&self, scene: &mut Scene) -> Result<(), String> {
+    /// Applies the file's settings on top of the loaded glTF, resolving image paths against `dir`;
+    /// errors are reasons for `Error::SceneFile`.
+    fn apply(&self, scene: &mut Scene, dir: &Path) -> Result<(), String> {
         if let Some(exposure) = self.exposure {
             scene.exposure = exposure;
         }
@@ -161,6 +243,20 @@ impl SceneFile {
         }
         for (i, spec) in self.scatter_lights.iter().enumerate() {
             generators::add_scattered_lights(scene, &spec.to_params()).map_err(|e| format!("scatter_lights {i}: {}", inner_message(e)))?;
+        }
+        let mut decal_materials = DecalMaterials::new(dir);
+        for (i, spec) in self.decals.iter().enumerate() {
+            let decal = spec.to_decal(scene, &mut decal_materials).and_then(|d| validate_decal(&d, scene.materials.len()).map(|()| d));
+            scene.decals.push(decal.map_err(|m| format!("decal {i}: {m}"))?);
+        }
+        for (i, spec) in self.scatter_decals.iter().enumerate() {
+            let params = ScatterDecals { count: spec.count, seed: spec.seed.unwrap_or(ScatterDecals::default().seed), size: spec.size };
+            generators::add_scattered_decals(scene, &params).map_err(|e| format!("scatter_decals {i}: {}", inner_message(e)))?;
+        }
+        if let Some(animate) = &self.animate {
+            let groups = animate.groups.unwrap_or(generators::DEFAULT_ANIMATION_GROUPS);
+            generators::group_for_animation(scene, groups, animate.seed.unwrap_or(1))
+                .map_err(|e| format!("animate: {}", inner_message(e)))?;
         }
         // Exposure, ambient and sun are checked here; the glTF part was checked on import.
         scene.validate().map_err(inner_message)
@@ -260,6 +356,120 @@ impl ScatterSpec {
             intensity: self.intensity.map(|[min, max]| (min, max)),
         }
     }
+}
+
+impl DecalSpec {
+    fn to_decal(&self, scene: &mut Scene, materials: &mut DecalMaterials) -> Result<Decal, String> {
+        let (position, normal, size) = (Vec3::from(self.position), Vec3::from(self.normal), Vec3::from(self.size));
+        if !position.is_finite() {
+            return Err(format!("position {:?} is NaN or infinite", self.position));
+        }
+        if !(normal.is_finite() && normal.length() > 0.0) {
+            return Err(format!("normal {:?} must be a finite, non-zero direction", self.normal));
+        }
+        if !(size.is_finite() && size.min_element() > 0.0) {
+            return Err(format!("size {:?} must be finite and > 0 on every axis (width, height, depth)", self.size));
+        }
+        if !self.rotation_degrees.is_finite() {
+            return Err(format!("rotation_degrees {} must be finite", self.rotation_degrees));
+        }
+        // Checked before the images are read, so that a typo is reported without waiting for them.
+        if self.layer >= DECAL_LAYERS {
+            return Err(format!("layer {} must be between 0 and {}", self.layer, DECAL_LAYERS - 1));
+        }
+        if !(self.weight.is_finite() && self.weight > 0.0) {
+            return Err(format!("weight {} must be finite and > 0", self.weight));
+        }
+        let z = normal.normalize();
+        // The image's up is world +Y projected onto the surface, or -Z where there is none.
+        let up = if Vec3::Y.cross(z).length() > 1e-3 { Vec3::Y } else { Vec3::NEG_Z };
+        let x0 = up.cross(z).normalize();
+        let y0 = z.cross(x0);
+        let (sin, cos) = self.rotation_degrees.to_radians().sin_cos();
+        let (x, y) = (x0 * cos + y0 * sin, y0 * cos - x0 * sin);
+        let world_from_decal = Affine3A::from_cols((x * size.x).into(), (y * size.y).into(), (z * size.z).into(), position.into());
+        Ok(Decal { world_from_decal, material: materials.material(scene, self)?, layer: self.layer, weight: self.weight })
+    }
+
+    /// Factors as glTF defines them: without a metallic-roughness texture, a fully rough dielectric.
+    fn factors(&self) -> Result<(Vec4, f32, f32), String> {
+        let color = Vec4::from(self.color);
+        if !(color.is_finite() && color.min_element() >= 0.0 && color.max_element() <= 1.0) {
+            return Err(format!("color {:?} must lie between 0 and 1", self.color));
+        }
+        let textured = self.roughness_metallic.is_some();
+        let roughness = self.roughness.unwrap_or(1.0);
+        let metallic = self.metallic.unwrap_or(if textured { 1.0 } else { 0.0 });
+        for (name, value) in [("roughness", roughness), ("metallic", metallic)] {
+            if !(0.0..=1.0).contains(&value) {
+                return Err(format!("{name} {value} must lie between 0 and 1"));
+            }
+        }
+        Ok((color, roughness, metallic))
+    }
+}
+
+/// What makes decal materials equal: albedo, normal and metallic-roughness texture, and the factors' bits.
+type DecalMaterialKey = (usize, Option<usize>, Option<usize>, [u32; 6]);
+
+/// The textures and materials of a file's decals, each image loaded once and each distinct
+/// combination of images and factors made into one material.
+struct DecalMaterials<'a> {
+    dir: &'a Path,
+    textures: HashMap<PathBuf, usize>,
+    materials: HashMap<DecalMaterialKey, usize>,
+}
+
+impl<'a> DecalMaterials<'a> {
+    fn new(dir: &'a Path) -> Self {
+        Self { dir, textures: HashMap::new(), materials: HashMap::new() }
+    }
+
+    fn material(&mut self, scene: &mut Scene, spec: &DecalSpec) -> Result<usize, String> {
+        let (color, roughness, metallic) = spec.factors()?;
+        let albedo = self.texture(scene, "albedo", &spec.albedo)?;
+        let normal = spec.normal_map.as_ref().map(|path| self.texture(scene, "normal_map", path)).transpose()?;
+        let roughness_metallic =
+            spec.roughness_metallic.as_ref().map(|path| self.texture(scene, "roughness_metallic", path)).transpose()?;
+        let factors = [color.x, color.y, color.z, color.w, roughness, metallic].map(f32::to_bits);
+        let index = *self.materials.entry((albedo, normal, roughness_metallic, factors)).or_insert_with(|| {
+            let clamped = |texture| TextureRef { texture, wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::ClampToEdge };
+            scene.materials.push(Material {
+                name: format!("decal {}", spec.albedo.display()),
+                base_color_factor: color,
+                base_color_texture: Some(clamped(albedo)),
+                metallic_factor: metallic,
+                roughness_factor: roughness,
+                metallic_roughness_texture: roughness_metallic.map(clamped),
+                normal_texture: normal.map(clamped),
+                ..Material::default()
+            });
+            scene.materials.len() - 1
+        });
+        Ok(index)
+    }
+
+    /// The texture index of the image at `path` (relative to the scene file), loading it the first time.
+    fn texture(&mut self, scene: &mut Scene, key: &str, path: &Path) -> Result<usize, String> {
+        let path = self.dir.join(path);
+        if let Some(&index) = self.textures.get(&path) {
+            return Ok(index);
+        }
+        scene.textures.push(load_image(&path).map_err(|m| format!("{key} image {m}"))?);
+        self.textures.insert(path, scene.textures.len() - 1);
+        Ok(scene.textures.len() - 1)
+    }
+}
+
+/// Decodes a PNG, JPEG or EXR file to RGBA8; the message starts with the path.
+fn load_image(path: &Path) -> Result<Texture, String> {
+    let reader = image::ImageReader::open(path)
+        .and_then(image::ImageReader::with_guessed_format)
+        .map_err(|e| format!("{}: cannot read it: {e} (check that the path exists and is readable)", path.display()))?;
+    let image = reader.decode().map_err(|e| format!("{}: not a readable PNG, JPEG or EXR image: {e}", path.display()))?;
+    let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+    let rgba = image.into_rgba8();
+    Ok(Texture { name, width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
 }
 
 #[cfg(test)]
@@ -416,6 +626,203 @@ intensity = [1.0, 2.0]
         assert!(reason(load_text("exposure", "exposure = 0.0\n")).contains("exposure must be finite and > 0"));
         let scatter = reason(load_text("scatter", "[[scatter_lights]]\ncount = 4\n"));
         assert!(scatter.starts_with("scatter_lights 0:") && scatter.contains("no triangles"), "{scatter}");
+    }
+
+    /// Writes a `size`² RGBA PNG of one colour.
+    fn write_png(path: &Path, size: u32, rgba: [u8; 4]) {
+        image::RgbaImage::from_pixel(size, size, image::Rgba(rgba)).save(path).unwrap();
+    }
+
+    fn axes(d: &Decal) -> [Vec3; 4] {
+        let m = d.world_from_decal;
+        [m.matrix3.x_axis.into(), m.matrix3.y_axis.into(), m.matrix3.z_axis.into(), m.translation.into()]
+    }
+
+    #[test]
+    fn explicit_decals_with_every_field_and_with_defaults() {
+        let dir = temp_dir("decals");
+        std::fs::create_dir(dir.join("decals")).unwrap();
+        write_png(&dir.join("decals/logo.png"), 8, [200, 100, 50, 128]);
+        write_png(&dir.join("decals/normal.png"), 4, [128, 128, 255, 255]);
+        write_png(&dir.join("decals/rm.png"), 4, [255, 100, 200, 255]);
+        let path = dir.join("scene.toml");
+        std::fs::write(
+            &path,
+            r#"
+[[decals]]
+position = [1.0, 2.0, -4.9]
+normal = [0.0, 0.0, 2.0]
+rotation_degrees = 90.0
+size = [2.0, 1.0, 0.5]
+layer = 3
+weight = 0.5
+albedo = "decals/logo.png"
+normal_map = "decals/normal.png"
+roughness_metallic = "decals/rm.png"
+color = [1.0, 0.5, 0.25, 0.8]
+roughness = 0.5
+metallic = 0.25
+
+[[decals]]
+position = [0.0, 0.0, 0.0]
+normal = [0.0, 1.0, 0.0]
+size = [1.0, 1.0, 1.0]
+albedo = "decals/logo.png"
+
+[[decals]]
+position = [3.0, 0.0, 0.0]
+normal = [0.0, 1.0, 0.0]
+size = [1.0, 2.0, 1.0]
+albedo = "decals/logo.png"
+
+[[decals]]
+position = [0.0, 1.0, 0.0]
+normal = [1.0, 0.0, 0.0]
+size = [1.0, 1.0, 1.0]
+albedo = "decals/logo.png"
+roughness_metallic = "decals/rm.png"
+"#,
+        )
+        .unwrap();
+        let scene = load(&path).unwrap();
+        assert_eq!(scene.decals.len(), 4);
+
+        // Facing +Z, turned a quarter counter-clockwise: u runs up (+Y), v's opposite left (-X).
+        let full = scene.decals[0];
+        let [x, y, z, centre] = axes(&full);
+        assert!(
+            x.abs_diff_eq(Vec3::Y * 2.0, 1e-5) && y.abs_diff_eq(Vec3::NEG_X, 1e-5) && z.abs_diff_eq(Vec3::Z * 0.5, 1e-5),
+            "{x} {y} {z}"
+        );
+        assert_eq!(centre, Vec3::new(1.0, 2.0, -4.9));
+        assert_eq!((full.layer, full.weight), (3, 0.5));
+        let m = &scene.materials[full.material];
+        assert_eq!(m.base_color_factor, Vec4::new(1.0, 0.5, 0.25, 0.8));
+        assert_eq!((m.roughness_factor, m.metallic_factor), (0.5, 0.25));
+        let texture = |t: Option<TextureRef>| {
+            let t = t.unwrap();
+            assert_eq!((t.wrap_u, t.wrap_v), (Wrap::ClampToEdge, Wrap::ClampToEdge));
+            &scene.textures[t.texture]
+        };
+        let albedo = texture(m.base_color_texture);
+        assert_eq!((albedo.name.as_str(), albedo.width, &albedo.rgba8[..4]), ("logo.png", 8, &[200, 100, 50, 128][..]));
+        assert_eq!(&texture(m.normal_texture).rgba8[..4], &[128, 128, 255, 255]);
+        assert_eq!(&texture(m.metallic_roughness_texture).rgba8[..4], &[255, 100, 200, 255]);
+
+        // Defaults: on a floor the image's up is -Z; layer 0, weight 1, white, fully rough dielectric.
+        let plain = scene.decals[1];
+        let [x, y, z, _] = axes(&plain);
+        assert!(x.abs_diff_eq(Vec3::X, 1e-6) && y.abs_diff_eq(Vec3::NEG_Z, 1e-6) && z.abs_diff_eq(Vec3::Y, 1e-6), "{x} {y} {z}");
+        assert_eq!((plain.layer, plain.weight), (0, 1.0));
+        let m = &scene.materials[plain.material];
+        assert_eq!((m.base_color_factor, m.roughness_factor, m.metallic_factor), (Vec4::ONE, 1.0, 0.0));
+        assert!(m.normal_texture.is_none() && m.metallic_roughness_texture.is_none());
+        // The same image and factors share one material; the image is loaded once.
+        assert_eq!(scene.decals[2].material, plain.material);
+        assert_eq!(scene.textures.iter().filter(|t| t.name == "logo.png").count(), 1);
+        // On a wall the image's up is +Y; with a metallic-roughness texture both factors default to 1.
+        let [x, y, ..] = axes(&scene.decals[3]);
+        assert!(x.abs_diff_eq(Vec3::NEG_Z, 1e-6) && y.abs_diff_eq(Vec3::Y, 1e-6), "{x} {y}");
+        let m = &scene.materials[scene.decals[3].material];
+        assert_eq!((m.roughness_factor, m.metallic_factor), (1.0, 1.0));
+        assert_eq!(scene.materials.len(), 3);
+    }
+
+    /// A decal table with `extra` lines, in a directory holding `logo.png`.
+    fn decal_reason(test: &str, extra: &str) -> String {
+        let dir = temp_dir(test);
+        write_png(&dir.join("logo.png"), 4, [255; 4]);
+        let path = dir.join("scene.toml");
+        let mut text = "[[decals]]\nalbedo = 'logo.png'\n".to_string();
+        for (key, value) in [("position", "[0, 0, 0]"), ("normal", "[0, 1, 0]"), ("size", "[1, 1, 1]")] {
+            if !extra.contains(&format!("{key} =")) {
+                text += &format!("{key} = {value}\n");
+            }
+        }
+        std::fs::write(&path, text + extra).unwrap();
+        reason(load(&path))
+    }
+
+    #[test]
+    fn bad_decals_are_reported_with_their_index_and_field() {
+        let cases = [
+            ("position = [nan, 0, 0]", "decal 0: position [NaN, 0.0, 0.0] is NaN or infinite"),
+            ("normal = [0, 0, 0]", "decal 0: normal [0.0, 0.0, 0.0] must be a finite, non-zero direction"),
+            ("size = [1, 0, 1]", "decal 0: size [1.0, 0.0, 1.0] must be finite and > 0 on every axis"),
+            ("size = [1, 1, inf]", "decal 0: size [1.0, 1.0, inf] must be finite"),
+            ("rotation_degrees = nan", "decal 0: rotation_degrees NaN must be finite"),
+            ("layer = 4", "decal 0: layer 4 must be between 0 and 3"),
+            ("weight = 0.0", "decal 0: weight 0 must be finite and > 0"),
+            ("color = [1, 1, 2, 1]", "decal 0: color [1.0, 1.0, 2.0, 1.0] must lie between 0 and 1"),
+            ("roughness = -0.5", "decal 0: roughness -0.5 must lie between 0 and 1"),
+            ("metallic = nan", "decal 0: metallic NaN must lie between 0 and 1"),
+        ];
+        for (i, (extra, expected)) in cases.iter().enumerate() {
+            let reason = decal_reason(&format!("bad_decal_{i}"), extra);
+            assert!(reason.starts_with(expected), "{extra}: {reason}");
+        }
+        let negative = decal_reason("negative_layer", "layer = -1");
+        assert!(negative.contains("line") && negative.contains("layer"), "{negative}");
+        let unknown = decal_reason("unknown_decal_key", "normal_texture = 'logo.png'");
+        assert!(unknown.contains("unknown field `normal_texture`"), "{unknown}");
+        let missing = reason(load_text("decal_no_albedo", "[[decals]]\nposition = [0, 0, 0]\nnormal = [0, 1, 0]\nsize = [1, 1, 1]\n"));
+        assert!(missing.contains("missing field `albedo`"), "{missing}");
+    }
+
+    #[test]
+    fn missing_and_corrupt_decal_images_are_named() {
+        let missing = decal_reason("missing_image", "normal_map = 'nope.png'");
+        assert!(missing.starts_with("decal 0: normal_map image ") && missing.contains("nope.png: cannot read it"), "{missing}");
+        let dir = temp_dir("corrupt_image");
+        let mut png = Vec::new();
+        image::RgbaImage::new(16, 16).write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).unwrap();
+        std::fs::write(dir.join("broken.png"), &png[..png.len() / 2]).unwrap();
+        std::fs::write(dir.join("text.png"), "not an image").unwrap();
+        for file in ["broken.png", "text.png"] {
+            let path = dir.join("scene.toml");
+            std::fs::write(&path, format!("[[decals]]\nposition = [0, 0, 0]\nnormal = [0, 1, 0]\nsize = [1, 1, 1]\nalbedo = '{file}'\n"))
+                .unwrap();
+            let reason = reason(load(&path));
+            assert!(reason.starts_with("decal 0: albedo image ") && reason.contains(&format!("{file}: not a readable")), "{reason}");
+        }
+    }
+
+    #[test]
+    fn scattered_and_animated_decals_and_lights() {
+        let dir = temp_dir("scatter_decals");
+        for file in ["Box.gltf", "Box0.bin"] {
+            std::fs::copy(assets_dir().join("box").join(file), dir.join(file)).unwrap();
+        }
+        let path = dir.join("scene.toml");
+        let text = "gltf = 'Box.gltf'\n[[scatter_lights]]\ncount = 40\n\
+                    [[scatter_decals]]\ncount = 30\nseed = 4\nsize = 0.2\n[[scatter_decals]]\ncount = 10\n";
+        std::fs::write(&path, text).unwrap();
+        let still = load(&path).unwrap();
+        assert_eq!(still.decals.len(), 40);
+        let procedural = crate::scene::decal_textures::find_decal_materials(&still).unwrap();
+        assert!(still.decals.iter().all(|d| procedural.contains(&d.material)));
+        assert_eq!(still.materials.len(), 1 + procedural.len(), "the procedural materials are added once");
+        assert!(still.decals[..30].iter().all(|d| (0.15 - 1e-5..=0.25 + 1e-5).contains(&d.world_from_decal.matrix3.x_axis.length())));
+        assert_eq!(still.light_groups, crate::scene::Groups::default());
+
+        std::fs::write(&path, format!("{text}[animate]\ngroups = 4\nseed = 2\n")).unwrap();
+        let animated = load(&path).unwrap();
+        assert_eq!(animated.light_groups.sizes, [10; 4]);
+        assert_eq!(animated.decal_groups.sizes, [10; 4]);
+        assert!(animated.light_groups.is_animated() && animated.decal_groups.is_animated());
+
+        std::fs::write(&path, format!("{text}[animate]\n")).unwrap();
+        let defaults = load(&path).unwrap();
+        assert_eq!(defaults.light_groups.sizes.len(), generators::DEFAULT_ANIMATION_GROUPS);
+
+        let zero = reason(load_text("animate_zero", "[animate]\ngroups = 0\n"));
+        assert!(zero.starts_with("animate:") && zero.contains("at least 1"), "{zero}");
+        let unknown = reason(load_text("animate_unknown", "[animate]\nspeed = 2\n"));
+        assert!(unknown.contains("unknown field `speed`"), "{unknown}");
+        let size = reason(load_text("scatter_decals_size", "[[scatter_decals]]\ncount = 4\nsize = -1.0\n"));
+        assert!(size.starts_with("scatter_decals 0:") && size.contains("size -1 must be a finite length > 0"), "{size}");
+        let empty = reason(load_text("scatter_decals_empty", "[[scatter_decals]]\ncount = 4\n"));
+        assert!(empty.starts_with("scatter_decals 0:") && empty.contains("no triangles"), "{empty}");
     }
 
     #[test]

@@ -1,0 +1,68 @@
+//! Scene options shared by `render` and `info`: which scene, and what the generators add to it.
+
+use anyhow::bail;
+use clap::Args;
+use manylights::scene::{
+    self,
+    generators::{ScatterDecals, ScatterLights, DEFAULT_ANIMATION_GROUPS},
+    Groups, Scene,
+};
+
+#[derive(Args)]
+pub struct SceneArgs {
+    /// `demo` (built in), or a .gltf, .glb or .toml scene file.
+    #[arg(long, default_value = "demo")]
+    pub scene: String,
+    /// Scatter this many extra point lights over the scene's surfaces.
+    #[arg(long, default_value_t = 0)]
+    pub lights: u32,
+    /// Scatter this many decals (built-in materials) over the scene's surfaces.
+    #[arg(long, default_value_t = 0)]
+    pub decals: u32,
+    /// Mean edge of the scattered decals, in metres (default: 2.5 % of the scene's diagonal).
+    #[arg(long, value_name = "METRES", allow_negative_numbers = true, requires = "decals")]
+    pub decal_size: Option<f32>,
+    /// Seed of the light and decal scatter and of the animation groups.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Group the lights and decals into groups that spin about their centres as frames advance.
+    #[arg(long)]
+    pub animate: bool,
+    /// Number of groups with --animate (fewer when there are fewer lights or decals).
+    #[arg(long, default_value_t = DEFAULT_ANIMATION_GROUPS, requires = "animate")]
+    pub groups: usize,
+}
+
+impl SceneArgs {
+    /// Loads the scene and adds the scattered lights and decals, then groups them with --animate.
+    pub fn load(&self) -> anyhow::Result<Scene> {
+        if let Some(size) = self.decal_size {
+            if !(size.is_finite() && size > 0.0) {
+                bail!("--decal-size {size}: the decals' mean edge must be a finite length > 0, in metres");
+            }
+        }
+        if self.groups == 0 {
+            bail!("--groups 0: animation needs at least 1 group");
+        }
+        let mut scene = if self.scene == "demo" { scene::demo::demo_scene() } else { scene::load_path(std::path::Path::new(&self.scene))? };
+        if self.lights > 0 {
+            let params = ScatterLights { count: self.lights as usize, seed: self.seed, ..Default::default() };
+            scene::generators::add_scattered_lights(&mut scene, &params)?;
+        }
+        if self.decals > 0 {
+            let params = ScatterDecals { count: self.decals as usize, seed: self.seed, size: self.decal_size };
+            scene::generators::add_scattered_decals(&mut scene, &params)?;
+        }
+        if self.animate {
+            scene::generators::group_for_animation(&mut scene, self.groups, self.seed)?;
+        }
+        Ok(scene)
+    }
+}
+
+/// "N groups, M instances (animated)" for lights or decals.
+pub fn describe_groups(groups: &Groups, item_count: usize) -> String {
+    let (ranges, instances) = groups.resolve(item_count);
+    let motion = if groups.is_animated() { "animated" } else { "still" };
+    format!("{} group(s), {} instance(s), {motion}", ranges.len(), instances.len())
+}
