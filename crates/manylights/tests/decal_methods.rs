@@ -150,3 +150,14 @@ fn non_finite_or_degenerate_decals_are_rejected() {
         assert!(message.contains("decal 3") && message.contains(reason), "{message}");
     }
 }
+
+#[test]
+fn grouping_for_animation_changes_nothing_at_time_zero() {
+    let scene = with_decals_and_lights(demo_scene(), 1000, 1000, 12);
+    let mut grouped = scene.clone();
+    generators::group_for_animation(&mut grouped, 16, 5).unwrap();
+    let config = decal_config(96, 54, DecalMethod::Bvh, BvhBuild::CpuOnce);
+    let (before, after) = (render_at(&scene, config.clone(), 0.0), render_at(&grouped, config, 0.0));
+    let difference = max_abs_difference(&before, &after);
+    assert!(difference <= TOLERANCE, "grouped scene differs by {difference} at time 0");
+}
