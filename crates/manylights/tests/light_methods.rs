@@ -107,7 +107,7 @@ fn a_million_lights_fit_and_light_the_scene() {
     assert!(added > 0.0, "a million lights added no light");
 }
 
-/// The demo's lights split into groups: the first placed twice (once turned and shifted), the second
+/// The demo's lights split into groups: the first placed twice (once scaled, turned and shifted), the second
 /// spinning, the third left alone.
 fn grouped_demo() -> Scene {
     let mut scene = with_scattered_lights(demo_scene(), 1200, 17);
@@ -117,7 +117,7 @@ fn grouped_demo() -> Scene {
         sizes: vec![507, 400, 600],
         instances: vec![
             still(0, Affine3A::IDENTITY),
-            still(0, Affine3A::from_rotation_translation(Quat::from_rotation_y(0.8), Vec3::new(0.5, 0.2, -0.3))),
+            still(0, Affine3A::from_scale_rotation_translation(Vec3::splat(1.3), Quat::from_rotation_y(0.8), Vec3::new(0.5, 0.2, -0.3))),
             GroupInstance {
                 spin: Some(Spin { pivot: Vec3::new(-0.5, 0.0, -1.0), radians_per_second: 1.3 }),
                 ..still(1, Affine3A::IDENTITY)
@@ -144,9 +144,11 @@ fn an_instanced_group_lights_like_its_lights_copied_into_the_world() {
         .iter()
         .flat_map(|instance| {
             let t = instance.world_from_group_at(0.6);
+            let scale = t.matrix3.x_axis.length();
             grouped.lights[ranges[instance.group].clone()].iter().map(move |l| Light {
                 position: t.transform_point3(l.position),
-                direction: t.transform_vector3(l.direction),
+                direction: t.transform_vector3(l.direction) / scale,
+                range: l.range * scale,
                 ..*l
             })
         })

@@ -15,8 +15,9 @@ var<private> VOLUMES_query_world_point: vec3<f32>;
 // The point in the current level's space: the world's in the top level, the group's inside an
 // instance. Callers read it to test items in their group's space.
 var<private> VOLUMES_query_point: vec3<f32>;
-// The instance whose group the last leaf belongs to.
+// The instance whose group the last leaf belongs to, and its index: a query enters each instance once.
 var<private> VOLUMES_query_instance: VolumeInstance;
+var<private> VOLUMES_query_instance_index: u32;
 var<private> VOLUMES_query_stack: array<u32, BVH_STACK_SIZE>;
 var<private> VOLUMES_query_top: u32;
 // Stack height below the current instance's BVH; NO_FLOOR while in the top level.
@@ -51,7 +52,8 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
                 return vec2<u32>(first, first + node.b);
             }
             // A top-level leaf holds one instance (the top level is an LBVH): enter its group.
-            VOLUMES_query_instance = VOLUMES_instances[VOLUMES_primitives[first]];
+            VOLUMES_query_instance_index = VOLUMES_primitives[first];
+            VOLUMES_query_instance = VOLUMES_instances[VOLUMES_query_instance_index];
             VOLUMES_query_point = instance_point_to_group(VOLUMES_query_instance, VOLUMES_query_world_point);
             VOLUMES_query_floor = VOLUMES_query_top;
             VOLUMES_query_stack[VOLUMES_query_top] = VOLUMES_query_instance.blas_root;

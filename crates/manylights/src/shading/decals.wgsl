@@ -51,8 +51,6 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, s:
         return;
     }
     // The rows of decal_from_group are the gradients of the decal coordinates: along the box's axes.
-    let axis_x = normalize(instance_direction_to_world(instance, decal.decal_from_group[0].xyz));
-    let axis_y = normalize(instance_direction_to_world(instance, decal.decal_from_group[1].xyz));
     let axis_z = normalize(instance_direction_to_world(instance, decal.decal_from_group[2].xyz));
     let facing = dot(s.normal, axis_z);
     if facing <= 0.0 {
@@ -93,6 +91,8 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, s:
         // The decal's tangent frame on the surface: its x and y axes made orthogonal to the surface
         // normal, so the normal map bends the surface's own normal.
         let n = s.normal;
+        let axis_x = normalize(instance_direction_to_world(instance, decal.decal_from_group[0].xyz));
+        let axis_y = normalize(instance_direction_to_world(instance, decal.decal_from_group[1].xyz));
         let t = normalize(axis_x - n * dot(n, axis_x));
         let b_raw = axis_y - n * dot(n, axis_y) - t * dot(t, axis_y);
         let b = select(cross(n, t), normalize(b_raw), dot(b_raw, b_raw) > 1e-12);

@@ -25,3 +25,15 @@ fn light_contribution(light: Light, s: ShadingInput) -> vec3<f32> {
     return light.radiant * attenuation * brdf_times_cosine(s, light_dir);
 }
 
+
+// The surface as seen from a group's space. Lighting it there with the group's lights, times
+// `1 / scale²`, equals lighting the surface with the lights placed in the world: the instance turns
+// and scales distances, the falloff is inverse-square, and the range window and cone depend on ratios
+// and angles only. One transform per instance instead of one per light.
+fn shading_input_in_group(s: ShadingInput, instance: VolumeInstance) -> ShadingInput {
+    var local = s;
+    local.position = instance_point_to_group(instance, s.position);
+    local.normal = instance_vector_to_group(instance, s.normal) * instance.scale;
+    local.view_dir = instance_vector_to_group(instance, s.view_dir) * instance.scale;
+    return local;
+}

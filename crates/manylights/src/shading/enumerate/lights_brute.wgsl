@@ -8,14 +8,15 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
     for (var i = 0u; i < frame.light_instance_count; i += 1u) {
         let instance = light_instances[i];
-        let local = instance_point_to_group(instance, s.position);
+        let local = shading_input_in_group(s, instance);
+        let falloff = 1.0 / (instance.scale * instance.scale);
         for (var k = instance.first_item; k < instance.first_item + instance.item_count; k += 1u) {
-            // Most lights are out of range: test in group space with the struct's first 16 bytes
-            // (position and range) before loading the rest.
-            let to_light = lights[k].position - local;
+            // Most lights are out of range: test with the struct's first 16 bytes (position and
+            // range) before loading the rest.
+            let to_light = lights[k].position - local.position;
             let range = lights[k].range;
             if dot(to_light, to_light) < range * range {
-                radiance += light_contribution(light_in_world(lights[k], instance), s);
+                radiance += light_contribution(lights[k], local) * falloff;
             }
         }
     }

@@ -7,10 +7,19 @@
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
+    // The surface in the space of the instance being visited (`shading_input_in_group`).
+    var local = s;
+    var falloff = 1.0;
+    var entered = 0xffffffffu;
     light_query_begin(s.position, frame.light_instance_count);
     for (var leaf = light_query_next_leaf(); leaf.x < leaf.y; leaf = light_query_next_leaf()) {
+        if light_query_instance_index != entered {
+            entered = light_query_instance_index;
+            local = shading_input_in_group(s, light_query_instance);
+            falloff = 1.0 / (light_query_instance.scale * light_query_instance.scale);
+        }
         for (var k = leaf.x; k < leaf.y; k += 1u) {
-            radiance += light_contribution(light_in_world(lights[light_primitives[k]], light_query_instance), s);
+            radiance += light_contribution(lights[light_primitives[k]], local) * falloff;
         }
     }
     return radiance;
