@@ -34,7 +34,7 @@ const TRAVERSAL_COST: f64 = 1.0;
 /// stay clear of the [`LEAF`] bit.
 const MAX_PRIMITIVES: usize = 1 << 30;
 
-/// One BVH node, 32 bytes. Keep in sync with `BvhNode` in `accel/bvh.wgsl`.
+/// One BVH node, 32 bytes. Keep in sync with `BvhNode` in `accel/bvh_types.wgsl`.
 ///
 /// Internal node: `a` = left child, `b` = right child (node indices).
 /// Leaf: `a` = `LEAF | first`, `b` = count: the leaf's primitives are

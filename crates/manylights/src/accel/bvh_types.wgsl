@@ -1,7 +1,8 @@
 // BVH nodes as `accel/bvh.rs` lays them out (keep in sync with `BvhNode` there): an internal node's
 // `a` and `b` are its children; a leaf has `a` = BVH_LEAF | first and `b` = count, naming a range of
-// the primitive index array. The root is node 0. Shared by the query (`bvh.wgsl`) and the GPU builder
-// (`lbvh.wgsl`).
+// the primitive index array. A lone BVH's root is node 0; in a two-level structure the top level's root
+// is node 0 and each group's is its instances' `blas_root`. Shared by the query (`volume_query.wgsl`)
+// and the GPU builder (`lbvh.wgsl`).
 
 struct BvhNode {
     min: vec3<f32>,

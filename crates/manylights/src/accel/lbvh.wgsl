@@ -1,5 +1,5 @@
 // LBVH build on the GPU (Karras 2012), over `params.count` boxes, into the node layout of
-// `accel/bvh.wgsl`: scene bounds of the box centres → 30-bit Morton codes → (radix sort, lampshade)
+// `accel/volume_query.wgsl`: scene bounds of the box centres → 30-bit Morton codes → (radix sort, lampshade)
 // → one thread per internal node finds its range and split → bounds propagated from the leaves up.
 // Node indices: internal nodes 0 .. count - 2 (root 0), leaf k at count - 1 + k, all offset by
 // `node_base` in `nodes`: several BVHs (a top level and the groups' BVHs) share one node array, so the

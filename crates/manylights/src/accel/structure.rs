@@ -329,3 +329,66 @@ fn relocate(bvh: &Bvh, node_base: u32, primitive_base: u32, item_base: u32) -> (
     let primitives = bvh.primitive_indices.iter().map(|&p| p + item_base).collect();
     (nodes, primitives)
 }
+
+#[cfg(test)]
+mod tests {
+    use std::mem::{offset_of, size_of};
+
+    use super::*;
+
+    #[test]
+    fn volume_instance_matches_its_wgsl_layout() {
+        let module = naga::front::wgsl::parse_str(include_str!("bvh_types.wgsl")).unwrap();
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        let (_, ty) = module.types.iter().find(|(_, t)| t.name.as_deref() == Some("VolumeInstance")).unwrap();
+        let naga::TypeInner::Struct { members, span } = &ty.inner else { panic!("VolumeInstance is not a struct") };
+        assert_eq!(*span as usize, size_of::<GpuVolumeInstance>());
+        let wgsl: Vec<(String, u32)> = members.iter().map(|m| (m.name.clone().unwrap(), m.offset)).collect();
+        let rust: Vec<(String, u32)> = [
+            ("group_from_world", offset_of!(GpuVolumeInstance, group_from_world)),
+            ("world_from_group", offset_of!(GpuVolumeInstance, world_from_group)),
+            ("first_item", offset_of!(GpuVolumeInstance, first_item)),
+            ("item_count", offset_of!(GpuVolumeInstance, item_count)),
+            ("blas_root", offset_of!(GpuVolumeInstance, blas_root)),
+            ("scale", offset_of!(GpuVolumeInstance, scale)),
+        ]
+        .into_iter()
+        .map(|(n, o)| (n.to_string(), o as u32))
+        .collect();
+        assert_eq!(wgsl, rust);
+    }
+
+    #[test]
+    fn instance_rows_map_points_both_ways() {
+        let t = Affine3A::from_scale_rotation_translation(
+            glam::Vec3::splat(2.0),
+            glam::Quat::from_rotation_y(0.5),
+            glam::Vec3::new(1.0, 2.0, 3.0),
+        );
+        let gpu = GpuVolumeInstance::new(t, &(4..9), 17);
+        let apply =
+            |rows: &[[f32; 4]; 3], p: glam::Vec3| glam::Vec3::from_array(rows.map(|r| glam::Vec4::from_array(r).dot(p.extend(1.0))));
+        let p = glam::Vec3::new(0.3, -1.0, 2.0);
+        assert!((apply(&gpu.world_from_group, p) - t.transform_point3(p)).length() < 1e-5);
+        assert!((apply(&gpu.group_from_world, apply(&gpu.world_from_group, p)) - p).length() < 1e-5);
+        assert_eq!((gpu.first_item, gpu.item_count, gpu.blas_root), (4, 5, 17));
+        assert!((gpu.scale - 2.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn relocation_offsets_children_leaves_and_items() {
+        let boxes: Vec<Aabb> = (0..20).map(|i| Aabb::new(glam::Vec3::splat(i as f32), glam::Vec3::splat(i as f32 + 0.5))).collect();
+        let bvh = Bvh::build(&boxes).unwrap();
+        let (nodes, primitives) = relocate(&bvh, 100, 50, 7);
+        for (moved, original) in nodes.iter().zip(&bvh.nodes) {
+            if original.is_leaf() {
+                assert_eq!(moved.a & !LEAF, (original.a & !LEAF) + 50);
+                assert_eq!(moved.b, original.b);
+            } else {
+                assert_eq!((moved.a, moved.b), (original.a + 100, original.b + 100));
+            }
+        }
+        assert!(primitives.iter().zip(&bvh.primitive_indices).all(|(m, o)| *m == o + 7));
+    }
+}
