@@ -23,7 +23,7 @@ use super::{
 use crate::{
     gpu::{
         bindings,
-        scene::{GpuDecal, GpuLight},
+        scene::{affine_rows, GpuDecal, GpuLight},
         GpuContext, GpuTimer,
     },
     scene::{Decal, GroupInstance, Groups, Light},
@@ -60,19 +60,14 @@ pub struct GpuVolumeInstance {
 impl GpuVolumeInstance {
     fn new(world_from_group: Affine3A, items: &Range<u32>, blas_root: u32) -> Self {
         Self {
-            group_from_world: rows(&world_from_group.inverse()),
-            world_from_group: rows(&world_from_group),
+            group_from_world: affine_rows(&world_from_group.inverse()),
+            world_from_group: affine_rows(&world_from_group),
             first_item: items.start,
             item_count: items.len() as u32,
             blas_root,
             scale: world_from_group.matrix3.x_axis.length(),
         }
     }
-}
-
-fn rows(t: &Affine3A) -> [[f32; 4]; 3] {
-    let m = glam::Mat4::from(*t);
-    [m.row(0).to_array(), m.row(1).to_array(), m.row(2).to_array()]
 }
 
 /// A group's items and its BVH in the shared arrays.

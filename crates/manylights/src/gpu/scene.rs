@@ -99,15 +99,20 @@ pub struct GpuDecal {
 
 impl From<&Decal> for GpuDecal {
     fn from(d: &Decal) -> Self {
-        let m = glam::Mat4::from(d.world_from_decal.inverse());
         Self {
-            decal_from_group: [m.row(0).to_array(), m.row(1).to_array(), m.row(2).to_array()],
+            decal_from_group: affine_rows(&d.world_from_decal.inverse()),
             material: d.material as u32,
             layer: d.layer,
             weight: d.weight,
             _pad: 0,
         }
     }
+}
+
+/// The three rows of an affine map, as WGSL applies them: `vec4(p, 1.0) * mat3x4(rows)`.
+pub fn affine_rows(t: &glam::Affine3A) -> [[f32; 4]; 3] {
+    let m = glam::Mat4::from(*t);
+    [m.row(0).to_array(), m.row(1).to_array(), m.row(2).to_array()]
 }
 
 /// Samplers for every pair of glTF wrap modes (3 × 3).

@@ -69,21 +69,15 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, s:
         return;
     }
     let aw = alpha * decal.weight;
-    var roughness = material.roughness_factor;
-    var metallic = material.metallic_factor;
-    if material.metallic_roughness_layer != NO_TEXTURE {
-        let mr = sample_data(material.metallic_roughness_layer, material, 2u, g);
-        roughness *= mr.g;
-        metallic *= mr.b;
-    }
+    let roughness_metallic = material_roughness_metallic(material, g);
     let layer = min(decal.layer, DECAL_LAYERS - 1u);
     if (decal_layers_touched & (1u << layer)) == 0u {
         decal_layers_touched |= 1u << layer;
         decal_layers[layer] = DecalLayerSums(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, 0.0, 0.0, 1.0, 1.0);
     }
     decal_layers[layer].albedo += color.rgb * aw;
-    decal_layers[layer].roughness += saturate(roughness) * aw;
-    decal_layers[layer].metallic += saturate(metallic) * aw;
+    decal_layers[layer].roughness += roughness_metallic.x * aw;
+    decal_layers[layer].metallic += roughness_metallic.y * aw;
     decal_layers[layer].alpha_weight += aw;
     decal_layers[layer].transmittance *= 1.0 - alpha;
 
@@ -96,10 +90,7 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, s:
         let t = normalize(axis_x - n * dot(n, axis_x));
         let b_raw = axis_y - n * dot(n, axis_y) - t * dot(t, axis_y);
         let b = select(cross(n, t), normalize(b_raw), dot(b_raw, b_raw) > 1e-12);
-        var n_ts = sample_data(material.normal_layer, material, 3u, g).xyz * 2.0 - 1.0;
-        n_ts = vec3<f32>(n_ts.xy * material.normal_scale, n_ts.z);
-        let mapped = t * n_ts.x + b * n_ts.y + n * n_ts.z;
-        let decal_normal = select(n, normalize(mapped), dot(mapped, mapped) > 1e-12);
+        let decal_normal = material_mapped_normal(material, g, n, t, b);
         decal_layers[layer].normal += decal_normal * aw;
         decal_layers[layer].normal_alpha_weight += aw;
         decal_layers[layer].normal_transmittance *= 1.0 - alpha;

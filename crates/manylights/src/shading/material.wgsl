@@ -43,6 +43,24 @@ fn material_base_color(material: Material, g: UvGradients) -> vec4<f32> {
     return color;
 }
 
+// Perceptual roughness and metallic (x, y): factors times the metallic-roughness texture (glTF: G, B).
+fn material_roughness_metallic(material: Material, g: UvGradients) -> vec2<f32> {
+    var roughness_metallic = vec2<f32>(material.roughness_factor, material.metallic_factor);
+    if material.metallic_roughness_layer != NO_TEXTURE {
+        roughness_metallic *= sample_data(material.metallic_roughness_layer, material, 2u, g).gb;
+    }
+    return saturate(roughness_metallic);
+}
+
+// The material's normal map (it must have one) applied in the frame (t, b, n); a zero-length result
+// (blank normal map texel) keeps n.
+fn material_mapped_normal(material: Material, g: UvGradients, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    var n_ts = sample_data(material.normal_layer, material, 3u, g).xyz * 2.0 - 1.0;
+    n_ts = vec3<f32>(n_ts.xy * material.normal_scale, n_ts.z);
+    let mapped = t * n_ts.x + b * n_ts.y + n * n_ts.z;
+    return select(n, normalize(mapped), dot(mapped, mapped) > 1e-12);
+}
+
 // The surface frame at a point: interpolated, in world space.
 struct SurfaceFrame {
     normal: vec3<f32>,
@@ -60,15 +78,9 @@ fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, 
     s.base_color = base.rgb;
     s.alpha = base.a;
 
-    var metallic = material.metallic_factor;
-    var roughness = material.roughness_factor;
-    if material.metallic_roughness_layer != NO_TEXTURE {
-        let mr = sample_data(material.metallic_roughness_layer, material, 2u, g);
-        roughness *= mr.g;
-        metallic *= mr.b;
-    }
-    s.metallic = saturate(metallic);
-    s.roughness = saturate(roughness);
+    let roughness_metallic = material_roughness_metallic(material, g);
+    s.roughness = roughness_metallic.x;
+    s.metallic = roughness_metallic.y;
 
     var emissive = material.emissive_factor;
     if material.emissive_layer != NO_TEXTURE {
@@ -80,11 +92,7 @@ fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, 
     if material.normal_layer != NO_TEXTURE {
         let t = normalize(surface.tangent - surface.normal * dot(surface.normal, surface.tangent));
         let b = cross(surface.normal, t) * surface.bitangent_sign;
-        var n_ts = sample_data(material.normal_layer, material, 3u, g).xyz * 2.0 - 1.0;
-        n_ts = vec3<f32>(n_ts.xy * material.normal_scale, n_ts.z);
-        let mapped = t * n_ts.x + b * n_ts.y + surface.normal * n_ts.z;
-        // A zero-length result (blank normal map texel) keeps the interpolated normal.
-        normal = select(surface.normal, normalize(mapped), dot(mapped, mapped) > 1e-12);
+        normal = material_mapped_normal(material, g, surface.normal, t, b);
     }
     s.normal = normal;
     return s;
