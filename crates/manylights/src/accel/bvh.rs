@@ -7,18 +7,26 @@ use glam::{DVec3, Vec3};
 
 use super::volumes::Aabb;
 
-/// Set in `BvhNode::a` of a leaf.
+/// Set in `BvhNode::entry` of a leaf.
 pub const LEAF: u32 = 1 << 31;
 
+/// `BvhNode::skip` of the nodes after which the traversal is done.
+pub const END: u32 = u32::MAX;
+
+/// A leaf's `entry` keeps its primitive count − 1 in the 4 bits below [`LEAF`] and its first
+/// primitive in the 27 bits below those.
+const LEAF_COUNT_SHIFT: u32 = 27;
+const LEAF_FIRST_MASK: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
+
 /// The deepest root-to-leaf path [`Bvh::build`] produces, in nodes (a root that is a leaf has depth 1).
-/// The GPU traversal keeps pending nodes on a fixed stack of 64 entries and holds at most one pending
-/// sibling per level (plus the two children just pushed), so 48 leaves headroom; the builder forces
-/// median splits wherever the SAH's choice could exceed it.
+/// The traversal needs no stack, so this only bounds the builder's recursion and keeps degenerate
+/// inputs from producing list-like trees: the builder forces median splits wherever the SAH's choice
+/// could exceed it.
 pub const MAX_DEPTH: u32 = 48;
 
 /// Leaves hold between 1 and this many primitives: nodes of at most 4 are always leaves, and the SAH
 /// keeps up to 8 in a leaf when splitting them does not pay. The GPU can rely on this bound to size
-/// per-leaf work.
+/// per-leaf work; a leaf's count must fit its 4 bits in `entry`.
 pub const MAX_LEAF_SIZE: u32 = 8;
 
 /// Nodes with more primitives than this are split unless the SAH prefers a leaf.
@@ -30,23 +38,26 @@ const BINS: usize = 16;
 /// SAH cost of visiting an internal node, relative to testing one primitive's box.
 const TRAVERSAL_COST: f64 = 1.0;
 
-/// Most volumes one BVH indexes: a BVH of n primitives has up to 2n − 1 nodes, and node indices must
-/// stay clear of the [`LEAF`] bit.
-const MAX_PRIMITIVES: usize = 1 << 30;
+/// Most primitive slots one BVH, or one node array holding several, can address: a leaf's first
+/// primitive has 27 bits.
+pub const MAX_PRIMITIVES: usize = 1 << LEAF_COUNT_SHIFT;
 
-/// One BVH node, 32 bytes. Keep in sync with `BvhNode` in `accel/bvh_types.wgsl`.
+/// One BVH node, 32 bytes, laid out for a traversal without a stack: nodes are in depth-first order
+/// as far as the links go, and each node says where to go next whether or not the point is inside
+/// its box. Keep in sync with `BvhNode` in `accel/bvh_types.wgsl`.
 ///
-/// Internal node: `a` = left child, `b` = right child (node indices).
-/// Leaf: `a` = `LEAF | first`, `b` = count: the leaf's primitives are
-/// `Bvh::primitive_indices[first..first + count]`.
+/// `entry`: for an internal node, its first child (the second is that child's `skip`); for a leaf,
+/// `LEAF | (count − 1) << 27 | first`, naming `Bvh::primitive_indices[first..first + count]`.
+/// `skip`: the node that follows this one's subtree in depth-first order, where the traversal goes
+/// when the point is outside the box or after a leaf; [`END`] after the last.
 /// The root is node 0; an empty BVH has no nodes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct BvhNode {
     pub min: [f32; 3],
-    pub a: u32,
+    pub entry: u32,
     pub max: [f32; 3],
-    pub b: u32,
+    pub skip: u32,
 }
 
 impl BvhNode {
@@ -56,13 +67,25 @@ impl BvhNode {
     }
 
     pub fn is_leaf(&self) -> bool {
-        self.a & LEAF != 0
+        self.entry & LEAF != 0
+    }
+
+    /// A leaf's `entry` for `count` (1 ..= 16) primitives from `first`.
+    pub fn leaf_entry(first: u32, count: u32) -> u32 {
+        debug_assert!((1..=16).contains(&count) && first <= LEAF_FIRST_MASK);
+        LEAF | (count - 1) << LEAF_COUNT_SHIFT | first
+    }
+
+    /// The leaf's first primitive slot.
+    pub fn leaf_first(&self) -> u32 {
+        self.entry & LEAF_FIRST_MASK
     }
 
     /// The leaf's range in `Bvh::primitive_indices`.
-    fn leaf_range(&self) -> std::ops::Range<usize> {
-        let first = (self.a & !LEAF) as usize;
-        first..first + self.b as usize
+    pub fn leaf_range(&self) -> std::ops::Range<usize> {
+        let first = self.leaf_first() as usize;
+        let count = ((self.entry & !LEAF) >> LEAF_COUNT_SHIFT) as usize + 1;
+        first..first + count
     }
 }
 
@@ -78,7 +101,7 @@ impl Bvh {
     ///
     /// Every box must be finite and non-empty (flat or point boxes are fine): a NaN bound would make
     /// every comparison false and silently drop lights, so it is an error here instead. Nodes are laid
-    /// out depth-first (a left child directly follows its parent), leaves hold 1 to
+    /// out depth-first (a first child directly follows its parent), leaves hold 1 to
     /// [`MAX_LEAF_SIZE`] primitives, and no path is deeper than [`MAX_DEPTH`].
     pub fn build(aabbs: &[Aabb]) -> crate::Result<Bvh> {
         let invalid = |message: String| Err(crate::Error::InvalidScene(message));
@@ -102,8 +125,18 @@ impl Bvh {
             .map(|(i, b)| Prim { bounds: *b, centroid: (b.min.as_dvec3() + b.max.as_dvec3()) * 0.5, index: i as u32 })
             .collect();
         let mut nodes = Vec::with_capacity(2 * aabbs.len() - 1);
-        build_node(&mut nodes, &mut prims, 0, 1);
+        let mut children = Vec::with_capacity(2 * aabbs.len() - 1);
+        build_node(&mut nodes, &mut children, &mut prims, 0, 1);
+        link(&mut nodes, &children);
         Ok(Bvh { nodes, primitive_indices: prims.iter().map(|p| p.index).collect() })
+    }
+
+    /// An internal node's two children, in traversal order; `None` for a leaf.
+    ///
+    /// # Panics
+    /// On a first child out of range (a BVH that fails [`Bvh::validate`]).
+    pub fn children(&self, node: &BvhNode) -> Option<(u32, u32)> {
+        (!node.is_leaf()).then(|| (node.entry, self.nodes[node.entry as usize].skip))
     }
 
     /// Calls `visit(i)` once for every primitive whose own box `aabbs[i]` contains `p` (faces
@@ -113,25 +146,21 @@ impl Bvh {
     /// # Panics
     /// On a BVH that fails [`Bvh::validate`] for `aabbs` (an index out of range); built ones pass.
     pub fn query_point(&self, aabbs: &[Aabb], p: Vec3, mut visit: impl FnMut(u32)) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut stack = Vec::with_capacity(MAX_DEPTH as usize + 1);
-        stack.push(0u32);
-        while let Some(n) = stack.pop() {
+        // The GPU's traversal, without a stack: into a node whose box holds the point, past it otherwise.
+        let mut n = if self.nodes.is_empty() { END } else { 0 };
+        while n != END {
             let node = &self.nodes[n as usize];
             if !node.bounds().contains(p) {
-                continue;
-            }
-            if node.is_leaf() {
+                n = node.skip;
+            } else if node.is_leaf() {
                 for &i in &self.primitive_indices[node.leaf_range()] {
                     if aabbs[i as usize].contains(p) {
                         visit(i);
                     }
                 }
+                n = node.skip;
             } else {
-                stack.push(node.b);
-                stack.push(node.a);
+                n = node.entry;
             }
         }
     }
@@ -148,19 +177,19 @@ impl Bvh {
         let mut stack = vec![(0u32, 1u32)];
         while let Some((n, level)) = stack.pop() {
             deepest = deepest.max(level);
-            let node = &self.nodes[n as usize];
-            if !node.is_leaf() {
-                stack.push((node.a, level + 1));
-                stack.push((node.b, level + 1));
+            if let Some((first, second)) = self.children(&self.nodes[n as usize]) {
+                stack.push((first, level + 1));
+                stack.push((second, level + 1));
             }
         }
         deepest
     }
 
     /// Checks everything the GPU traversal relies on, for this BVH over `aabbs`: child and primitive
-    /// indices in range, every node reached exactly once from the root (no cycles, no orphans), depth
-    /// ≤ [`MAX_DEPTH`], non-empty leaves covering `primitive_indices` exactly once, every primitive in
-    /// exactly one leaf, and every node's box containing its children's or its primitives' boxes.
+    /// indices in range, every node reached exactly once from the root (no cycles, no orphans), each
+    /// second child skipping where its parent does and the root to [`END`], non-empty leaves covering
+    /// `primitive_indices` exactly once, every primitive in exactly one leaf, and every node's box
+    /// containing its children's or its primitives' boxes.
     pub fn validate(&self, aabbs: &[Aabb]) -> Result<(), String> {
         if self.nodes.is_empty() {
             return if self.primitive_indices.is_empty() && aabbs.is_empty() {
@@ -175,17 +204,19 @@ impl Bvh {
         let mut node_seen = vec![false; self.nodes.len()];
         let mut slot_seen = vec![false; self.primitive_indices.len()];
         let mut primitive_seen = vec![false; aabbs.len()];
-        let mut stack = vec![(0u32, 1u32)];
-        while let Some((n, level)) = stack.pop() {
+        // Each node with the `skip` it must have: its parent's for a second child, its sibling for a
+        // first child (which defines the sibling), END for the root.
+        let mut stack = vec![(0u32, END)];
+        while let Some((n, skip)) = stack.pop() {
             let seen = node_seen.get_mut(n as usize).ok_or_else(|| format!("node index {n} out of range ({} nodes)", self.nodes.len()))?;
             if *seen {
                 return Err(format!("node {n} is reached twice"));
             }
             *seen = true;
-            if level > MAX_DEPTH {
-                return Err(format!("node {n} is at depth {level} > MAX_DEPTH = {MAX_DEPTH}"));
-            }
             let node = &self.nodes[n as usize];
+            if node.skip != skip {
+                return Err(format!("node {n} skips to {} instead of {skip}", node.skip));
+            }
             let bounds = node.bounds();
             if !bounds.is_valid() {
                 return Err(format!("node {n} has an empty or non-finite box {bounds:?}"));
@@ -210,13 +241,18 @@ impl Bvh {
                     }
                 }
             } else {
-                for child in [node.a, node.b] {
-                    let child_node = self.nodes.get(child as usize).ok_or_else(|| format!("node {n}: child {child} out of range"))?;
+                let first = node.entry;
+                let first_node = self.nodes.get(first as usize).ok_or_else(|| format!("node {n}: first child {first} out of range"))?;
+                let second = first_node.skip;
+                let second_node =
+                    self.nodes.get(second as usize).ok_or_else(|| format!("node {n}: second child {second} out of range"))?;
+                for (child, child_node) in [(first, first_node), (second, second_node)] {
                     if !bounds.contains_box(&child_node.bounds()) {
                         return Err(format!("node {n}'s box {bounds:?} does not contain child {child}'s {:?}", child_node.bounds()));
                     }
-                    stack.push((child, level + 1));
                 }
+                stack.push((second, node.skip));
+                stack.push((first, second));
             }
         }
         if let Some(n) = node_seen.iter().position(|seen| !seen) {
@@ -241,24 +277,37 @@ struct Prim {
 }
 
 /// Appends the subtree over `prims` (which start at `first` in the final primitive order) at `level`
-/// (the root is 1); returns its node index. Recursion depth is bounded by [`MAX_DEPTH`].
-fn build_node(nodes: &mut Vec<BvhNode>, prims: &mut [Prim], first: usize, level: u32) -> u32 {
+/// (the root is 1) with a leaf's `entry` filled in and an internal node's children noted in
+/// `children`; returns its node index. Recursion depth is bounded by [`MAX_DEPTH`].
+fn build_node(nodes: &mut Vec<BvhNode>, children: &mut Vec<(u32, u32)>, prims: &mut [Prim], first: usize, level: u32) -> u32 {
     let index = nodes.len() as u32;
     let bounds = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
-    nodes.push(BvhNode { min: bounds.min.to_array(), a: 0, max: bounds.max.to_array(), b: 0 });
-    let (a, b) = match split(prims, bounds, level) {
-        None => (LEAF | first as u32, prims.len() as u32),
+    nodes.push(BvhNode { min: bounds.min.to_array(), entry: 0, max: bounds.max.to_array(), skip: END });
+    children.push((END, END));
+    match split(prims, bounds, level) {
+        None => nodes[index as usize].entry = BvhNode::leaf_entry(first as u32, prims.len() as u32),
         Some(mid) => {
             let (left, right) = prims.split_at_mut(mid);
-            let a = build_node(nodes, left, first, level + 1);
-            let b = build_node(nodes, right, first + mid, level + 1);
-            (a, b)
+            let a = build_node(nodes, children, left, first, level + 1);
+            let b = build_node(nodes, children, right, first + mid, level + 1);
+            children[index as usize] = (a, b);
         }
-    };
-    let node = &mut nodes[index as usize];
-    node.a = a;
-    node.b = b;
+    }
     index
+}
+
+/// Sets every node's `skip`, and internal nodes' `entry`, from the children `build_node` noted.
+fn link(nodes: &mut [BvhNode], children: &[(u32, u32)]) {
+    let mut stack = vec![(0u32, END)];
+    while let Some((n, skip)) = stack.pop() {
+        nodes[n as usize].skip = skip;
+        if !nodes[n as usize].is_leaf() {
+            let (a, b) = children[n as usize];
+            nodes[n as usize].entry = a;
+            stack.push((a, b));
+            stack.push((b, skip));
+        }
+    }
 }
 
 /// Levels below a node of `count` primitives if it and its descendants are split at the median.
@@ -276,7 +325,7 @@ fn median_levels(count: usize) -> u32 {
 /// `prims[..mid]` and `prims[mid..]` are the children (both non-empty).
 ///
 /// A SAH split is taken only if its larger child can still be finished by median splits within
-/// [`MAX_DEPTH`]; median splits halve the count, so from the root (at most 2^30 primitives, 29
+/// [`MAX_DEPTH`]; median splits halve the count, so from the root (at most 2^27 primitives, 26
 /// levels) that bound always holds.
 fn split(prims: &mut [Prim], bounds: Aabb, level: u32) -> Option<usize> {
     let count = prims.len();
@@ -375,7 +424,8 @@ mod tests {
         bvh.validate(aabbs).unwrap();
         assert!(bvh.depth() <= MAX_DEPTH, "depth {}", bvh.depth());
         for node in bvh.nodes.iter().filter(|n| n.is_leaf()) {
-            assert!((1..=MAX_LEAF_SIZE).contains(&node.b), "leaf of {} primitives", node.b);
+            let count = node.leaf_range().len() as u32;
+            assert!((1..=MAX_LEAF_SIZE).contains(&count), "leaf of {count} primitives");
         }
     }
 
@@ -472,7 +522,7 @@ mod tests {
 
         let one = [Aabb::new(Vec3::ZERO, Vec3::ONE)];
         let bvh = Bvh::build(&one).unwrap();
-        assert_eq!(bvh.nodes, [BvhNode { min: [0.0; 3], a: LEAF, max: [1.0; 3], b: 1 }], "the root is a leaf");
+        assert_eq!(bvh.nodes, [BvhNode { min: [0.0; 3], entry: LEAF, max: [1.0; 3], skip: END }], "the root is a leaf");
         assert_eq!(bvh.primitive_indices, [0]);
         assert_eq!(bvh.depth(), 1);
 
@@ -532,13 +582,15 @@ mod tests {
         let internal = good.nodes.iter().position(|n| !n.is_leaf()).unwrap();
         // Each breakage gets the tree, a leaf's index and an internal node's index.
         type Breakage = fn(&mut Bvh, usize, usize);
-        let breakages: [(&str, Breakage); 6] = [
+        let breakages: [(&str, Breakage); 8] = [
             ("duplicate primitive", |b, _, _| b.primitive_indices[0] = b.primitive_indices[1]),
             ("primitive out of range", |b, _, _| b.primitive_indices[0] = 50),
-            ("child out of range", |b, _, internal| b.nodes[internal].b = 1000),
-            ("cycle", |b, _, internal| b.nodes[internal].b = 0),
+            ("child out of range", |b, _, internal| b.nodes[internal].entry = 1000),
+            ("cycle", |b, _, internal| b.nodes[internal].entry = 0),
+            ("skip to an ancestor", |b, leaf, _| b.nodes[leaf].skip = 0),
+            ("skip past the end", |b, leaf, _| b.nodes[leaf].skip = END),
             ("shrunken box", |b, leaf, _| b.nodes[leaf].max[0] = b.nodes[leaf].min[0] - 1.0),
-            ("empty leaf", |b, leaf, _| b.nodes[leaf].b = 0),
+            ("leaf past the primitives", |b, leaf, _| b.nodes[leaf].entry = BvhNode::leaf_entry(45, 8)),
         ];
         for (name, breakage) in breakages {
             let mut bvh = good.clone();

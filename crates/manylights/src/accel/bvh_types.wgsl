@@ -1,23 +1,28 @@
-// BVH nodes as `accel/bvh.rs` lays them out (keep in sync with `BvhNode` there): an internal node's
-// `a` and `b` are its children; a leaf has `a` = BVH_LEAF | first and `b` = count, naming a range of
-// the primitive index array. A lone BVH's root is node 0; in a two-level structure the top level's root
-// is node 0 and each group's is its instances' `blas_root`. Shared by the query (`volume_query.wgsl`)
-// and the GPU builder (`lbvh.wgsl`).
+// BVH nodes as `accel/bvh.rs` lays them out (keep in sync with `BvhNode` there), for a traversal
+// without a stack: `entry` is an internal node's first child (its second is that child's `skip`), or a
+// leaf's `BVH_LEAF | (count − 1) << 27 | first`, naming a range of the primitive index array; `skip`
+// is the node after the subtree, where the traversal goes when the point is outside the box or after
+// a leaf (BVH_END after the last). A lone BVH's root is node 0; in a two-level structure the top
+// level's root is node 0 and each group's is its instances' `blas_root`. Shared by the query
+// (`volume_query.wgsl`) and the GPU builder (`lbvh.wgsl`).
 
 struct BvhNode {
     min: vec3<f32>,
-    a: u32,
+    entry: u32,
     max: vec3<f32>,
-    b: u32,
+    skip: u32,
 }
 
 const BVH_LEAF: u32 = 0x80000000u;
-// A two-level query's floor while it is in the top level (`volume_query.wgsl`).
-const NO_FLOOR: u32 = 0xffffffffu;
-// Depth-first traversal keeps at most one pending sibling per level, and a two-level query stacks a
-// group's BVH on the top level's: the CPU builder keeps depth ≤ 48 (`bvh::MAX_DEPTH`), the LBVH ≤ 30
-// Morton bits + 32 index bits, so 128 entries never overflow.
-const BVH_STACK_SIZE: u32 = 128u;
+const BVH_END: u32 = 0xffffffffu;
+const BVH_LEAF_COUNT_SHIFT: u32 = 27u;
+const BVH_LEAF_FIRST_MASK: u32 = 0x07ffffffu;
+
+// The range [x, y) of the primitive index array a leaf's `entry` names.
+fn bvh_leaf_range(entry: u32) -> vec2<u32> {
+    let first = entry & BVH_LEAF_FIRST_MASK;
+    return vec2<u32>(first, first + ((entry & ~BVH_LEAF) >> BVH_LEAF_COUNT_SHIFT) + 1u);
+}
 
 // One placement of a group of volumes (`accel/structure.rs`, `GpuVolumeInstance`): a similarity
 // transform, stored as rows applied as `vec4(p, 1.0) * matrix`.

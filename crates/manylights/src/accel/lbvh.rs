@@ -4,7 +4,7 @@
 //! the top level, so their boxes change only when the group's contents change). The nodes land in a
 //! region of a node array that may hold other BVHs too ([`LbvhTarget`]).
 
-use super::{Aabb, Bvh, BvhNode, LEAF};
+use super::{bvh::END, Aabb, Bvh, BvhNode};
 use crate::gpu::{bindings, readback, shaders::ShaderDesc, GpuContext, GpuTimer};
 use crate::{Error, Result};
 
@@ -239,11 +239,13 @@ impl GpuLbvh {
         ctx.check_errors()?;
         let mut bvh = Bvh { nodes: bytemuck::pod_collect_to_vec(&nodes), primitive_indices: bytemuck::pod_collect_to_vec(&primitives) };
         for node in &mut bvh.nodes {
-            if node.is_leaf() {
-                node.a = LEAF | (node.a & !LEAF).wrapping_sub(t.primitive_base);
+            node.entry = if node.is_leaf() {
+                BvhNode::leaf_entry(node.leaf_first().wrapping_sub(t.primitive_base), node.leaf_range().len() as u32)
             } else {
-                node.a = node.a.wrapping_sub(t.node_base);
-                node.b = node.b.wrapping_sub(t.node_base);
+                node.entry.wrapping_sub(t.node_base)
+            };
+            if node.skip != END {
+                node.skip = node.skip.wrapping_sub(t.node_base);
             }
         }
         for primitive in &mut bvh.primitive_indices {

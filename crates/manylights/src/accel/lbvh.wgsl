@@ -1,5 +1,5 @@
 // LBVH build on the GPU (Karras 2012), over `params.count` boxes, into the node layout of
-// `accel/volume_query.wgsl`: scene bounds of the box centres → 30-bit Morton codes → (radix sort, lampshade)
+// `accel/bvh_types.wgsl`: scene bounds of the box centres → 30-bit Morton codes → (radix sort, lampshade)
 // → one thread per internal node finds its range and split → bounds propagated from the leaves up.
 // Node indices: internal nodes 0 .. count - 2 (root 0), leaf k at count - 1 + k, all offset by
 // `node_base` in `nodes`: several BVHs (a top level and the groups' BVHs) share one node array, so the
@@ -112,6 +112,26 @@ fn child_node(index: i32, is_leaf: bool) -> u32 {
     return select(u32(index), params.count - 1u + u32(index), is_leaf);
 }
 
+// Whether internal node i's range runs up from i (Karras: it grows towards the neighbour sharing the
+// longer prefix).
+fn range_runs_up(i: i32) -> bool {
+    return common_prefix(i, i + 1) > common_prefix(i, i - 1);
+}
+
+// `skip` of the nodes whose range ends at sorted key `last`: the node after them in depth-first
+// order, which is the largest subtree starting at key last + 1. It is a second child, and Karras
+// stores second children at the start of their range: internal node last + 1 if that node's range
+// runs up from it, otherwise leaf last + 1. Found locally, so no pass over the finished tree.
+fn skip_after(last: i32) -> u32 {
+    let n = i32(params.count);
+    if last == n - 1 {
+        return BVH_END;
+    }
+    let next = last + 1;
+    let is_leaf = next == n - 1 || !range_runs_up(next);
+    return params.node_base + child_node(next, is_leaf);
+}
+
 @compute @workgroup_size(256)
 fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
     let n = params.count;
@@ -120,8 +140,8 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     // Every thread writes its leaf; threads below n - 1 also build internal node id.x.
     let leaf = params.node_base + n - 1u + id.x;
-    nodes[leaf].a = BVH_LEAF | (params.primitive_base + id.x);
-    nodes[leaf].b = 1u;
+    nodes[leaf].entry = BVH_LEAF | (params.primitive_base + id.x);
+    nodes[leaf].skip = skip_after(i32(id.x));
     primitives[params.primitive_base + id.x] = params.item_base + sorted_keys[id.x].y;
     if id.x == 0u {
         parents[0] = NO_PARENT;
@@ -133,7 +153,7 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = i32(id.x);
     // Direction of the range and its other end (Karras, "Maximizing parallelism in the construction
     // of BVHs, octrees, and k-d trees", 2012).
-    let d = select(-1, 1, common_prefix(i, i + 1) > common_prefix(i, i - 1));
+    let d = select(-1, 1, range_runs_up(i));
     let min_prefix = common_prefix(i, i - d);
     var max_length = 2;
     while common_prefix(i, i + max_length * d) > min_prefix {
@@ -162,8 +182,8 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
     let gamma = i + split * d + min(d, 0);
     let left = child_node(gamma, min(i, j) == gamma);
     let right = child_node(gamma + 1, max(i, j) == gamma + 1);
-    nodes[params.node_base + id.x].a = params.node_base + left;
-    nodes[params.node_base + id.x].b = params.node_base + right;
+    nodes[params.node_base + id.x].entry = params.node_base + left;
+    nodes[params.node_base + id.x].skip = skip_after(max(i, j));
     parents[left] = id.x;
     parents[right] = id.x;
 }

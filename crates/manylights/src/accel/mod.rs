@@ -14,6 +14,6 @@ pub mod lbvh;
 pub mod structure;
 pub mod volumes;
 
-pub use bvh::{Bvh, BvhNode, LEAF, MAX_DEPTH, MAX_LEAF_SIZE};
+pub use bvh::{Bvh, BvhNode, END, LEAF, MAX_DEPTH, MAX_LEAF_SIZE};
 pub use structure::{BvhBuild, VolumeStructure, Volumes};
 pub use volumes::{decal_aabb, decal_contains, light_aabb, light_contains, Aabb};

@@ -18,7 +18,8 @@ use wgpu::util::DeviceExt;
 use super::{
     decal_aabb,
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
-    light_aabb, Aabb, Bvh, BvhNode, LEAF,
+    bvh::{END, MAX_PRIMITIVES},
+    light_aabb, Aabb, Bvh, BvhNode,
 };
 use crate::{
     gpu::{
@@ -166,6 +167,9 @@ impl VolumeStructure {
         }
         let node_count = u64::from(node_base);
         let primitive_count = u64::from(instance_slots) + count as u64;
+        if primitive_count > MAX_PRIMITIVES as u64 {
+            return Err(Error::InvalidScene(format!("{count} {label}s; a structure holds at most {MAX_PRIMITIVES} volumes and instances")));
+        }
 
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let node_bytes = node_count * std::mem::size_of::<BvhNode>() as u64;
@@ -304,19 +308,22 @@ impl VolumeStructure {
     }
 }
 
-/// Moves a CPU-built BVH into the shared arrays: child indices by `node_base`, leaf ranges by
-/// `primitive_base`, primitive values by `item_base`.
+/// Moves a CPU-built BVH into the shared arrays: node links by `node_base` (the last node's [`END`]
+/// stays, ending the group's traversal), leaf ranges by `primitive_base`, primitive values by
+/// `item_base`.
 fn relocate(bvh: &Bvh, node_base: u32, primitive_base: u32, item_base: u32) -> (Vec<BvhNode>, Vec<u32>) {
     let nodes = bvh
         .nodes
         .iter()
         .map(|n| {
             let mut n = *n;
-            if n.is_leaf() {
-                n.a = LEAF | ((n.a & !LEAF) + primitive_base);
+            n.entry = if n.is_leaf() {
+                BvhNode::leaf_entry(n.leaf_first() + primitive_base, n.leaf_range().len() as u32)
             } else {
-                n.a += node_base;
-                n.b += node_base;
+                n.entry + node_base
+            };
+            if n.skip != END {
+                n.skip += node_base;
             }
             n
         })
@@ -378,12 +385,14 @@ mod tests {
         let (nodes, primitives) = relocate(&bvh, 100, 50, 7);
         for (moved, original) in nodes.iter().zip(&bvh.nodes) {
             if original.is_leaf() {
-                assert_eq!(moved.a & !LEAF, (original.a & !LEAF) + 50);
-                assert_eq!(moved.b, original.b);
+                assert_eq!(moved.leaf_range(), original.leaf_range().start + 50..original.leaf_range().end + 50);
             } else {
-                assert_eq!((moved.a, moved.b), (original.a + 100, original.b + 100));
+                assert_eq!(moved.entry, original.entry + 100);
             }
+            let skip = if original.skip == END { END } else { original.skip + 100 };
+            assert_eq!(moved.skip, skip);
         }
+        assert_eq!(nodes[0].skip, END, "the root ends the group's traversal");
         assert!(primitives.iter().zip(&bvh.primitive_indices).all(|(m, o)| *m == o + 7));
     }
 }

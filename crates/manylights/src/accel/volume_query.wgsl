@@ -10,7 +10,8 @@
 // measured 20 % slower shading on the H200.
 #include "accel/bvh_types.wgsl"
 
-// The query in flight, one per invocation.
+// The query in flight, one per invocation. The traversal needs no stack (`bvh_types.wgsl`): the
+// node to visit next, and the top-level node to resume at when the current instance is done.
 var<private> VOLUMES_query_world_point: vec3<f32>;
 // The point in the current level's space: the world's in the top level, the group's inside an
 // instance. Callers read it to test items in their group's space.
@@ -18,51 +19,53 @@ var<private> VOLUMES_query_point: vec3<f32>;
 // The instance whose group the last leaf belongs to, and its index: a query enters each instance once.
 var<private> VOLUMES_query_instance: VolumeInstance;
 var<private> VOLUMES_query_instance_index: u32;
-var<private> VOLUMES_query_stack: array<u32, BVH_STACK_SIZE>;
-var<private> VOLUMES_query_top: u32;
-// Stack height below the current instance's BVH; NO_FLOOR while in the top level.
-var<private> VOLUMES_query_floor: u32;
+var<private> VOLUMES_query_node: u32;
+var<private> VOLUMES_query_resume: u32;
+var<private> VOLUMES_query_in_group: bool;
 
 // Starts a point query (world space), replacing any in flight; with no instances it finds nothing.
 fn VOLUMES_query_begin(point: vec3<f32>, instance_count: u32) {
     VOLUMES_query_world_point = point;
     VOLUMES_query_point = point;
-    VOLUMES_query_stack[0] = 0u;
-    VOLUMES_query_top = select(0u, 1u, instance_count > 0u);
-    VOLUMES_query_floor = NO_FLOOR;
+    VOLUMES_query_node = select(BVH_END, 0u, instance_count > 0u);
+    VOLUMES_query_in_group = false;
 }
 
 // The next group leaf whose box contains the point, as the range [x, y) of `VOLUMES_primitives`
 // (item indices); an empty range when the query is done (leaves are never empty).
 fn VOLUMES_query_next_leaf() -> vec2<u32> {
-    while VOLUMES_query_top > 0u {
-        if VOLUMES_query_top == VOLUMES_query_floor {
-            // The instance's BVH is done: back in the top level.
-            VOLUMES_query_floor = NO_FLOOR;
-            VOLUMES_query_point = VOLUMES_query_world_point;
-        }
-        VOLUMES_query_top -= 1u;
-        let node = VOLUMES_nodes[VOLUMES_query_stack[VOLUMES_query_top]];
-        if !bvh_node_contains(node, VOLUMES_query_point) {
-            continue;
-        }
-        if (node.a & BVH_LEAF) != 0u {
-            let first = node.a & ~BVH_LEAF;
-            if VOLUMES_query_floor != NO_FLOOR {
-                return vec2<u32>(first, first + node.b);
+    loop {
+        if VOLUMES_query_node == BVH_END {
+            if !VOLUMES_query_in_group {
+                break;
             }
-            // A top-level leaf holds one instance (the top level is an LBVH): enter its group.
-            VOLUMES_query_instance_index = VOLUMES_primitives[first];
-            VOLUMES_query_instance = VOLUMES_instances[VOLUMES_query_instance_index];
-            VOLUMES_query_point = instance_point_to_group(VOLUMES_query_instance, VOLUMES_query_world_point);
-            VOLUMES_query_floor = VOLUMES_query_top;
-            VOLUMES_query_stack[VOLUMES_query_top] = VOLUMES_query_instance.blas_root;
-            VOLUMES_query_top += 1u;
+            // The instance's BVH is done: back in the top level.
+            VOLUMES_query_in_group = false;
+            VOLUMES_query_node = VOLUMES_query_resume;
+            VOLUMES_query_point = VOLUMES_query_world_point;
             continue;
         }
-        VOLUMES_query_stack[VOLUMES_query_top] = node.a;
-        VOLUMES_query_stack[VOLUMES_query_top + 1u] = node.b;
-        VOLUMES_query_top += 2u;
+        let node = VOLUMES_nodes[VOLUMES_query_node];
+        if !bvh_node_contains(node, VOLUMES_query_point) {
+            VOLUMES_query_node = node.skip;
+            continue;
+        }
+        if (node.entry & BVH_LEAF) == 0u {
+            VOLUMES_query_node = node.entry;
+            continue;
+        }
+        VOLUMES_query_node = node.skip;
+        let leaf = bvh_leaf_range(node.entry);
+        if VOLUMES_query_in_group {
+            return leaf;
+        }
+        // A top-level leaf holds one instance (the top level is an LBVH): enter its group.
+        VOLUMES_query_instance_index = VOLUMES_primitives[leaf.x];
+        VOLUMES_query_instance = VOLUMES_instances[VOLUMES_query_instance_index];
+        VOLUMES_query_point = instance_point_to_group(VOLUMES_query_instance, VOLUMES_query_world_point);
+        VOLUMES_query_resume = VOLUMES_query_node;
+        VOLUMES_query_node = VOLUMES_query_instance.blas_root;
+        VOLUMES_query_in_group = true;
     }
     return vec2<u32>(0u);
 }
