@@ -9,12 +9,14 @@ use std::sync::{Arc, Mutex};
 
 use crate::{Error, Result};
 
-/// Features the renderer uses when the adapter has them; none is required. Subgroups let the GPU BVH
-/// builder's radix sort (lampshade) use its fast kernels.
 /// Storage buffers the shading passes bind at once: the scene's four, the lights' and the decals'
 /// four each (`shading/*_bindings.wgsl`).
 const REQUIRED_STORAGE_BUFFERS: u32 = 12;
-const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::SUBGROUP);
+/// Features the renderer uses when the adapter has them; none is required. Subgroups let the GPU BVH
+/// builder's radix sort (lampshade) use its fast kernels; `primitive_index` lets the visibility
+/// raster draw indexed.
+pub const OPTIONAL_FEATURES: wgpu::Features =
+    wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::SUBGROUP).union(wgpu::Features::PRIMITIVE_INDEX);
 
 pub struct GpuContext {
     pub adapter: wgpu::Adapter,
@@ -81,6 +83,12 @@ pub fn list_adapters() -> Vec<AdapterSummary> {
 impl GpuContext {
     /// Picks an adapter as described in the module docs and opens a device on it.
     pub fn new() -> Result<Self> {
+        Self::without(wgpu::Features::empty())
+    }
+
+    /// Like [`GpuContext::new`], but never requests `withheld`: tests use it to run the paths taken on
+    /// devices that lack a feature.
+    pub fn without(withheld: wgpu::Features) -> Result<Self> {
         let adapters = pollster::block_on(instance().enumerate_adapters(wgpu::Backends::all()));
         let seen: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
         let filter = name_filter();
@@ -96,10 +104,10 @@ impl GpuContext {
                     (None, false) => format!(" (adapters present but unusable: {})", seen.join("; ")),
                 },
             })?;
-        Self::open(adapter)
+        Self::open(adapter, withheld)
     }
 
-    fn open(adapter: wgpu::Adapter) -> Result<Self> {
+    fn open(adapter: wgpu::Adapter, withheld: wgpu::Features) -> Result<Self> {
         let info = adapter.get_info();
         if adapter.limits().max_storage_buffers_per_shader_stage < REQUIRED_STORAGE_BUFFERS {
             return Err(Error::NoAdapter {
@@ -110,7 +118,7 @@ impl GpuContext {
                 ),
             });
         }
-        let features = adapter.features() & OPTIONAL_FEATURES;
+        let features = adapter.features() & (OPTIONAL_FEATURES - withheld);
         let available = adapter.limits();
         // Large scenes need large buffers and texture arrays: take what the adapter offers for the
         // limits that grow with the scene or the image, defaults for the rest.

@@ -131,7 +131,10 @@ pub struct RasterState {
 #[derive(Clone, Copy, Debug)]
 pub struct DrawCommand {
     pub draw_index: u32,
+    /// The primitive's range of the index buffer, and its first vertex.
+    pub first_index: u32,
     pub index_count: u32,
+    pub base_vertex: u32,
     pub state: RasterState,
     /// World-space centre of the primitive's bounds, for front-to-back ordering.
     pub center: glam::Vec3,
@@ -144,6 +147,8 @@ pub struct GpuScene {
     pub draw_commands: Vec<DrawCommand>,
     pub lighting: SceneLighting,
     pub triangle_count: u64,
+    /// The scene's indices, also bound as storage: the raster pass draws indexed from it.
+    pub index_buffer: wgpu::Buffer,
 }
 
 impl GpuScene {
@@ -180,8 +185,8 @@ impl GpuScene {
 
         let mut draws = Vec::new();
         let mut draw_commands = Vec::new();
-        // Visibility ids count triangles from 1; 0 is the background.
-        let mut next_visibility_id = 1u64;
+        // Visibility ids number the drawn triangles from 0 (the background is told by depth).
+        let mut next_visibility_id = 0u64;
         for instance in &scene.instances {
             let normal_from_local = Mat3::from_mat4(instance.world_from_local).inverse().transpose();
             let handedness = Mat3::from_mat4(instance.world_from_local).determinant().signum();
@@ -192,7 +197,9 @@ impl GpuScene {
                 let material = &scene.materials[primitive.material];
                 draw_commands.push(DrawCommand {
                     draw_index: draws.len() as u32,
+                    first_index,
                     index_count,
+                    base_vertex,
                     center: instance.world_from_local.transform_point3(primitive_center(primitive)),
                     state: RasterState {
                         alpha_mask: matches!(material.alpha_mode, AlphaMode::Mask { .. }),
@@ -211,19 +218,17 @@ impl GpuScene {
                 next_visibility_id += u64::from(index_count / 3);
             }
         }
-        if next_visibility_id > u64::from(u32::MAX) {
+        if next_visibility_id > 1 << 32 {
             return Err(Error::InvalidScene(format!(
-                "the scene draws {} triangles; the visibility buffer numbers at most {} (2³² − 1)",
-                next_visibility_id - 1,
-                u32::MAX
+                "the scene draws {next_visibility_id} triangles; the visibility buffer numbers at most 2³²"
             )));
         }
 
         let limit = ctx.limits.max_storage_buffer_binding_size;
-        let vertex_buffer = storage_buffer(device, "vertices", &vertices, limit)?;
-        let index_buffer = storage_buffer(device, "indices", &indices, limit)?;
-        let draw_buffer = storage_buffer(device, "draws", &draws, limit)?;
-        let material_buffer = storage_buffer(device, "materials", &materials, limit)?;
+        let vertex_buffer = storage_buffer(device, "vertices", &vertices, limit, wgpu::BufferUsages::empty())?;
+        let index_buffer = storage_buffer(device, "indices", &indices, limit, wgpu::BufferUsages::INDEX)?;
+        let draw_buffer = storage_buffer(device, "draws", &draws, limit, wgpu::BufferUsages::empty())?;
+        let material_buffer = storage_buffer(device, "materials", &materials, limit, wgpu::BufferUsages::empty())?;
         let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
             size: std::mem::size_of::<FrameUniforms>() as u64,
@@ -274,6 +279,7 @@ impl GpuScene {
             draw_commands,
             lighting: SceneLighting { sun: scene.sun, ambient: scene.ambient, exposure: scene.exposure },
             triangle_count: scene.drawn_triangle_count() as u64,
+            index_buffer,
         })
     }
 
@@ -300,8 +306,15 @@ impl GpuScene {
     }
 }
 
-/// A read-only storage buffer; empty arrays get one zeroed element because bindings cannot be empty.
-fn storage_buffer<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, data: &[T], limit: u64) -> Result<wgpu::Buffer> {
+/// A read-only storage buffer, also usable as `usage`; empty arrays get one zeroed element because
+/// bindings cannot be empty.
+fn storage_buffer<T: bytemuck::Pod>(
+    device: &wgpu::Device,
+    label: &str,
+    data: &[T],
+    limit: u64,
+    usage: wgpu::BufferUsages,
+) -> Result<wgpu::Buffer> {
     let bytes = std::mem::size_of_val(data) as u64;
     if bytes > limit {
         return Err(Error::InvalidScene(format!(
@@ -315,7 +328,7 @@ fn storage_buffer<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, data: &[
     Ok(device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents: bytemuck::cast_slice(contents),
-        usage: wgpu::BufferUsages::STORAGE,
+        usage: wgpu::BufferUsages::STORAGE | usage,
     }))
 }
 

@@ -28,6 +28,8 @@ const SOURCES: &[(&str, &str)] = &[
     ("accel/volume_query.wgsl", include_str!("../accel/volume_query.wgsl")),
     ("accel/bvh_types.wgsl", include_str!("../accel/bvh_types.wgsl")),
     ("accel/lbvh.wgsl", include_str!("../accel/lbvh.wgsl")),
+    ("passes/visbuffer_raster_indexed.wgsl", include_str!("../passes/visbuffer_raster_indexed.wgsl")),
+    ("passes/visbuffer_raster_pulled.wgsl", include_str!("../passes/visbuffer_raster_pulled.wgsl")),
     ("accel/volume_query_probe.wgsl", include_str!("../accel/volume_query_probe.wgsl")),
     ("passes/visbuffer_raster.wgsl", include_str!("../passes/visbuffer_raster.wgsl")),
     ("passes/visbuffer_shade.wgsl", include_str!("../passes/visbuffer_shade.wgsl")),
@@ -146,7 +148,8 @@ pub fn create_module(device: &wgpu::Device, desc: &ShaderDesc) -> crate::Result<
 /// Every shader the renderer builds, with every substitution it uses: the naga test validates each.
 pub fn all_shaders() -> Vec<ShaderDesc> {
     let mut shaders = vec![
-        ShaderDesc::new("passes/visbuffer_raster.wgsl"),
+        ShaderDesc::new("passes/visbuffer_raster_indexed.wgsl"),
+        ShaderDesc::new("passes/visbuffer_raster_pulled.wgsl"),
         ShaderDesc::new("passes/tonemap.wgsl"),
         ShaderDesc::new("accel/volume_query_probe.wgsl"),
         ShaderDesc::new("accel/lbvh.wgsl"),
@@ -166,7 +169,13 @@ mod tests {
     fn validate(desc: &ShaderDesc) {
         let source = desc.compose().unwrap_or_else(|e| panic!("{}: {e}", desc.entry));
         let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}:\n{}", desc.entry, e.emit_to_string(&source)));
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+        // Shaders that enable a WGSL extension run only on devices with the matching feature.
+        let capabilities = if source.contains("enable primitive_index;") {
+            naga::valid::Capabilities::PRIMITIVE_INDEX
+        } else {
+            naga::valid::Capabilities::empty()
+        };
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
             .validate(&module)
             .unwrap_or_else(|e| panic!("{}:\n{}", desc.entry, e.emit_to_string(&source)));
     }

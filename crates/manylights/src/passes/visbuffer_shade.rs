@@ -30,6 +30,7 @@ impl VisbufferShade {
         methods: (LightMethod, DecalMethod),
         (lights, decals): (&VolumeStructure, &VolumeStructure),
         visibility: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
         hdr: &wgpu::TextureView,
     ) -> Result<Self> {
         let device = &ctx.device;
@@ -41,6 +42,7 @@ impl VisbufferShade {
             &[
                 bindings::texture(0, compute, wgpu::TextureSampleType::Uint, wgpu::TextureViewDimension::D2), // visibility ids
                 bindings::storage_texture_write(1, compute, HDR_FORMAT),                                      // HDR output
+                bindings::texture(2, compute, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2), // depth
             ],
         );
         let layouts = [&scene.bind_group_layout, &layout, &lights.bind_group_layout, &decals.bind_group_layout];
@@ -49,7 +51,11 @@ impl VisbufferShade {
             device,
             "visbuffer_shade",
             &layout,
-            vec![wgpu::BindingResource::TextureView(visibility), wgpu::BindingResource::TextureView(hdr)],
+            vec![
+                wgpu::BindingResource::TextureView(visibility),
+                wgpu::BindingResource::TextureView(hdr),
+                wgpu::BindingResource::TextureView(depth),
+            ],
         );
         Ok(Self { pipeline, bind_group, lights: lights.bind_group.clone(), decals: decals.bind_group.clone() })
     }

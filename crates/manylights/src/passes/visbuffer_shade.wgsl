@@ -10,6 +10,8 @@
 
 @group(1) @binding(0) var visibility: texture_2d<u32>;
 @group(1) @binding(1) var hdr_output: texture_storage_2d<rgba32float, write>;
+// Reverse Z, cleared to 0: a pixel no triangle covered keeps 0, and its id is stale (ids are not cleared).
+@group(1) @binding(2) var depth: texture_depth_2d;
 
 // A ray whose origin is relative to the camera position (`frame.world_from_view[3]`).
 struct Ray {
@@ -81,11 +83,11 @@ fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let pixel = vec2<f32>(id.xy) + 0.5;
     let ray = camera_ray(pixel);
-    let visibility_id = textureLoad(visibility, id.xy, 0).x;
-    if visibility_id == 0u {
+    if textureLoad(depth, id.xy, 0) == 0.0 {
         textureStore(hdr_output, id.xy, vec4<f32>(sky_radiance(ray.dir), 1.0));
         return;
     }
+    let visibility_id = textureLoad(visibility, id.xy, 0).x;
 
     let draw = draws[find_draw(visibility_id)];
     let first = draw.first_index + (visibility_id - draw.first_visibility_id) * 3u;

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! light / decal structures ─▶ (tlas/blas builds, when groups move or change)
-//! GpuScene ─▶ visbuffer_raster ─▶ visibility (R32Uint) + depth
+//! GpuScene ─▶ visbuffer_raster ─▶ visibility (R32Uint, not cleared) + depth (cleared to 0)
 //!                                   │
 //!                                   ▼
 //!             visbuffer_shade (material, decals, lights) ─▶ hdr (Rgba32Float)
@@ -54,7 +54,7 @@ impl FrameTargets {
             width,
             height,
             visibility: target("visibility", VISIBILITY_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING),
-            depth: target("depth", DEPTH_FORMAT, U::RENDER_ATTACHMENT),
+            depth: target("depth", DEPTH_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING),
             hdr: target("hdr", HDR_FORMAT, U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC),
             ldr: target("ldr", LDR_FORMAT, U::STORAGE_BINDING | U::COPY_SRC),
         }
@@ -85,7 +85,7 @@ impl VisbufferPipeline {
             (view(&targets.visibility), view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
         Ok(Self {
             raster: VisbufferRaster::new(ctx, scene)?,
-            shade: VisbufferShade::new(ctx, scene, methods, structures, &visibility_view, &hdr_view)?,
+            shade: VisbufferShade::new(ctx, scene, methods, structures, &visibility_view, &depth_view, &hdr_view)?,
             tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
             targets,
             visibility_view,

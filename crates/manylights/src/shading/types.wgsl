@@ -20,8 +20,8 @@ struct Draw {
     // determinant, which flips the bitangent of mirrored instances.
     normal_from_local: mat3x4<f32>,
     first_index: u32,
-    // Visibility id of the draw's first triangle: ids number every drawn triangle from 1 (0 is the
-    // background), draw after draw, so one u32 per pixel names draw and triangle.
+    // Visibility id of the draw's first triangle: ids number every drawn triangle from 0, draw after
+    // draw, so one u32 per pixel names draw and triangle.
     first_visibility_id: u32,
     base_vertex: u32,
     material: u32,
