@@ -104,7 +104,8 @@ impl GpuLbvh {
         let keys = buffer("lbvh keys", u64::from(capacity) * 8, U::STORAGE);
         let sorted_keys = buffer("lbvh sorted keys", u64::from(capacity) * 8, U::STORAGE);
         let parents = buffer("lbvh parents", node_capacity * 4, U::STORAGE);
-        let node_bounds = buffer("lbvh node bounds", node_capacity * 24, U::STORAGE | U::COPY_DST);
+        // Internal nodes only (there is one fewer than boxes): leaves write their boxes directly.
+        let node_bounds = buffer("lbvh node bounds", u64::from(capacity) * 24, U::STORAGE | U::COPY_DST);
 
         let compute = wgpu::ShaderStages::COMPUTE;
         let read_write = |binding| wgpu::BindGroupLayoutEntry {
@@ -191,9 +192,10 @@ impl GpuLbvh {
             return Ok(());
         }
         encoder.clear_buffer(&self.centre_bounds, 0, None);
-        encoder.clear_buffer(&self.node_bounds, 0, Some(u64::from(self.node_count()) * 24));
+        let internal_nodes = self.count - 1;
+        encoder.clear_buffer(&self.node_bounds, 0, Some(u64::from(internal_nodes) * 24));
         let items = self.count.div_ceil(WORKGROUP);
-        let nodes = self.node_count().div_ceil(WORKGROUP);
+        let nodes = internal_nodes.div_ceil(WORKGROUP);
         let last = PASSES.len() - 1;
         for (index, (entry, pipeline)) in PASSES.iter().zip(&self.pipelines).enumerate() {
             if *entry == "lbvh_hierarchy" {

@@ -32,7 +32,7 @@ const NO_PARENT: u32 = 0xffffffffu;
 @group(0) @binding(5) var<storage, read_write> nodes: array<BvhNode>;
 @group(0) @binding(6) var<storage, read_write> primitives: array<u32>;
 @group(0) @binding(7) var<storage, read_write> parents: array<u32>;
-// Node bounds as order-preserving integers, 6 per node like `centre_bounds`; cleared to 0.
+// Internal nodes' bounds as order-preserving integers, 6 per node like `centre_bounds`; cleared to 0.
 @group(0) @binding(8) var<storage, read_write> node_bounds: array<atomic<u32>>;
 
 // f32 → u32 keeping the order, so atomicMax works on floats; ~ordered(x) turns max into min.
@@ -188,24 +188,32 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
     parents[right] = id.x;
 }
 
-// Each leaf carries its box up the tree with atomic max, one slot (min or max of an axis) at a time,
-// and stops carrying a slot once a node already holds as much: whoever put that value there carries
-// it (or found it) above, so every ancestor still ends up exact. Atomic max is order-independent, so
-// no thread waits for another and no memory ordering between threads is assumed; stopping early
-// keeps thousands of threads from queueing on the root (6.2 → see BENCHMARKS.md at 1M boxes).
+// Each leaf writes its own box, then carries it up the tree with atomic max, one slot (min or max of
+// an axis) at a time, and stops carrying a slot once a node already holds as much: whoever put that
+// value there carries it (or found it) above, so every ancestor still ends up exact. Atomic max is
+// order-independent, so no thread waits for another and no memory ordering between threads is
+// assumed; stopping early keeps thousands of threads from queueing on the root (6.2 → see
+// BENCHMARKS.md at 1M boxes).
 @compute @workgroup_size(256)
 fn lbvh_bounds(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= params.count {
         return;
     }
     let b = boxes[sorted_keys[id.x].y];
+    let leaf = params.count - 1u + id.x;
+    nodes[params.node_base + leaf].min = b.min.xyz;
+    nodes[params.node_base + leaf].max = b.max.xyz;
+    if leaf == 0u {
+        // A lone leaf is the root.
+        return;
+    }
     var values: array<u32, 6>;
     for (var axis = 0u; axis < 3u; axis += 1u) {
         values[axis] = ~ordered(b.min[axis]);
         values[axis + 3u] = ordered(b.max[axis]);
     }
     var rising = 0x3fu;
-    var node = params.count - 1u + id.x;
+    var node = parents[leaf];
     loop {
         for (var slot = 0u; slot < 6u; slot += 1u) {
             if (rising & (1u << slot)) != 0u && atomicMax(&node_bounds[node * 6u + slot], values[slot]) >= values[slot] {
@@ -219,9 +227,10 @@ fn lbvh_bounds(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
+// Internal nodes only: leaves wrote their boxes in `lbvh_bounds`.
 @compute @workgroup_size(256)
 fn lbvh_write_nodes(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= 2u * params.count - 1u {
+    if id.x + 1u >= params.count {
         return;
     }
     let base = id.x * 6u;
