@@ -42,9 +42,8 @@ const TRAVERSAL_COST: f64 = 1.0;
 /// primitive has 27 bits.
 pub const MAX_PRIMITIVES: usize = 1 << LEAF_COUNT_SHIFT;
 
-/// One BVH node, 32 bytes, laid out for a traversal without a stack: nodes are in depth-first order
-/// as far as the links go, and each node says where to go next whether or not the point is inside
-/// its box. Keep in sync with `BvhNode` in `accel/bvh_types.wgsl`.
+/// One BVH node, 32 bytes, laid out for a traversal without a stack: the links visit the nodes depth
+/// first, and each node says where to go next whether or not the point is inside its box. Keep in sync with `BvhNode` in `accel/bvh_types.wgsl`.
 ///
 /// `entry`: for an internal node, its first child (the second is that child's `skip`); for a leaf,
 /// `LEAF | (count − 1) << 27 | first`, naming `Bvh::primitive_indices[first..first + count]`.
@@ -244,8 +243,7 @@ impl Bvh {
                 let first = node.entry;
                 let first_node = self.nodes.get(first as usize).ok_or_else(|| format!("node {n}: first child {first} out of range"))?;
                 let second = first_node.skip;
-                let second_node =
-                    self.nodes.get(second as usize).ok_or_else(|| format!("node {n}: second child {second} out of range"))?;
+                let second_node = self.nodes.get(second as usize).ok_or_else(|| format!("node {n}: second child {second} out of range"))?;
                 for (child, child_node) in [(first, first_node), (second, second_node)] {
                     if !bounds.contains_box(&child_node.bounds()) {
                         return Err(format!("node {n}'s box {bounds:?} does not contain child {child}'s {:?}", child_node.bounds()));

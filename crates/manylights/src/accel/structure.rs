@@ -16,9 +16,9 @@ use glam::Affine3A;
 use wgpu::util::DeviceExt;
 
 use super::{
+    bvh::{END, MAX_PRIMITIVES},
     decal_aabb,
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
-    bvh::{END, MAX_PRIMITIVES},
     light_aabb, Aabb, Bvh, BvhNode,
 };
 use crate::{
