@@ -15,7 +15,7 @@ const REQUIRED_STORAGE_BUFFERS: u32 = 12;
 /// Features the renderer uses when the adapter has them; none is required. Subgroups let the GPU BVH
 /// builder's radix sort (lampshade) use its fast kernels; `primitive_index` lets the visibility
 /// raster draw indexed.
-pub const OPTIONAL_FEATURES: wgpu::Features =
+const OPTIONAL_FEATURES: wgpu::Features =
     wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::SUBGROUP).union(wgpu::Features::PRIMITIVE_INDEX);
 
 pub struct GpuContext {
