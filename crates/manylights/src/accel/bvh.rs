@@ -17,6 +17,8 @@ pub const END: u32 = u32::MAX;
 /// primitive in the 27 bits below those.
 const LEAF_COUNT_SHIFT: u32 = 27;
 const LEAF_FIRST_MASK: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
+/// The most primitives a leaf's `entry` can count.
+const MAX_LEAF_COUNT: u32 = 1 << (31 - LEAF_COUNT_SHIFT);
 
 /// The deepest root-to-leaf path [`Bvh::build`] produces, in nodes (a root that is a leaf has depth 1).
 /// The traversal needs no stack, so this only bounds the builder's recursion and keeps degenerate
@@ -43,7 +45,8 @@ const TRAVERSAL_COST: f64 = 1.0;
 pub const MAX_PRIMITIVES: usize = 1 << LEAF_COUNT_SHIFT;
 
 /// One BVH node, 32 bytes, laid out for a traversal without a stack: the links visit the nodes depth
-/// first, and each node says where to go next whether or not the point is inside its box. Keep in sync with `BvhNode` in `accel/bvh_types.wgsl`.
+/// first, and each node says where to go next whether or not the point is inside its box. Keep in
+/// sync with `BvhNode` in `accel/bvh_types.wgsl`.
 ///
 /// `entry`: for an internal node, its first child (the second is that child's `skip`); for a leaf,
 /// `LEAF | (count − 1) << 27 | first`, naming `Bvh::primitive_indices[first..first + count]`.
@@ -71,7 +74,7 @@ impl BvhNode {
 
     /// A leaf's `entry` for `count` (1 ..= 16) primitives from `first`.
     pub fn leaf_entry(first: u32, count: u32) -> u32 {
-        debug_assert!((1..=16).contains(&count) && first <= LEAF_FIRST_MASK);
+        debug_assert!((1..=MAX_LEAF_COUNT).contains(&count) && first <= LEAF_FIRST_MASK);
         LEAF | (count - 1) << LEAF_COUNT_SHIFT | first
     }
 
@@ -85,6 +88,19 @@ impl BvhNode {
         let first = self.leaf_first() as usize;
         let count = ((self.entry & !LEAF) >> LEAF_COUNT_SHIFT) as usize + 1;
         first..first + count
+    }
+
+    /// The node as it reads once its BVH is moved within shared arrays: node links shifted by
+    /// `node_offset` (an [`END`] stays), a leaf's range by `primitive_offset`. Offsets wrap, so a
+    /// wrapped negation moves a BVH back.
+    pub fn offset(&self, node_offset: u32, primitive_offset: u32) -> BvhNode {
+        let entry = if self.is_leaf() {
+            BvhNode::leaf_entry(self.leaf_first().wrapping_add(primitive_offset), self.leaf_range().len() as u32)
+        } else {
+            self.entry.wrapping_add(node_offset)
+        };
+        let skip = if self.skip == END { END } else { self.skip.wrapping_add(node_offset) };
+        BvhNode { entry, skip, ..*self }
     }
 }
 

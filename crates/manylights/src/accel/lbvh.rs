@@ -4,7 +4,7 @@
 //! the top level, so their boxes change only when the group's contents change). The nodes land in a
 //! region of a node array that may hold other BVHs too ([`LbvhTarget`]).
 
-use super::{bvh::END, Aabb, Bvh, BvhNode};
+use super::{Aabb, Bvh, BvhNode};
 use crate::gpu::{bindings, readback, shaders::ShaderDesc, GpuContext, GpuTimer};
 use crate::{Error, Result};
 
@@ -241,14 +241,7 @@ impl GpuLbvh {
         ctx.check_errors()?;
         let mut bvh = Bvh { nodes: bytemuck::pod_collect_to_vec(&nodes), primitive_indices: bytemuck::pod_collect_to_vec(&primitives) };
         for node in &mut bvh.nodes {
-            node.entry = if node.is_leaf() {
-                BvhNode::leaf_entry(node.leaf_first().wrapping_sub(t.primitive_base), node.leaf_range().len() as u32)
-            } else {
-                node.entry.wrapping_sub(t.node_base)
-            };
-            if node.skip != END {
-                node.skip = node.skip.wrapping_sub(t.node_base);
-            }
+            *node = node.offset(t.node_base.wrapping_neg(), t.primitive_base.wrapping_neg());
         }
         for primitive in &mut bvh.primitive_indices {
             *primitive = primitive.wrapping_sub(t.item_base);

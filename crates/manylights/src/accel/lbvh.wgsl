@@ -140,6 +140,7 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     // Every thread writes its leaf; threads below n - 1 also build internal node id.x.
     let leaf = params.node_base + n - 1u + id.x;
+    // One box per leaf: the count − 1 bits stay 0.
     nodes[leaf].entry = BVH_LEAF | (params.primitive_base + id.x);
     nodes[leaf].skip = skip_after(i32(id.x));
     primitives[params.primitive_base + id.x] = params.item_base + sorted_keys[id.x].y;

@@ -16,7 +16,7 @@ use glam::Affine3A;
 use wgpu::util::DeviceExt;
 
 use super::{
-    bvh::{END, MAX_PRIMITIVES},
+    bvh::MAX_PRIMITIVES,
     decal_aabb,
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
     light_aabb, Aabb, Bvh, BvhNode,
@@ -308,26 +308,11 @@ impl VolumeStructure {
     }
 }
 
-/// Moves a CPU-built BVH into the shared arrays: node links by `node_base` (the last node's [`END`]
+/// Moves a CPU-built BVH into the shared arrays: node links by `node_base` (the last node's [`END`](super::END)
 /// stays, ending the group's traversal), leaf ranges by `primitive_base`, primitive values by
 /// `item_base`.
 fn relocate(bvh: &Bvh, node_base: u32, primitive_base: u32, item_base: u32) -> (Vec<BvhNode>, Vec<u32>) {
-    let nodes = bvh
-        .nodes
-        .iter()
-        .map(|n| {
-            let mut n = *n;
-            n.entry = if n.is_leaf() {
-                BvhNode::leaf_entry(n.leaf_first() + primitive_base, n.leaf_range().len() as u32)
-            } else {
-                n.entry + node_base
-            };
-            if n.skip != END {
-                n.skip += node_base;
-            }
-            n
-        })
-        .collect();
+    let nodes = bvh.nodes.iter().map(|n| n.offset(node_base, primitive_base)).collect();
     let primitives = bvh.primitive_indices.iter().map(|&p| p + item_base).collect();
     (nodes, primitives)
 }
@@ -337,6 +322,7 @@ mod tests {
     use std::mem::{offset_of, size_of};
 
     use super::*;
+    use crate::accel::END;
 
     #[test]
     fn volume_instance_matches_its_wgsl_layout() {
