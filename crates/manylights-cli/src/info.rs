@@ -1,8 +1,15 @@
 //! `manylights info`: what wgpu sees and what manylights would use, and what a scene holds.
 
-use manylights::gpu::{context, GpuContext};
+use manylights::{
+    accel::overlap::{decal_overlap, light_overlap, Overlap},
+    gpu::{context, GpuContext},
+    scene::generators::surface_points,
+};
 
 use crate::scene_args::{describe_groups, SceneArgs};
+
+/// Surface points sampled (uniformly by area) for the overlap statistics.
+const OVERLAP_SAMPLES: usize = 100_000;
 
 pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     let adapters = context::list_adapters();
@@ -37,5 +44,19 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     );
     println!("  lights: {} in {}", scene.lights.len(), describe_groups(&scene.light_groups, scene.lights.len()));
     println!("  decals: {} in {}", scene.decals.len(), describe_groups(&scene.decal_groups, scene.decals.len()));
+    // What the enumeration's cost per pixel follows: volumes reaching a surface point.
+    let points = surface_points(&scene, OVERLAP_SAMPLES, 1);
+    if !points.is_empty() {
+        let show = |what: &str, o: Overlap| {
+            println!(
+                "  {what} reaching a surface point: mean {:.2}, max {} ({:.1} % of points reached by any; {OVERLAP_SAMPLES} points)",
+                o.mean,
+                o.max,
+                o.covered * 100.0
+            )
+        };
+        show("lights", light_overlap(&scene, &points)?);
+        show("decals", decal_overlap(&scene, &points)?);
+    }
     Ok(())
 }

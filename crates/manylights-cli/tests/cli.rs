@@ -223,4 +223,9 @@ fn info_counts_decals_and_groups() {
     assert!(stdout.contains("scene demo:"), "{stdout}");
     assert!(stdout.contains("decals: 10 in 3 group(s), 3 instance(s), animated"), "{stdout}");
     assert!(stdout.contains("lights: 7 in 3 group(s), 3 instance(s), animated"), "{stdout}");
+    // The overlap statistics, through the groups' instances.
+    assert!(
+        stdout.contains("lights reaching a surface point: mean") && stdout.contains("decals reaching a surface point: mean"),
+        "{stdout}"
+    );
 }

@@ -4,7 +4,7 @@
 
 use glam::{Affine3A, Quat, Vec3};
 use manylights::{
-    accel::{light_contains, BvhBuild, VolumeStructure},
+    accel::{light_contains, BvhBuild, VolumeStructure, CPU_TOP_LEVEL_MAX_INSTANCES},
     gpu::{readback, shaders, shaders::ShaderDesc, GpuContext},
     scene::{GroupInstance, Groups, Light, LightKind, Spin},
 };
@@ -188,5 +188,25 @@ fn instanced_and_moving_groups_are_queried_in_their_own_space() {
         ],
     };
     let reached = check(&ctx, &lights, &groups, 0.7, &mut rng);
+    assert!(reached > 4096, "the test points reach too few lights ({reached}) to mean much");
+}
+
+/// More instances than the CPU builds a top level for: the GPU builds it, and queries stay exact.
+#[test]
+fn many_instances_get_a_gpu_built_top_level() {
+    let ctx = GpuContext::new().expect("a GPU adapter");
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+    let lights = random_lights(40, &mut rng);
+    let count = CPU_TOP_LEVEL_MAX_INSTANCES + 1;
+    let instances = (0..count)
+        .map(|i| {
+            let offset = Vec3::new(rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0));
+            let world_from_group = Affine3A::from_scale_rotation_translation(Vec3::splat(0.3), Quat::from_rotation_y(i as f32), offset);
+            let spin = (i % 3 == 0).then_some(Spin { pivot: offset, radians_per_second: 0.5 });
+            GroupInstance { group: i % 2, world_from_group, spin }
+        })
+        .collect();
+    let groups = Groups { sizes: vec![25, 15], instances };
+    let reached = check(&ctx, &lights, &groups, 1.3, &mut rng);
     assert!(reached > 4096, "the test points reach too few lights ({reached}) to mean much");
 }

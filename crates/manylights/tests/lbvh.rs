@@ -31,6 +31,15 @@ fn build(ctx: &GpuContext, lbvh: &mut GpuLbvh, boxes: &[Aabb]) -> manylights::ac
 
 fn check(bvh: &manylights::accel::Bvh, boxes: &[Aabb], rng: &mut rand_pcg::Pcg64) {
     bvh.validate(boxes).unwrap_or_else(|e| panic!("{} boxes: invalid GPU BVH: {e}", boxes.len()));
+    // Valid means every box holds its children; the LBVH's boxes are also exact unions (a looser box
+    // would only slow queries down, which no other test would notice).
+    for (n, node) in bvh.nodes.iter().enumerate() {
+        let tight = match bvh.children(node) {
+            Some((a, b)) => bvh.nodes[a as usize].bounds().union(bvh.nodes[b as usize].bounds()),
+            None => node.leaf_range().map(|slot| boxes[bvh.primitive_indices[slot] as usize]).fold(Aabb::EMPTY, Aabb::union),
+        };
+        assert_eq!(node.bounds(), tight, "{} boxes: node {n}'s box is not the union of what it holds", boxes.len());
+    }
     for _ in 0..2000 {
         // Half the points on box corners and faces, half anywhere.
         let p = if !boxes.is_empty() && rng.random_bool(0.5) {
@@ -52,7 +61,8 @@ fn gpu_builds_are_valid_and_exact() {
     let ctx = GpuContext::new().expect("a GPU adapter");
     let mut lbvh = GpuLbvh::new(&ctx, 20_000).unwrap();
     let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
-    for count in [1, 2, 3, 17, 1000, 20_000] {
+    // 256 boxes fill one block of the bounds pass exactly; 257 and 513 spill into the next.
+    for count in [1, 2, 3, 17, 255, 256, 257, 513, 1000, 20_000] {
         let boxes = random_boxes(count, &mut rng);
         let bvh = build(&ctx, &mut lbvh, &boxes);
         assert_eq!(bvh.nodes.len(), 2 * count - 1);

@@ -119,6 +119,13 @@ impl Bvh {
     /// out depth-first (a first child directly follows its parent), leaves hold 1 to
     /// [`MAX_LEAF_SIZE`] primitives, and no path is deeper than [`MAX_DEPTH`].
     pub fn build(aabbs: &[Aabb]) -> crate::Result<Bvh> {
+        Self::build_with_leaf_size(aabbs, MAX_LEAF_SIZE)
+    }
+
+    /// As [`build`](Self::build), with leaves of at most `max_leaf_size` (1 to [`MAX_LEAF_SIZE`])
+    /// primitives: 1 for a top level, whose leaves the query enters one instance at a time.
+    pub fn build_with_leaf_size(aabbs: &[Aabb], max_leaf_size: u32) -> crate::Result<Bvh> {
+        assert!((1..=MAX_LEAF_SIZE).contains(&max_leaf_size), "leaf size {max_leaf_size}");
         let invalid = |message: String| Err(crate::Error::InvalidScene(message));
         if aabbs.len() > MAX_PRIMITIVES {
             return invalid(format!("{} volumes; one BVH holds at most {MAX_PRIMITIVES}", aabbs.len()));
@@ -141,7 +148,8 @@ impl Bvh {
             .collect();
         let mut nodes = Vec::with_capacity(2 * aabbs.len() - 1);
         let mut children = Vec::with_capacity(2 * aabbs.len() - 1);
-        build_node(&mut nodes, &mut children, &mut prims, 0, 1);
+        let leaves = LeafSizes { max: max_leaf_size as usize, split_above: MIN_SPLIT_SIZE.min(max_leaf_size as usize) };
+        build_node(&mut nodes, &mut children, &mut prims, 0, 1, leaves);
         link(&mut nodes, &children);
         Ok(Bvh { nodes, primitive_indices: prims.iter().map(|p| p.index).collect() })
     }
@@ -293,17 +301,24 @@ struct Prim {
 /// Appends the subtree over `prims` (which start at `first` in the final primitive order) at `level`
 /// (the root is 1) with a leaf's `entry` filled in and an internal node's children noted in
 /// `children`; returns its node index. Recursion depth is bounded by [`MAX_DEPTH`].
-fn build_node(nodes: &mut Vec<BvhNode>, children: &mut Vec<(u32, u32)>, prims: &mut [Prim], first: usize, level: u32) -> u32 {
+fn build_node(
+    nodes: &mut Vec<BvhNode>,
+    children: &mut Vec<(u32, u32)>,
+    prims: &mut [Prim],
+    first: usize,
+    level: u32,
+    leaves: LeafSizes,
+) -> u32 {
     let index = nodes.len() as u32;
     let bounds = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
     nodes.push(BvhNode { min: bounds.min.to_array(), entry: 0, max: bounds.max.to_array(), skip: END });
     children.push((END, END));
-    match split(prims, bounds, level) {
+    match split(prims, bounds, level, leaves) {
         None => nodes[index as usize].entry = BvhNode::leaf_entry(first as u32, prims.len() as u32),
         Some(mid) => {
             let (left, right) = prims.split_at_mut(mid);
-            let a = build_node(nodes, children, left, first, level + 1);
-            let b = build_node(nodes, children, right, first + mid, level + 1);
+            let a = build_node(nodes, children, left, first, level + 1, leaves);
+            let b = build_node(nodes, children, right, first + mid, level + 1, leaves);
             children[index as usize] = (a, b);
         }
     }
@@ -324,11 +339,19 @@ fn link(nodes: &mut [BvhNode], children: &[(u32, u32)]) {
     }
 }
 
+/// Leaf sizes of a build: nodes of at most `split_above` primitives are leaves, and the SAH may keep
+/// up to `max` in one.
+#[derive(Clone, Copy)]
+struct LeafSizes {
+    max: usize,
+    split_above: usize,
+}
+
 /// Levels below a node of `count` primitives if it and its descendants are split at the median.
-fn median_levels(count: usize) -> u32 {
+fn median_levels(count: usize, leaves: LeafSizes) -> u32 {
     let mut levels = 0;
     let mut count = count;
-    while count > MIN_SPLIT_SIZE {
+    while count > leaves.split_above {
         count = count.div_ceil(2);
         levels += 1;
     }
@@ -340,10 +363,10 @@ fn median_levels(count: usize) -> u32 {
 ///
 /// A SAH split is taken only if its larger child can still be finished by median splits within
 /// [`MAX_DEPTH`]; median splits halve the count, so from the root (at most 2^27 primitives, 26
-/// levels) that bound always holds.
-fn split(prims: &mut [Prim], bounds: Aabb, level: u32) -> Option<usize> {
+/// levels, 27 with leaves of one) that bound always holds.
+fn split(prims: &mut [Prim], bounds: Aabb, level: u32, leaves: LeafSizes) -> Option<usize> {
     let count = prims.len();
-    if count <= MIN_SPLIT_SIZE {
+    if count <= leaves.split_above {
         return None;
     }
     let (cmin, cmax) = prims.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p.centroid), hi.max(p.centroid)));
@@ -386,10 +409,10 @@ fn split(prims: &mut [Prim], bounds: Aabb, level: u32) -> Option<usize> {
             }
         }
         if let Some((bin, cost, left_count)) = best {
-            if cost >= count as f64 && count <= MAX_LEAF_SIZE as usize {
+            if cost >= count as f64 && count <= leaves.max {
                 return None;
             }
-            if level + 1 + median_levels(left_count.max(count - left_count)) <= MAX_DEPTH {
+            if level + 1 + median_levels(left_count.max(count - left_count), leaves) <= MAX_DEPTH {
                 return Some(partition(prims, |p| bin_of(p) < bin));
             }
         }
@@ -525,6 +548,31 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn single_primitive_leaves_for_top_levels() {
+        let mut rng = Pcg64::seed_from_u64(0x7095);
+        for size in [1, 2, 5, 100, 1000] {
+            for _ in 0..8 {
+                let boxes = random_boxes(&mut rng, size);
+                let bvh = Bvh::build_with_leaf_size(&boxes, 1).unwrap();
+                check_structure(&bvh, &boxes);
+                assert!(
+                    bvh.nodes.iter().filter(|n| n.is_leaf()).all(|n| n.leaf_range().len() == 1),
+                    "{size} boxes: a leaf holds more than one"
+                );
+                assert_eq!(bvh.nodes.len(), 2 * size - 1);
+                for p in random_points(&mut rng, &boxes, 200) {
+                    check_point(&bvh, &boxes, p);
+                }
+            }
+        }
+        // Coincident boxes split by halving, still one per leaf.
+        let same = vec![Aabb::new(Vec3::ZERO, Vec3::ONE); 64];
+        let bvh = Bvh::build_with_leaf_size(&same, 1).unwrap();
+        check_structure(&bvh, &same);
+        assert_eq!(bvh.nodes.len(), 127);
     }
 
     #[test]

@@ -1,12 +1,13 @@
 //! The LBVH builder on the GPU (`lbvh.wgsl`): rebuilds a BVH over up to `capacity` boxes in a handful
-//! of compute passes and lampshade's radix sort, writing the node layout the point query reads.
+//! of compute passes and a radix sort (`radix_sort.rs`), writing the node layout the point query reads.
 //! Boxes are uploaded by the caller (a group's volumes in its local space; moving groups are placed by
 //! the top level, so their boxes change only when the group's contents change). The nodes land in a
 //! region of a node array that may hold other BVHs too ([`LbvhTarget`]).
 
-use super::{Aabb, Bvh, BvhNode};
+use super::{radix_sort::GpuRadixSort, Aabb, Bvh, BvhNode};
 use crate::gpu::{bindings, readback, shaders::ShaderDesc, GpuContext, GpuTimer};
 use crate::{Error, Result};
+use glam::Vec3;
 
 /// Keep in sync with `Box` in `lbvh.wgsl`.
 #[repr(C)]
@@ -14,6 +15,18 @@ use crate::{Error, Result};
 struct GpuBox {
     min: [f32; 4],
     max: [f32; 4],
+}
+
+/// Keep in sync with `LbvhParams` in `lbvh.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct LbvhParams {
+    count: u32,
+    node_base: u32,
+    primitive_base: u32,
+    item_base: u32,
+    centre_min: [f32; 4],
+    centre_max: [f32; 4],
 }
 
 /// Where a build writes: `2 × capacity − 1` nodes from `node_base` in `nodes`, and `capacity` primitive
@@ -44,20 +57,18 @@ impl TimerSpan {
 }
 
 /// One entry point per pass, in dispatch order around the sort.
-const PASSES: [&str; 5] = ["lbvh_centre_bounds", "lbvh_morton", "lbvh_hierarchy", "lbvh_bounds", "lbvh_write_nodes"];
+const PASSES: [&str; 4] = ["lbvh_morton", "lbvh_hierarchy", "lbvh_bounds", "lbvh_write_nodes"];
 const WORKGROUP: u32 = 256;
+/// Bits of the Morton codes: 8 per axis (`MORTON_CELLS` in `lbvh.wgsl`).
+const MORTON_BITS: u32 = 24;
 
 pub struct GpuLbvh {
     pipelines: Vec<wgpu::ComputePipeline>,
     bind_group: wgpu::BindGroup,
-    sorter: lampshade::KeyValueSorter,
+    sort: GpuRadixSort,
     params: wgpu::Buffer,
     boxes: wgpu::Buffer,
-    centre_bounds: wgpu::Buffer,
-    keys: wgpu::Buffer,
-    sorted_keys: wgpu::Buffer,
     target: LbvhTarget,
-    node_bounds: wgpu::Buffer,
     capacity: u32,
     count: u32,
 }
@@ -98,26 +109,17 @@ impl GpuLbvh {
         let buffer = |label, size: u64, usage| {
             device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
         };
-        let params = buffer("lbvh params", 16, U::UNIFORM | U::COPY_DST);
+        let params = buffer("lbvh params", std::mem::size_of::<LbvhParams>() as u64, U::UNIFORM | U::COPY_DST);
         let boxes = buffer("lbvh boxes", u64::from(capacity) * 32, U::STORAGE | U::COPY_DST);
-        let centre_bounds = buffer("lbvh centre bounds", 24, U::STORAGE | U::COPY_DST);
-        let keys = buffer("lbvh keys", u64::from(capacity) * 8, U::STORAGE);
-        let sorted_keys = buffer("lbvh sorted keys", u64::from(capacity) * 8, U::STORAGE);
+        let keys = buffer("lbvh keys", u64::from(capacity) * 8, U::STORAGE | U::COPY_SRC);
+        let sorted_keys = buffer("lbvh sorted keys", u64::from(capacity) * 8, U::STORAGE | U::COPY_DST);
         let parents = buffer("lbvh parents", node_capacity * 4, U::STORAGE);
         // Internal nodes only (there is one fewer than boxes): leaves write their boxes directly.
-        let node_bounds = buffer("lbvh node bounds", u64::from(capacity) * 24, U::STORAGE | U::COPY_DST);
+        let node_bounds = buffer("lbvh node bounds", u64::from(capacity) * 24, U::STORAGE);
+        let ranges = buffer("lbvh node ranges", u64::from(capacity) * 8, U::STORAGE);
 
         let compute = wgpu::ShaderStages::COMPUTE;
-        let read_write = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: compute,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
+        let read_write = |binding| bindings::storage_read_write(binding, compute);
         // Keep in sync with the bindings of `lbvh.wgsl`.
         let layout = bindings::layout(
             device,
@@ -125,20 +127,20 @@ impl GpuLbvh {
             &[
                 bindings::uniform(0, compute),
                 bindings::storage_read(1, compute), // boxes
-                read_write(2),                      // centre bounds
-                read_write(3),                      // keys
-                bindings::storage_read(4, compute), // sorted keys
-                read_write(5),                      // nodes
-                read_write(6),                      // primitives
-                read_write(7),                      // parents
-                read_write(8),                      // node bounds
+                read_write(2),                      // keys
+                bindings::storage_read(3, compute), // sorted keys
+                read_write(4),                      // nodes
+                read_write(5),                      // primitives
+                read_write(6),                      // parents
+                read_write(7),                      // node bounds
+                read_write(8),                      // node ranges
             ],
         );
         let bind_group = bindings::bind_group(
             device,
             "lbvh",
             &layout,
-            [&params, &boxes, &centre_bounds, &keys, &sorted_keys, &target.nodes, &target.primitives, &parents, &node_bounds]
+            [&params, &boxes, &keys, &sorted_keys, &target.nodes, &target.primitives, &parents, &node_bounds, &ranges]
                 .iter()
                 .map(|b| b.as_entire_binding())
                 .collect(),
@@ -148,14 +150,10 @@ impl GpuLbvh {
         Ok(Self {
             pipelines,
             bind_group,
-            sorter: lampshade::KeyValueSorter::new_for_adapter(device, &ctx.queue, &ctx.info),
+            sort: GpuRadixSort::new(ctx, &keys, &sorted_keys, capacity)?,
             params,
             boxes,
-            centre_bounds,
-            keys,
-            sorted_keys,
             target,
-            node_bounds,
             capacity,
             count: 0,
         })
@@ -175,8 +173,21 @@ impl GpuLbvh {
             queue.write_buffer(&self.boxes, 0, bytemuck::cast_slice(&gpu));
         }
         self.count = boxes.len() as u32;
+        self.sort.set_problem(queue, self.count, MORTON_BITS)?;
+        // The Morton grid spans the box centres, computed as `lbvh.wgsl` does (no overflow near f32::MAX).
+        let centre = |b: &Aabb| b.min * 0.5 + b.max * 0.5;
+        let (centre_min, centre_max) =
+            boxes.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(low, high), b| (low.min(centre(b)), high.max(centre(b))));
         let t = &self.target;
-        queue.write_buffer(&self.params, 0, bytemuck::cast_slice(&[self.count, t.node_base, t.primitive_base, t.item_base]));
+        let params = LbvhParams {
+            count: self.count,
+            node_base: t.node_base,
+            primitive_base: t.primitive_base,
+            item_base: t.item_base,
+            centre_min: centre_min.extend(0.0).to_array(),
+            centre_max: centre_max.extend(0.0).to_array(),
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         Ok(())
     }
 
@@ -191,17 +202,12 @@ impl GpuLbvh {
         if self.count == 0 {
             return Ok(());
         }
-        encoder.clear_buffer(&self.centre_bounds, 0, None);
-        let internal_nodes = self.count - 1;
-        encoder.clear_buffer(&self.node_bounds, 0, Some(u64::from(internal_nodes) * 24));
         let items = self.count.div_ceil(WORKGROUP);
-        let nodes = internal_nodes.div_ceil(WORKGROUP);
+        let nodes = (self.count - 1).div_ceil(WORKGROUP);
         let last = PASSES.len() - 1;
         for (index, (entry, pipeline)) in PASSES.iter().zip(&self.pipelines).enumerate() {
             if *entry == "lbvh_hierarchy" {
-                self.sorter
-                    .record_sort_with_key_bits(encoder, &self.keys, &self.sorted_keys, self.count, 30)
-                    .map_err(|e| Error::Gpu(format!("radix sort: {e}")))?;
+                self.sort.record(encoder);
             }
             let timestamp_writes = timer.as_deref_mut().and_then(|t| match index {
                 0 if span.starts => Some(t.span_start(span.name)),

@@ -11,9 +11,11 @@
 
 pub mod bvh;
 pub mod lbvh;
+pub mod overlap;
+pub mod radix_sort;
 pub mod structure;
 pub mod volumes;
 
 pub use bvh::{Bvh, BvhNode, END, LEAF, MAX_DEPTH, MAX_LEAF_SIZE};
-pub use structure::{BvhBuild, VolumeStructure, Volumes};
+pub use structure::{BvhBuild, VolumeStructure, Volumes, CPU_TOP_LEVEL_MAX_INSTANCES};
 pub use volumes::{decal_aabb, decal_contains, light_aabb, light_contains, Aabb};

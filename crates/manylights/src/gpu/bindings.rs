@@ -12,6 +12,10 @@ pub fn storage_read(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindG
     buffer(binding, visibility, wgpu::BufferBindingType::Storage { read_only: true })
 }
 
+pub fn storage_read_write(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    buffer(binding, visibility, wgpu::BufferBindingType::Storage { read_only: false })
+}
+
 fn buffer(binding: u32, visibility: wgpu::ShaderStages, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,

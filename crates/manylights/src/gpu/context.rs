@@ -12,11 +12,9 @@ use crate::{Error, Result};
 /// Storage buffers the shading passes bind at once: the scene's four, the lights' and the decals'
 /// four each (`shading/*_bindings.wgsl`).
 const REQUIRED_STORAGE_BUFFERS: u32 = 12;
-/// Features the renderer uses when the adapter has them; none is required. Subgroups let the GPU BVH
-/// builder's radix sort (lampshade) use its fast kernels; `primitive_index` lets the visibility
-/// raster draw indexed.
-const OPTIONAL_FEATURES: wgpu::Features =
-    wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::SUBGROUP).union(wgpu::Features::PRIMITIVE_INDEX);
+/// Features the renderer uses when the adapter has them; none is required. `primitive_index` lets the
+/// visibility raster draw indexed.
+const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::PRIMITIVE_INDEX);
 
 pub struct GpuContext {
     pub adapter: wgpu::Adapter,
@@ -127,8 +125,6 @@ impl GpuContext {
             max_storage_buffer_binding_size: available.max_storage_buffer_binding_size,
             max_texture_dimension_2d: available.max_texture_dimension_2d,
             max_texture_array_layers: available.max_texture_array_layers,
-            // lampshade's fastest sort kernel needs a little over WebGPU's default 16 KiB.
-            max_compute_workgroup_storage_size: available.max_compute_workgroup_storage_size,
             // Shading binds the scene's, the lights' and the decals' buffers at once.
             max_storage_buffers_per_shader_stage: available.max_storage_buffers_per_shader_stage,
             ..wgpu::Limits::default().using_resolution(available.clone())

@@ -28,6 +28,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("accel/volume_query.wgsl", include_str!("../accel/volume_query.wgsl")),
     ("accel/bvh_types.wgsl", include_str!("../accel/bvh_types.wgsl")),
     ("accel/lbvh.wgsl", include_str!("../accel/lbvh.wgsl")),
+    ("accel/radix_sort.wgsl", include_str!("../accel/radix_sort.wgsl")),
     ("passes/visbuffer_raster_indexed.wgsl", include_str!("../passes/visbuffer_raster_indexed.wgsl")),
     ("passes/visbuffer_raster_pulled.wgsl", include_str!("../passes/visbuffer_raster_pulled.wgsl")),
     ("accel/volume_query_probe.wgsl", include_str!("../accel/volume_query_probe.wgsl")),
@@ -153,6 +154,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("passes/tonemap.wgsl"),
         ShaderDesc::new("accel/volume_query_probe.wgsl"),
         ShaderDesc::new("accel/lbvh.wgsl"),
+        ShaderDesc::new("accel/radix_sort.wgsl"),
     ];
     for lights in crate::pipelines::LightMethod::ALL {
         for decals in crate::pipelines::DecalMethod::ALL {

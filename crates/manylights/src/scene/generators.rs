@@ -179,6 +179,18 @@ pub fn scatter_decals(scene: &Scene, params: &ScatterDecals, materials: Range<us
     Ok(decals)
 }
 
+/// `count` points distributed uniformly by area over the scene's surfaces (seeded): where shading
+/// happens, for statistics such as [`crate::accel::overlap`]. Empty for a scene without area.
+pub fn surface_points(scene: &Scene, count: usize, seed: u64) -> Vec<Vec3> {
+    let surfaces = Surfaces::new(scene);
+    let area = surfaces.total_area();
+    if !(area.is_finite() && area > 0.0) {
+        return Vec::new();
+    }
+    let mut rng = Pcg64::seed_from_u64(seed);
+    (0..count).map(|_| surfaces.sample(&mut rng).0).collect()
+}
+
 /// Appends [`scatter_decals`] to the scene's decals, which must not be grouped yet, with the
 /// procedural decal materials ([`decal_textures`]), which are added the first time only.
 pub fn add_scattered_decals(scene: &mut Scene, params: &ScatterDecals) -> Result<()> {
