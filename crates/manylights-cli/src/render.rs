@@ -9,7 +9,7 @@ use manylights::{
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
     image_io,
-    pipelines::{DecalMethod, LightMethod},
+    pipelines::{DecalMethod, LightMethod, PipelineKind},
     renderer::Renderer,
     scene::{Camera, Scene},
 };
@@ -31,6 +31,10 @@ pub struct RenderArgs {
     /// scene is framed automatically.
     #[arg(long)]
     camera: Option<usize>,
+    /// Frame graph: visibility buffer (shading in compute) or forward (depth prepass, shading in
+    /// fragments).
+    #[arg(long, value_enum, default_value_t = PipelineArg::Visbuffer)]
+    pipeline: PipelineArg,
     #[arg(long, value_enum, default_value_t = MethodArg::Brute)]
     light_method: MethodArg,
     /// How the light BVH is built (with --light-method bvh): once on the CPU, or every frame on the GPU.
@@ -71,6 +75,12 @@ pub struct RenderArgs {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum PipelineArg {
+    Visbuffer,
+    Forward,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum MethodArg {
     Brute,
     Bvh,
@@ -107,6 +117,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let config = RenderConfig {
         width: args.width,
         height: args.height,
+        pipeline: match args.pipeline {
+            PipelineArg::Visbuffer => PipelineKind::Visbuffer,
+            PipelineArg::Forward => PipelineKind::Forward,
+        },
         light_method: match args.light_method {
             MethodArg::Brute => LightMethod::Brute,
             MethodArg::Bvh => LightMethod::Bvh,
@@ -237,6 +251,7 @@ impl TimingReport {
             "height": args.height,
             "triangles": renderer.scene.triangle_count,
             "lights": scene.lights.len(),
+            "pipeline": renderer.config.pipeline.name(),
             "light_method": renderer.config.light_method.name(),
             "decals": scene.decals.len(),
             "decal_method": renderer.config.decal_method.name(),

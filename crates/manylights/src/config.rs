@@ -3,7 +3,7 @@
 use crate::{
     accel::BvhBuild,
     gpu::GpuContext,
-    pipelines::{DecalMethod, LightMethod},
+    pipelines::{DecalMethod, LightMethod, PipelineKind},
     Error, Result,
 };
 
@@ -21,6 +21,7 @@ pub enum Tonemapper {
 pub struct RenderConfig {
     pub width: u32,
     pub height: u32,
+    pub pipeline: PipelineKind,
     pub light_method: LightMethod,
     /// How the light groups' BVHs are built, for `LightMethod::Bvh`.
     pub light_bvh_build: BvhBuild,
@@ -40,6 +41,7 @@ impl Default for RenderConfig {
         Self {
             width: 1280,
             height: 720,
+            pipeline: PipelineKind::Visbuffer,
             light_method: LightMethod::Brute,
             light_bvh_build: BvhBuild::CpuOnce,
             decal_method: DecalMethod::Brute,

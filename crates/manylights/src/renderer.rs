@@ -5,7 +5,7 @@ use crate::{
     accel::VolumeStructure,
     config::RenderConfig,
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
-    pipelines::{DecalMethod, LightMethod, VisbufferPipeline},
+    pipelines::{DecalMethod, FramePipeline, LightMethod},
     scene::{Camera, Scene},
     Result,
 };
@@ -17,7 +17,7 @@ pub struct Renderer {
     pub ctx: GpuContext,
     pub scene: GpuScene,
     pub config: RenderConfig,
-    pipeline: VisbufferPipeline,
+    pipeline: FramePipeline,
     lights: VolumeStructure,
     decals: VolumeStructure,
     timer: Option<GpuTimer>,
@@ -52,13 +52,13 @@ impl Renderer {
             &scene.decal_groups,
             build(config.decal_method == DecalMethod::Bvh, config.decal_bvh_build),
         )?;
-        let pipeline = VisbufferPipeline::new(
+        let pipeline = FramePipeline::new(
             &ctx,
             &gpu_scene,
+            config.pipeline,
             (config.light_method, config.decal_method),
             (&lights, &decals),
-            config.width,
-            config.height,
+            (config.width, config.height),
         )?;
         let timer = GpuTimer::new(&ctx);
         ctx.check_errors()?;
@@ -112,13 +112,13 @@ impl Renderer {
 
     /// The last frame after tonemapping: RGBA8, sRGB-encoded.
     pub fn read_ldr(&self) -> Result<Image<[u8; 4]>> {
-        let bytes = readback::read_texture(&self.ctx, &self.pipeline.targets.ldr, 4)?;
+        let bytes = readback::read_texture(&self.ctx, &self.pipeline.targets().ldr, 4)?;
         Ok(self.image(bytemuck::cast_slice(&bytes).to_vec()))
     }
 
     /// The last frame before exposure and tonemapping: linear RGBA radiance.
     pub fn read_hdr(&self) -> Result<Image<[f32; 4]>> {
-        let bytes = readback::read_texture(&self.ctx, &self.pipeline.targets.hdr, 16)?;
+        let bytes = readback::read_texture(&self.ctx, &self.pipeline.targets().hdr, 16)?;
         Ok(self.image(bytemuck::pod_collect_to_vec(&bytes)))
     }
 

@@ -127,6 +127,23 @@ pub struct RasterState {
     pub mirrored: bool,
 }
 
+impl RasterState {
+    /// Every combination, one raster pipeline each.
+    pub fn all() -> impl Iterator<Item = RasterState> {
+        (0..8).map(|bits| RasterState { alpha_mask: bits & 1 != 0, double_sided: bits & 2 != 0, mirrored: bits & 4 != 0 })
+    }
+
+    /// Winding and culling: mirrored instances reverse the winding; double-sided materials cull nothing.
+    pub fn primitive(self) -> wgpu::PrimitiveState {
+        wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            front_face: if self.mirrored { wgpu::FrontFace::Cw } else { wgpu::FrontFace::Ccw },
+            cull_mode: if self.double_sided { None } else { Some(wgpu::Face::Back) },
+            ..Default::default()
+        }
+    }
+}
+
 /// One instance of one primitive, as the raster pass draws it.
 #[derive(Clone, Copy, Debug)]
 pub struct DrawCommand {
@@ -152,6 +169,15 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
+    /// The draws in the order raster passes submit them: opaque before alpha-masked (whose discard
+    /// defeats early depth tests), each front to back from `eye`. Raster passes on our benchmark GPUs
+    /// are bound by fragment work, and early-Z rejects what nearer draws hide.
+    pub fn draw_order(&self, eye: glam::Vec3) -> Vec<&DrawCommand> {
+        let mut order: Vec<&DrawCommand> = self.draw_commands.iter().collect();
+        order.sort_by(|a, b| a.state.cmp(&b.state).then(a.center.distance_squared(eye).total_cmp(&b.center.distance_squared(eye))));
+        order
+    }
+
     /// Uploads `scene`. `max_texture_size` caps the layer size of the texture arrays; `anisotropy` is
     /// the sampler's maximum anisotropy (1 = trilinear).
     pub fn upload(ctx: &GpuContext, scene: &Scene, max_texture_size: u32, anisotropy: u16) -> Result<Self> {

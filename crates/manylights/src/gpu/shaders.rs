@@ -27,6 +27,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/enumerate/decals_bvh.wgsl", include_str!("../shading/enumerate/decals_bvh.wgsl")),
     ("accel/volume_query.wgsl", include_str!("../accel/volume_query.wgsl")),
     ("accel/bvh_types.wgsl", include_str!("../accel/bvh_types.wgsl")),
+    ("shading/camera.wgsl", include_str!("../shading/camera.wgsl")),
     ("accel/lbvh.wgsl", include_str!("../accel/lbvh.wgsl")),
     ("accel/radix_sort.wgsl", include_str!("../accel/radix_sort.wgsl")),
     ("passes/visbuffer_raster_indexed.wgsl", include_str!("../passes/visbuffer_raster_indexed.wgsl")),
@@ -35,6 +36,9 @@ const SOURCES: &[(&str, &str)] = &[
     ("passes/visbuffer_raster.wgsl", include_str!("../passes/visbuffer_raster.wgsl")),
     ("passes/visbuffer_shade.wgsl", include_str!("../passes/visbuffer_shade.wgsl")),
     ("passes/tonemap.wgsl", include_str!("../passes/tonemap.wgsl")),
+    ("passes/forward_vertex.wgsl", include_str!("../passes/forward_vertex.wgsl")),
+    ("passes/depth_prepass.wgsl", include_str!("../passes/depth_prepass.wgsl")),
+    ("passes/forward_shade.wgsl", include_str!("../passes/forward_shade.wgsl")),
 ];
 
 /// A shader to build: an entry file and the values of its `$NAME` includes.
@@ -155,10 +159,12 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("accel/volume_query_probe.wgsl"),
         ShaderDesc::new("accel/lbvh.wgsl"),
         ShaderDesc::new("accel/radix_sort.wgsl"),
+        ShaderDesc::new("passes/depth_prepass.wgsl"),
     ];
     for lights in crate::pipelines::LightMethod::ALL {
         for decals in crate::pipelines::DecalMethod::ALL {
             shaders.push(crate::passes::visbuffer_shade::shader(lights, decals));
+            shaders.push(crate::passes::forward_shade::shader(lights, decals));
         }
     }
     shaders

@@ -2,6 +2,12 @@
 //! layouts, bind groups over its targets) and recorded each frame by `record`, under a timestamp scope
 //! named like its file and its WGSL entry point.
 
+use std::collections::HashMap;
+
+use crate::gpu::{scene::RasterState, GpuScene};
+
+pub mod depth_prepass;
+pub mod forward_shade;
 pub mod tonemap;
 pub mod visbuffer_raster;
 pub mod visbuffer_shade;
@@ -11,4 +17,20 @@ pub const TILE: u32 = 8;
 
 pub fn dispatch_size(width: u32, height: u32) -> (u32, u32) {
     (width.div_ceil(TILE), height.div_ceil(TILE))
+}
+
+/// Draws the scene indexed, in `GpuScene::draw_order`, with the pipeline of each draw's raster state;
+/// binds the scene as group 0.
+pub fn draw_scene(pass: &mut wgpu::RenderPass, scene: &GpuScene, eye: glam::Vec3, pipelines: &HashMap<RasterState, wgpu::RenderPipeline>) {
+    pass.set_bind_group(0, &scene.bind_group, &[]);
+    pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+    let mut current = None;
+    for command in scene.draw_order(eye) {
+        if current != Some(command.state) {
+            pass.set_pipeline(&pipelines[&command.state]);
+            current = Some(command.state);
+        }
+        let draw = command.draw_index..command.draw_index + 1;
+        pass.draw_indexed(command.first_index..command.first_index + command.index_count, command.base_vertex as i32, draw);
+    }
 }

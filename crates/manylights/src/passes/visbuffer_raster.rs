@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use crate::gpu::scene::{DrawCommand, RasterState};
+use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::Result;
 
@@ -23,15 +23,7 @@ impl VisbufferRaster {
         let entry = if indexed { "passes/visbuffer_raster_indexed.wgsl" } else { "passes/visbuffer_raster_pulled.wgsl" };
         let module = shaders::create_module(&ctx.device, &ShaderDesc::new(entry))?;
         let layout = bindings::pipeline_layout(&ctx.device, "visbuffer_raster", &[&scene.bind_group_layout]);
-        let mut pipelines = HashMap::new();
-        for alpha_mask in [false, true] {
-            for double_sided in [false, true] {
-                for mirrored in [false, true] {
-                    let state = RasterState { alpha_mask, double_sided, mirrored };
-                    pipelines.insert(state, Self::create_pipeline(&ctx.device, &layout, &module, state));
-                }
-            }
-        }
+        let pipelines = RasterState::all().map(|state| (state, Self::create_pipeline(&ctx.device, &layout, &module, state))).collect();
         Ok(Self { pipelines, indexed })
     }
 
@@ -50,12 +42,7 @@ impl VisbufferRaster {
                 compilation_options: Default::default(),
                 buffers: &[],
             },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                front_face: if state.mirrored { wgpu::FrontFace::Cw } else { wgpu::FrontFace::Ccw },
-                cull_mode: if state.double_sided { None } else { Some(wgpu::Face::Back) },
-                ..Default::default()
-            },
+            primitive: state.primitive(),
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: DEPTH_FORMAT,
                 depth_write_enabled: Some(true),
@@ -85,10 +72,7 @@ impl VisbufferRaster {
         visibility: &wgpu::TextureView,
         depth: &wgpu::TextureView,
     ) {
-        // Opaque before alpha-masked (whose discard defeats early depth tests), each front to back:
-        // this pass is bound by fragment throughput, and early-Z rejects what nearer draws hide.
-        let mut order: Vec<&DrawCommand> = scene.draw_commands.iter().collect();
-        order.sort_by(|a, b| a.state.cmp(&b.state).then(a.center.distance_squared(eye).total_cmp(&b.center.distance_squared(eye))));
+        let order = scene.draw_order(eye);
 
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("visbuffer_raster"),

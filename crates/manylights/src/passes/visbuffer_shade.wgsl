@@ -7,28 +7,12 @@
 // position's derivatives.
 #include "shading/shade.wgsl"
 #include "shading/material.wgsl"
+#include "shading/camera.wgsl"
 
 @group(1) @binding(0) var visibility: texture_2d<u32>;
 @group(1) @binding(1) var hdr_output: texture_storage_2d<rgba32float, write>;
 // Reverse Z, cleared to 0: a pixel no triangle covered keeps 0, and its id is stale (ids are not cleared).
 @group(1) @binding(2) var depth: texture_depth_2d;
-
-// A ray whose origin is relative to the camera position (`frame.world_from_view[3]`).
-struct Ray {
-    origin: vec3<f32>,
-    dir: vec3<f32>,
-}
-
-// The camera ray through a point in pixel coordinates (y down); works for any projection.
-fn camera_ray(pixel: vec2<f32>) -> Ray {
-    let ndc = vec2<f32>(pixel.x * frame.viewport.z * 2.0 - 1.0, 1.0 - pixel.y * frame.viewport.w * 2.0);
-    // Reverse Z: depth 1 is the near plane; 0.5 is a second point on the ray even for infinite far.
-    let near = frame.view_from_clip * vec4<f32>(ndc, 1.0, 1.0);
-    let mid = frame.view_from_clip * vec4<f32>(ndc, 0.5, 1.0);
-    let origin = near.xyz / near.w;
-    let world_from_view = mat3x3<f32>(frame.world_from_view[0].xyz, frame.world_from_view[1].xyz, frame.world_from_view[2].xyz);
-    return Ray(world_from_view * origin, normalize(world_from_view * (mid.xyz / mid.w - origin)));
-}
 
 // Barycentrics (b0, b1, b2) where the ray meets the triangle's plane (Möller–Trumbore without the
 // inside test: neighbouring pixels may fall outside the triangle, which is what derivatives need).
@@ -65,14 +49,6 @@ fn find_draw(id: u32) -> u32 {
         }
     }
     return low;
-}
-
-fn world_direction(draw: Draw, v: vec3<f32>) -> vec3<f32> {
-    return (draw.world_from_local * vec4<f32>(v, 0.0)).xyz;
-}
-
-fn world_normal(draw: Draw, n: vec3<f32>) -> vec3<f32> {
-    return draw.normal_from_local[0].xyz * n.x + draw.normal_from_local[1].xyz * n.y + draw.normal_from_local[2].xyz * n.z;
 }
 
 @compute @workgroup_size(8, 8)

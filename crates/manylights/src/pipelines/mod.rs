@@ -1,10 +1,126 @@
-//! Frame graphs: each pipeline orders the passes of one frame, read top to bottom in its own file.
-//! Today: the visibility-buffer pipeline. Forward and deferred pipelines plug in beside it, reusing
-//! the same shading core; enumeration methods plug in through `LightMethod` and `DecalMethod`.
+//! Frame graphs: each pipeline orders the passes of one frame, read top to bottom in its own file:
+//! `visbuffer.rs` (raster ids, shade in compute) and `forward.rs` (depth prepass, shade in fragments).
+//! Both call the same shading core; enumeration methods plug in through `LightMethod` and
+//! `DecalMethod`.
 
+pub mod forward;
 pub mod visbuffer;
 
+pub use forward::ForwardPipeline;
 pub use visbuffer::VisbufferPipeline;
+
+use crate::accel::VolumeStructure;
+use crate::gpu::{GpuContext, GpuScene, GpuTimer};
+use crate::passes::{tonemap::LDR_FORMAT, visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
+use crate::Result;
+
+/// Which frame graph renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum PipelineKind {
+    /// Visibility buffer, shading in compute (`visbuffer.rs`).
+    #[default]
+    Visbuffer,
+    /// Depth prepass, then shading in the fragment stage (`forward.rs`).
+    Forward,
+}
+
+impl PipelineKind {
+    pub const ALL: [PipelineKind; 2] = [PipelineKind::Visbuffer, PipelineKind::Forward];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            PipelineKind::Visbuffer => "visbuffer",
+            PipelineKind::Forward => "forward",
+        }
+    }
+}
+
+/// The pipeline a renderer runs.
+pub enum FramePipeline {
+    Visbuffer(VisbufferPipeline),
+    Forward(ForwardPipeline),
+}
+
+impl FramePipeline {
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        kind: PipelineKind,
+        methods: (LightMethod, DecalMethod),
+        structures: (&VolumeStructure, &VolumeStructure),
+        (width, height): (u32, u32),
+    ) -> Result<Self> {
+        Ok(match kind {
+            PipelineKind::Visbuffer => Self::Visbuffer(VisbufferPipeline::new(ctx, scene, methods, structures, width, height)?),
+            PipelineKind::Forward => Self::Forward(ForwardPipeline::new(ctx, scene, methods, structures, width, height)?),
+        })
+    }
+
+    /// Records one frame seen from `eye`. The frame uniforms must already be written.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, eye: glam::Vec3) {
+        match self {
+            Self::Visbuffer(p) => p.record(encoder, timer, scene, eye),
+            Self::Forward(p) => p.record(encoder, timer, scene, eye),
+        }
+    }
+
+    pub fn targets(&self) -> &FrameTargets {
+        match self {
+            Self::Visbuffer(p) => &p.targets,
+            Self::Forward(p) => &p.targets,
+        }
+    }
+}
+
+/// The images every pipeline writes; `hdr` and `ldr` can be read back.
+pub struct FrameTargets {
+    pub width: u32,
+    pub height: u32,
+    pub depth: wgpu::Texture,
+    pub hdr: wgpu::Texture,
+    pub ldr: wgpu::Texture,
+}
+
+impl FrameTargets {
+    fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+        use wgpu::TextureUsages as U;
+        Self {
+            width,
+            height,
+            depth: target(device, "depth", width, height, DEPTH_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING),
+            // Written by a compute pass (visibility buffer) or as a colour attachment (forward).
+            hdr: target(
+                device,
+                "hdr",
+                width,
+                height,
+                HDR_FORMAT,
+                U::STORAGE_BINDING | U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
+            ),
+            ldr: target(device, "ldr", width, height, LDR_FORMAT, U::STORAGE_BINDING | U::COPY_SRC),
+        }
+    }
+}
+
+fn target(
+    device: &wgpu::Device,
+    label: &str,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
 
 /// How the shading core finds the local lights that reach a point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]

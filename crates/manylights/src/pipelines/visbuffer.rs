@@ -16,50 +16,14 @@
 use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
-    tonemap::{Tonemap, LDR_FORMAT},
-    visbuffer_raster::{VisbufferRaster, DEPTH_FORMAT, VISIBILITY_FORMAT},
-    visbuffer_shade::{VisbufferShade, HDR_FORMAT},
+    tonemap::Tonemap,
+    visbuffer_raster::{VisbufferRaster, VISIBILITY_FORMAT},
+    visbuffer_shade::VisbufferShade,
 };
 use crate::{
-    pipelines::{DecalMethod, LightMethod},
+    pipelines::{DecalMethod, FrameTargets, LightMethod},
     Result,
 };
-
-/// The images a frame writes; `hdr` and `ldr` can be read back.
-pub struct FrameTargets {
-    pub width: u32,
-    pub height: u32,
-    pub visibility: wgpu::Texture,
-    pub depth: wgpu::Texture,
-    pub hdr: wgpu::Texture,
-    pub ldr: wgpu::Texture,
-}
-
-impl FrameTargets {
-    fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
-        let target = |label, format, usage| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
-        use wgpu::TextureUsages as U;
-        Self {
-            width,
-            height,
-            visibility: target("visibility", VISIBILITY_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING),
-            depth: target("depth", DEPTH_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING),
-            hdr: target("hdr", HDR_FORMAT, U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC),
-            ldr: target("ldr", LDR_FORMAT, U::STORAGE_BINDING | U::COPY_SRC),
-        }
-    }
-}
 
 pub struct VisbufferPipeline {
     pub targets: FrameTargets,
@@ -80,9 +44,11 @@ impl VisbufferPipeline {
         height: u32,
     ) -> Result<Self> {
         let targets = FrameTargets::new(&ctx.device, width, height);
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let visibility = super::target(&ctx.device, "visibility", width, height, VISIBILITY_FORMAT, usage);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let (visibility_view, depth_view, hdr_view, ldr_view) =
-            (view(&targets.visibility), view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
+            (view(&visibility), view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
         Ok(Self {
             raster: VisbufferRaster::new(ctx, scene)?,
             shade: VisbufferShade::new(ctx, scene, methods, structures, &visibility_view, &depth_view, &hdr_view)?,

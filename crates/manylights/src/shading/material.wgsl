@@ -61,6 +61,15 @@ fn material_mapped_normal(material: Material, g: UvGradients, n: vec3<f32>, t: v
     return select(n, normalize(mapped), dot(mapped, mapped) > 1e-12);
 }
 
+// A draw's local directions and normals in world space.
+fn world_direction(draw: Draw, v: vec3<f32>) -> vec3<f32> {
+    return (draw.world_from_local * vec4<f32>(v, 0.0)).xyz;
+}
+
+fn world_normal(draw: Draw, n: vec3<f32>) -> vec3<f32> {
+    return draw.normal_from_local[0].xyz * n.x + draw.normal_from_local[1].xyz * n.y + draw.normal_from_local[2].xyz * n.z;
+}
+
 // The surface frame at a point: interpolated, in world space.
 struct SurfaceFrame {
     normal: vec3<f32>,

@@ -8,7 +8,7 @@ use manylights::{
     accel::BvhBuild,
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
-    pipelines::{DecalMethod, LightMethod},
+    pipelines::{DecalMethod, LightMethod, PipelineKind},
     renderer::{Image, Renderer},
     scene::{Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Vertex},
 };
@@ -21,6 +21,7 @@ pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfi
     RenderConfig {
         width,
         height,
+        pipeline: PipelineKind::Visbuffer,
         light_method,
         light_bvh_build: BvhBuild::CpuOnce,
         decal_method: DecalMethod::Brute,

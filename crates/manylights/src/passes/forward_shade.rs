@@ -1,0 +1,122 @@
+//! Forward shading in the fragment stage (`forward_shade.wgsl`): the scene drawn again over the depth
+//! prepass's depth with an EQUAL test, each fragment lit by the shading core, then the sky where no
+//! geometry is. On our benchmark GPUs fragment shading is far slower than the compute resolve; the
+//! pipeline exists for comparison (and, later, for transparent surfaces).
+
+use std::collections::HashMap;
+
+use super::{visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
+use crate::accel::VolumeStructure;
+use crate::gpu::scene::RasterState;
+use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::pipelines::{DecalMethod, LightMethod};
+use crate::Result;
+
+/// The shader for a pair of enumeration methods.
+pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
+    ShaderDesc::new("passes/forward_shade.wgsl")
+        .with("LIGHT_ENUMERATION", lights.enumeration_module())
+        .with("DECAL_ENUMERATION", decals.enumeration_module())
+}
+
+pub struct ForwardShade {
+    pipelines: HashMap<RasterState, wgpu::RenderPipeline>,
+    sky: wgpu::RenderPipeline,
+    /// Group 1, empty: the shading core's light and decal bindings are groups 2 and 3 everywhere.
+    empty: wgpu::BindGroup,
+    lights: wgpu::BindGroup,
+    decals: wgpu::BindGroup,
+}
+
+impl ForwardShade {
+    /// The light and decal structures are bound as groups 2 and 3, as in the compute resolve.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        methods: (LightMethod, DecalMethod),
+        (lights, decals): (&VolumeStructure, &VolumeStructure),
+    ) -> Result<Self> {
+        let device = &ctx.device;
+        let module = shaders::create_module(device, &shader(methods.0, methods.1))?;
+        let empty = bindings::layout(device, "forward_shade (unused)", &[]);
+        let layout = bindings::pipeline_layout(
+            device,
+            "forward_shade",
+            &[&scene.bind_group_layout, &empty, &lights.bind_group_layout, &decals.bind_group_layout],
+        );
+        // EQUAL against the prepass's depth: only the visible fragment of each pixel is shaded.
+        let depth_equal = wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(false),
+            depth_compare: Some(wgpu::CompareFunction::Equal),
+            stencil: Default::default(),
+            bias: Default::default(),
+        };
+        let pipeline = |label, vertex_entry, fragment_entry, primitive| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vertex_entry),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive,
+                depth_stencil: Some(depth_equal.clone()),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fragment_entry),
+                    compilation_options: Default::default(),
+                    targets: &[Some(HDR_FORMAT.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let pipelines = RasterState::all()
+            .map(|state| {
+                let fragment = if state.alpha_mask { "forward_masked" } else { "forward_opaque" };
+                (state, pipeline("forward_shade", "forward_vertex", fragment, state.primitive()))
+            })
+            .collect();
+        let sky = pipeline("forward_sky", "forward_sky_vertex", "forward_sky", wgpu::PrimitiveState::default());
+        let empty = bindings::bind_group(device, "forward_shade (unused)", &empty, Vec::new());
+        Ok(Self { pipelines, sky, empty, lights: lights.bind_group.clone(), decals: decals.bind_group.clone() })
+    }
+
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&mut GpuTimer>,
+        scene: &GpuScene,
+        eye: glam::Vec3,
+        (hdr, depth): (&wgpu::TextureView, &wgpu::TextureView),
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("forward_shade"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: hdr,
+                depth_slice: None,
+                resolve_target: None,
+                // Every pixel is written: by a surface or by the sky.
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.map(|t| t.render_pass("forward_shade")),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(1, &self.empty, &[]);
+        pass.set_bind_group(2, &self.lights, &[]);
+        pass.set_bind_group(3, &self.decals, &[]);
+        super::draw_scene(&mut pass, scene, eye, &self.pipelines);
+        pass.set_pipeline(&self.sky);
+        pass.draw(0..3, 0..1);
+    }
+}

@@ -1,0 +1,57 @@
+// Forward shading in the fragment stage, after the depth prepass (EQUAL depth test, so each pixel is
+// shaded once): the same shading core as the visibility-buffer resolve — material, decals, lights —
+// with the fragment stage's derivatives instead of analytic ones for texture and decal gradients.
+// A full-screen triangle at the cleared depth fills the sky.
+#include "shading/shade.wgsl"
+#include "shading/camera.wgsl"
+#include "passes/forward_vertex.wgsl"
+
+fn forward_radiance(in: ForwardVertex, front_facing: bool, g: UvGradients, dp: PositionGradients) -> vec3<f32> {
+    let draw = draws[in.draw_index];
+    let position = in.relative_position + frame.world_from_view[3].xyz;
+    let view_dir = -camera_ray(in.clip_position.xy).dir;
+    var surface: SurfaceFrame;
+    surface.normal = normalize(world_normal(draw, in.normal));
+    surface.tangent = world_direction(draw, in.tangent.xyz);
+    surface.bitangent_sign = in.tangent.w * sign(draw.normal_from_local[0].w);
+    // Back faces only reach here on double-sided materials (front_facing follows the pipeline's
+    // winding, which mirrored instances reverse): turn the whole tangent frame over, as the resolve does.
+    if !front_facing {
+        surface.normal = -surface.normal;
+        surface.tangent = -surface.tangent;
+        surface.bitangent_sign = -surface.bitangent_sign;
+    }
+    let material = materials[draw.material];
+    let s = apply_decals(evaluate_material(material, surface, g, position, view_dir), dp);
+    return shade(s);
+}
+
+@fragment
+fn forward_opaque(in: ForwardVertex, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    let g = UvGradients(in.uv, dpdx(in.uv), dpdy(in.uv));
+    let dp = PositionGradients(dpdx(in.relative_position), dpdy(in.relative_position));
+    return vec4<f32>(forward_radiance(in, front_facing, g, dp), 1.0);
+}
+
+@fragment
+fn forward_masked(in: ForwardVertex, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    let g = UvGradients(in.uv, dpdx(in.uv), dpdy(in.uv));
+    let dp = PositionGradients(dpdx(in.relative_position), dpdy(in.relative_position));
+    if !forward_alpha_covers(in, g) {
+        discard;
+    }
+    return vec4<f32>(forward_radiance(in, front_facing, g, dp), 1.0);
+}
+
+// A triangle covering the screen at depth 0, the cleared (farthest, reverse Z) depth: with an EQUAL
+// test it reaches exactly the pixels no geometry covered.
+@vertex
+fn forward_sky_vertex(@builtin(vertex_index) index: u32) -> @builtin(position) @invariant vec4<f32> {
+    let corner = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
+    return vec4<f32>(corner * 2.0 - 1.0, 0.0, 1.0);
+}
+
+@fragment
+fn forward_sky(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
+    return vec4<f32>(sky_radiance(camera_ray(pixel.xy).dir), 1.0);
+}

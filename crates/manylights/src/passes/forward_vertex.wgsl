@@ -1,0 +1,39 @@
+// The vertex stage of the forward pipeline, shared by its depth prepass and its shading pass: both
+// must compute bit-identical positions for the shading pass's EQUAL depth test, hence one function
+// and `@invariant`. Indexed draws, one draw per instance of a primitive (`instance_index` is the draw).
+#include "shading/scene_bindings.wgsl"
+#include "shading/material.wgsl"
+
+struct ForwardVertex {
+    @builtin(position) @invariant clip_position: vec4<f32>,
+    @location(0) @interpolate(flat) draw_index: u32,
+    @location(1) uv: vec2<f32>,
+    // World position relative to the camera, like the visibility-buffer resolve's (precision far from
+    // the origin).
+    @location(2) relative_position: vec3<f32>,
+    // Local-space normal and tangent: the fragment takes them to world space as the resolve does.
+    @location(3) normal: vec3<f32>,
+    @location(4) tangent: vec4<f32>,
+}
+
+@vertex
+fn forward_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) draw_index: u32) -> ForwardVertex {
+    // An indexed draw's vertex_index already includes the draw's base vertex.
+    let vertex = vertices[vertex_index];
+    let draw = draws[draw_index];
+    let world = draw.world_from_local * vec4<f32>(vertex.position, 1.0);
+    var out: ForwardVertex;
+    out.clip_position = frame.clip_from_world * world;
+    out.draw_index = draw_index;
+    out.uv = vec2<f32>(vertex.u, vertex.v);
+    out.relative_position = world.xyz - frame.world_from_view[3].xyz;
+    out.normal = vertex.normal;
+    out.tangent = vertex.tangent;
+    return out;
+}
+
+// Whether an alpha-masked fragment covers its pixel (derivatives taken before any discard).
+fn forward_alpha_covers(in: ForwardVertex, g: UvGradients) -> bool {
+    let material = materials[draws[in.draw_index].material];
+    return material_base_color(material, g).a >= material.alpha_cutoff;
+}

@@ -1,0 +1,20 @@
+// The camera's rays, for any projection: pixels to world-space rays whose origins are relative to the
+// camera position (`frame.world_from_view[3]`), so f32 precision holds far from the world origin.
+// Shared by the visibility-buffer resolve, the forward pass and the sky.
+#include "shading/scene_bindings.wgsl"
+
+struct Ray {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+}
+
+// The camera ray through a point in pixel coordinates (y down).
+fn camera_ray(pixel: vec2<f32>) -> Ray {
+    let ndc = vec2<f32>(pixel.x * frame.viewport.z * 2.0 - 1.0, 1.0 - pixel.y * frame.viewport.w * 2.0);
+    // Reverse Z: depth 1 is the near plane; 0.5 is a second point on the ray even for infinite far.
+    let near = frame.view_from_clip * vec4<f32>(ndc, 1.0, 1.0);
+    let mid = frame.view_from_clip * vec4<f32>(ndc, 0.5, 1.0);
+    let origin = near.xyz / near.w;
+    let world_from_view = mat3x3<f32>(frame.world_from_view[0].xyz, frame.world_from_view[1].xyz, frame.world_from_view[2].xyz);
+    return Ray(world_from_view * origin, normalize(world_from_view * (mid.xyz / mid.w - origin)));
+}
