@@ -31,8 +31,8 @@ pub struct RenderArgs {
     /// scene is framed automatically.
     #[arg(long)]
     camera: Option<usize>,
-    /// Frame graph: visibility buffer (shading in compute) or forward (depth prepass, shading in
-    /// fragments).
+    /// Frame graph: visibility buffer (shading in compute), deferred (G-buffer, lighting in compute)
+    /// or forward (depth prepass, shading in fragments).
     #[arg(long, value_enum, default_value_t = PipelineArg::Visbuffer)]
     pipeline: PipelineArg,
     #[arg(long, value_enum, default_value_t = MethodArg::Brute)]
@@ -77,6 +77,7 @@ pub struct RenderArgs {
 #[derive(Clone, Copy, ValueEnum)]
 enum PipelineArg {
     Visbuffer,
+    Deferred,
     Forward,
 }
 
@@ -119,6 +120,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         height: args.height,
         pipeline: match args.pipeline {
             PipelineArg::Visbuffer => PipelineKind::Visbuffer,
+            PipelineArg::Deferred => PipelineKind::Deferred,
             PipelineArg::Forward => PipelineKind::Forward,
         },
         light_method: match args.light_method {

@@ -229,3 +229,24 @@ fn info_counts_decals_and_groups() {
         "{stdout}"
     );
 }
+
+#[test]
+fn every_pipeline_renders_with_its_passes_timed() {
+    let dir = temp_dir("render_pipelines");
+    let json = dir.join("timings.json");
+    for (pipeline, passes) in [
+        ("visbuffer", ["visbuffer_raster", "visbuffer_shade"]),
+        ("deferred", ["gbuffer_raster", "deferred_shade"]),
+        ("forward", ["depth_prepass", "forward_shade"]),
+    ] {
+        let out = render_to(&dir, &["--pipeline", pipeline, "--lights", "20", "--decals", "20", "--timings-json", json.to_str().unwrap()]);
+        assert!(out.status.success(), "{pipeline}: {}", String::from_utf8_lossy(&out.stderr));
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(report["pipeline"].as_str(), Some(pipeline));
+        for pass in passes {
+            assert!(report["passes"][pass]["median_ms"].as_f64().unwrap() > 0.0, "{pipeline}: no {pass} timing");
+        }
+    }
+    let err = failure(&["render", "--pipeline", "tiled"]);
+    assert!(err.contains("--pipeline") && err.contains("visbuffer") && err.contains("deferred") && err.contains("forward"), "{err}");
+}

@@ -1,6 +1,6 @@
 //! The pipelines share one shading core: within each pipeline the enumeration methods give the
 //! brute-force image (linear HDR, max abs difference ≤ 1e-3), and the pipelines give the same image
-//! up to their derivatives (see `PIPELINE_TOLERANCE`).
+//! up to their derivatives and G-buffer precision (`PIPELINE_*_TOLERANCE`).
 
 mod common;
 
@@ -14,13 +14,16 @@ use manylights::{
 
 const TOLERANCE: f32 = 1e-3;
 
-/// How far the forward pipeline may stray from the visibility buffer, in linear HDR. The surfaces,
-/// lights and decals are the same; texture and decal gradients are not: the fragment stage takes them
-/// from 2×2 pixel quads, the compute resolve from exact neighbouring rays, so a texture's mip level
-/// can differ by a fraction, mostly at edges and on steep surfaces. Measured on the demo with
-/// decals: mean ≈ 0.002, 99.5th percentile ≈ 0.05 (radiance values up to ≈ 4).
-const PIPELINE_MEAN_TOLERANCE: f32 = 0.01;
-const PIPELINE_P995_TOLERANCE: f32 = 0.15;
+/// How far the other pipelines may stray from the visibility buffer, in linear HDR (per pixel, the
+/// largest channel difference). Surfaces, lights and decals are the same; what differs: forward and
+/// G-buffer fragments take texture gradients from 2×2 pixel quads where the compute resolve uses exact
+/// neighbouring rays (a mip level can differ by a fraction, mostly at edges and on steep surfaces), and
+/// the G-buffer stores albedo and roughness-metallic in 8 bits and normals in 2 × 16, and gives decals
+/// gradients from the tangent plane. Measured on lavapipe (demo, 300 lights, 300 decals, 128×72,
+/// radiance up to ≈ 4): forward mean 0.0006, 99.5th percentile 0.013; deferred mean 0.0016, 99.5th
+/// percentile 0.019; the bounds leave about 2.5× room.
+const PIPELINE_MEAN_TOLERANCE: f32 = 0.004;
+const PIPELINE_P995_TOLERANCE: f32 = 0.05;
 
 fn scene_with(lights: usize, decals: usize, seed: u64) -> Scene {
     let mut scene = demo_scene();
@@ -68,18 +71,30 @@ fn forward_methods_equal_brute_force() {
 }
 
 #[test]
-fn forward_and_visibility_buffer_agree() {
+fn deferred_methods_equal_brute_force() {
+    let size = (128, 72);
+    let scene = scene_with(300, 300, 5);
+    let brute = render(&scene, configured(PipelineKind::Deferred, LightMethod::Brute, DecalMethod::Brute, size));
+    let image = render(&scene, configured(PipelineKind::Deferred, LightMethod::Bvh, DecalMethod::Bvh, size));
+    let difference = max_abs_difference(&brute, &image);
+    assert!(difference <= TOLERANCE, "deferred, bvh lights and decals: max abs difference {difference}");
+}
+
+#[test]
+fn pipelines_agree_with_the_visibility_buffer() {
     let size = (128, 72);
     let scene = scene_with(300, 300, 4);
     let visbuffer = render(&scene, configured(PipelineKind::Visbuffer, LightMethod::Brute, DecalMethod::Brute, size));
-    let forward = render(&scene, configured(PipelineKind::Forward, LightMethod::Brute, DecalMethod::Brute, size));
-    let d = sorted_differences(&visbuffer, &forward);
-    let mean = d.iter().sum::<f32>() / d.len() as f32;
-    let p995 = d[d.len() * 995 / 1000];
-    eprintln!("forward vs visibility buffer: mean {mean}, 99.5th percentile {p995}, max {}", d[d.len() - 1]);
-    assert!(mean <= PIPELINE_MEAN_TOLERANCE, "mean difference {mean}");
-    assert!(p995 <= PIPELINE_P995_TOLERANCE, "99.5th percentile difference {p995}");
     // Not trivially equal because both are blank: the image has structure.
     let bright = visbuffer.pixels.iter().filter(|p| luminance(**p) > 0.05).count();
     assert!(bright > visbuffer.pixels.len() / 2, "the image is mostly dark");
+    for pipeline in [PipelineKind::Forward, PipelineKind::Deferred] {
+        let image = render(&scene, configured(pipeline, LightMethod::Brute, DecalMethod::Brute, size));
+        let d = sorted_differences(&visbuffer, &image);
+        let mean = d.iter().sum::<f32>() / d.len() as f32;
+        let p995 = d[d.len() * 995 / 1000];
+        eprintln!("{} vs visibility buffer: mean {mean}, 99.5th percentile {p995}, max {}", pipeline.name(), d[d.len() - 1]);
+        assert!(mean <= PIPELINE_MEAN_TOLERANCE, "{}: mean difference {mean}", pipeline.name());
+        assert!(p995 <= PIPELINE_P995_TOLERANCE, "{}: 99.5th percentile difference {p995}", pipeline.name());
+    }
 }

@@ -36,9 +36,12 @@ const SOURCES: &[(&str, &str)] = &[
     ("passes/visbuffer_raster.wgsl", include_str!("../passes/visbuffer_raster.wgsl")),
     ("passes/visbuffer_shade.wgsl", include_str!("../passes/visbuffer_shade.wgsl")),
     ("passes/tonemap.wgsl", include_str!("../passes/tonemap.wgsl")),
-    ("passes/forward_vertex.wgsl", include_str!("../passes/forward_vertex.wgsl")),
+    ("passes/surface_raster.wgsl", include_str!("../passes/surface_raster.wgsl")),
     ("passes/depth_prepass.wgsl", include_str!("../passes/depth_prepass.wgsl")),
     ("passes/forward_shade.wgsl", include_str!("../passes/forward_shade.wgsl")),
+    ("passes/gbuffer.wgsl", include_str!("../passes/gbuffer.wgsl")),
+    ("passes/gbuffer_raster.wgsl", include_str!("../passes/gbuffer_raster.wgsl")),
+    ("passes/deferred_shade.wgsl", include_str!("../passes/deferred_shade.wgsl")),
 ];
 
 /// A shader to build: an entry file and the values of its `$NAME` includes.
@@ -160,11 +163,13 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("accel/lbvh.wgsl"),
         ShaderDesc::new("accel/radix_sort.wgsl"),
         ShaderDesc::new("passes/depth_prepass.wgsl"),
+        ShaderDesc::new("passes/gbuffer_raster.wgsl"),
     ];
     for lights in crate::pipelines::LightMethod::ALL {
         for decals in crate::pipelines::DecalMethod::ALL {
             shaders.push(crate::passes::visbuffer_shade::shader(lights, decals));
             shaders.push(crate::passes::forward_shade::shader(lights, decals));
+            shaders.push(crate::passes::deferred_shade::shader(lights, decals));
         }
     }
     shaders

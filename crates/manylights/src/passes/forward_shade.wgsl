@@ -4,26 +4,10 @@
 // A full-screen triangle at the cleared depth fills the sky.
 #include "shading/shade.wgsl"
 #include "shading/camera.wgsl"
-#include "passes/forward_vertex.wgsl"
+#include "passes/surface_raster.wgsl"
 
 fn forward_radiance(in: ForwardVertex, front_facing: bool, g: UvGradients, dp: PositionGradients) -> vec3<f32> {
-    let draw = draws[in.draw_index];
-    let position = in.relative_position + frame.world_from_view[3].xyz;
-    let view_dir = -camera_ray(in.clip_position.xy).dir;
-    var surface: SurfaceFrame;
-    surface.normal = normalize(world_normal(draw, in.normal));
-    surface.tangent = world_direction(draw, in.tangent.xyz);
-    surface.bitangent_sign = in.tangent.w * sign(draw.normal_from_local[0].w);
-    // Back faces only reach here on double-sided materials (front_facing follows the pipeline's
-    // winding, which mirrored instances reverse): turn the whole tangent frame over, as the resolve does.
-    if !front_facing {
-        surface.normal = -surface.normal;
-        surface.tangent = -surface.tangent;
-        surface.bitangent_sign = -surface.bitangent_sign;
-    }
-    let material = materials[draw.material];
-    let s = apply_decals(evaluate_material(material, surface, g, position, view_dir), dp);
-    return shade(s);
+    return shade(apply_decals(fragment_surface(in, front_facing, g), dp));
 }
 
 @fragment

@@ -6,8 +6,10 @@ use std::collections::HashMap;
 
 use crate::gpu::{scene::RasterState, GpuScene};
 
+pub mod deferred_shade;
 pub mod depth_prepass;
 pub mod forward_shade;
+pub mod gbuffer_raster;
 pub mod tonemap;
 pub mod visbuffer_raster;
 pub mod visbuffer_shade;

@@ -1,11 +1,14 @@
 //! Frame graphs: each pipeline orders the passes of one frame, read top to bottom in its own file:
-//! `visbuffer.rs` (raster ids, shade in compute) and `forward.rs` (depth prepass, shade in fragments).
+//! `visbuffer.rs` (raster ids, shade in compute), `deferred.rs` (G-buffer, light in compute) and
+//! `forward.rs` (depth prepass, shade in fragments).
 //! Both call the same shading core; enumeration methods plug in through `LightMethod` and
 //! `DecalMethod`.
 
+pub mod deferred;
 pub mod forward;
 pub mod visbuffer;
 
+pub use deferred::DeferredPipeline;
 pub use forward::ForwardPipeline;
 pub use visbuffer::VisbufferPipeline;
 
@@ -20,25 +23,29 @@ pub enum PipelineKind {
     /// Visibility buffer, shading in compute (`visbuffer.rs`).
     #[default]
     Visbuffer,
+    /// G-buffer raster, then decals and lights in compute (`deferred.rs`).
+    Deferred,
     /// Depth prepass, then shading in the fragment stage (`forward.rs`).
     Forward,
 }
 
 impl PipelineKind {
-    pub const ALL: [PipelineKind; 2] = [PipelineKind::Visbuffer, PipelineKind::Forward];
+    pub const ALL: [PipelineKind; 3] = [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward];
 
     pub fn name(self) -> &'static str {
         match self {
             PipelineKind::Visbuffer => "visbuffer",
+            PipelineKind::Deferred => "deferred",
             PipelineKind::Forward => "forward",
         }
     }
 }
 
-/// The pipeline a renderer runs.
+/// The pipeline a renderer runs. Boxed: the variants hold hundreds of bytes of GPU handles each.
 pub enum FramePipeline {
-    Visbuffer(VisbufferPipeline),
-    Forward(ForwardPipeline),
+    Visbuffer(Box<VisbufferPipeline>),
+    Deferred(Box<DeferredPipeline>),
+    Forward(Box<ForwardPipeline>),
 }
 
 impl FramePipeline {
@@ -51,8 +58,9 @@ impl FramePipeline {
         (width, height): (u32, u32),
     ) -> Result<Self> {
         Ok(match kind {
-            PipelineKind::Visbuffer => Self::Visbuffer(VisbufferPipeline::new(ctx, scene, methods, structures, width, height)?),
-            PipelineKind::Forward => Self::Forward(ForwardPipeline::new(ctx, scene, methods, structures, width, height)?),
+            PipelineKind::Visbuffer => Self::Visbuffer(Box::new(VisbufferPipeline::new(ctx, scene, methods, structures, width, height)?)),
+            PipelineKind::Deferred => Self::Deferred(Box::new(DeferredPipeline::new(ctx, scene, methods, structures, width, height)?)),
+            PipelineKind::Forward => Self::Forward(Box::new(ForwardPipeline::new(ctx, scene, methods, structures, width, height)?)),
         })
     }
 
@@ -60,6 +68,7 @@ impl FramePipeline {
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, eye: glam::Vec3) {
         match self {
             Self::Visbuffer(p) => p.record(encoder, timer, scene, eye),
+            Self::Deferred(p) => p.record(encoder, timer, scene, eye),
             Self::Forward(p) => p.record(encoder, timer, scene, eye),
         }
     }
@@ -67,6 +76,7 @@ impl FramePipeline {
     pub fn targets(&self) -> &FrameTargets {
         match self {
             Self::Visbuffer(p) => &p.targets,
+            Self::Deferred(p) => &p.targets,
             Self::Forward(p) => &p.targets,
         }
     }

@@ -1,8 +1,11 @@
-// The vertex stage of the forward pipeline, shared by its depth prepass and its shading pass: both
-// must compute bit-identical positions for the shading pass's EQUAL depth test, hence one function
-// and `@invariant`. Indexed draws, one draw per instance of a primitive (`instance_index` is the draw).
+// Raster passes that rebuild surfaces in the fragment stage — the forward pipeline's depth prepass
+// and shading pass, the deferred pipeline's G-buffer — share this vertex function and the fragment's
+// surface. The forward passes must compute bit-identical positions for the EQUAL depth test, hence one
+// function and `@invariant`. Indexed draws, one draw per instance of a primitive (`instance_index` is
+// the draw).
 #include "shading/scene_bindings.wgsl"
 #include "shading/material.wgsl"
+#include "shading/camera.wgsl"
 
 struct ForwardVertex {
     @builtin(position) @invariant clip_position: vec4<f32>,
@@ -30,6 +33,26 @@ fn forward_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(instance_in
     out.normal = vertex.normal;
     out.tangent = vertex.tangent;
     return out;
+}
+
+// The fragment's surface and material, before decals: the fragment stage's counterpart of the
+// visibility-buffer resolve. `front_facing` follows the pipeline's winding, which mirrored instances
+// reverse; back faces only reach here on double-sided materials and turn their whole tangent frame
+// over, as the resolve does.
+fn fragment_surface(in: ForwardVertex, front_facing: bool, g: UvGradients) -> ShadingInput {
+    let draw = draws[in.draw_index];
+    let position = in.relative_position + frame.world_from_view[3].xyz;
+    let view_dir = -camera_ray(in.clip_position.xy).dir;
+    var surface: SurfaceFrame;
+    surface.normal = normalize(world_normal(draw, in.normal));
+    surface.tangent = world_direction(draw, in.tangent.xyz);
+    surface.bitangent_sign = in.tangent.w * sign(draw.normal_from_local[0].w);
+    if !front_facing {
+        surface.normal = -surface.normal;
+        surface.tangent = -surface.tangent;
+        surface.bitangent_sign = -surface.bitangent_sign;
+    }
+    return evaluate_material(materials[draw.material], surface, g, position, view_dir);
 }
 
 // Whether an alpha-masked fragment covers its pixel (derivatives taken before any discard).

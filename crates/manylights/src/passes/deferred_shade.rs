@@ -1,0 +1,73 @@
+//! Deferred lighting in compute (`deferred_shade.wgsl`): G-buffer and depth in, decals and lights
+//! through the shading core, HDR radiance out.
+
+use crate::accel::VolumeStructure;
+use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::passes::visbuffer_shade::HDR_FORMAT;
+use crate::pipelines::{DecalMethod, LightMethod};
+use crate::Result;
+
+/// The shader for a pair of enumeration methods.
+pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
+    ShaderDesc::new("passes/deferred_shade.wgsl")
+        .with("LIGHT_ENUMERATION", lights.enumeration_module())
+        .with("DECAL_ENUMERATION", decals.enumeration_module())
+}
+
+pub struct DeferredShade {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    lights: wgpu::BindGroup,
+    decals: wgpu::BindGroup,
+}
+
+impl DeferredShade {
+    /// The light and decal structures are bound as groups 2 and 3, whichever the methods.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        methods: (LightMethod, DecalMethod),
+        (lights, decals): (&VolumeStructure, &VolumeStructure),
+        (depth, gbuffer): (&wgpu::TextureView, &[wgpu::TextureView; 4]),
+        hdr: &wgpu::TextureView,
+    ) -> Result<Self> {
+        let device = &ctx.device;
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let texture = |binding, sample_type| bindings::texture(binding, compute, sample_type, wgpu::TextureViewDimension::D2);
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        // Group 1 of `deferred_shade.wgsl`; group 0 is the scene.
+        let layout = bindings::layout(
+            device,
+            "deferred_shade",
+            &[
+                texture(0, wgpu::TextureSampleType::Depth),
+                texture(1, float),                         // albedo
+                texture(2, wgpu::TextureSampleType::Uint), // normal
+                texture(3, float),                         // roughness, metallic
+                texture(4, float),                         // emission
+                bindings::storage_texture_write(5, compute, HDR_FORMAT),
+            ],
+        );
+        let layouts = [&scene.bind_group_layout, &layout, &lights.bind_group_layout, &decals.bind_group_layout];
+        let pipeline = bindings::compute_pipeline(device, "deferred_shade", &shader(methods.0, methods.1), &layouts)?;
+        let mut views = vec![wgpu::BindingResource::TextureView(depth)];
+        views.extend(gbuffer.iter().map(wgpu::BindingResource::TextureView));
+        views.push(wgpu::BindingResource::TextureView(hdr));
+        let bind_group = bindings::bind_group(device, "deferred_shade", &layout, views);
+        Ok(Self { pipeline, bind_group, lights: lights.bind_group.clone(), decals: decals.bind_group.clone() })
+    }
+
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, width: u32, height: u32) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("deferred_shade"),
+            timestamp_writes: timer.map(|t| t.compute_pass("deferred_shade")),
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &scene.bind_group, &[]);
+        pass.set_bind_group(1, &self.bind_group, &[]);
+        pass.set_bind_group(2, &self.lights, &[]);
+        pass.set_bind_group(3, &self.decals, &[]);
+        let (x, y) = super::dispatch_size(width, height);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+}

@@ -1,0 +1,92 @@
+//! The deferred pipeline's geometry pass (`gbuffer_raster.wgsl`): surfaces and materials into the
+//! G-buffer (`gbuffer.wgsl` lists its layout), depth tested and written, draws in the usual order.
+
+use std::collections::HashMap;
+
+use super::visbuffer_raster::DEPTH_FORMAT;
+use crate::gpu::scene::RasterState;
+use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::Result;
+
+/// Keep in sync with `gbuffer.wgsl`: albedo, normal, roughness-metallic, emission.
+pub const GBUFFER_FORMATS: [wgpu::TextureFormat; 4] =
+    [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::R32Uint, wgpu::TextureFormat::Rg8Unorm, wgpu::TextureFormat::Rgba16Float];
+
+pub struct GBufferRaster {
+    pipelines: HashMap<RasterState, wgpu::RenderPipeline>,
+}
+
+impl GBufferRaster {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Result<Self> {
+        let module = shaders::create_module(&ctx.device, &ShaderDesc::new("passes/gbuffer_raster.wgsl"))?;
+        let layout = bindings::pipeline_layout(&ctx.device, "gbuffer_raster", &[&scene.bind_group_layout]);
+        let targets = GBUFFER_FORMATS.map(|format| Some(wgpu::ColorTargetState::from(format)));
+        let pipelines = RasterState::all()
+            .map(|state| {
+                let pipeline = ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("gbuffer_raster"),
+                    layout: Some(&layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("forward_vertex"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: state.primitive(),
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        // Reverse Z: nearer is greater.
+                        depth_compare: Some(wgpu::CompareFunction::Greater),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(if state.alpha_mask { "gbuffer_masked" } else { "gbuffer_opaque" }),
+                        compilation_options: Default::default(),
+                        targets: &targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                });
+                (state, pipeline)
+            })
+            .collect();
+        Ok(Self { pipelines })
+    }
+
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&mut GpuTimer>,
+        scene: &GpuScene,
+        eye: glam::Vec3,
+        gbuffer: &[wgpu::TextureView; 4],
+        depth: &wgpu::TextureView,
+    ) {
+        // Not cleared: the lighting pass reads the G-buffer only where depth says something was drawn.
+        let attachments = gbuffer.each_ref().map(|view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+            })
+        });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("gbuffer_raster"),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.map(|t| t.render_pass("gbuffer_raster")),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        super::draw_scene(&mut pass, scene, eye, &self.pipelines);
+    }
+}
