@@ -35,14 +35,18 @@ pub struct RenderArgs {
     /// or forward (depth prepass, shading in fragments).
     #[arg(long, value_enum, default_value_t = PipelineArg::Visbuffer)]
     pipeline: PipelineArg,
-    #[arg(long, value_enum, default_value_t = MethodArg::Brute)]
-    light_method: MethodArg,
+    /// How shading finds the local lights reaching a point: none (sun and ambient only), loop over
+    /// all, point queries in a BVH, or per-froxel lists built every frame (clustered shading).
+    #[arg(long, value_enum, default_value_t = LightMethodArg::Brute)]
+    light_method: LightMethodArg,
     /// How the light BVH is built (with --light-method bvh): once on the CPU, or every frame on the GPU.
     #[arg(long, value_enum, default_value_t = BvhBuildArg::CpuOnce)]
     light_bvh_build: BvhBuildArg,
-    /// How shading finds the decals covering a point: loop over all, or point queries in a BVH.
-    #[arg(long, value_enum, default_value_t = MethodArg::Brute)]
-    decal_method: MethodArg,
+    /// How shading finds the decals covering a point: none, loop over all, point queries in a BVH,
+    /// per-froxel lists built every frame (clustered shading), or decal boxes rasterised into the
+    /// G-buffer (deferred decals, --pipeline deferred only).
+    #[arg(long, value_enum, default_value_t = DecalMethodArg::Brute)]
+    decal_method: DecalMethodArg,
     /// How the decal BVH is built (with --decal-method bvh): once on the CPU, or every frame on the GPU.
     #[arg(long, value_enum, default_value_t = BvhBuildArg::CpuOnce)]
     decal_bvh_build: BvhBuildArg,
@@ -82,9 +86,20 @@ enum PipelineArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
-enum MethodArg {
+enum LightMethodArg {
+    Off,
     Brute,
     Bvh,
+    Clustered,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum DecalMethodArg {
+    Off,
+    Brute,
+    Bvh,
+    Clustered,
+    DeferredDecals,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -124,13 +139,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             PipelineArg::Forward => PipelineKind::Forward,
         },
         light_method: match args.light_method {
-            MethodArg::Brute => LightMethod::Brute,
-            MethodArg::Bvh => LightMethod::Bvh,
+            LightMethodArg::Off => LightMethod::Off,
+            LightMethodArg::Brute => LightMethod::Brute,
+            LightMethodArg::Bvh => LightMethod::Bvh,
+            LightMethodArg::Clustered => LightMethod::Clustered,
         },
         light_bvh_build: args.light_bvh_build.into(),
         decal_method: match args.decal_method {
-            MethodArg::Brute => DecalMethod::Brute,
-            MethodArg::Bvh => DecalMethod::Bvh,
+            DecalMethodArg::Off => DecalMethod::Off,
+            DecalMethodArg::Brute => DecalMethod::Brute,
+            DecalMethodArg::Bvh => DecalMethod::Bvh,
+            DecalMethodArg::Clustered => DecalMethod::Clustered,
+            DecalMethodArg::DeferredDecals => DecalMethod::DeferredDecals,
         },
         decal_bvh_build: args.decal_bvh_build.into(),
         tonemapper: match args.tonemap {

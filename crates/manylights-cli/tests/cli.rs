@@ -250,3 +250,29 @@ fn every_pipeline_renders_with_its_passes_timed() {
     let err = failure(&["render", "--pipeline", "tiled"]);
     assert!(err.contains("--pipeline") && err.contains("visbuffer") && err.contains("deferred") && err.contains("forward"), "{err}");
 }
+
+#[test]
+fn every_method_renders_with_its_builds_timed() {
+    let dir = temp_dir("render_methods");
+    let json = dir.join("timings.json");
+    let cases: [(&[&str], &[&str]); 4] = [
+        (&["--light-method", "clustered", "--decal-method", "clustered"], &["light_cluster_build", "decal_cluster_build"]),
+        (&["--light-method", "off", "--decal-method", "off"], &["visbuffer_shade"]),
+        (&["--pipeline", "deferred", "--decal-method", "deferred-decals"], &["deferred_decals", "deferred_shade"]),
+        (&["--pipeline", "forward", "--light-method", "clustered"], &["light_cluster_build", "forward_shade"]),
+    ];
+    for (flags, passes) in cases {
+        let mut args = vec!["--lights", "20", "--decals", "20", "--timings-json", json.to_str().unwrap()];
+        args.extend_from_slice(flags);
+        let out = render_to(&dir, &args);
+        assert!(out.status.success(), "{flags:?}: {}", String::from_utf8_lossy(&out.stderr));
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        for pass in passes {
+            assert!(report["passes"][pass]["median_ms"].as_f64().unwrap() > 0.0, "{flags:?}: no {pass} timing");
+        }
+    }
+    for pipeline in ["visbuffer", "forward"] {
+        let err = failure(&["render", "--width", "32", "--height", "18", "--pipeline", pipeline, "--decal-method", "deferred-decals"]);
+        assert!(err.contains("deferred decals") && err.contains("--pipeline deferred"), "{err}");
+    }
+}

@@ -80,6 +80,13 @@ impl RenderConfig {
                 ctx.limits.max_buffer_size >> 20
             )));
         }
+        if !self.decal_method.works_in(self.pipeline) {
+            return Err(Error::InvalidConfig(format!(
+                "deferred decals are rasterised into the G-buffer, which only --pipeline deferred has (not {}); \
+                 use --pipeline deferred, or --decal-method bvh, clustered or brute",
+                self.pipeline.name()
+            )));
+        }
         if self.max_texture_size == 0 {
             return Err(Error::InvalidConfig("the maximum texture size must be at least 1".into()));
         }

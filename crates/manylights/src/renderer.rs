@@ -2,10 +2,10 @@
 //! images are read back on request so benchmarks time frames without readback in the way.
 
 use crate::{
-    accel::VolumeStructure,
+    accel::{clusters::ClusterGrid, VolumeStructure},
     config::RenderConfig,
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
-    pipelines::{DecalMethod, FramePipeline, LightMethod},
+    pipelines::{DecalMethod, FrameInputs, FramePipeline, LightMethod},
     scene::{Camera, Scene},
     Result,
 };
@@ -25,6 +25,18 @@ pub struct Renderer {
     pub time: f32,
 }
 
+/// The anisotropy the samplers get. lavapipe (Mesa 22.3) takes seconds per pixel when decal textures
+/// are sampled anisotropically (in the visibility-buffer resolve and in fragment shaders; measured:
+/// one decal at 64×36 turned a 14 ms frame into 5 s), so on lavapipe every pipeline filters
+/// trilinearly, with a warning.
+fn effective_anisotropy(ctx: &GpuContext, config: &RenderConfig) -> u16 {
+    if config.anisotropy > 1 && ctx.info.name.contains("llvmpipe") {
+        log::warn!("lavapipe is pathologically slow at anisotropic filtering: using --anisotropy 1 on it");
+        return 1;
+    }
+    config.anisotropy
+}
+
 /// A read-back image, rows top to bottom.
 #[derive(Clone, Debug)]
 pub struct Image<T> {
@@ -36,21 +48,26 @@ pub struct Image<T> {
 impl Renderer {
     pub fn new(ctx: GpuContext, scene: &Scene, config: RenderConfig) -> Result<Self> {
         config.validate(&ctx)?;
-        let gpu_scene = GpuScene::upload(&ctx, scene, config.max_texture_size, config.anisotropy)?;
+        let gpu_scene = GpuScene::upload(&ctx, scene, config.max_texture_size, effective_anisotropy(&ctx, &config))?;
         // Brute force reads the structures' items and instances only: their BVHs are built once on the
         // CPU, so a GPU rebuild every frame is timed only where a method uses it.
         let build = |uses_bvh: bool, build| if uses_bvh { build } else { crate::accel::BvhBuild::CpuOnce };
+        // Clustered lists are built every frame only where the method reads them.
+        let grid = ClusterGrid::for_resolution(config.width, config.height);
+        let clusters = |clustered: bool| clustered.then_some((grid, &gpu_scene.bind_group_layout));
         let lights = VolumeStructure::for_lights(
             &ctx,
             &scene.lights,
             &scene.light_groups,
             build(config.light_method == LightMethod::Bvh, config.light_bvh_build),
+            clusters(config.light_method == LightMethod::Clustered),
         )?;
         let decals = VolumeStructure::for_decals(
             &ctx,
             &scene.decals,
             &scene.decal_groups,
             build(config.decal_method == DecalMethod::Bvh, config.decal_bvh_build),
+            clusters(config.decal_method == DecalMethod::Clustered),
         )?;
         let pipeline = FramePipeline::new(
             &ctx,
@@ -79,8 +96,25 @@ impl Renderer {
     /// Renders `count` frames submitted back to back, as an application's frame loop does, waiting
     /// only when the timer's slots are full and at the end; each frame advances `time` by
     /// [`FRAME_INTERVAL`]. Returns each frame's pass timings.
+    ///
+    /// When the clustered lists were too short for a frame, they grow and the frames are rendered
+    /// again from the same time, so every returned frame is complete.
     pub fn render_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<PassTimings>> {
-        let mut uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.lighting, self.config.tonemapper);
+        let start = self.time;
+        loop {
+            let timings = self.submit_frames(camera, count)?;
+            // Both are asked: each grows its own lists.
+            let lights_fitted = self.lights.clusters_fitted(&self.ctx)?;
+            let decals_fitted = self.decals.clusters_fitted(&self.ctx)?;
+            if lights_fitted && decals_fitted {
+                return Ok(timings);
+            }
+            self.time = start;
+        }
+    }
+
+    fn submit_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<PassTimings>> {
+        let mut uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.constants, self.config.tonemapper);
         uniforms.light_instance_count = self.lights.instance_count();
         uniforms.decal_instance_count = self.decals.instance_count();
         self.scene.write_frame(&self.ctx.queue, &uniforms);
@@ -93,9 +127,12 @@ impl Renderer {
                 }
                 timer.begin_frame();
             }
-            self.lights.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time)?;
-            self.decals.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time)?;
-            self.pipeline.record(&mut encoder, self.timer.as_mut(), &self.scene, camera.position());
+            for structure in [&mut self.lights, &mut self.decals] {
+                structure.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time)?;
+                structure.record_clusters(&mut encoder, self.timer.as_mut(), &self.scene.bind_group);
+            }
+            let inputs = FrameInputs { scene: &self.scene, lights: &self.lights, decals: &self.decals, eye: camera.position() };
+            self.pipeline.record(&mut encoder, self.timer.as_mut(), &inputs);
             if let Some(timer) = &self.timer {
                 timer.resolve(&mut encoder);
             }
@@ -108,6 +145,11 @@ impl Renderer {
         }
         self.ctx.check_errors()?;
         Ok(timings)
+    }
+
+    /// Entries the clustered lists of lights and of decals hold now, for the methods that use them.
+    pub fn cluster_capacities(&self) -> (Option<u32>, Option<u32>) {
+        (self.lights.cluster_capacity(), self.decals.cluster_capacity())
     }
 
     /// The last frame after tonemapping: RGBA8, sRGB-encoded.

@@ -37,7 +37,7 @@ fn random_lights(count: usize, rng: &mut rand_pcg::Pcg64) -> Vec<Light> {
 /// Per point: (count, Σ index, Σ index²) of the lights the GPU query reaches and the tight test keeps.
 fn gpu_query(ctx: &GpuContext, lights: &[Light], groups: &Groups, build: BvhBuild, time: f32, points: &[Vec3]) -> Vec<[u32; 4]> {
     let device = &ctx.device;
-    let mut structure = VolumeStructure::for_lights(ctx, lights, groups, build).unwrap();
+    let mut structure = VolumeStructure::for_lights(ctx, lights, groups, build, None).unwrap();
     let gpu_points: Vec<[f32; 4]> = points.iter().map(|p| p.extend(1.0).to_array()).collect();
     let storage = |contents: &[u8], usage| device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents, usage });
     let point_buffer = storage(bytemuck::cast_slice(&gpu_points), wgpu::BufferUsages::STORAGE);

@@ -1,4 +1,4 @@
-//! Decals through the acceleration structure give the brute-force image (linear HDR, max abs
+//! Decals through the acceleration structure and the clustered lists give the brute-force image (linear HDR, max abs
 //! difference ≤ 1e-3), with thousands of decals and lights, grouped and moving; 0 decals work, 1M
 //! decals fit, and bad decals are rejected.
 
@@ -37,10 +37,12 @@ fn render_at(scene: &Scene, config: RenderConfig, time: f32) -> Image<[f32; 4]> 
 
 fn assert_decal_methods_agree(scene: &Scene, width: u32, height: u32, time: f32) {
     let brute = render_at(scene, decal_config(width, height, DecalMethod::Brute, BvhBuild::CpuOnce), time);
-    for build in [BvhBuild::CpuOnce, BvhBuild::GpuEveryFrame] {
-        let bvh = render_at(scene, decal_config(width, height, DecalMethod::Bvh, build), time);
-        let difference = max_abs_difference(&brute, &bvh);
-        assert!(difference <= TOLERANCE, "bvh decals ({build:?}): max abs difference {difference} from brute force");
+    let methods =
+        [(DecalMethod::Bvh, BvhBuild::CpuOnce), (DecalMethod::Bvh, BvhBuild::GpuEveryFrame), (DecalMethod::Clustered, BvhBuild::CpuOnce)];
+    for (method, build) in methods {
+        let image = render_at(scene, decal_config(width, height, method, build), time);
+        let difference = max_abs_difference(&brute, &image);
+        assert!(difference <= TOLERANCE, "{} decals ({build:?}): max abs difference {difference} from brute force", method.name());
     }
 }
 

@@ -16,6 +16,11 @@ use rand::{Rng, SeedableRng};
 
 const TOLERANCE: f32 = 1e-3;
 
+/// Every method that lights, whichever way it finds the lights (`off` is the unlit baseline).
+fn lighting_methods() -> impl Iterator<Item = LightMethod> {
+    LightMethod::ALL.into_iter().filter(|&m| m != LightMethod::Off)
+}
+
 fn assert_methods_agree(scene: &Scene, width: u32, height: u32) {
     assert_methods_agree_at(scene, width, height, 0.0);
 }
@@ -33,7 +38,7 @@ fn assert_methods_agree_at(scene: &Scene, width: u32, height: u32, time: f32) {
     let lit = brute.pixels.iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count();
     assert!(lit > brute.pixels.len() / 2, "the reference image is mostly black");
     let gpu_built = RenderConfig { light_bvh_build: BvhBuild::GpuEveryFrame, ..config(width, height, LightMethod::Bvh) };
-    let configs = LightMethod::ALL.iter().map(|&method| config(width, height, method)).chain([gpu_built]);
+    let configs = lighting_methods().map(|method| config(width, height, method)).chain([gpu_built]);
     for config in configs {
         let image = render_at(scene, config.clone(), time);
         let difference = max_abs_difference(&brute, &image);
@@ -90,6 +95,23 @@ fn no_lights() {
     let mut scene = demo_scene();
     scene.lights.clear();
     assert_methods_agree(&scene, 64, 36);
+}
+
+/// Large lights overlapping each other everywhere need more list entries than the clustered lists
+/// start with: the renderer grows them and renders the frame again, so the image stays exact.
+#[test]
+fn clustered_lists_grow_to_what_the_view_needs() {
+    let params = ScatterLights { count: 2000, seed: 3, range: Some((6.0, 12.0)), intensity: Some((0.01, 0.05)), ..Default::default() };
+    let mut scene = demo_scene();
+    scene::generators::add_scattered_lights(&mut scene, &params).unwrap();
+    let mut clustered = renderer(&scene, config(128, 72, LightMethod::Clustered));
+    let initial = clustered.cluster_capacities().0.expect("clustered lights have lists");
+    clustered.render(&scene.cameras[0]).expect("frame");
+    let grown = clustered.cluster_capacities().0.unwrap();
+    assert!(grown > initial, "the lists did not grow ({initial} entries)");
+    let brute = render_at(&scene, config(128, 72, LightMethod::Brute), 0.0);
+    let difference = max_abs_difference(&brute, &clustered.read_hdr().unwrap());
+    assert!(difference <= TOLERANCE, "clustered after growing: max abs difference {difference} from brute force");
 }
 
 #[test]
@@ -154,7 +176,7 @@ fn an_instanced_group_lights_like_its_lights_copied_into_the_world() {
         })
         .collect();
     let expected = render_at(&expanded, config(128, 72, LightMethod::Brute), 0.0);
-    for method in LightMethod::ALL {
+    for method in lighting_methods() {
         let image = render_at(&grouped, config(128, 72, method), 0.6);
         let difference = max_abs_difference(&expected, &image);
         assert!(difference <= TOLERANCE, "{}: max abs difference {difference} from the expanded lights", method.name());

@@ -47,37 +47,121 @@ fn sorted_differences(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>) -> Vec<f32> {
     d
 }
 
-/// On lavapipe (Mesa 22.3) BVH queries in fragment shaders find wrong leaves, slowly, while the same
-/// WGSL is exact in compute there and exact in fragments on NVIDIA; so this test checks the forward
-/// pipeline's methods on real GPUs (run there from the device machine, BENCHMARKS.md) and says it
-/// skipped on lavapipe.
-#[test]
-fn forward_methods_equal_brute_force() {
-    let ctx = manylights::gpu::GpuContext::new().expect("a GPU adapter");
-    if ctx.info.name.contains("llvmpipe") {
-        eprintln!("skipped on lavapipe: its fragment shaders mis-run BVH queries (see the test's comment)");
-        return;
-    }
+/// Within `pipeline`, each pair of methods gives the brute-force image.
+fn assert_methods_equal_brute_force(pipeline: PipelineKind, methods: &[(LightMethod, DecalMethod)], seed: u64) {
     let size = (64, 36);
-    let scene = scene_with(300, 300, 3);
-    let brute = render(&scene, configured(PipelineKind::Forward, LightMethod::Brute, DecalMethod::Brute, size));
+    let scene = scene_with(300, 300, seed);
+    let brute = render(&scene, configured(pipeline, LightMethod::Brute, DecalMethod::Brute, size));
     let lit = brute.pixels.iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count();
     assert!(lit > brute.pixels.len() / 2, "the reference image is mostly black");
-    for (lights, decals) in [(LightMethod::Bvh, DecalMethod::Brute), (LightMethod::Brute, DecalMethod::Bvh)] {
-        let image = render(&scene, configured(PipelineKind::Forward, lights, decals, size));
+    for &(lights, decals) in methods {
+        let image = render(&scene, configured(pipeline, lights, decals, size));
         let difference = max_abs_difference(&brute, &image);
-        assert!(difference <= TOLERANCE, "forward, lights {}, decals {}: max abs difference {difference}", lights.name(), decals.name());
+        assert!(
+            difference <= TOLERANCE,
+            "{}, lights {}, decals {}: max abs difference {difference}",
+            pipeline.name(),
+            lights.name(),
+            decals.name()
+        );
     }
+}
+
+const ACCELERATED: [(LightMethod, DecalMethod); 3] =
+    [(LightMethod::Bvh, DecalMethod::Bvh), (LightMethod::Clustered, DecalMethod::Clustered), (LightMethod::Bvh, DecalMethod::Clustered)];
+
+#[test]
+fn visbuffer_methods_equal_brute_force() {
+    assert_methods_equal_brute_force(PipelineKind::Visbuffer, &ACCELERATED, 6);
 }
 
 #[test]
 fn deferred_methods_equal_brute_force() {
+    assert_methods_equal_brute_force(PipelineKind::Deferred, &ACCELERATED, 5);
+}
+
+/// On lavapipe (Mesa 22.3) BVH queries in fragment shaders find wrong leaves, slowly, while the same
+/// WGSL is exact in compute there and exact in fragments on NVIDIA; so on lavapipe this test checks
+/// the clustered method only, and the BVH in forward is checked on real GPUs (run there from the
+/// device machine, BENCHMARKS.md).
+#[test]
+fn forward_methods_equal_brute_force() {
+    let ctx = manylights::gpu::GpuContext::new().expect("a GPU adapter");
+    if ctx.info.name.contains("llvmpipe") {
+        eprintln!("lavapipe: forward bvh not checked (its fragment shaders mis-run BVH queries, see the test's comment)");
+        assert_methods_equal_brute_force(PipelineKind::Forward, &[(LightMethod::Clustered, DecalMethod::Clustered)], 3);
+    } else {
+        assert_methods_equal_brute_force(PipelineKind::Forward, &ACCELERATED, 3);
+    }
+}
+
+/// Deferred decals blend in draw order and in the G-buffer's precision, where the shading core blends
+/// weighted-OIT sums in f32 (`passes/deferred_decals.wgsl` lists the differences). Where decals do not
+/// overlap, only precision remains: measured on lavapipe (demo, 150 decals of one layer, 128×72) mean
+/// 0.00013, 99.5th percentile 0.0046 against the decals' own effect of mean 0.0082; the bounds leave
+/// about 3× room, and the decals' effect must be over 10× the difference.
+const DEFERRED_DECALS_MEAN_TOLERANCE: f32 = 0.0004;
+const DEFERRED_DECALS_P995_TOLERANCE: f32 = 0.015;
+
+#[test]
+fn deferred_decals_match_the_shading_cores_decals_where_both_apply() {
     let size = (128, 72);
-    let scene = scene_with(300, 300, 5);
-    let brute = render(&scene, configured(PipelineKind::Deferred, LightMethod::Brute, DecalMethod::Brute, size));
-    let image = render(&scene, configured(PipelineKind::Deferred, LightMethod::Bvh, DecalMethod::Bvh, size));
-    let difference = max_abs_difference(&brute, &image);
-    assert!(difference <= TOLERANCE, "deferred, bvh lights and decals: max abs difference {difference}");
+    let mut scene = scene_with(40, 150, 9);
+    for decal in &mut scene.decals {
+        decal.layer = 0;
+    }
+    let config = |decals| configured(PipelineKind::Deferred, LightMethod::Brute, decals, size);
+    let bvh = render(&scene, config(DecalMethod::Bvh));
+    let deferred = render(&scene, config(DecalMethod::DeferredDecals));
+    let bare = render(&scene, config(DecalMethod::Off));
+    let mean = |d: &[f32]| d.iter().sum::<f32>() / d.len() as f32;
+    let effect = mean(&sorted_differences(&bvh, &bare));
+    let d = sorted_differences(&bvh, &deferred);
+    let p995 = d[d.len() * 995 / 1000];
+    eprintln!("deferred decals vs bvh decals: mean {}, 99.5th percentile {p995}; decals' effect: mean {effect}", mean(&d));
+    assert!(effect > 10.0 * mean(&d), "the decals barely change the image (mean {effect})");
+    assert!(mean(&d) <= DEFERRED_DECALS_MEAN_TOLERANCE, "mean difference {}", mean(&d));
+    assert!(p995 <= DEFERRED_DECALS_P995_TOLERANCE, "99.5th percentile difference {p995}");
+}
+
+#[test]
+fn deferred_decals_outside_the_deferred_pipeline_are_an_error() {
+    let scene = scene_with(0, 10, 1);
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Forward] {
+        let ctx = manylights::gpu::GpuContext::new().expect("a GPU adapter");
+        let config = configured(pipeline, LightMethod::Brute, DecalMethod::DeferredDecals, (32, 18));
+        let error = manylights::renderer::Renderer::new(ctx, &scene, config).err().expect("an invalid combination");
+        let message = error.to_string();
+        assert!(message.contains("--pipeline deferred") && message.contains(pipeline.name()), "{message}");
+    }
+}
+
+/// `off` is the baseline of the method comparison: the image of the scene without local lights, or
+/// without decals.
+#[test]
+fn off_renders_the_scene_without_lights_or_decals() {
+    let size = (64, 36);
+    let scene = scene_with(300, 300, 8);
+    for pipeline in PipelineKind::ALL {
+        let mut unlit = scene.clone();
+        unlit.lights.clear();
+        let mut undecaled = scene.clone();
+        undecaled.decals.clear();
+        for (without, lights, decals) in
+            [(&unlit, LightMethod::Off, DecalMethod::Brute), (&undecaled, LightMethod::Brute, DecalMethod::Off)]
+        {
+            let expected = render(without, configured(pipeline, LightMethod::Brute, DecalMethod::Brute, size));
+            let image = render(&scene, configured(pipeline, lights, decals, size));
+            let difference = max_abs_difference(&expected, &image);
+            assert!(difference <= TOLERANCE, "{}, lights {}, decals {}: {difference}", pipeline.name(), lights.name(), decals.name());
+            let full = render(&scene, configured(pipeline, LightMethod::Brute, DecalMethod::Brute, size));
+            assert!(
+                max_abs_difference(&full, &image) > 0.05,
+                "turning {} off changed nothing",
+                if lights == LightMethod::Off { "lights" } else { "decals" }
+            );
+        }
+    }
 }
 
 #[test]

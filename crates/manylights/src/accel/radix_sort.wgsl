@@ -4,6 +4,8 @@
 // in workgroup memory, so it needs neither subgroup operations nor progress guarantees between
 // workgroups (lavapipe runs it as the GPUs do).
 
+#include "accel/workgroup_scan.wgsl"
+
 struct SortPass {
     count: u32,
     // Bit position of this pass's digit.
@@ -13,7 +15,8 @@ struct SortPass {
     index: u32,
 }
 
-const THREADS: u32 = 256u;
+// Threads per workgroup: one per digit in `sort_offsets` and `sort_scatter`.
+const THREADS: u32 = SCAN_THREADS;
 const ROUNDS: u32 = 8u;
 const TILE: u32 = THREADS * ROUNDS;
 const DIGITS: u32 = 256u;
@@ -51,27 +54,6 @@ fn sort_count(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation
     if count != 0u {
         atomicAdd(&digit_totals[pass_info.index * DIGITS + local], count);
     }
-}
-
-var<workgroup> scan: array<u32, THREADS>;
-
-// Exclusive prefix sum of `value` over the workgroup's threads (Hillis–Steele); also returns the total.
-fn workgroup_exclusive_scan(local: u32, value: u32) -> vec2<u32> {
-    scan[local] = value;
-    workgroupBarrier();
-    for (var offset = 1u; offset < THREADS; offset *= 2u) {
-        var add = 0u;
-        if local >= offset {
-            add = scan[local - offset];
-        }
-        workgroupBarrier();
-        scan[local] += add;
-        workgroupBarrier();
-    }
-    let inclusive = scan[local];
-    let total = scan[THREADS - 1u];
-    workgroupBarrier();
-    return vec2<u32>(inclusive - value, total);
 }
 
 // One workgroup per digit: the digit's first output position is the number of smaller digits; each

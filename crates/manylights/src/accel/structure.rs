@@ -17,6 +17,7 @@ use wgpu::util::DeviceExt;
 
 use super::{
     bvh::MAX_PRIMITIVES,
+    clusters::{ClusterBounds, ClusterGrid, ClusterLists},
     decal_aabb,
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
     light_aabb, Aabb, Bvh, BvhNode,
@@ -101,11 +102,11 @@ impl VolumeKind {
         }
     }
 
-    /// Timer scopes of the top-level build and of the groups' rebuilds.
-    fn scopes(self) -> (&'static str, &'static str) {
+    /// Timer scopes of the top-level build, of the groups' rebuilds and of the clustered lists.
+    fn scopes(self) -> (&'static str, &'static str, &'static str) {
         match self {
-            VolumeKind::Lights => ("light_tlas_build", "light_blas_build"),
-            VolumeKind::Decals => ("decal_tlas_build", "decal_blas_build"),
+            VolumeKind::Lights => ("light_tlas_build", "light_blas_build", "light_cluster_build"),
+            VolumeKind::Decals => ("decal_tlas_build", "decal_blas_build", "decal_cluster_build"),
         }
     }
 }
@@ -119,10 +120,24 @@ pub struct Volumes<'a> {
     pub groups: &'a Groups,
 }
 
+/// The clustered method's lists, for structures that shading reads through them: the froxel grid,
+/// the bounds each volume is binned by (group space), and the scene's bind group layout, whose frame
+/// uniforms the list build reads.
+pub struct Clustering<'a> {
+    pub grid: ClusterGrid,
+    pub bounds: Vec<ClusterBounds>,
+    pub frame_layout: &'a wgpu::BindGroupLayout,
+}
+
 pub struct VolumeStructure {
     pub bind_group_layout: wgpu::BindGroupLayout,
     pub bind_group: wgpu::BindGroup,
     label: &'static str,
+    items: wgpu::Buffer,
+    /// Each item's decal layer (empty for lights): deferred decals draw in layer order.
+    layers: Vec<u32>,
+    /// Present for the clustered method; its buffers are bindings 4 and 5, placeholders otherwise.
+    clusters: Option<ClusterLists>,
     groups: Vec<Group>,
     /// Instances of non-empty groups: instances of empty groups can contain nothing.
     instances: Vec<GroupInstance>,
@@ -138,21 +153,60 @@ pub struct VolumeStructure {
 }
 
 impl VolumeStructure {
-    /// The structure over a scene's lights.
-    pub fn for_lights(ctx: &GpuContext, lights: &[Light], groups: &Groups, build: BvhBuild) -> Result<Self> {
+    /// The structure over a scene's lights; with clustered lists on `clusters`' grid when given.
+    pub fn for_lights(
+        ctx: &GpuContext,
+        lights: &[Light],
+        groups: &Groups,
+        build: BvhBuild,
+        clusters: Option<(ClusterGrid, &wgpu::BindGroupLayout)>,
+    ) -> Result<Self> {
         let items: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
         let boxes: Vec<Aabb> = lights.iter().map(light_aabb).collect();
-        Self::new(ctx, &Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups }, build)
+        let clustering = clusters.map(|(grid, frame_layout)| Clustering {
+            grid,
+            bounds: lights.iter().map(ClusterBounds::of_light).collect(),
+            frame_layout,
+        });
+        let volumes = Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups };
+        Self::new(ctx, &volumes, build, clustering)
     }
 
-    /// The structure over a scene's decals.
-    pub fn for_decals(ctx: &GpuContext, decals: &[Decal], groups: &Groups, build: BvhBuild) -> Result<Self> {
+    /// The structure over a scene's decals; with clustered lists on `clusters`' grid when given.
+    pub fn for_decals(
+        ctx: &GpuContext,
+        decals: &[Decal],
+        groups: &Groups,
+        build: BvhBuild,
+        clusters: Option<(ClusterGrid, &wgpu::BindGroupLayout)>,
+    ) -> Result<Self> {
         let items: Vec<GpuDecal> = decals.iter().map(GpuDecal::from).collect();
         let boxes: Vec<Aabb> = decals.iter().map(decal_aabb).collect();
-        Self::new(ctx, &Volumes { kind: VolumeKind::Decals, items: bytemuck::cast_slice(&items), boxes: &boxes, groups }, build)
+        let clustering = clusters.map(|(grid, frame_layout)| Clustering {
+            grid,
+            bounds: decals.iter().map(ClusterBounds::of_decal).collect(),
+            frame_layout,
+        });
+        let volumes = Volumes { kind: VolumeKind::Decals, items: bytemuck::cast_slice(&items), boxes: &boxes, groups };
+        let mut structure = Self::new(ctx, &volumes, build, clustering)?;
+        structure.layers = decals.iter().map(|d| d.layer).collect();
+        Ok(structure)
     }
 
-    pub fn new(ctx: &GpuContext, volumes: &Volumes, build: BvhBuild) -> Result<Self> {
+    /// Every (instance, item) pair, instances in the order of the instance buffer, sorted stably by
+    /// decal layer: the order deferred decals are drawn in, bottom layer first.
+    pub fn pairs_in_layer_order(&self) -> Vec<[u32; 2]> {
+        let mut pairs: Vec<[u32; 2]> = self
+            .instances
+            .iter()
+            .enumerate()
+            .flat_map(|(i, instance)| self.groups[instance.group].items.clone().map(move |item| [i as u32, item]))
+            .collect();
+        pairs.sort_by_key(|&[_, item]| self.layers.get(item as usize).copied().unwrap_or(0));
+        pairs
+    }
+
+    pub fn new(ctx: &GpuContext, volumes: &Volumes, build: BvhBuild, clustering: Option<Clustering>) -> Result<Self> {
         let label = volumes.kind.label();
         let count = volumes.boxes.len();
         if let Some(i) = volumes.boxes.iter().position(|b| !b.is_valid()) {
@@ -255,20 +309,26 @@ impl VolumeStructure {
             None
         };
 
+        let (top_level_scope, blas_scope, cluster_scope) = volumes.kind.scopes();
+        let clusters = match clustering {
+            Some(c) => {
+                let instance_items: Vec<u32> = instances.iter().map(|i| ranges[i.group].len() as u32).collect();
+                Some(ClusterLists::new(ctx, (label, cluster_scope), c.frame_layout, &instance_buffer, &instance_items, &c.bounds, c.grid)?)
+            }
+            None => None,
+        };
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
         // Keep in sync with `shading/light_bindings.wgsl` and `shading/decal_bindings.wgsl`.
-        let bind_group_layout = bindings::layout(device, label, &[0, 1, 2, 3].map(|binding| bindings::storage_read(binding, all)));
-        let bind_group = bindings::bind_group(
-            device,
-            label,
-            &bind_group_layout,
-            [&items, &nodes, &primitives, &instance_buffer].iter().map(|b| b.as_entire_binding()).collect(),
-        );
-        let (top_level_scope, blas_scope) = volumes.kind.scopes();
+        let bind_group_layout = bindings::layout(device, label, &[0, 1, 2, 3, 4, 5].map(|binding| bindings::storage_read(binding, all)));
+        let bind_group =
+            shading_bind_group(ctx, label, &bind_group_layout, [&items, &nodes, &primitives, &instance_buffer], clusters.as_ref());
         Ok(Self {
             bind_group_layout,
             bind_group,
             label,
+            items,
+            layers: Vec::new(),
+            clusters,
             groups,
             instances,
             instance_buffer,
@@ -284,6 +344,31 @@ impl VolumeStructure {
     /// Instances the shaders visit (those of non-empty groups).
     pub fn instance_count(&self) -> u32 {
         self.instances.len() as u32
+    }
+
+    /// Records this frame's clustered lists, if the structure has them, after `record`: they read
+    /// the instances it placed and the frame uniforms of `frame`, the scene's bind group.
+    pub fn record_clusters(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, frame: &wgpu::BindGroup) {
+        if let Some(clusters) = &self.clusters {
+            clusters.record(encoder, timer, frame);
+        }
+    }
+
+    /// Entries the clustered lists hold, if the structure has them.
+    pub fn cluster_capacity(&self) -> Option<u32> {
+        self.clusters.as_ref().map(ClusterLists::capacity)
+    }
+
+    /// Whether the clustered lists held everything the frames since the last call needed (always
+    /// true without them). If not, they have grown, and those frames must be rendered again.
+    pub fn clusters_fitted(&mut self, ctx: &GpuContext) -> Result<bool> {
+        let Some(clusters) = &mut self.clusters else { return Ok(true) };
+        if clusters.fitted(ctx)? {
+            return Ok(true);
+        }
+        let buffers = [&self.items, &self.nodes, &self.primitives, &self.instance_buffer];
+        self.bind_group = shading_bind_group(ctx, self.label, &self.bind_group_layout, buffers, self.clusters.as_ref());
+        Ok(false)
     }
 
     /// Records this frame's builds for time `time` (seconds): the groups rebuilt on the GPU, then the
@@ -329,6 +414,33 @@ impl VolumeStructure {
         self.built_for = Some(time);
         Ok(())
     }
+}
+
+/// The bind group shading reads (`shading/*_bindings.wgsl`): items, nodes, primitives and instances,
+/// then the clustered lists' ranges and entries, or placeholders without them.
+fn shading_bind_group(
+    ctx: &GpuContext,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: [&wgpu::Buffer; 4],
+    clusters: Option<&ClusterLists>,
+) -> wgpu::BindGroup {
+    let placeholder;
+    let (ranges, entries) = match clusters {
+        Some(c) => (&c.ranges, &c.entries),
+        None => {
+            placeholder = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("no cluster lists"),
+                size: 16,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            });
+            (&placeholder, &placeholder)
+        }
+    };
+    let mut resources: Vec<wgpu::BindingResource> = buffers.iter().map(|b| b.as_entire_binding()).collect();
+    resources.extend([ranges.as_entire_binding(), entries.as_entire_binding()]);
+    bindings::bind_group(&ctx.device, label, layout, resources)
 }
 
 /// Moves a CPU-built BVH into the shared arrays: node links by `node_base` (the last node's [`END`](super::END)

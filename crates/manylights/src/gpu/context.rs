@@ -10,8 +10,8 @@ use std::sync::{Arc, Mutex};
 use crate::{Error, Result};
 
 /// Storage buffers the shading passes bind at once: the scene's four, the lights' and the decals'
-/// four each (`shading/*_bindings.wgsl`).
-const REQUIRED_STORAGE_BUFFERS: u32 = 12;
+/// six each (`shading/*_bindings.wgsl`).
+const REQUIRED_STORAGE_BUFFERS: u32 = 16;
 /// Features the renderer uses when the adapter has them; none is required. `primitive_index` lets the
 /// visibility raster draw indexed.
 const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::PRIMITIVE_INDEX);

@@ -1,6 +1,10 @@
 //! Per-frame constants: camera matrices, viewport, sun, ambient and the tonemapper.
 
-use crate::{config::Tonemapper, scene::Camera};
+use crate::{
+    accel::clusters::ClusterGrid,
+    config::Tonemapper,
+    scene::{Aabb, Camera},
+};
 
 /// Keep in sync with `FrameUniforms` in `shading/types.wgsl`.
 #[repr(C)]
@@ -18,23 +22,30 @@ pub struct FrameUniforms {
     pub exposure: f32,
     pub tonemapper: u32,
     pub decal_instance_count: u32,
+    /// The clustered method's froxel grid (`accel/cluster_grid.wgsl`): tile columns, rows, depth
+    /// slices, tile size in pixels.
+    pub cluster_grid: [u32; 4],
+    /// Its depth slicing: near plane, slices per doubling of view depth.
+    pub cluster_depth: [f32; 4],
 }
 
-/// The scene-wide lighting a frame needs, kept by `GpuScene` from the CPU scene.
+/// What a frame needs of the scene besides its buffers, kept by `GpuScene` from the CPU scene.
 #[derive(Clone, Copy, Debug)]
-pub struct SceneLighting {
+pub struct SceneConstants {
     pub sun: Option<crate::scene::Sun>,
     pub ambient: glam::Vec3,
     pub exposure: f32,
+    /// Bounds of the geometry: the clustered grid's depth slices end at its far side.
+    pub bounds: Aabb,
 }
 
 impl FrameUniforms {
-    pub fn new(camera: &Camera, width: u32, height: u32, lighting: &SceneLighting, tonemapper: Tonemapper) -> Self {
+    pub fn new(camera: &Camera, width: u32, height: u32, scene: &SceneConstants, tonemapper: Tonemapper) -> Self {
         let clip_from_view = camera.clip_from_view(width as f32 / height as f32);
         let clip_from_world = clip_from_view * camera.world_from_view.inverse();
         // Invert in f64: reverse-Z projections lose visible precision when inverted in f32.
         let view_from_clip = clip_from_view.as_dmat4().inverse().as_mat4();
-        let (sun_direction, sun_radiance) = match lighting.sun {
+        let (sun_direction, sun_radiance) = match scene.sun {
             Some(sun) => (sun.direction.normalize().extend(1.0), (sun.color * sun.illuminance).extend(0.0)),
             None => (glam::Vec4::ZERO, glam::Vec4::ZERO),
         };
@@ -45,11 +56,13 @@ impl FrameUniforms {
             viewport: [width as f32, height as f32, 1.0 / width as f32, 1.0 / height as f32],
             sun_direction: sun_direction.to_array(),
             sun_radiance: sun_radiance.to_array(),
-            ambient: lighting.ambient.extend(0.0).to_array(),
+            ambient: scene.ambient.extend(0.0).to_array(),
             light_instance_count: 0,
-            exposure: lighting.exposure,
+            exposure: scene.exposure,
             tonemapper: tonemapper as u32,
             decal_instance_count: 0,
+            cluster_grid: ClusterGrid::for_resolution(width, height).uniform(),
+            cluster_depth: ClusterGrid::depth_slicing(camera, &scene.bounds),
         }
     }
 }

@@ -8,7 +8,7 @@ use wgpu::util::DeviceExt;
 
 use super::{
     bindings,
-    frame::SceneLighting,
+    frame::SceneConstants,
     textures::{TextureArray, TextureSpace},
     FrameUniforms, GpuContext,
 };
@@ -162,7 +162,7 @@ pub struct GpuScene {
     pub bind_group: wgpu::BindGroup,
     pub frame_uniforms: wgpu::Buffer,
     pub draw_commands: Vec<DrawCommand>,
-    pub lighting: SceneLighting,
+    pub constants: SceneConstants,
     pub triangle_count: u64,
     /// The scene's indices, also bound as storage: the raster pass draws indexed from it.
     pub index_buffer: wgpu::Buffer,
@@ -303,7 +303,7 @@ impl GpuScene {
             bind_group,
             frame_uniforms,
             draw_commands,
-            lighting: SceneLighting { sun: scene.sun, ambient: scene.ambient, exposure: scene.exposure },
+            constants: SceneConstants { sun: scene.sun, ambient: scene.ambient, exposure: scene.exposure, bounds: scene.bounds() },
             triangle_count: scene.drawn_triangle_count() as u64,
             index_buffer,
         })
@@ -476,7 +476,9 @@ mod tests {
                 light_instance_count,
                 exposure,
                 tonemapper,
-                decal_instance_count
+                decal_instance_count,
+                cluster_grid,
+                cluster_depth
             ]
         );
     }

@@ -25,6 +25,13 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/enumerate/lights_bvh.wgsl", include_str!("../shading/enumerate/lights_bvh.wgsl")),
     ("shading/enumerate/decals_brute.wgsl", include_str!("../shading/enumerate/decals_brute.wgsl")),
     ("shading/enumerate/decals_bvh.wgsl", include_str!("../shading/enumerate/decals_bvh.wgsl")),
+    ("shading/enumerate/lights_off.wgsl", include_str!("../shading/enumerate/lights_off.wgsl")),
+    ("shading/enumerate/decals_off.wgsl", include_str!("../shading/enumerate/decals_off.wgsl")),
+    ("shading/enumerate/lights_clustered.wgsl", include_str!("../shading/enumerate/lights_clustered.wgsl")),
+    ("shading/enumerate/decals_clustered.wgsl", include_str!("../shading/enumerate/decals_clustered.wgsl")),
+    ("accel/cluster_grid.wgsl", include_str!("../accel/cluster_grid.wgsl")),
+    ("accel/cluster_build.wgsl", include_str!("../accel/cluster_build.wgsl")),
+    ("accel/workgroup_scan.wgsl", include_str!("../accel/workgroup_scan.wgsl")),
     ("accel/volume_query.wgsl", include_str!("../accel/volume_query.wgsl")),
     ("accel/bvh_types.wgsl", include_str!("../accel/bvh_types.wgsl")),
     ("shading/camera.wgsl", include_str!("../shading/camera.wgsl")),
@@ -42,6 +49,8 @@ const SOURCES: &[(&str, &str)] = &[
     ("passes/gbuffer.wgsl", include_str!("../passes/gbuffer.wgsl")),
     ("passes/gbuffer_raster.wgsl", include_str!("../passes/gbuffer_raster.wgsl")),
     ("passes/deferred_shade.wgsl", include_str!("../passes/deferred_shade.wgsl")),
+    ("passes/gbuffer_surface.wgsl", include_str!("../passes/gbuffer_surface.wgsl")),
+    ("passes/deferred_decals.wgsl", include_str!("../passes/deferred_decals.wgsl")),
 ];
 
 /// A shader to build: an entry file and the values of its `$NAME` includes.
@@ -162,13 +171,20 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("accel/volume_query_probe.wgsl"),
         ShaderDesc::new("accel/lbvh.wgsl"),
         ShaderDesc::new("accel/radix_sort.wgsl"),
+        ShaderDesc::new("accel/cluster_build.wgsl"),
+        ShaderDesc::new("passes/deferred_decals.wgsl"),
         ShaderDesc::new("passes/depth_prepass.wgsl"),
         ShaderDesc::new("passes/gbuffer_raster.wgsl"),
     ];
-    for lights in crate::pipelines::LightMethod::ALL {
-        for decals in crate::pipelines::DecalMethod::ALL {
-            shaders.push(crate::passes::visbuffer_shade::shader(lights, decals));
-            shaders.push(crate::passes::forward_shade::shader(lights, decals));
+    use crate::pipelines::{DecalMethod, LightMethod, PipelineKind};
+    for lights in LightMethod::ALL {
+        for decals in DecalMethod::ALL {
+            if decals.works_in(PipelineKind::Visbuffer) {
+                shaders.push(crate::passes::visbuffer_shade::shader(lights, decals));
+            }
+            if decals.works_in(PipelineKind::Forward) {
+                shaders.push(crate::passes::forward_shade::shader(lights, decals));
+            }
             shaders.push(crate::passes::deferred_shade::shader(lights, decals));
         }
     }

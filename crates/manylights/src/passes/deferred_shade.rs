@@ -4,7 +4,7 @@
 use crate::accel::VolumeStructure;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::passes::visbuffer_shade::HDR_FORMAT;
-use crate::pipelines::{DecalMethod, LightMethod};
+use crate::pipelines::{DecalMethod, FrameInputs, LightMethod};
 use crate::Result;
 
 /// The shader for a pair of enumeration methods.
@@ -17,8 +17,6 @@ pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
 pub struct DeferredShade {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
-    lights: wgpu::BindGroup,
-    decals: wgpu::BindGroup,
 }
 
 impl DeferredShade {
@@ -41,10 +39,10 @@ impl DeferredShade {
             "deferred_shade",
             &[
                 texture(0, wgpu::TextureSampleType::Depth),
-                texture(1, float),                         // albedo
-                texture(2, wgpu::TextureSampleType::Uint), // normal
-                texture(3, float),                         // roughness, metallic
-                texture(4, float),                         // emission
+                texture(1, float), // albedo
+                texture(2, float), // normal
+                texture(3, float), // roughness, metallic
+                texture(4, float), // emission
                 bindings::storage_texture_write(5, compute, HDR_FORMAT),
             ],
         );
@@ -54,19 +52,25 @@ impl DeferredShade {
         views.extend(gbuffer.iter().map(wgpu::BindingResource::TextureView));
         views.push(wgpu::BindingResource::TextureView(hdr));
         let bind_group = bindings::bind_group(device, "deferred_shade", &layout, views);
-        Ok(Self { pipeline, bind_group, lights: lights.bind_group.clone(), decals: decals.bind_group.clone() })
+        Ok(Self { pipeline, bind_group })
     }
 
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, width: u32, height: u32) {
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&mut GpuTimer>,
+        inputs: &FrameInputs,
+        (width, height): (u32, u32),
+    ) {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("deferred_shade"),
             timestamp_writes: timer.map(|t| t.compute_pass("deferred_shade")),
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &scene.bind_group, &[]);
+        pass.set_bind_group(0, &inputs.scene.bind_group, &[]);
         pass.set_bind_group(1, &self.bind_group, &[]);
-        pass.set_bind_group(2, &self.lights, &[]);
-        pass.set_bind_group(3, &self.decals, &[]);
+        pass.set_bind_group(2, &inputs.lights.bind_group, &[]);
+        pass.set_bind_group(3, &inputs.decals.bind_group, &[]);
         let (x, y) = super::dispatch_size(width, height);
         pass.dispatch_workgroups(x, y, 1);
     }

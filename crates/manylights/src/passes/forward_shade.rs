@@ -9,7 +9,7 @@ use super::{visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
 use crate::accel::VolumeStructure;
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
-use crate::pipelines::{DecalMethod, LightMethod};
+use crate::pipelines::{DecalMethod, FrameInputs, LightMethod};
 use crate::Result;
 
 /// The shader for a pair of enumeration methods.
@@ -24,8 +24,6 @@ pub struct ForwardShade {
     sky: wgpu::RenderPipeline,
     /// Group 1, empty: the shading core's light and decal bindings are groups 2 and 3 everywhere.
     empty: wgpu::BindGroup,
-    lights: wgpu::BindGroup,
-    decals: wgpu::BindGroup,
 }
 
 impl ForwardShade {
@@ -83,15 +81,14 @@ impl ForwardShade {
             .collect();
         let sky = pipeline("forward_sky", "forward_sky_vertex", "forward_sky", wgpu::PrimitiveState::default());
         let empty = bindings::bind_group(device, "forward_shade (unused)", &empty, Vec::new());
-        Ok(Self { pipelines, sky, empty, lights: lights.bind_group.clone(), decals: decals.bind_group.clone() })
+        Ok(Self { pipelines, sky, empty })
     }
 
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&mut GpuTimer>,
-        scene: &GpuScene,
-        eye: glam::Vec3,
+        inputs: &FrameInputs,
         (hdr, depth): (&wgpu::TextureView, &wgpu::TextureView),
     ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -113,9 +110,9 @@ impl ForwardShade {
             multiview_mask: None,
         });
         pass.set_bind_group(1, &self.empty, &[]);
-        pass.set_bind_group(2, &self.lights, &[]);
-        pass.set_bind_group(3, &self.decals, &[]);
-        super::draw_scene(&mut pass, scene, eye, &self.pipelines);
+        pass.set_bind_group(2, &inputs.lights.bind_group, &[]);
+        pass.set_bind_group(3, &inputs.decals.bind_group, &[]);
+        super::draw_scene(&mut pass, inputs.scene, inputs.eye, &self.pipelines);
         pass.set_pipeline(&self.sky);
         pass.draw(0..3, 0..1);
     }

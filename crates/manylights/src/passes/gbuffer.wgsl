@@ -1,11 +1,12 @@
 // The deferred pipeline's G-buffer, written by `gbuffer_raster` and read by `deferred_shade`. The
 // paper's 112 bits a pixel, plus emission, which glTF materials have and the paper's scenes did not:
 //   albedo              Rgba8UnormSrgb   base colour (alpha unused)
-//   normal              R32Uint          octahedral shading normal, two 16-bit snorm halves
+//   normal              Rg16Float        octahedral shading normal (blendable, for deferred decals)
 //   roughness_metallic  Rg8Unorm         perceptual roughness, metallic
 //   depth               Depth32Float     (the frame's depth target)
 //   emission            Rgba16Float      emitted radiance (not touched by decals)
-// The surface is stored before decals: `deferred_shade` applies them, so bvh decals work here too.
+// The surface is stored before decals: `deferred_shade` applies them, so bvh decals work here too;
+// deferred decals (`deferred_decals.wgsl`) blend into albedo, normal and roughness-metallic instead.
 
 // Octahedral encoding of a unit vector into [-1, 1]² (Cigolle et al. 2014).
 fn octahedral_encode(n: vec3<f32>) -> vec2<f32> {
@@ -23,10 +24,10 @@ fn octahedral_decode(e: vec2<f32>) -> vec3<f32> {
     return normalize(n);
 }
 
-fn gbuffer_encode_normal(n: vec3<f32>) -> u32 {
-    return pack2x16snorm(octahedral_encode(n));
+fn gbuffer_encode_normal(n: vec3<f32>) -> vec4<f32> {
+    return vec4<f32>(octahedral_encode(n), 0.0, 0.0);
 }
 
-fn gbuffer_decode_normal(bits: u32) -> vec3<f32> {
-    return octahedral_decode(unpack2x16snorm(bits));
+fn gbuffer_decode_normal(texel: vec4<f32>) -> vec3<f32> {
+    return octahedral_decode(texel.xy);
 }

@@ -10,7 +10,7 @@ use crate::Result;
 
 /// Keep in sync with `gbuffer.wgsl`: albedo, normal, roughness-metallic, emission.
 pub const GBUFFER_FORMATS: [wgpu::TextureFormat; 4] =
-    [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::R32Uint, wgpu::TextureFormat::Rg8Unorm, wgpu::TextureFormat::Rgba16Float];
+    [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::Rg16Float, wgpu::TextureFormat::Rg8Unorm, wgpu::TextureFormat::Rgba16Float];
 
 pub struct GBufferRaster {
     pipelines: HashMap<RasterState, wgpu::RenderPipeline>,

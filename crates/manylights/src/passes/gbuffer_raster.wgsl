@@ -6,7 +6,7 @@
 
 struct GBufferTexel {
     @location(0) albedo: vec4<f32>,
-    @location(1) normal: u32,
+    @location(1) normal: vec4<f32>,
     @location(2) roughness_metallic: vec4<f32>,
     @location(3) emission: vec4<f32>,
 }

@@ -6,6 +6,7 @@ use std::collections::HashMap;
 
 use crate::gpu::{scene::RasterState, GpuScene};
 
+pub mod deferred_decals;
 pub mod deferred_shade;
 pub mod depth_prepass;
 pub mod forward_shade;

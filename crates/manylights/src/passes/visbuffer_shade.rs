@@ -2,7 +2,7 @@
 
 use crate::accel::VolumeStructure;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
-use crate::pipelines::{DecalMethod, LightMethod};
+use crate::pipelines::{DecalMethod, FrameInputs, LightMethod};
 use crate::Result;
 
 /// f32 rather than f16: methods are compared in linear HDR to 1e-3, finer than f16 steps above 1.
@@ -18,8 +18,6 @@ pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
 pub struct VisbufferShade {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
-    lights: wgpu::BindGroup,
-    decals: wgpu::BindGroup,
 }
 
 impl VisbufferShade {
@@ -57,19 +55,25 @@ impl VisbufferShade {
                 wgpu::BindingResource::TextureView(depth),
             ],
         );
-        Ok(Self { pipeline, bind_group, lights: lights.bind_group.clone(), decals: decals.bind_group.clone() })
+        Ok(Self { pipeline, bind_group })
     }
 
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, width: u32, height: u32) {
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&mut GpuTimer>,
+        inputs: &FrameInputs,
+        (width, height): (u32, u32),
+    ) {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("visbuffer_shade"),
             timestamp_writes: timer.map(|t| t.compute_pass("visbuffer_shade")),
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &scene.bind_group, &[]);
+        pass.set_bind_group(0, &inputs.scene.bind_group, &[]);
         pass.set_bind_group(1, &self.bind_group, &[]);
-        pass.set_bind_group(2, &self.lights, &[]);
-        pass.set_bind_group(3, &self.decals, &[]);
+        pass.set_bind_group(2, &inputs.lights.bind_group, &[]);
+        pass.set_bind_group(3, &inputs.decals.bind_group, &[]);
         let (x, y) = super::dispatch_size(width, height);
         pass.dispatch_workgroups(x, y, 1);
     }

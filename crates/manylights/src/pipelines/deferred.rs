@@ -1,12 +1,15 @@
 //! The deferred frame: surfaces and materials rasterised into a G-buffer (about the paper's 112 bits a
 //! pixel, `passes/gbuffer.wgsl`), then decals and lights applied per pixel in compute by the same
-//! shading core as the other pipelines, then tonemapping.
+//! shading core as the other pipelines, then tonemapping. With `--decal-method deferred-decals`, the
+//! decals' boxes are rasterised into the G-buffer before lighting instead (Kim 2012).
 //!
 //! ```text
-//! light / decal structures ─▶ (tlas/blas builds, when groups move or change)
+//! light / decal structures ─▶ (tlas/blas builds, when groups move or change; clustered lists)
 //! GpuScene ─▶ gbuffer_raster ─▶ albedo, normal, roughness-metallic, emission (not cleared)
 //!                               + depth (cleared to 0)
 //!                                   │
+//!                                   ├─▶ (deferred decals only) copy normals ─▶ deferred_decals:
+//!                                   │     decal boxes blended into albedo, normal, roughness-metallic
 //!                                   ▼
 //!             deferred_shade (decals, lights) ─▶ hdr (Rgba32Float)
 //!                                   │
@@ -17,12 +20,13 @@
 use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
+    deferred_decals::DeferredDecals,
     deferred_shade::DeferredShade,
     gbuffer_raster::{GBufferRaster, GBUFFER_FORMATS},
     tonemap::Tonemap,
 };
 use crate::{
-    pipelines::{DecalMethod, FrameTargets, LightMethod},
+    pipelines::{DecalMethod, FrameInputs, FrameTargets, LightMethod},
     Result,
 };
 
@@ -31,6 +35,8 @@ pub struct DeferredPipeline {
     gbuffer: [wgpu::TextureView; 4],
     depth_view: wgpu::TextureView,
     raster: GBufferRaster,
+    /// With deferred decals: the pass, the G-buffer's normals and the copy of them the pass reads.
+    decals: Option<(DeferredDecals, wgpu::Texture, wgpu::Texture)>,
     shade: DeferredShade,
     tonemap: Tonemap,
 }
@@ -46,12 +52,31 @@ impl DeferredPipeline {
     ) -> Result<Self> {
         let targets = FrameTargets::new(&ctx.device, width, height);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        use wgpu::TextureUsages as U;
         let labels = ["gbuffer albedo", "gbuffer normal", "gbuffer roughness-metallic", "gbuffer emission"];
-        let gbuffer = std::array::from_fn(|i| view(&super::target(&ctx.device, labels[i], width, height, GBUFFER_FORMATS[i], usage)));
+        let textures: [wgpu::Texture; 4] = std::array::from_fn(|i| {
+            super::target(
+                &ctx.device,
+                labels[i],
+                width,
+                height,
+                GBUFFER_FORMATS[i],
+                U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
+            )
+        });
+        let gbuffer = textures.each_ref().map(view);
         let (depth_view, hdr_view, ldr_view) = (view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
+        let decals = match methods.1 {
+            DecalMethod::DeferredDecals => {
+                let copy =
+                    super::target(&ctx.device, "surface normals", width, height, GBUFFER_FORMATS[1], U::COPY_DST | U::TEXTURE_BINDING);
+                Some((DeferredDecals::new(ctx, scene, structures.1, &depth_view, &view(&copy))?, textures[1].clone(), copy))
+            }
+            _ => None,
+        };
         Ok(Self {
             raster: GBufferRaster::new(ctx, scene)?,
+            decals,
             shade: DeferredShade::new(ctx, scene, methods, structures, (&depth_view, &gbuffer), &hdr_view)?,
             tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
             targets,
@@ -60,11 +85,15 @@ impl DeferredPipeline {
         })
     }
 
-    /// Records one frame seen from `eye`. The frame uniforms must already be written.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, scene: &GpuScene, eye: glam::Vec3) {
+    /// Records one frame. The frame uniforms must already be written.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         let (width, height) = (self.targets.width, self.targets.height);
-        self.raster.record(encoder, timer.as_deref_mut(), scene, eye, &self.gbuffer, &self.depth_view);
-        self.shade.record(encoder, timer.as_deref_mut(), scene, width, height);
+        self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.gbuffer, &self.depth_view);
+        if let Some((decals, normals, copy)) = &self.decals {
+            encoder.copy_texture_to_texture(normals.as_image_copy(), copy.as_image_copy(), normals.size());
+            decals.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.decals, &self.gbuffer);
+        }
+        self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
         self.tonemap.record(encoder, timer, width, height);
     }
 }

@@ -19,7 +19,7 @@ use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{depth_prepass::DepthPrepass, forward_shade::ForwardShade, tonemap::Tonemap};
 use crate::{
-    pipelines::{DecalMethod, FrameTargets, LightMethod},
+    pipelines::{DecalMethod, FrameInputs, FrameTargets, LightMethod},
     Result,
 };
 
@@ -54,10 +54,10 @@ impl ForwardPipeline {
         })
     }
 
-    /// Records one frame seen from `eye`. The frame uniforms must already be written.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, scene: &GpuScene, eye: glam::Vec3) {
-        self.prepass.record(encoder, timer.as_deref_mut(), scene, eye, &self.depth_view);
-        self.shade.record(encoder, timer.as_deref_mut(), scene, eye, (&self.hdr_view, &self.depth_view));
+    /// Records one frame. The frame uniforms must already be written.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
+        self.prepass.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.depth_view);
+        self.shade.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
         self.tonemap.record(encoder, timer, self.targets.width, self.targets.height);
     }
 }

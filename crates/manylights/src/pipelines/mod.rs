@@ -64,12 +64,12 @@ impl FramePipeline {
         })
     }
 
-    /// Records one frame seen from `eye`. The frame uniforms must already be written.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, eye: glam::Vec3) {
+    /// Records one frame. The frame uniforms must already be written.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         match self {
-            Self::Visbuffer(p) => p.record(encoder, timer, scene, eye),
-            Self::Deferred(p) => p.record(encoder, timer, scene, eye),
-            Self::Forward(p) => p.record(encoder, timer, scene, eye),
+            Self::Visbuffer(p) => p.record(encoder, timer, inputs),
+            Self::Deferred(p) => p.record(encoder, timer, inputs),
+            Self::Forward(p) => p.record(encoder, timer, inputs),
         }
     }
 
@@ -80,6 +80,16 @@ impl FramePipeline {
             Self::Forward(p) => &p.targets,
         }
     }
+}
+
+/// What a frame reads besides its pipeline's own images: the scene, the light and decal structures
+/// (bound as groups 2 and 3 by the shading passes), and the eye, which orders draws front to back.
+#[derive(Clone, Copy)]
+pub struct FrameInputs<'a> {
+    pub scene: &'a GpuScene,
+    pub lights: &'a VolumeStructure,
+    pub decals: &'a VolumeStructure,
+    pub eye: glam::Vec3,
 }
 
 /// The images every pipeline writes; `hdr` and `ldr` can be read back.
@@ -135,28 +145,36 @@ fn target(
 /// How the shading core finds the local lights that reach a point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub enum LightMethod {
+    /// No local lights: the baseline the others are measured against.
+    Off,
     /// Loop over every light.
     #[default]
     Brute,
     /// Point queries in a BVH over the lights' volumes (`accel`).
     Bvh,
+    /// Per-froxel lists built every frame (`accel/clusters.rs`); view frustum only.
+    Clustered,
 }
 
 impl LightMethod {
-    pub const ALL: [LightMethod; 2] = [LightMethod::Brute, LightMethod::Bvh];
+    pub const ALL: [LightMethod; 4] = [LightMethod::Off, LightMethod::Brute, LightMethod::Bvh, LightMethod::Clustered];
 
     /// The WGSL module that defines `shade_local_lights` for this method.
     pub fn enumeration_module(self) -> &'static str {
         match self {
+            LightMethod::Off => "shading/enumerate/lights_off.wgsl",
             LightMethod::Brute => "shading/enumerate/lights_brute.wgsl",
             LightMethod::Bvh => "shading/enumerate/lights_bvh.wgsl",
+            LightMethod::Clustered => "shading/enumerate/lights_clustered.wgsl",
         }
     }
 
     pub fn name(self) -> &'static str {
         match self {
+            LightMethod::Off => "off",
             LightMethod::Brute => "brute",
             LightMethod::Bvh => "bvh",
+            LightMethod::Clustered => "clustered",
         }
     }
 }
@@ -164,28 +182,47 @@ impl LightMethod {
 /// How the shading core finds the decals that cover a point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub enum DecalMethod {
+    /// No decals: the baseline the others are measured against.
+    Off,
     /// Loop over every decal.
     #[default]
     Brute,
     /// Point queries in a BVH over the decals' boxes (`accel`).
     Bvh,
+    /// Per-froxel lists built every frame (`accel/clusters.rs`); view frustum only.
+    Clustered,
+    /// Decal boxes rasterised into the G-buffer before lighting (Kim 2012); deferred pipeline only.
+    DeferredDecals,
 }
 
 impl DecalMethod {
-    pub const ALL: [DecalMethod; 2] = [DecalMethod::Brute, DecalMethod::Bvh];
+    pub const ALL: [DecalMethod; 5] =
+        [DecalMethod::Off, DecalMethod::Brute, DecalMethod::Bvh, DecalMethod::Clustered, DecalMethod::DeferredDecals];
+
+    /// Whether `pipeline` can apply decals this way: deferred decals need a G-buffer to blend into.
+    pub fn works_in(self, pipeline: PipelineKind) -> bool {
+        self != DecalMethod::DeferredDecals || pipeline == PipelineKind::Deferred
+    }
 
     /// The WGSL module that defines `apply_decals` for this method.
     pub fn enumeration_module(self) -> &'static str {
         match self {
+            DecalMethod::Off => "shading/enumerate/decals_off.wgsl",
             DecalMethod::Brute => "shading/enumerate/decals_brute.wgsl",
             DecalMethod::Bvh => "shading/enumerate/decals_bvh.wgsl",
+            DecalMethod::Clustered => "shading/enumerate/decals_clustered.wgsl",
+            // Already blended into the G-buffer when shading runs.
+            DecalMethod::DeferredDecals => "shading/enumerate/decals_off.wgsl",
         }
     }
 
     pub fn name(self) -> &'static str {
         match self {
+            DecalMethod::Off => "off",
             DecalMethod::Brute => "brute",
             DecalMethod::Bvh => "bvh",
+            DecalMethod::Clustered => "clustered",
+            DecalMethod::DeferredDecals => "deferred-decals",
         }
     }
 }

@@ -21,7 +21,7 @@ use crate::passes::{
     visbuffer_shade::VisbufferShade,
 };
 use crate::{
-    pipelines::{DecalMethod, FrameTargets, LightMethod},
+    pipelines::{DecalMethod, FrameInputs, FrameTargets, LightMethod},
     Result,
 };
 
@@ -59,11 +59,11 @@ impl VisbufferPipeline {
         })
     }
 
-    /// Records one frame seen from `eye`. The frame uniforms must already be written.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, scene: &GpuScene, eye: glam::Vec3) {
+    /// Records one frame. The frame uniforms must already be written.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         let (width, height) = (self.targets.width, self.targets.height);
-        self.raster.record(encoder, timer.as_deref_mut(), scene, eye, &self.visibility_view, &self.depth_view);
-        self.shade.record(encoder, timer.as_deref_mut(), scene, width, height);
+        self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.visibility_view, &self.depth_view);
+        self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
         self.tonemap.record(encoder, timer, width, height);
     }
 }

@@ -7,3 +7,7 @@
 @group(2) @binding(1) var<storage, read> light_nodes: array<BvhNode>;
 @group(2) @binding(2) var<storage, read> light_primitives: array<u32>;
 @group(2) @binding(3) var<storage, read> light_instances: array<VolumeInstance>;
+// The clustered method's lists (`accel/clusters.rs`), rebuilt every frame: per froxel the range of
+// its entries, and the entries as (instance, light) pairs. One-element placeholders for other methods.
+@group(2) @binding(4) var<storage, read> light_cluster_ranges: array<vec2<u32>>;
+@group(2) @binding(5) var<storage, read> light_cluster_entries: array<vec2<u32>>;

@@ -1,5 +1,5 @@
-// The surface every pipeline hands to the shading core: built by the visibility-buffer resolve today,
-// and by G-buffer decode and forward fragments later. Decals modify it before `shade`.
+// The surface every pipeline hands to the shading core: built by the visibility-buffer resolve, the
+// G-buffer decode and forward fragments. Decals modify it before `shade`.
 
 struct ShadingInput {
     position: vec3<f32>,

@@ -104,4 +104,9 @@ struct FrameUniforms {
     exposure: f32,
     tonemapper: u32,
     decal_instance_count: u32,
+    // The clustered method's froxel grid (`accel/cluster_grid.wgsl`): tile columns, rows, depth
+    // slices, tile size in pixels.
+    cluster_grid: vec4<u32>,
+    // x: near plane of the depth slicing; y: slices per doubling of view depth.
+    cluster_depth: vec4<f32>,
 }

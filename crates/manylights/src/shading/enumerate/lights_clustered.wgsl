@@ -1,0 +1,27 @@
+// Light enumeration through clustered shading (Olsson, Billeter & Assarsson 2012): the lights listed
+// for the shading point's froxel (`accel/cluster_grid.wgsl`), built this frame on the GPU
+// (`accel/cluster_build.wgsl`); each gets the tight test inside `light_contribution`, so the result
+// equals the brute-force loop's for every point in the view frustum. Points outside it (a
+// reflection's hit point) find a froxel that does not list their lights: the method's limit.
+#include "shading/light_bindings.wgsl"
+#include "shading/lights.wgsl"
+#include "accel/cluster_grid.wgsl"
+
+fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
+    var radiance = vec3<f32>(0.0);
+    var local = s;
+    var falloff = 1.0;
+    var entered = 0xffffffffu;
+    let range = light_cluster_ranges[cluster_of(s.position)];
+    for (var i = range.x; i < range.x + range.y; i += 1u) {
+        let entry = light_cluster_entries[i];
+        if entry.x != entered {
+            entered = entry.x;
+            let instance = light_instances[entry.x];
+            local = shading_input_in_group(s, instance);
+            falloff = 1.0 / (instance.scale * instance.scale);
+        }
+        radiance += light_contribution(lights[entry.y], local) * falloff;
+    }
+    return radiance;
+}
