@@ -12,9 +12,11 @@ use crate::{Error, Result};
 /// Storage buffers the shading passes bind at once: the scene's four, the lights' and the decals'
 /// six each (`shading/*_bindings.wgsl`).
 const REQUIRED_STORAGE_BUFFERS: u32 = 16;
-/// Features the renderer uses when the adapter has them; none is required. `primitive_index` lets the
-/// visibility raster draw indexed.
-const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::PRIMITIVE_INDEX);
+/// Features the renderer uses when the adapter has them; none is required by every scene.
+/// `primitive_index` lets the visibility raster draw indexed; `float32_blendable` lets transparent
+/// surfaces blend into the f32 HDR image (scenes with them need it).
+const OPTIONAL_FEATURES: wgpu::Features =
+    wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::PRIMITIVE_INDEX).union(wgpu::Features::FLOAT32_BLENDABLE);
 
 pub struct GpuContext {
     pub adapter: wgpu::Adapter,

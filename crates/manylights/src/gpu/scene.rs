@@ -161,7 +161,10 @@ pub struct GpuScene {
     pub bind_group_layout: wgpu::BindGroupLayout,
     pub bind_group: wgpu::BindGroup,
     pub frame_uniforms: wgpu::Buffer,
+    /// Opaque and alpha-masked draws: the raster passes' and the visibility buffer's.
     pub draw_commands: Vec<DrawCommand>,
+    /// Alpha-blended draws (glTF BLEND): drawn after shading by `passes::transparent_shade`.
+    pub transparent_draw_commands: Vec<DrawCommand>,
     pub constants: SceneConstants,
     pub triangle_count: u64,
     /// The scene's indices, also bound as storage: the raster pass draws indexed from it.
@@ -169,12 +172,22 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    /// The draws in the order raster passes submit them: opaque before alpha-masked (whose discard
-    /// defeats early depth tests), each front to back from `eye`. Raster passes on our benchmark GPUs
-    /// are bound by fragment work, and early-Z rejects what nearer draws hide.
+    /// The opaque draws in the order raster passes submit them: opaque before alpha-masked (whose
+    /// discard defeats early depth tests), each front to back from `eye`. Raster passes on our
+    /// benchmark GPUs are bound by fragment work, and early-Z rejects what nearer draws hide.
     pub fn draw_order(&self, eye: glam::Vec3) -> Vec<&DrawCommand> {
         let mut order: Vec<&DrawCommand> = self.draw_commands.iter().collect();
         order.sort_by(|a, b| a.state.cmp(&b.state).then(a.center.distance_squared(eye).total_cmp(&b.center.distance_squared(eye))));
+        order
+    }
+
+    /// The alpha-blended draws back to front from `eye` (by the centres of their bounds), so each
+    /// blends over what lies behind it. Triangles within a draw keep their order.
+    pub fn transparent_order(&self, eye: glam::Vec3) -> Vec<&DrawCommand> {
+        let mut order: Vec<&DrawCommand> = self.transparent_draw_commands.iter().collect();
+        order.sort_by(|a, b| {
+            b.center.distance_squared(eye).total_cmp(&a.center.distance_squared(eye)).then(a.draw_index.cmp(&b.draw_index))
+        });
         order
     }
 
@@ -211,6 +224,7 @@ impl GpuScene {
 
         let mut draws = Vec::new();
         let mut draw_commands = Vec::new();
+        let mut transparent_draw_commands = Vec::new();
         // Visibility ids number the drawn triangles from 0 (the background is told by depth).
         let mut next_visibility_id = 0u64;
         for instance in &scene.instances {
@@ -221,7 +235,8 @@ impl GpuScene {
             let mesh = &scene.meshes[instance.mesh];
             for (primitive, &(first_index, index_count, base_vertex)) in mesh.primitives.iter().zip(&primitive_ranges[instance.mesh]) {
                 let material = &scene.materials[primitive.material];
-                draw_commands.push(DrawCommand {
+                let commands = if material.alpha_mode == AlphaMode::Blend { &mut transparent_draw_commands } else { &mut draw_commands };
+                commands.push(DrawCommand {
                     draw_index: draws.len() as u32,
                     first_index,
                     index_count,
@@ -303,6 +318,7 @@ impl GpuScene {
             bind_group,
             frame_uniforms,
             draw_commands,
+            transparent_draw_commands,
             constants: SceneConstants { sun: scene.sun, ambient: scene.ambient, exposure: scene.exposure, bounds: scene.bounds() },
             triangle_count: scene.drawn_triangle_count() as u64,
             index_buffer,

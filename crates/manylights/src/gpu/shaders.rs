@@ -51,6 +51,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("passes/deferred_shade.wgsl", include_str!("../passes/deferred_shade.wgsl")),
     ("passes/gbuffer_surface.wgsl", include_str!("../passes/gbuffer_surface.wgsl")),
     ("passes/deferred_decals.wgsl", include_str!("../passes/deferred_decals.wgsl")),
+    ("passes/transparent_shade.wgsl", include_str!("../passes/transparent_shade.wgsl")),
 ];
 
 /// A shader to build: an entry file and the values of its `$NAME` includes.
@@ -186,6 +187,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                 shaders.push(crate::passes::forward_shade::shader(lights, decals));
             }
             shaders.push(crate::passes::deferred_shade::shader(lights, decals));
+            shaders.push(crate::passes::transparent_shade::shader(lights, decals));
         }
     }
     shaders

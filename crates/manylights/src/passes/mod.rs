@@ -4,7 +4,10 @@
 
 use std::collections::HashMap;
 
-use crate::gpu::{scene::RasterState, GpuScene};
+use crate::gpu::{
+    scene::{DrawCommand, RasterState},
+    GpuScene,
+};
 
 pub mod deferred_decals;
 pub mod deferred_shade;
@@ -12,6 +15,7 @@ pub mod depth_prepass;
 pub mod forward_shade;
 pub mod gbuffer_raster;
 pub mod tonemap;
+pub mod transparent_shade;
 pub mod visbuffer_raster;
 pub mod visbuffer_shade;
 
@@ -22,13 +26,24 @@ pub fn dispatch_size(width: u32, height: u32) -> (u32, u32) {
     (width.div_ceil(TILE), height.div_ceil(TILE))
 }
 
-/// Draws the scene indexed, in `GpuScene::draw_order`, with the pipeline of each draw's raster state;
-/// binds the scene as group 0.
+/// Draws the scene's opaque draws indexed, in `GpuScene::draw_order`, with the pipeline of each
+/// draw's raster state; binds the scene as group 0.
 pub fn draw_scene(pass: &mut wgpu::RenderPass, scene: &GpuScene, eye: glam::Vec3, pipelines: &HashMap<RasterState, wgpu::RenderPipeline>) {
+    draw_commands(pass, scene, &scene.draw_order(eye), pipelines);
+}
+
+/// Draws `commands` indexed, in order, with the pipeline of each draw's raster state; binds the scene
+/// as group 0.
+pub fn draw_commands(
+    pass: &mut wgpu::RenderPass,
+    scene: &GpuScene,
+    commands: &[&DrawCommand],
+    pipelines: &HashMap<RasterState, wgpu::RenderPipeline>,
+) {
     pass.set_bind_group(0, &scene.bind_group, &[]);
     pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
     let mut current = None;
-    for command in scene.draw_order(eye) {
+    for &command in commands {
         if current != Some(command.state) {
             pass.set_pipeline(&pipelines[&command.state]);
             current = Some(command.state);

@@ -14,6 +14,9 @@
 //!             deferred_shade (decals, lights) ─▶ hdr (Rgba32Float)
 //!                                   │
 //!                                   ▼
+//!             transparent_shade (BLEND draws, back to front, fragments) ─▶ blended over hdr
+//!                                   │
+//!                                   ▼
 //!             tonemap ─▶ ldr (Rgba8Unorm, sRGB-encoded)
 //! ```
 
@@ -24,6 +27,7 @@ use crate::passes::{
     deferred_shade::DeferredShade,
     gbuffer_raster::{GBufferRaster, GBUFFER_FORMATS},
     tonemap::Tonemap,
+    transparent_shade::TransparentShade,
 };
 use crate::{
     pipelines::{DecalMethod, FrameInputs, FrameTargets, LightMethod},
@@ -34,10 +38,13 @@ pub struct DeferredPipeline {
     pub targets: FrameTargets,
     gbuffer: [wgpu::TextureView; 4],
     depth_view: wgpu::TextureView,
+    hdr_view: wgpu::TextureView,
     raster: GBufferRaster,
     /// With deferred decals: the pass, the G-buffer's normals and the copy of them the pass reads.
     decals: Option<(DeferredDecals, wgpu::Texture, wgpu::Texture)>,
     shade: DeferredShade,
+    /// Present when the scene has transparent draws.
+    transparent: Option<TransparentShade>,
     tonemap: Tonemap,
 }
 
@@ -78,10 +85,12 @@ impl DeferredPipeline {
             raster: GBufferRaster::new(ctx, scene)?,
             decals,
             shade: DeferredShade::new(ctx, scene, methods, structures, (&depth_view, &gbuffer), &hdr_view)?,
+            transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
             targets,
             gbuffer,
             depth_view,
+            hdr_view,
         })
     }
 
@@ -94,6 +103,9 @@ impl DeferredPipeline {
             decals.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.decals, &self.gbuffer);
         }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
+        if let Some(transparent) = &self.transparent {
+            transparent.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
+        }
         self.tonemap.record(encoder, timer, width, height);
     }
 }

@@ -12,12 +12,15 @@
 //!             forward_shade (EQUAL depth; material, decals, lights; then sky) ─▶ hdr (Rgba32Float)
 //!                                   │
 //!                                   ▼
+//!             transparent_shade (BLEND draws, back to front) ─▶ blended over hdr
+//!                                   │
+//!                                   ▼
 //!             tonemap ─▶ ldr (Rgba8Unorm, sRGB-encoded)
 //! ```
 
 use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
-use crate::passes::{depth_prepass::DepthPrepass, forward_shade::ForwardShade, tonemap::Tonemap};
+use crate::passes::{depth_prepass::DepthPrepass, forward_shade::ForwardShade, tonemap::Tonemap, transparent_shade::TransparentShade};
 use crate::{
     pipelines::{DecalMethod, FrameInputs, FrameTargets, LightMethod},
     Result,
@@ -29,6 +32,8 @@ pub struct ForwardPipeline {
     hdr_view: wgpu::TextureView,
     prepass: DepthPrepass,
     shade: ForwardShade,
+    /// Present when the scene has transparent draws.
+    transparent: Option<TransparentShade>,
     tonemap: Tonemap,
 }
 
@@ -47,6 +52,7 @@ impl ForwardPipeline {
         Ok(Self {
             prepass: DepthPrepass::new(ctx, scene)?,
             shade: ForwardShade::new(ctx, scene, methods, structures)?,
+            transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
             targets,
             depth_view,
@@ -58,6 +64,9 @@ impl ForwardPipeline {
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         self.prepass.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.depth_view);
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
+        if let Some(transparent) = &self.transparent {
+            transparent.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
+        }
         self.tonemap.record(encoder, timer, self.targets.width, self.targets.height);
     }
 }

@@ -10,6 +10,9 @@
 //!             visbuffer_shade (material, decals, lights) ─▶ hdr (Rgba32Float)
 //!                                   │
 //!                                   ▼
+//!             transparent_shade (BLEND draws, back to front, fragments) ─▶ blended over hdr
+//!                                   │
+//!                                   ▼
 //!             tonemap ─▶ ldr (Rgba8Unorm, sRGB-encoded)
 //! ```
 
@@ -17,6 +20,7 @@ use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
     tonemap::Tonemap,
+    transparent_shade::TransparentShade,
     visbuffer_raster::{VisbufferRaster, VISIBILITY_FORMAT},
     visbuffer_shade::VisbufferShade,
 };
@@ -29,8 +33,11 @@ pub struct VisbufferPipeline {
     pub targets: FrameTargets,
     visibility_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
+    hdr_view: wgpu::TextureView,
     raster: VisbufferRaster,
     shade: VisbufferShade,
+    /// Present when the scene has transparent draws.
+    transparent: Option<TransparentShade>,
     tonemap: Tonemap,
 }
 
@@ -52,10 +59,12 @@ impl VisbufferPipeline {
         Ok(Self {
             raster: VisbufferRaster::new(ctx, scene)?,
             shade: VisbufferShade::new(ctx, scene, methods, structures, &visibility_view, &depth_view, &hdr_view)?,
+            transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
             targets,
             visibility_view,
             depth_view,
+            hdr_view,
         })
     }
 
@@ -64,6 +73,9 @@ impl VisbufferPipeline {
         let (width, height) = (self.targets.width, self.targets.height);
         self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.visibility_view, &self.depth_view);
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
+        if let Some(transparent) = &self.transparent {
+            transparent.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
+        }
         self.tonemap.record(encoder, timer, width, height);
     }
 }

@@ -82,7 +82,8 @@ pub enum AlphaMode {
     Mask {
         cutoff: f32,
     },
-    /// Drawn as opaque until the forward transparent pass exists (see docs/ARCHITECTURE.md).
+    /// Blended over what lies behind it by its base colour's alpha, in the transparent pass after
+    /// the opaque surfaces are shaded (`passes/transparent_shade.rs`).
     Blend,
 }
 

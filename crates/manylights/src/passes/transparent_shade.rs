@@ -1,0 +1,141 @@
+//! Transparent surfaces (`transparent_shade.wgsl`): the scene's alpha-blended draws (glTF BLEND),
+//! drawn back to front over the shaded HDR image after the opaque surfaces, in every pipeline. Depth
+//! is tested against the opaque surfaces and not written; each fragment is lit and decaled by the
+//! shading core through the frame's methods, so decals and lights reach transparent surfaces too.
+//! The fragment stage is the only place for them: no G-buffer or visibility buffer holds more than
+//! one surface per pixel.
+
+use std::collections::HashMap;
+
+use super::{visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
+use crate::accel::VolumeStructure;
+use crate::gpu::scene::RasterState;
+use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::pipelines::{DecalMethod, FrameInputs, LightMethod};
+use crate::{Error, Result};
+
+/// The shader for a pair of enumeration methods.
+pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
+    ShaderDesc::new("passes/transparent_shade.wgsl")
+        .with("LIGHT_ENUMERATION", lights.enumeration_module())
+        .with("DECAL_ENUMERATION", decals.enumeration_module())
+}
+
+pub struct TransparentShade {
+    pipelines: HashMap<RasterState, wgpu::RenderPipeline>,
+    /// Group 1, empty: the shading core's light and decal bindings are groups 2 and 3 everywhere.
+    empty: wgpu::BindGroup,
+}
+
+impl TransparentShade {
+    /// The pass for `scene`'s transparent draws; `None` when it has none.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        methods: (LightMethod, DecalMethod),
+        (lights, decals): (&VolumeStructure, &VolumeStructure),
+    ) -> Result<Option<Self>> {
+        if scene.transparent_draw_commands.is_empty() {
+            return Ok(None);
+        }
+        if !ctx.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+            return Err(Error::InvalidScene(format!(
+                "the scene has alpha-blended (glTF BLEND) materials, and {} cannot blend into the renderer's 32-bit float HDR \
+                 image (no float32-blendable feature); use a GPU or driver that has it, or make those materials OPAQUE or MASK",
+                ctx.info.name
+            )));
+        }
+        let device = &ctx.device;
+        let module = shaders::create_module(device, &shader(methods.0, methods.1))?;
+        let empty = bindings::layout(device, "transparent_shade (unused)", &[]);
+        let layout = bindings::pipeline_layout(
+            device,
+            "transparent_shade",
+            &[&scene.bind_group_layout, &empty, &lights.bind_group_layout, &decals.bind_group_layout],
+        );
+        let over = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::SrcAlpha,
+            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+            operation: wgpu::BlendOperation::Add,
+        };
+        // The HDR image's alpha stays 1.
+        let keep = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::Zero,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let states: std::collections::BTreeSet<RasterState> = scene.transparent_draw_commands.iter().map(|c| c.state).collect();
+        let pipelines = states
+            .into_iter()
+            .map(|state| {
+                let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("transparent_shade"),
+                    layout: Some(&layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("forward_vertex"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: state.primitive(),
+                    // Reverse Z: in front of the opaque surface is greater. Not written, so every
+                    // transparent layer in front of it blends.
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(false),
+                        depth_compare: Some(wgpu::CompareFunction::Greater),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("transparent_shade"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: HDR_FORMAT,
+                            blend: Some(wgpu::BlendState { color: over, alpha: keep }),
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                });
+                (state, pipeline)
+            })
+            .collect();
+        let empty = bindings::bind_group(device, "transparent_shade (unused)", &empty, Vec::new());
+        Ok(Some(Self { pipelines, empty }))
+    }
+
+    /// Blends the transparent draws over `hdr`, tested against `depth`.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&mut GpuTimer>,
+        inputs: &FrameInputs,
+        (hdr, depth): (&wgpu::TextureView, &wgpu::TextureView),
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("transparent_shade"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: hdr,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.map(|t| t.render_pass("transparent_shade")),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(1, &self.empty, &[]);
+        pass.set_bind_group(2, &inputs.lights.bind_group, &[]);
+        pass.set_bind_group(3, &inputs.decals.bind_group, &[]);
+        super::draw_commands(&mut pass, inputs.scene, &inputs.scene.transparent_order(inputs.eye), &self.pipelines);
+    }
+}
