@@ -2,6 +2,12 @@
 # Runs on the GPU machine (see BENCHMARKS.md): expects the release binary and sponza_lite under
 # .bench/, and the Vulkan loader packages under .gl/ (the device tool's recipe). Writes the JSON of
 # every configuration and the GPU description to $OUT/timings.tgz; prints the timing tables.
+#
+#   scripts/bench-device.sh structures   the acceleration structures' set (issue 3)
+#   scripts/bench-device.sh lights       pipelines × light methods on 28k small lights (issue 4)
+#   scripts/bench-device.sh decals       pipelines × decal methods on 100k decals (issue 4)
+#   scripts/bench-device.sh tests        the GPU-only test binaries under .bench/tests/, if any
+# Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
@@ -19,28 +25,75 @@ nvidia-smi --query-gpu=name,driver_version --format=csv | tee "$out/gpu.txt"
 run() { # name, frames, then render arguments
   local name=$1 frames=$2; shift 2
   echo "== $name"
-  timeout 300 $bin render --width 1920 --height 1080 --warmup 50 --frames "$frames" --timings \
+  timeout 300 $bin render --width 1920 --height 1080 --warmup "${WARMUP:-50}" --frames "$frames" --timings \
     --timings-json "$out/$name.json" -o /tmp/$name.png "$@" 2>&1 | grep -v "^GPU\|^wrote"
 }
 bvh="--light-method bvh"
-run empty 200 --scene $sponza
-run lights_256_brute 200 --scene $sponza --lights 256 --seed 1
-run small_28k_cpu 200 --scene .bench/small_28000.toml $bvh
-run small_28k_gpu 200 --scene .bench/small_28000.toml $bvh --light-bvh-build gpu-every-frame
-run small_100k_gpu 200 --scene .bench/small_100000.toml $bvh --light-bvh-build gpu-every-frame
-run small_1m_gpu 200 --scene .bench/small_1000000.toml $bvh --light-bvh-build gpu-every-frame
-run small_1m_cpu 200 --scene .bench/small_1000000.toml $bvh
-run lights_28k_cpu 200 --scene $sponza --lights 28000 --seed 1 $bvh
-run small_28k_brute 5 --scene .bench/small_28000.toml --light-method brute
-run decals_100 200 --scene $sponza --decals 100 --seed 1 --decal-method bvh
-run decals_10k 200 --scene $sponza --decals 10000 --seed 1 --decal-method bvh
-run decals_10k_brute 5 --scene $sponza --decals 10000 --seed 1 --decal-method brute
-run decals_100k 200 --scene $sponza --decals 100000 --seed 1 --decal-method bvh
-run decals_100k_gpu 200 --scene $sponza --decals 100000 --seed 1 --decal-method bvh --decal-bvh-build gpu-every-frame
-run decals_100k_aniso1 200 --scene $sponza --decals 100000 --seed 1 --decal-method bvh --anisotropy 1
-run decals_100k_03 200 --scene $sponza --decals 100000 --decal-size 0.3 --seed 1 --decal-method bvh
-run decals_1m_03_gpu 200 --scene $sponza --decals 1000000 --decal-size 0.3 --seed 1 --decal-method bvh --decal-bvh-build gpu-every-frame
-run both_still 200 --scene .bench/small_28000.toml $bvh --decals 100000 --seed 1 --decal-method bvh
-run both_animated 200 --scene .bench/small_28000.toml $bvh --decals 100000 --seed 1 --decal-method bvh --animate
-run both_animated_2000_groups 200 --scene .bench/small_28000.toml $bvh --decals 100000 --seed 1 --decal-method bvh --animate --groups 2000
+structures() {
+  run empty 200 --scene $sponza
+  run lights_256_brute 200 --scene $sponza --lights 256 --seed 1
+  run small_28k_cpu 200 --scene .bench/small_28000.toml $bvh
+  run small_28k_gpu 200 --scene .bench/small_28000.toml $bvh --light-bvh-build gpu-every-frame
+  run small_100k_gpu 200 --scene .bench/small_100000.toml $bvh --light-bvh-build gpu-every-frame
+  run small_1m_gpu 200 --scene .bench/small_1000000.toml $bvh --light-bvh-build gpu-every-frame
+  run small_1m_cpu 200 --scene .bench/small_1000000.toml $bvh
+  run lights_28k_cpu 200 --scene $sponza --lights 28000 --seed 1 $bvh
+  run small_28k_brute 5 --scene .bench/small_28000.toml --light-method brute
+  run decals_100 200 --scene $sponza --decals 100 --seed 1 --decal-method bvh
+  run decals_10k 200 --scene $sponza --decals 10000 --seed 1 --decal-method bvh
+  run decals_10k_brute 5 --scene $sponza --decals 10000 --seed 1 --decal-method brute
+  run decals_100k 200 --scene $sponza --decals 100000 --seed 1 --decal-method bvh
+  run decals_100k_gpu 200 --scene $sponza --decals 100000 --seed 1 --decal-method bvh --decal-bvh-build gpu-every-frame
+  run decals_100k_aniso1 200 --scene $sponza --decals 100000 --seed 1 --decal-method bvh --anisotropy 1
+  run decals_100k_03 200 --scene $sponza --decals 100000 --decal-size 0.3 --seed 1 --decal-method bvh
+  run decals_1m_03_gpu 200 --scene $sponza --decals 1000000 --decal-size 0.3 --seed 1 --decal-method bvh --decal-bvh-build gpu-every-frame
+  run both_still 200 --scene .bench/small_28000.toml $bvh --decals 100000 --seed 1 --decal-method bvh
+  run both_animated 200 --scene .bench/small_28000.toml $bvh --decals 100000 --seed 1 --decal-method bvh --animate
+  run both_animated_2000_groups 200 --scene .bench/small_28000.toml $bvh --decals 100000 --seed 1 --decal-method bvh --animate --groups 2000
+}
+
+# Every pipeline with every method, on the paper's 28k small lights and on 100k decals of the default
+# size (about one scene unit) and of 0.3 m. Brute force runs 3 frames after 1: seconds each.
+matrix_lights() {
+  local p m
+  for p in visbuffer deferred forward; do
+    for m in off bvh clustered; do
+      run "lights_${p}_$m" 200 --scene .bench/small_28000.toml --pipeline $p --light-method $m --decal-method off
+    done
+    WARMUP=1 run "lights_${p}_brute" 3 --scene .bench/small_28000.toml --pipeline $p --light-method brute --decal-method off
+  done
+}
+
+matrix_decals() {
+  local p m
+  for p in visbuffer deferred forward; do
+    for m in off bvh clustered deferred-decals; do
+      [ $m = deferred-decals ] && [ $p != deferred ] && continue
+      run "decals_${p}_$m" 200 --scene $sponza --decals 100000 --seed 1 --pipeline $p --light-method off --decal-method $m
+      [ $m = off ] && continue
+      run "decals03_${p}_$m" 200 --scene $sponza --decals 100000 --decal-size 0.3 --seed 1 --pipeline $p --light-method off --decal-method $m
+    done
+    WARMUP=1 run "decals_${p}_brute" 3 --scene $sponza --decals 100000 --seed 1 --pipeline $p --light-method off --decal-method brute
+  done
+}
+
+# Test binaries built with `cargo test --release --no-run` for checks lavapipe cannot make (BVH
+# queries in fragment shaders), run here against the GPU.
+tests() {
+  local t
+  for t in .bench/tests/*; do
+    echo "== $t"
+    WGPU_ADAPTER_NAME=nvidia "$t" --test-threads 1 2>&1 | grep -E "^test |test result|panicked|difference"
+  done
+}
+
+for set in "${@:-structures}"; do
+  case $set in
+    structures) structures ;;
+    lights) matrix_lights ;;
+    decals) matrix_decals ;;
+    tests) tests ;;
+    *) echo "unknown set $set (structures, lights, decals or tests)" >&2; exit 2 ;;
+  esac
+done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

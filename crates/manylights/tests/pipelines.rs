@@ -80,19 +80,9 @@ fn deferred_methods_equal_brute_force() {
     assert_methods_equal_brute_force(PipelineKind::Deferred, &ACCELERATED, 5);
 }
 
-/// On lavapipe (Mesa 22.3) BVH queries in fragment shaders find wrong leaves, slowly, while the same
-/// WGSL is exact in compute there and exact in fragments on NVIDIA; so on lavapipe this test checks
-/// the clustered method only, and the BVH in forward is checked on real GPUs (run there from the
-/// device machine, BENCHMARKS.md).
 #[test]
 fn forward_methods_equal_brute_force() {
-    let ctx = manylights::gpu::GpuContext::new().expect("a GPU adapter");
-    if ctx.info.name.contains("llvmpipe") {
-        eprintln!("lavapipe: forward bvh not checked (its fragment shaders mis-run BVH queries, see the test's comment)");
-        assert_methods_equal_brute_force(PipelineKind::Forward, &[(LightMethod::Clustered, DecalMethod::Clustered)], 3);
-    } else {
-        assert_methods_equal_brute_force(PipelineKind::Forward, &ACCELERATED, 3);
-    }
+    assert_methods_equal_brute_force(PipelineKind::Forward, &ACCELERATED, 3);
 }
 
 /// Deferred decals blend in draw order and in the G-buffer's precision, where the shading core blends

@@ -46,12 +46,17 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
             continue;
         }
         let node = VOLUMES_nodes[VOLUMES_query_node];
+        // A link back to the node itself ends the query. No valid tree has one, but lavapipe's
+        // fragment shaders run lanes outside the triangle (helpers) with storage loads masked to
+        // zero: node 0 reads as a box at the origin linking to node 0, and a lane looping there until
+        // llvmpipe's loop limiter (65,535 iterations, shared by every loop of the shader) runs out
+        // ends every later loop of its whole 8-lane vector, the light loop included.
         if !bvh_node_contains(node, VOLUMES_query_point) {
-            VOLUMES_query_node = node.skip;
+            VOLUMES_query_node = select(node.skip, BVH_END, node.skip == VOLUMES_query_node);
             continue;
         }
         if (node.entry & BVH_LEAF) == 0u {
-            VOLUMES_query_node = node.entry;
+            VOLUMES_query_node = select(node.entry, BVH_END, node.entry == VOLUMES_query_node);
             continue;
         }
         VOLUMES_query_node = node.skip;
