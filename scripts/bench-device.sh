@@ -83,7 +83,7 @@ tests() {
   local t
   for t in .bench/tests/*; do
     echo "== $t"
-    WGPU_ADAPTER_NAME=nvidia "$t" --test-threads 1 2>&1 | grep -E "^test |test result|panicked|difference"
+    WGPU_ADAPTER_NAME=nvidia "$t" --test-threads 1 2>&1 | grep -E -A2 "^test |test result|panicked" | grep -v "^stack backtrace\|^--$"
   done
 }
 

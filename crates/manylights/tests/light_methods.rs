@@ -99,6 +99,24 @@ fn no_lights() {
 
 /// Large lights overlapping each other everywhere need more list entries than the clustered lists
 /// start with: the renderer grows them and renders the frame again, so the image stays exact.
+/// Lights around the eye — behind it, beside it, straddling the near plane — reach the visible
+/// surfaces in front of it: the clustered lists bound them by the part beyond the near plane.
+#[test]
+fn lights_around_the_camera() {
+    let mut scene = demo_scene();
+    let eye = scene.cameras[0].position();
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+    scene.lights = (0..300)
+        .map(|_| {
+            let offset = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            let mut light = point_light(eye + offset, rng.random_range(0.05..0.2), rng.random_range(2.0..8.0));
+            light.color = Vec3::new(rng.random_range(0.2..1.0), rng.random_range(0.2..1.0), rng.random_range(0.2..1.0));
+            light
+        })
+        .collect();
+    assert_methods_agree(&scene, 64, 36);
+}
+
 #[test]
 fn clustered_lists_grow_to_what_the_view_needs() {
     let params = ScatterLights { count: 2000, seed: 3, range: Some((6.0, 12.0)), intensity: Some((0.01, 0.05)), ..Default::default() };

@@ -59,27 +59,51 @@ struct FroxelRange {
     empty: bool,
 }
 
-// Extends a projected rectangle (xy min, zw max in NDC) by a world point; false when the point is
-// not in front of the camera, where projection cannot bound.
-fn grow_rect(rect: ptr<function, vec4<f32>>, world: vec3<f32>) -> bool {
+// Extends a projected rectangle (xy min, zw max in NDC) by a world point.
+fn grow_rect(rect: ptr<function, vec4<f32>>, world: vec3<f32>) {
     let clip = cluster_clip(world);
-    if clip.w <= 0.0 {
-        return false;
-    }
     let ndc = clip.xy / clip.w;
     *rect = vec4<f32>(min((*rect).xy, ndc), max((*rect).zw, ndc));
-    return true;
 }
 
-// The projected rectangle of the box with centre `c` and half-axes `a`; everything when part of it
-// is behind the camera.
+// Visible points lie at least this far in front of the camera (its near plane, less rounding's worth).
+fn cluster_visible_depth() -> f32 {
+    return frame.cluster_depth.z - 1e-4 * abs(frame.cluster_depth.z);
+}
+
+// The projected rectangle of the part of the box with centre `c` and half-axes `a` that lies beyond
+// the near plane, where points can be visible. With every corner beyond it, the corners' rectangle;
+// otherwise the rectangle of the box's view-space bounds cut at the near plane (projecting corners
+// behind the camera bounds nothing, and a full-screen rectangle would list a volume grazing the
+// camera in every tile). Empty (min > max) when nothing of the box is beyond the near plane.
 fn box_rect(c: vec3<f32>, a: mat3x3<f32>) -> vec4<f32> {
+    let near = cluster_visible_depth();
     var rect = vec4<f32>(FAR, FAR, -FAR, -FAR);
+    var beyond_near = true;
     for (var corner = 0u; corner < 8u; corner += 1u) {
         let s = vec3<f32>(vec3<u32>(corner, corner >> 1u, corner >> 2u) & vec3<u32>(1u)) * 2.0 - 1.0;
-        if !grow_rect(&rect, c + a * s) {
-            return vec4<f32>(-FAR, -FAR, FAR, FAR);
-        }
+        let world = c + a * s;
+        beyond_near = beyond_near && cluster_view_depth(world) >= near;
+        grow_rect(&rect, world);
+    }
+    if beyond_near {
+        return rect;
+    }
+    let eye = frame.world_from_view[3].xyz;
+    let view_axes = mat3x3<f32>(frame.world_from_view[0].xyz, frame.world_from_view[1].xyz, -frame.world_from_view[2].xyz);
+    // The box in view space (x right, y up, z depth): centre and half extents along those axes.
+    let centre = (c - eye) * view_axes;
+    let half = vec3<f32>(dot(abs(view_axes[0] * a), vec3<f32>(1.0)), dot(abs(view_axes[1] * a), vec3<f32>(1.0)), dot(abs(view_axes[2] * a), vec3<f32>(1.0)));
+    var low = centre - half;
+    let high = centre + half;
+    rect = vec4<f32>(FAR, FAR, -FAR, -FAR);
+    if high.z < near {
+        return rect;
+    }
+    low.z = max(low.z, near);
+    for (var corner = 0u; corner < 8u; corner += 1u) {
+        let pick = vec3<bool>((vec3<u32>(corner, corner >> 1u, corner >> 2u) & vec3<u32>(1u)) == vec3<u32>(1u));
+        grow_rect(&rect, eye + view_axes * select(low, high, pick));
     }
     return rect;
 }
@@ -111,7 +135,7 @@ fn volume_froxels(instance: VolumeInstance, b: ClusterBounds) -> FroxelRange {
 
     // Visible points lie in front of the camera and inside the screen.
     var range: FroxelRange;
-    range.empty = depth.y <= 0.0 || any(rect.xy > vec2<f32>(1.0)) || any(rect.zw < vec2<f32>(-1.0));
+    range.empty = depth.y < cluster_visible_depth() || any(rect.xy > vec2<f32>(1.0)) || any(rect.zw < vec2<f32>(-1.0));
     // Widened by rounding's worth, so a point on the bounds never falls in a froxel outside them.
     rect += vec4<f32>(-1e-4, -1e-4, 1e-4, 1e-4);
     depth += vec2<f32>(-1e-5, 1e-5) * abs(depth) - vec2<f32>(1e-7, -1e-7);

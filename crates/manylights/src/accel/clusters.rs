@@ -55,8 +55,9 @@ impl ClusterGrid {
         [self.tiles_x, self.tiles_y, self.slices, CLUSTER_TILE_PIXELS]
     }
 
-    /// `FrameUniforms::cluster_depth`: the near plane, and slices per doubling of view depth so that
-    /// the last slice ends at the far side of `bounds` (points beyond it fall in the last slice).
+    /// `FrameUniforms::cluster_depth`: the near plane of the slicing, slices per doubling of view
+    /// depth so that the last slice ends at the far side of `bounds` (points beyond it fall in the last
+    /// slice), and the camera's near plane, in front of which no point is visible.
     pub fn depth_slicing(camera: &Camera, bounds: &Aabb) -> [f32; 4] {
         let forward = -camera.world_from_view.z_axis.truncate().normalize();
         let eye = camera.position();
@@ -71,7 +72,7 @@ impl ClusterGrid {
         };
         let near = znear.max(far * 1e-6).max(1e-6);
         let far = far.max(near * 2.0);
-        [near, CLUSTER_SLICES as f32 / (far / near).log2(), 0.0, 0.0]
+        [near, CLUSTER_SLICES as f32 / (far / near).log2(), znear, 0.0]
     }
 }
 
@@ -436,8 +437,8 @@ mod tests {
     fn slices_reach_the_far_side_of_the_scene() {
         let camera = Camera::look_at("c", Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, 1.0, 0.1);
         let bounds = Aabb::new(Vec3::splat(-5.0), Vec3::splat(5.0));
-        let [near, per_doubling, ..] = ClusterGrid::depth_slicing(&camera, &bounds);
-        assert_eq!(near, 0.1);
+        let [near, per_doubling, znear, _] = ClusterGrid::depth_slicing(&camera, &bounds);
+        assert_eq!((near, znear), (0.1, 0.1));
         // The far side is 15 units away: 32 slices over log2(150) doublings.
         assert!(((15.0f32 / 0.1).log2() * per_doubling - CLUSTER_SLICES as f32).abs() < 1e-3);
         let grid = ClusterGrid::for_resolution(100, 33);

@@ -25,7 +25,7 @@ pub struct FrameUniforms {
     /// The clustered method's froxel grid (`accel/cluster_grid.wgsl`): tile columns, rows, depth
     /// slices, tile size in pixels.
     pub cluster_grid: [u32; 4],
-    /// Its depth slicing: near plane, slices per doubling of view depth.
+    /// Its depth slicing: near plane, slices per doubling of view depth; the camera's near plane.
     pub cluster_depth: [f32; 4],
 }
 

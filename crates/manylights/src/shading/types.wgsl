@@ -107,6 +107,7 @@ struct FrameUniforms {
     // The clustered method's froxel grid (`accel/cluster_grid.wgsl`): tile columns, rows, depth
     // slices, tile size in pixels.
     cluster_grid: vec4<u32>,
-    // x: near plane of the depth slicing; y: slices per doubling of view depth.
+    // x: near plane of the depth slicing; y: slices per doubling of view depth; z: the camera's near
+    // plane, in front of which nothing is visible.
     cluster_depth: vec4<f32>,
 }
