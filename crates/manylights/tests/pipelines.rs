@@ -114,6 +114,33 @@ fn deferred_decals_match_the_shading_cores_decals_where_both_apply() {
     assert!(p995 <= DEFERRED_DECALS_P995_TOLERANCE, "99.5th percentile difference {p995}");
 }
 
+/// A decal box around the eye has no front face in view: deferred decals draw it inside out, and it
+/// still reaches the surface it projects onto.
+#[test]
+fn deferred_decals_reach_surfaces_from_boxes_around_the_eye() {
+    let (mut scene, camera) = wall_scene(Vec::new());
+    scene.ambient = glam::Vec3::ONE;
+    scene.materials.push(manylights::scene::Material {
+        base_color_factor: glam::Vec4::new(0.9, 0.1, 0.1, 1.0),
+        metallic_factor: 0.0,
+        ..Default::default()
+    });
+    // From z = −0.5, behind the wall, to z = 4.5, behind the camera at z = 4.
+    let box_around_eye = glam::Affine3A::from_scale_rotation_translation(
+        glam::Vec3::new(3.0, 3.0, 5.0),
+        glam::Quat::IDENTITY,
+        glam::Vec3::new(0.0, 0.0, 2.0),
+    );
+    scene.decals.push(manylights::scene::Decal { world_from_decal: box_around_eye, material: 1, layer: 0, weight: 1.0 });
+    let config = |decals| configured(PipelineKind::Deferred, LightMethod::Off, decals, (64, 36));
+    let (_, bvh) = render_with(&scene, &camera, config(DecalMethod::Bvh));
+    let (_, deferred) = render_with(&scene, &camera, config(DecalMethod::DeferredDecals));
+    let centre = |image: &Image<[f32; 4]>| pixel(image, 32, 18);
+    assert!(centre(&bvh)[0] > 0.8 && centre(&bvh)[1] < 0.15, "the decal does not cover the wall: {:?}", centre(&bvh));
+    let difference = max_abs_difference(&bvh, &deferred);
+    assert!(difference <= 0.01, "deferred decals from a box around the eye: max abs difference {difference} from bvh decals");
+}
+
 #[test]
 fn deferred_decals_outside_the_deferred_pipeline_are_an_error() {
     let scene = scene_with(0, 10, 1);

@@ -194,16 +194,25 @@ impl VolumeStructure {
     }
 
     /// Every (instance, item) pair, instances in the order of the instance buffer, sorted stably by
-    /// decal layer: the order deferred decals are drawn in, bottom layer first.
-    pub fn pairs_in_layer_order(&self) -> Vec<[u32; 2]> {
+    /// decal layer — the order deferred decals are drawn in, bottom layer first — and the range of
+    /// pairs in each layer that has any.
+    pub fn pairs_in_layer_order(&self) -> (Vec<[u32; 2]>, Vec<std::ops::Range<u32>>) {
+        let layer = |item: u32| self.layers.get(item as usize).copied().unwrap_or(0);
         let mut pairs: Vec<[u32; 2]> = self
             .instances
             .iter()
             .enumerate()
             .flat_map(|(i, instance)| self.groups[instance.group].items.clone().map(move |item| [i as u32, item]))
             .collect();
-        pairs.sort_by_key(|&[_, item]| self.layers.get(item as usize).copied().unwrap_or(0));
-        pairs
+        pairs.sort_by_key(|&[_, item]| layer(item));
+        let mut ranges: Vec<std::ops::Range<u32>> = Vec::new();
+        for (i, &[_, item]) in pairs.iter().enumerate() {
+            match ranges.last_mut() {
+                Some(range) if layer(pairs[range.start as usize][1]) == layer(item) => range.end = i as u32 + 1,
+                _ => ranges.push(i as u32..i as u32 + 1),
+            }
+        }
+        (pairs, ranges)
     }
 
     pub fn new(ctx: &GpuContext, volumes: &Volumes, build: BvhBuild, clustering: Option<Clustering>) -> Result<Self> {

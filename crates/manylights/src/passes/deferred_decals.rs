@@ -4,7 +4,7 @@
 
 use wgpu::util::DeviceExt;
 
-use super::gbuffer_raster::GBUFFER_FORMATS;
+use super::{gbuffer_raster::GBUFFER_FORMATS, visbuffer_raster::DEPTH_FORMAT};
 use crate::accel::VolumeStructure;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::Result;
@@ -13,11 +13,13 @@ use crate::Result;
 const BOX_VERTICES: u32 = 36;
 
 pub struct DeferredDecals {
-    pipeline: wgpu::RenderPipeline,
+    /// For boxes away from the eye, and for boxes around it.
+    pipelines: [wgpu::RenderPipeline; 2],
     bind_group: wgpu::BindGroup,
     /// An empty group 2: the pass reads no lights.
     no_lights: wgpu::BindGroup,
-    draws: u32,
+    /// The draws of each layer, bottom first: instance ranges of the draw order.
+    layers: Vec<std::ops::Range<u32>>,
 }
 
 impl DeferredDecals {
@@ -61,29 +63,46 @@ impl DeferredDecals {
             })
         };
         let targets = [target(GBUFFER_FORMATS[0]), target(GBUFFER_FORMATS[1]), target(GBUFFER_FORMATS[2])];
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("deferred_decals"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("deferred_decal_vertex"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            // Back faces only: each covered pixel once, also with the camera inside the box.
-            primitive: wgpu::PrimitiveState { cull_mode: Some(wgpu::Face::Front), ..Default::default() },
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("deferred_decal_fragment"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let order = decals.pairs_in_layer_order();
+        let pipeline = |around_the_eye: bool| {
+            // Away from the eye: front faces in front of the surface (reverse Z), each covered pixel
+            // once; the fragment stage discards but writes no depth, so occluded fragments are still
+            // rejected early. Around the eye: back faces, untested (`deferred_decals.wgsl`).
+            let (cull, compare) = if around_the_eye {
+                (wgpu::Face::Front, wgpu::CompareFunction::Always)
+            } else {
+                (wgpu::Face::Back, wgpu::CompareFunction::GreaterEqual)
+            };
+            let constants = [("AROUND_THE_EYE", if around_the_eye { 1.0 } else { 0.0 })];
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("deferred_decals"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("deferred_decal_vertex"),
+                    compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState { cull_mode: Some(cull), ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("deferred_decal_fragment"),
+                    compilation_options: Default::default(),
+                    targets: &targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let pipelines = [pipeline(false), pipeline(true)];
+        let (order, layers) = decals.pairs_in_layer_order();
         let order_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("deferred decal order"),
             contents: if order.is_empty() { &[0; 8] } else { bytemuck::cast_slice(&order) },
@@ -100,7 +119,7 @@ impl DeferredDecals {
             ],
         );
         let no_lights = bindings::bind_group(device, "no lights", &empty, Vec::new());
-        Ok(Self { pipeline, bind_group, no_lights, draws: order.len() as u32 })
+        Ok(Self { pipelines, bind_group, no_lights, layers })
     }
 
     /// Blends the decals into the first three G-buffer targets (albedo, normal, roughness-metallic).
@@ -111,6 +130,7 @@ impl DeferredDecals {
         scene: &GpuScene,
         decals: &VolumeStructure,
         gbuffer: &[wgpu::TextureView; 4],
+        depth: &wgpu::TextureView,
     ) {
         let attachments = gbuffer[..3]
             .iter()
@@ -126,19 +146,22 @@ impl DeferredDecals {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("deferred_decals"),
             color_attachments: &attachments,
-            depth_stencil_attachment: None,
+            // Read-only: the fragments also read it as a texture.
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: depth, depth_ops: None, stencil_ops: None }),
             timestamp_writes: timer.map(|t| t.render_pass("deferred_decals")),
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        if self.draws == 0 {
-            return;
-        }
-        pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &scene.bind_group, &[]);
         pass.set_bind_group(1, &self.bind_group, &[]);
         pass.set_bind_group(2, &self.no_lights, &[]);
         pass.set_bind_group(3, &decals.bind_group, &[]);
-        pass.draw(0..BOX_VERTICES, 0..self.draws);
+        // Layer after layer, bottom first; each vertex stage skips the other pipeline's boxes.
+        for layer in &self.layers {
+            for pipeline in &self.pipelines {
+                pass.set_pipeline(pipeline);
+                pass.draw(0..BOX_VERTICES, layer.clone());
+            }
+        }
     }
 }

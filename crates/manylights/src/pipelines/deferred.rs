@@ -100,7 +100,7 @@ impl DeferredPipeline {
         self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.gbuffer, &self.depth_view);
         if let Some((decals, normals, copy)) = &self.decals {
             encoder.copy_texture_to_texture(normals.as_image_copy(), copy.as_image_copy(), normals.size());
-            decals.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.decals, &self.gbuffer);
+            decals.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.decals, &self.gbuffer, &self.depth_view);
         }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
         if let Some(transparent) = &self.transparent {
