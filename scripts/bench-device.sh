@@ -60,6 +60,8 @@ matrix_lights() {
     for m in off bvh clustered; do
       run "lights_${p}_$m" 200 --scene .bench/small_28000.toml --pipeline $p --light-method $m --decal-method off
     done
+    # Lights that move every frame: the BVH rebuilt on the GPU, as the clustered lists are.
+    run "lights_${p}_bvh-gpu" 200 --scene .bench/small_28000.toml --pipeline $p --light-method bvh --light-bvh-build gpu-every-frame --decal-method off
     WARMUP=1 run "lights_${p}_brute" 3 --scene .bench/small_28000.toml --pipeline $p --light-method brute --decal-method off
   done
 }
@@ -70,6 +72,8 @@ matrix_decals() {
     for m in off bvh clustered deferred-decals; do
       [ $m = deferred-decals ] && [ $p != deferred ] && continue
       run "decals_${p}_$m" 200 --scene $sponza --decals 100000 --seed 1 --pipeline $p --light-method off --decal-method $m
+      [ $m = bvh ] && run "decals_${p}_bvh-gpu" 200 --scene $sponza --decals 100000 --seed 1 --pipeline $p --light-method off \
+        --decal-method bvh --decal-bvh-build gpu-every-frame
       [ $m = off ] && continue
       run "decals03_${p}_$m" 200 --scene $sponza --decals 100000 --decal-size 0.3 --seed 1 --pipeline $p --light-method off --decal-method $m
     done

@@ -31,7 +31,7 @@ def main(folder):
         print("| pipeline | method | build ms | raster ms | deferred decals ms | shade ms | frame ms | p95 | frames |")
         print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
         for pipeline in ("visbuffer", "deferred", "forward"):
-            for method in ("off", "brute", "bvh", "clustered", "deferred-decals"):
+            for method in ("off", "brute", "bvh", "bvh-gpu", "clustered", "deferred-decals"):
                 report = reports.get(f"{prefix}_{pipeline}_{method}")
                 if report:
                     print("| " + " | ".join([pipeline, method] + row(report)) + " |")
