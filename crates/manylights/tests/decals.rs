@@ -8,35 +8,18 @@
 mod common;
 
 use common::*;
-use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
+use glam::{Affine3A, Quat, Vec3, Vec4};
 use manylights::{
     config::RenderConfig,
     pipelines::{DecalMethod, LightMethod},
-    scene::{Camera, Decal, Instance, Material, Scene, Texture, TextureRef, Wrap},
+    scene::{Camera, Decal, Material, Scene, Texture, TextureRef, Wrap},
 };
 
 /// The methods that blend through the shading core's formula: `off` applies no decals, and deferred
 /// decals blend in draw order in the deferred pipeline (`tests/pipelines.rs` compares them).
 const BLENDING_METHODS: [DecalMethod; 3] = [DecalMethod::Brute, DecalMethod::Bvh, DecalMethod::Clustered];
 
-const WALL_COLOR: Vec3 = Vec3::new(0.2, 0.3, 0.4);
-
-/// A wall at z = 0 facing +Z, lit by white ambient only; material 0 is the wall's.
-fn wall() -> (Scene, Camera) {
-    let scene = Scene {
-        meshes: vec![quad_mesh()],
-        materials: vec![Material {
-            base_color_factor: WALL_COLOR.extend(1.0),
-            metallic_factor: 0.0,
-            roughness_factor: 0.8,
-            ..Default::default()
-        }],
-        instances: vec![Instance { mesh: 0, world_from_local: Mat4::from_scale(Vec3::new(10.0, 10.0, 1.0)) }],
-        ambient: Vec3::ONE,
-        ..Default::default()
-    };
-    (scene, Camera::look_at("front", Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 60f32.to_radians(), 0.1))
-}
+const WALL_COLOR: Vec3 = AMBIENT_WALL_COLOR;
 
 /// A solid decal material: colour and alpha from the factor.
 fn solid(scene: &mut Scene, color: Vec3, alpha: f32) -> usize {
@@ -70,7 +53,7 @@ fn render_methods(scene: &Scene, camera: &Camera) -> Vec<(DecalMethod, Vec3, Vec
 /// Renders the decals over the wall and checks the centre against `expected` and that the corner is
 /// untouched, for every method.
 fn assert_centre(decals: Vec<Decal>, materials: &[(Vec3, f32)], expected: Vec3, rule: &str) {
-    let (mut scene, camera) = wall();
+    let (mut scene, camera) = ambient_wall();
     for &(color, alpha) in materials {
         solid(&mut scene, color, alpha);
     }
@@ -130,7 +113,7 @@ fn higher_layers_cover_lower_ones_whatever_the_order_or_weight() {
 
 #[test]
 fn metallic_blends_like_albedo() {
-    let (mut scene, camera) = wall();
+    let (mut scene, camera) = ambient_wall();
     scene.materials.push(Material {
         base_color_factor: RED.extend(0.5),
         metallic_factor: 1.0,
@@ -147,7 +130,7 @@ fn metallic_blends_like_albedo() {
 
 /// A scene lit by one point light in front of the wall, where roughness and normals show.
 fn lit_wall() -> (Scene, Camera) {
-    let (mut scene, camera) = wall();
+    let (mut scene, camera) = ambient_wall();
     scene.ambient = Vec3::ZERO;
     scene.lights = vec![point_light(Vec3::new(0.6, 0.4, 1.5), 8.0, 10.0)];
     (scene, camera)
@@ -224,7 +207,7 @@ fn normal_decals_bend_the_normal_in_the_surface_tangent_frame() {
 
 #[test]
 fn decals_skip_surfaces_facing_away_and_fade_edge_on() {
-    let (mut scene, camera) = wall();
+    let (mut scene, camera) = ambient_wall();
     solid(&mut scene, RED, 1.0);
     // Projecting from behind the wall: its +Z faces away from the wall's normal.
     let behind = Affine3A::from_rotation_translation(Quat::from_rotation_y(std::f32::consts::PI), Vec3::ZERO)
@@ -246,7 +229,7 @@ fn decals_skip_surfaces_facing_away_and_fade_edge_on() {
 #[test]
 fn textured_decals_sample_their_image_in_decal_space() {
     // Left half red, right half green: the decal's u runs along its +X.
-    let (mut scene, camera) = wall();
+    let (mut scene, camera) = ambient_wall();
     let mut rgba = Vec::new();
     for _y in 0..8 {
         for x in 0..8 {

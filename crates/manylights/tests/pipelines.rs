@@ -118,8 +118,7 @@ fn deferred_decals_match_the_shading_cores_decals_where_both_apply() {
 /// still reaches the surface it projects onto.
 #[test]
 fn deferred_decals_reach_surfaces_from_boxes_around_the_eye() {
-    let (mut scene, camera) = wall_scene(Vec::new());
-    scene.ambient = glam::Vec3::ONE;
+    let (mut scene, camera) = ambient_wall();
     scene.materials.push(manylights::scene::Material {
         base_color_factor: glam::Vec4::new(0.9, 0.1, 0.1, 1.0),
         metallic_factor: 0.0,

@@ -16,7 +16,7 @@ use manylights::{
 };
 
 const TOLERANCE: f32 = 1e-3;
-const WALL_COLOR: Vec3 = Vec3::new(0.2, 0.3, 0.4);
+const WALL_COLOR: Vec3 = AMBIENT_WALL_COLOR;
 
 fn rgb(p: [f32; 4]) -> Vec3 {
     Vec3::new(p[0], p[1], p[2])
@@ -32,23 +32,6 @@ fn glass(color: Vec3, alpha: f32) -> Material {
         alpha_mode: AlphaMode::Blend,
         ..Default::default()
     }
-}
-
-/// A wall at z = 0 facing +Z lit by white ambient only, so radiance is albedo, seen from z = 4.
-fn wall() -> (Scene, Camera) {
-    let scene = Scene {
-        meshes: vec![quad_mesh()],
-        materials: vec![Material {
-            base_color_factor: WALL_COLOR.extend(1.0),
-            metallic_factor: 0.0,
-            roughness_factor: 0.8,
-            ..Default::default()
-        }],
-        instances: vec![Instance { mesh: 0, world_from_local: Mat4::from_scale(Vec3::new(10.0, 10.0, 1.0)) }],
-        ambient: Vec3::ONE,
-        ..Default::default()
-    };
-    (scene, Camera::look_at("front", Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 60f32.to_radians(), 0.1))
 }
 
 /// Adds a 2 m square pane at height `z` over the wall's centre, facing the camera.
@@ -75,7 +58,7 @@ fn panes_blend_back_to_front_over_what_lies_behind_them() {
     const GREEN: Vec3 = Vec3::new(0.1, 0.8, 0.2);
     for pipeline in PipelineKind::ALL {
         let name = pipeline.name();
-        let (mut one, camera) = wall();
+        let (mut one, camera) = ambient_wall();
         add_pane(&mut one, 1.0, RED, 0.25);
         // The wall as this pipeline renders it (the G-buffer stores albedo in 8 bits), seen beside the pane.
         let (centre, wall_radiance) = centre_and_corner(&one, &camera, pipeline);
@@ -86,7 +69,7 @@ fn panes_blend_back_to_front_over_what_lies_behind_them() {
         // Two panes blend nearest last whatever order the scene lists them in.
         let expected = GREEN * 0.5 + (RED * 0.25 + wall_radiance * 0.75) * 0.5;
         for (near_first, order) in [(false, "far pane listed first"), (true, "near pane listed first")] {
-            let (mut two, _) = wall();
+            let (mut two, _) = ambient_wall();
             let panes = [(1.0, RED, 0.25), (2.0, GREEN, 0.5)];
             for i in 0..2 {
                 let (z, color, alpha) = panes[if near_first { 1 - i } else { i }];
@@ -97,7 +80,7 @@ fn panes_blend_back_to_front_over_what_lies_behind_them() {
         }
 
         // A pane behind the wall is hidden by it.
-        let (mut hidden, _) = wall();
+        let (mut hidden, _) = ambient_wall();
         add_pane(&mut hidden, -1.0, RED, 0.9);
         let (centre, _) = centre_and_corner(&hidden, &camera, pipeline);
         assert!((centre - wall_radiance).abs().max_element() <= 1e-4, "{name}: pane behind the wall shows: {centre}");
@@ -163,7 +146,7 @@ fn panes_are_lit_and_decaled_through_every_method_in_every_pipeline() {
 
 #[test]
 fn transparent_surfaces_need_float32_blending() {
-    let (mut scene, _) = wall();
+    let (mut scene, _) = ambient_wall();
     add_pane(&mut scene, 1.0, Vec3::ONE, 0.5);
     let ctx = GpuContext::without(wgpu::Features::FLOAT32_BLENDABLE).expect("a GPU adapter");
     let error = Renderer::new(ctx, &scene, config(32, 18, LightMethod::Brute)).err().expect("an error without float32 blending");

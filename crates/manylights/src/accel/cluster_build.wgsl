@@ -167,8 +167,9 @@ fn thread_pair(id: vec3<u32>) -> vec2<u32> {
     return vec2<u32>(lo, instances[lo].first_item + pair - pair_starts[lo]);
 }
 
-@compute @workgroup_size(64)
-fn cluster_count(@builtin(global_invocation_id) id: vec3<u32>) {
+// Walks the froxels the thread's pair may reach: counting itself into each (`fill` false), or, once
+// the counts are prefix sums, writing itself into each one's list.
+fn cluster_visit(id: vec3<u32>, fill: bool) {
     let pair = thread_pair(id);
     if pair.x >= params.instance_count {
         return;
@@ -180,10 +181,23 @@ fn cluster_count(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var z = range.first.z; z <= range.last.z; z += 1u) {
         for (var y = range.first.y; y <= range.last.y; y += 1u) {
             for (var x = range.first.x; x <= range.last.x; x += 1u) {
-                atomicAdd(&counts[cluster_index(vec2<u32>(x, y), z)], 1u);
+                let froxel = cluster_index(vec2<u32>(x, y), z);
+                if fill {
+                    let entry = ranges[froxel].x + atomicAdd(&cursors[froxel], 1u);
+                    if entry < params.capacity {
+                        entries[entry] = pair;
+                    }
+                } else {
+                    atomicAdd(&counts[froxel], 1u);
+                }
             }
         }
     }
+}
+
+@compute @workgroup_size(64)
+fn cluster_count(@builtin(global_invocation_id) id: vec3<u32>) {
+    cluster_visit(id, false);
 }
 
 // Per block of SCAN_THREADS froxels: offsets within the block, and the block's total.
@@ -236,23 +250,5 @@ fn cluster_scan_apply(@builtin(global_invocation_id) id: vec3<u32>, @builtin(wor
 
 @compute @workgroup_size(64)
 fn cluster_fill(@builtin(global_invocation_id) id: vec3<u32>) {
-    let pair = thread_pair(id);
-    if pair.x >= params.instance_count {
-        return;
-    }
-    let range = volume_froxels(instances[pair.x], bounds[pair.y]);
-    if range.empty {
-        return;
-    }
-    for (var z = range.first.z; z <= range.last.z; z += 1u) {
-        for (var y = range.first.y; y <= range.last.y; y += 1u) {
-            for (var x = range.first.x; x <= range.last.x; x += 1u) {
-                let froxel = cluster_index(vec2<u32>(x, y), z);
-                let entry = ranges[froxel].x + atomicAdd(&cursors[froxel], 1u);
-                if entry < params.capacity {
-                    entries[entry] = pair;
-                }
-            }
-        }
-    }
+    cluster_visit(id, true);
 }

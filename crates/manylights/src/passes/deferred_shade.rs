@@ -9,9 +9,7 @@ use crate::Result;
 
 /// The shader for a pair of enumeration methods.
 pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
-    ShaderDesc::new("passes/deferred_shade.wgsl")
-        .with("LIGHT_ENUMERATION", lights.enumeration_module())
-        .with("DECAL_ENUMERATION", decals.enumeration_module())
+    super::shading_core_shader("passes/deferred_shade.wgsl", lights, decals)
 }
 
 pub struct DeferredShade {

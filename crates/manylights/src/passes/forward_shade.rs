@@ -14,9 +14,7 @@ use crate::Result;
 
 /// The shader for a pair of enumeration methods.
 pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
-    ShaderDesc::new("passes/forward_shade.wgsl")
-        .with("LIGHT_ENUMERATION", lights.enumeration_module())
-        .with("DECAL_ENUMERATION", decals.enumeration_module())
+    super::shading_core_shader("passes/forward_shade.wgsl", lights, decals)
 }
 
 pub struct ForwardShade {

@@ -6,8 +6,10 @@ use std::collections::HashMap;
 
 use crate::gpu::{
     scene::{DrawCommand, RasterState},
+    shaders::ShaderDesc,
     GpuScene,
 };
+use crate::pipelines::{DecalMethod, LightMethod};
 
 pub mod deferred_decals;
 pub mod deferred_shade;
@@ -18,6 +20,12 @@ pub mod tonemap;
 pub mod transparent_shade;
 pub mod visbuffer_raster;
 pub mod visbuffer_shade;
+
+/// A pass's shader that calls the shading core, composed with the WGSL modules of a pair of
+/// enumeration methods (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION` and `$DECAL_ENUMERATION`).
+pub fn shading_core_shader(entry: &'static str, lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
+    ShaderDesc::new(entry).with("LIGHT_ENUMERATION", lights.enumeration_module()).with("DECAL_ENUMERATION", decals.enumeration_module())
+}
 
 /// Workgroup edge of the 2D compute passes (`@workgroup_size(8, 8)` in their WGSL).
 pub const TILE: u32 = 8;

@@ -16,9 +16,7 @@ use crate::{Error, Result};
 
 /// The shader for a pair of enumeration methods.
 pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
-    ShaderDesc::new("passes/transparent_shade.wgsl")
-        .with("LIGHT_ENUMERATION", lights.enumeration_module())
-        .with("DECAL_ENUMERATION", decals.enumeration_module())
+    super::shading_core_shader("passes/transparent_shade.wgsl", lights, decals)
 }
 
 pub struct TransparentShade {

@@ -10,9 +10,7 @@ pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 /// The shader for a pair of enumeration methods.
 pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
-    ShaderDesc::new("passes/visbuffer_shade.wgsl")
-        .with("LIGHT_ENUMERATION", lights.enumeration_module())
-        .with("DECAL_ENUMERATION", decals.enumeration_module())
+    super::shading_core_shader("passes/visbuffer_shade.wgsl", lights, decals)
 }
 
 pub struct VisbufferShade {

@@ -99,3 +99,24 @@ pub fn point_light(position: Vec3, intensity: f32, range: f32) -> Light {
 pub fn pixel<T: Copy>(image: &Image<T>, x: u32, y: u32) -> T {
     image.pixels[(y * image.width + x) as usize]
 }
+
+/// The albedo of [`ambient_wall`].
+pub const AMBIENT_WALL_COLOR: Vec3 = Vec3::new(0.2, 0.3, 0.4);
+
+/// A wall at z = 0 facing +Z, lit by white ambient only, so that its linear radiance is its albedo
+/// (times one minus half its metallic); material 0 is the wall's. The camera is 4 m in front of it.
+pub fn ambient_wall() -> (Scene, Camera) {
+    let scene = Scene {
+        meshes: vec![quad_mesh()],
+        materials: vec![Material {
+            base_color_factor: AMBIENT_WALL_COLOR.extend(1.0),
+            metallic_factor: 0.0,
+            roughness_factor: 0.8,
+            ..Default::default()
+        }],
+        instances: vec![Instance { mesh: 0, world_from_local: Mat4::from_scale(Vec3::new(10.0, 10.0, 1.0)) }],
+        ambient: Vec3::ONE,
+        ..Default::default()
+    };
+    (scene, Camera::look_at("front", Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 60f32.to_radians(), 0.1))
+}
