@@ -1,8 +1,10 @@
-//! `manylights`: render glTF and TOML scenes headless, print GPU information.
+//! `manylights`: render glTF and TOML scenes headless, benchmark them, print GPU information.
 
+mod bench;
 mod info;
 mod render;
 mod scene_args;
+mod timing;
 
 use std::process::ExitCode;
 
@@ -19,6 +21,10 @@ struct Cli {
 enum Command {
     /// Render a scene to a PNG (and optionally EXR), with per-pass GPU timings.
     Render(render::RenderArgs),
+    /// Measure the paper's Table 1 (6 large decals, 100 and 100k small decals, 28k small lights) in
+    /// every pipeline with every method, and sweep lights and decals from 1k to 1M; writes Markdown,
+    /// JSON, CSV and PNG plots.
+    Bench(bench::BenchArgs),
     /// List GPU adapters, the one manylights would choose, its driver and the features it uses; then
     /// what the scene (with the same scene options as `render`) holds.
     Info(scene_args::SceneArgs),
@@ -29,6 +35,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render::run(&args),
+        Command::Bench(args) => bench::run(&args),
         Command::Info(args) => info::run(&args),
     };
     match result {

@@ -10,14 +10,15 @@ use manylights::{
     gpu::GpuContext,
     image_io,
     pipelines::{DecalMethod, LightMethod, PipelineKind},
-    renderer::Renderer,
+    renderer::{FrameTiming, Renderer},
     scene::{Camera, Scene},
 };
 
 use crate::scene_args::SceneArgs;
+use crate::timing::{FrameSamples, Stat};
 
 /// Most frames one run may time or warm up with: a few minutes even on a fast GPU.
-const MAX_FRAMES: u32 = 100_000;
+pub(crate) const MAX_FRAMES: u32 = 100_000;
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -78,11 +79,21 @@ pub struct RenderArgs {
     warmup: u32,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum PipelineArg {
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum PipelineArg {
     Visbuffer,
     Deferred,
     Forward,
+}
+
+impl From<PipelineArg> for PipelineKind {
+    fn from(arg: PipelineArg) -> Self {
+        match arg {
+            PipelineArg::Visbuffer => PipelineKind::Visbuffer,
+            PipelineArg::Deferred => PipelineKind::Deferred,
+            PipelineArg::Forward => PipelineKind::Forward,
+        }
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -133,11 +144,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let config = RenderConfig {
         width: args.width,
         height: args.height,
-        pipeline: match args.pipeline {
-            PipelineArg::Visbuffer => PipelineKind::Visbuffer,
-            PipelineArg::Deferred => PipelineKind::Deferred,
-            PipelineArg::Forward => PipelineKind::Forward,
-        },
+        pipeline: args.pipeline.into(),
         light_method: match args.light_method {
             LightMethodArg::Off => LightMethod::Off,
             LightMethodArg::Brute => LightMethod::Brute,
@@ -187,7 +194,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn choose_camera(scene: &Scene, index: Option<usize>) -> anyhow::Result<Camera> {
+pub(crate) fn choose_camera(scene: &Scene, index: Option<usize>) -> anyhow::Result<Camera> {
     match (index, scene.cameras.len()) {
         (Some(i), n) if i >= n => {
             bail!("--camera {i}: the scene has {n} camera(s){}", if n > 0 { format!(", numbered 0 to {}", n - 1) } else { String::new() })
@@ -207,34 +214,12 @@ fn choose_camera(scene: &Scene, index: Option<usize>) -> anyhow::Result<Camera> 
 
 /// Per-pass statistics over the timed frames.
 struct TimingReport {
-    passes: Vec<(&'static str, Vec<f64>)>,
-    frame_totals: Vec<f64>,
-}
-
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    let rank = (p * (sorted.len() - 1) as f64).round() as usize;
-    sorted[rank.min(sorted.len() - 1)]
+    samples: FrameSamples,
 }
 
 impl TimingReport {
-    fn new(frames: &[manylights::gpu::PassTimings]) -> Self {
-        let mut passes: Vec<(&'static str, Vec<f64>)> = Vec::new();
-        for frame in frames {
-            for &(name, ms) in frame {
-                match passes.iter_mut().find(|(n, _)| *n == name) {
-                    Some((_, samples)) => samples.push(ms),
-                    None => passes.push((name, vec![ms])),
-                }
-            }
-        }
-        let frame_totals = frames.iter().map(|f| f.iter().map(|(_, ms)| ms).sum()).collect();
-        Self { passes, frame_totals }
-    }
-
-    fn stats(samples: &[f64]) -> (f64, f64) {
-        let mut sorted = samples.to_vec();
-        sorted.sort_by(f64::total_cmp);
-        (percentile(&sorted, 0.5), percentile(&sorted, 0.95))
+    fn new(frames: &[FrameTiming]) -> Self {
+        Self { samples: FrameSamples::new(frames) }
     }
 
     fn print(&self, device: &str, args: &RenderArgs, renderer: &Renderer, scene: &Scene) {
@@ -251,20 +236,24 @@ impl TimingReport {
             args.warmup
         );
         println!("{:<20} {:>10} {:>10}", "pass", "median ms", "p95 ms");
-        for (name, samples) in &self.passes {
-            let (median, p95) = Self::stats(samples);
+        let line = |name: &str, samples: &[f64]| {
+            let Stat { median, p95 } = Stat::of(samples);
             println!("{name:<20} {median:>10.3} {p95:>10.3}");
+        };
+        for (name, samples) in &self.samples.passes {
+            line(name, samples);
         }
-        let (median, p95) = Self::stats(&self.frame_totals);
-        println!("{:<20} {median:>10.3} {p95:>10.3}", "frame (sum)");
+        line("frame (sum)", &self.samples.gpu_frame);
+        line("cpu (record)", &self.samples.cpu_frame);
     }
 
     fn to_json(&self, device: &str, args: &RenderArgs, renderer: &Renderer, scene: &Scene) -> serde_json::Value {
         let pass = |samples: &[f64]| {
-            let (median, p95) = Self::stats(samples);
+            let Stat { median, p95 } = Stat::of(samples);
             serde_json::json!({ "median_ms": median, "p95_ms": p95, "samples_ms": samples })
         };
-        let passes: serde_json::Map<String, serde_json::Value> = self.passes.iter().map(|(n, s)| (n.to_string(), pass(s))).collect();
+        let passes: serde_json::Map<String, serde_json::Value> =
+            self.samples.passes.iter().map(|(n, s)| (n.to_string(), pass(s))).collect();
         serde_json::json!({
             "device": device,
             "commit": env!("MANYLIGHTS_COMMIT"),
@@ -281,7 +270,8 @@ impl TimingReport {
             "warmup_frames": args.warmup,
             "timed_frames": args.frames,
             "passes": passes,
-            "frame": pass(&self.frame_totals),
+            "frame": pass(&self.samples.gpu_frame),
+            "cpu_frame": pass(&self.samples.cpu_frame),
         })
     }
 }

@@ -31,10 +31,26 @@ pub struct Renderer {
 /// trilinearly, with a warning.
 fn effective_anisotropy(ctx: &GpuContext, config: &RenderConfig) -> u16 {
     if config.anisotropy > 1 && ctx.info.name.contains("llvmpipe") {
-        log::warn!("lavapipe is pathologically slow at anisotropic filtering: using --anisotropy 1 on it");
+        static WARNED: std::sync::Once = std::sync::Once::new();
+        WARNED.call_once(|| log::warn!("lavapipe is pathologically slow at anisotropic filtering: using --anisotropy 1 on it"));
         return 1;
     }
     config.anisotropy
+}
+
+/// One frame's timings: GPU milliseconds per pass (empty without timestamp support), and the CPU's
+/// milliseconds to record and submit the frame's commands.
+#[derive(Clone, Debug, Default)]
+pub struct FrameTiming {
+    pub passes: PassTimings,
+    pub cpu_ms: f64,
+}
+
+impl FrameTiming {
+    /// The frame's GPU time: the sum of its passes.
+    pub fn gpu_ms(&self) -> f64 {
+        self.passes.iter().map(|(_, ms)| ms).sum()
+    }
 }
 
 /// A read-back image, rows top to bottom.
@@ -90,16 +106,16 @@ impl Renderer {
     /// Renders one frame and waits for it; returns per-pass GPU milliseconds (empty without
     /// timestamp support).
     pub fn render(&mut self, camera: &Camera) -> Result<PassTimings> {
-        Ok(self.render_frames(camera, 1)?.pop().unwrap_or_default())
+        Ok(self.render_frames(camera, 1)?.pop().map(|frame| frame.passes).unwrap_or_default())
     }
 
     /// Renders `count` frames submitted back to back, as an application's frame loop does, waiting
     /// only when the timer's slots are full and at the end; each frame advances `time` by
-    /// [`FRAME_INTERVAL`]. Returns each frame's pass timings.
+    /// [`FRAME_INTERVAL`]. Returns each frame's timings.
     ///
     /// When the clustered lists were too short for a frame, they grow and the frames are rendered
     /// again from the same time, so every returned frame is complete.
-    pub fn render_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<PassTimings>> {
+    pub fn render_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<FrameTiming>> {
         let start = self.time;
         loop {
             let timings = self.submit_frames(camera, count)?;
@@ -113,12 +129,13 @@ impl Renderer {
         }
     }
 
-    fn submit_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<PassTimings>> {
+    fn submit_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<FrameTiming>> {
         let mut uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.constants, self.config.tonemapper);
         uniforms.light_instance_count = self.lights.instance_count();
         uniforms.decal_instance_count = self.decals.instance_count();
         self.scene.write_frame(&self.ctx.queue, &uniforms);
         let mut timings = Vec::new();
+        let mut cpu_ms = Vec::with_capacity(count as usize);
         for _ in 0..count {
             let mut encoder = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
             if let Some(timer) = &mut self.timer {
@@ -127,6 +144,8 @@ impl Renderer {
                 }
                 timer.begin_frame();
             }
+            // From here to the submit is the CPU's work for the frame (waits for the timer are before).
+            let recording = std::time::Instant::now();
             for structure in [&mut self.lights, &mut self.decals] {
                 structure.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time)?;
                 structure.record_clusters(&mut encoder, self.timer.as_mut(), &self.scene.bind_group);
@@ -137,6 +156,7 @@ impl Renderer {
                 timer.resolve(&mut encoder);
             }
             self.ctx.queue.submit([encoder.finish()]);
+            cpu_ms.push(recording.elapsed().as_secs_f64() * 1e3);
             self.time += FRAME_INTERVAL;
         }
         match &mut self.timer {
@@ -144,7 +164,8 @@ impl Renderer {
             None => self.ctx.wait_idle()?,
         }
         self.ctx.check_errors()?;
-        Ok(timings)
+        timings.resize_with(cpu_ms.len(), PassTimings::default);
+        Ok(timings.into_iter().zip(cpu_ms).map(|(passes, cpu_ms)| FrameTiming { passes, cpu_ms }).collect())
     }
 
     /// Entries the clustered lists of lights and of decals hold now, for the methods that use them.

@@ -18,6 +18,8 @@ const REQUIRED_STORAGE_BUFFERS: u32 = 16;
 const OPTIONAL_FEATURES: wgpu::Features =
     wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::PRIMITIVE_INDEX).union(wgpu::Features::FLOAT32_BLENDABLE);
 
+/// Clones share the device: several renderers (a benchmark's configurations) can use one.
+#[derive(Clone)]
 pub struct GpuContext {
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,

@@ -194,25 +194,159 @@ pub fn surface_points(scene: &Scene, count: usize, seed: u64) -> Vec<Vec3> {
 /// Appends [`scatter_decals`] to the scene's decals, which must not be grouped yet, with the
 /// procedural decal materials ([`decal_textures`]), which are added the first time only.
 pub fn add_scattered_decals(scene: &mut Scene, params: &ScatterDecals) -> Result<()> {
-    check_ungrouped(&scene.decal_groups, "decals")?;
     check_decals(params)?;
+    add_decals_with_builtin_materials(scene, params.count, |scene, materials| scatter_decals(scene, params, materials))
+}
+
+/// Most decals [`large_decals`] places: one per flat surface, and scenes have few large ones.
+pub const MAX_LARGE_DECALS: usize = 256;
+
+/// Decals covering the largest flat surfaces of a scene — its floors and walls — as in the paper's
+/// "large decals" scene: coplanar triangles are pooled by plane, the planes with the most area are
+/// taken, and each gets one decal whose box spans all of that plane's triangles, thin along its normal.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LargeDecals {
+    pub count: usize,
+    pub seed: u64,
+}
+
+/// Generates up to `params.count` large decals (fewer when the scene has fewer distinct planes), each
+/// with a material drawn from `materials`, layer 0 and weight 1. Deterministic.
+pub fn large_decals(scene: &Scene, params: &LargeDecals, materials: Range<usize>) -> Result<Vec<Decal>> {
+    if params.count > MAX_LARGE_DECALS {
+        return Err(Error::InvalidConfig(format!("large decals: count {} exceeds the maximum of {MAX_LARGE_DECALS}", params.count)));
+    }
+    if materials.is_empty() || materials.end > scene.materials.len() {
+        return Err(Error::InvalidConfig(format!(
+            "large decals: materials {materials:?} must be a non-empty range of the scene's {} materials",
+            scene.materials.len()
+        )));
+    }
+    scene.validate()?;
     if params.count == 0 {
+        return Ok(Vec::new());
+    }
+    let diagonal = scene.bounds().diagonal();
+    if !(diagonal.is_finite() && diagonal > 0.0) {
+        return Err(Error::InvalidConfig(format!("cannot place {} large decals: the scene has no extent", params.count)));
+    }
+    let planes = flat_surfaces(&Surfaces::new(scene), diagonal);
+    let mut rng = Pcg64::seed_from_u64(params.seed);
+    Ok(planes
+        .into_iter()
+        .take(params.count)
+        .map(|plane| Decal { world_from_decal: plane.world_from_box, material: rng.random_range(materials.clone()), layer: 0, weight: 1.0 })
+        .collect())
+}
+
+/// Appends [`large_decals`] to the scene's decals, which must not be grouped yet, with the procedural
+/// decal materials, added the first time only.
+pub fn add_large_decals(scene: &mut Scene, params: &LargeDecals) -> Result<()> {
+    add_decals_with_builtin_materials(scene, params.count, |scene, materials| large_decals(scene, params, materials))
+}
+
+/// Runs a decal generator with the built-in decal materials, adding them to the scene the first time;
+/// on error the scene is left as it was.
+fn add_decals_with_builtin_materials(
+    scene: &mut Scene,
+    count: usize,
+    generate: impl FnOnce(&Scene, Range<usize>) -> Result<Vec<Decal>>,
+) -> Result<()> {
+    check_ungrouped(&scene.decal_groups, "decals")?;
+    if count == 0 {
         return Ok(());
     }
     let (material_count, texture_count) = (scene.materials.len(), scene.textures.len());
     let materials = decal_textures::find_decal_materials(scene).unwrap_or_else(|| decal_textures::add_decal_materials(scene));
-    match scatter_decals(scene, params, materials) {
+    match generate(scene, materials) {
         Ok(decals) => {
             scene.decals.extend(decals);
             Ok(())
         }
         Err(e) => {
-            // Leave the scene as it was.
             scene.materials.truncate(material_count);
             scene.textures.truncate(texture_count);
             Err(e)
         }
     }
+}
+
+/// One flat surface: the triangles of one plane (one side of it), pooled.
+struct FlatSurface {
+    normal: Vec3,
+    offset: f32,
+    /// The decal box covering every triangle of the plane: x and y span it, z is its thickness.
+    world_from_box: Affine3A,
+}
+
+/// The scene's planes, largest area first. Triangles are pooled by their normal (to about 3°) and
+/// their distance from the origin (to 0.5 % of the scene's diagonal); a plane within that of a larger
+/// one already taken is the same surface split across pooling cells and is dropped.
+fn flat_surfaces(surfaces: &Surfaces, diagonal: f32) -> Vec<FlatSurface> {
+    const NORMAL_CELLS: f32 = 20.0;
+    let offset_cell = diagonal * 0.005;
+    struct Pool {
+        area: f64,
+        normal_sum: Vec3,
+        corners: Vec<Vec3>,
+    }
+    let mut pools: std::collections::HashMap<[i32; 4], Pool> = std::collections::HashMap::new();
+    for &(ii, pi, first) in &surfaces.triangles {
+        let [(a, na), (b, nb), (c, nc)] = surfaces.corners(ii as usize, pi as usize, first as usize);
+        let cross = (b - a).cross(c - a);
+        let area = cross.length() * 0.5;
+        if !(area.is_finite() && area > 0.0) {
+            continue;
+        }
+        let geometric = cross / (2.0 * area);
+        let normal = if geometric.dot(na + nb + nc) < 0.0 { -geometric } else { geometric };
+        let q = (normal * NORMAL_CELLS).round();
+        let key = [q.x as i32, q.y as i32, q.z as i32, (normal.dot(a) / offset_cell).round() as i32];
+        let pool = pools.entry(key).or_insert_with(|| Pool { area: 0.0, normal_sum: Vec3::ZERO, corners: Vec::new() });
+        pool.area += f64::from(area);
+        pool.normal_sum += normal * area;
+        pool.corners.extend([a, b, c]);
+    }
+    let mut pools: Vec<([i32; 4], Pool)> = pools.into_iter().collect();
+    // Largest first; the key breaks ties so the order never depends on the hash map's.
+    pools.sort_by(|(ka, a), (kb, b)| b.area.total_cmp(&a.area).then(ka.cmp(kb)));
+
+    let mut planes: Vec<FlatSurface> = Vec::new();
+    for (_, pool) in pools {
+        let normal = pool.normal_sum.normalize_or_zero();
+        if normal == Vec3::ZERO {
+            continue;
+        }
+        let offset = normal.dot(pool.corners[0]);
+        let same_surface = |p: &FlatSurface| p.normal.dot(normal) > 0.99 && (p.offset - offset).abs() < 2.0 * offset_cell;
+        if planes.iter().any(same_surface) {
+            continue;
+        }
+        // The decal's image is upright: its y is world up, or -Z on floors and ceilings (as scene files place decals).
+        let up = if normal.y.abs() > 0.99 { Vec3::NEG_Z } else { Vec3::Y };
+        let x = up.cross(normal).normalize();
+        let y = normal.cross(x);
+        let (mut min, mut max) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for p in &pool.corners {
+            let local = Vec3::new(x.dot(*p), y.dot(*p), normal.dot(*p));
+            min = min.min(local);
+            max = max.max(local);
+        }
+        // Thick enough for the surface's relief: a hundredth of the scene's diagonal either side.
+        let thickness = (max.z - min.z) + 0.02 * diagonal;
+        let centre = (min + max) * 0.5;
+        planes.push(FlatSurface {
+            normal,
+            offset,
+            world_from_box: Affine3A::from_cols(
+                (x * (max.x - min.x)).into(),
+                (y * (max.y - min.y)).into(),
+                (normal * thickness).into(),
+                (x * centre.x + y * centre.y + normal * centre.z).into(),
+            ),
+        });
+    }
+    planes
 }
 
 /// World-space items appended to grouped ones would land in the wrong space and break the grouping.
@@ -749,5 +883,37 @@ mod tests {
         add_scattered_lights(&mut scene, &ScatterLights { count: 5, ..Default::default() }).unwrap();
         assert_eq!(scene.lights.len(), 15);
         scene.validate().unwrap();
+    }
+
+    #[test]
+    fn large_decals_cover_whole_floors_largest_first() {
+        let mut scene = two_floors();
+        // The upper floor, flipped at y = 2, is made twice as wide: four times the area, so it comes first.
+        scene.instances[1].world_from_local *= Mat4::from_scale(Vec3::new(2.0, 1.0, 2.0));
+        add_large_decals(&mut scene, &LargeDecals { count: 5, seed: 1 }).unwrap();
+        // Two planes, so two decals however many were asked for.
+        assert_eq!(scene.decals.len(), 2);
+        scene.validate().unwrap();
+        let [upper, lower] = [&scene.decals[0], &scene.decals[1]];
+        let inside = |d: &Decal, p: Vec3| crate::accel::decal_contains(d, p);
+        for (x, z) in [(0.0, 0.0), (3.99, 3.99), (-3.99, 1.0)] {
+            assert!(inside(upper, Vec3::new(x, 2.0, z)), "upper floor at ({x}, {z})");
+        }
+        for (x, z) in [(0.0, 0.0), (1.99, -1.99), (-1.99, 1.99)] {
+            assert!(inside(lower, Vec3::new(x, 0.0, z)), "lower floor at ({x}, {z})");
+            assert!(!inside(lower, Vec3::new(x, 1.0, z)), "a metre above the lower floor");
+        }
+        assert!(!inside(lower, Vec3::new(3.0, 0.0, 0.0)), "beyond the lower floor's edge");
+        // Projecting along the floors' normals: the box's z faces out of each floor.
+        let z = |d: &Decal| Vec3::from(d.world_from_decal.matrix3.z_axis).normalize();
+        assert!(z(upper).abs_diff_eq(Vec3::NEG_Y, 1e-5) && z(lower).abs_diff_eq(Vec3::Y, 1e-5));
+        assert!(scene.decals.iter().all(|d| d.layer == 0 && d.weight == 1.0));
+        // Deterministic, and a count of 1 keeps the largest.
+        let mut again = two_floors();
+        again.instances[1].world_from_local *= Mat4::from_scale(Vec3::new(2.0, 1.0, 2.0));
+        add_large_decals(&mut again, &LargeDecals { count: 1, seed: 1 }).unwrap();
+        assert_eq!(again.decals, scene.decals[..1]);
+        let err = add_large_decals(&mut again, &LargeDecals { count: MAX_LARGE_DECALS + 1, seed: 1 }).unwrap_err();
+        assert!(err.to_string().contains("exceeds the maximum"), "{err}");
     }
 }

@@ -11,6 +11,7 @@ pub mod decal_textures;
 pub mod demo;
 pub mod generators;
 pub mod gltf;
+pub mod paper_scenes;
 pub mod scene_file;
 mod tangents;
 

@@ -63,6 +63,10 @@
 //! seed = 1                # default 1
 //! size = 0.5              # mean edge; default 2.5 % of the scene's diagonal
 //!
+//! [[large_decals]]        # decals covering the largest flat surfaces, floors and walls (generators::LargeDecals)
+//! count = 6               # required: one per plane, largest first
+//! seed = 1                # default 1: picks their built-in materials
+//!
 //! [animate]               # group all lights and decals into spinning groups (generators::group_for_animation)
 //! groups = 16             # default 16
 //! seed = 1                # default 1
@@ -77,7 +81,7 @@ use std::path::{Path, PathBuf};
 use glam::{Affine3A, Vec3, Vec4};
 use serde::Deserialize;
 
-use super::generators::{self, ScatterDecals, ScatterLights};
+use super::generators::{self, LargeDecals, ScatterDecals, ScatterLights};
 use super::{
     validate_decal, validate_light, Camera, Decal, Light, LightKind, Material, Scene, Sun, Texture, TextureRef, Wrap, DECAL_LAYERS,
     DEFAULT_LIGHT_CUTOFF,
@@ -118,6 +122,8 @@ struct SceneFile {
     decals: Vec<DecalSpec>,
     #[serde(default)]
     scatter_decals: Vec<ScatterDecalsSpec>,
+    #[serde(default)]
+    large_decals: Vec<LargeDecalsSpec>,
     animate: Option<AnimateSpec>,
 }
 
@@ -212,6 +218,13 @@ struct ScatterDecalsSpec {
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
+struct LargeDecalsSpec {
+    count: usize,
+    seed: Option<u64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct AnimateSpec {
     groups: Option<usize>,
     seed: Option<u64>,
@@ -248,6 +261,10 @@ impl SceneFile {
         for (i, spec) in self.decals.iter().enumerate() {
             let decal = spec.to_decal(scene, &mut decal_materials).and_then(|d| validate_decal(&d, scene.materials.len()).map(|()| d));
             scene.decals.push(decal.map_err(|m| format!("decal {i}: {m}"))?);
+        }
+        for (i, spec) in self.large_decals.iter().enumerate() {
+            let params = LargeDecals { count: spec.count, seed: spec.seed.unwrap_or(1) };
+            generators::add_large_decals(scene, &params).map_err(|e| format!("large_decals {i}: {}", inner_message(e)))?;
         }
         for (i, spec) in self.scatter_decals.iter().enumerate() {
             let params = ScatterDecals { count: spec.count, seed: spec.seed.unwrap_or(ScatterDecals::default().seed), size: spec.size };
@@ -819,6 +836,16 @@ roughness_metallic = "decals/rm.png"
         assert!(zero.starts_with("animate:") && zero.contains("at least 1"), "{zero}");
         let unknown = reason(load_text("animate_unknown", "[animate]\nspeed = 2\n"));
         assert!(unknown.contains("unknown field `speed`"), "{unknown}");
+        // The box's six faces are six planes: six large decals, one on each, before the scattered ones.
+        std::fs::write(&path, "gltf = 'Box.gltf'\n[[large_decals]]\ncount = 8\n[[scatter_decals]]\ncount = 3\n").unwrap();
+        let large = load(&path).unwrap();
+        assert_eq!(large.decals.len(), 6 + 3);
+        let normals: Vec<Vec3> = large.decals[..6].iter().map(|d| Vec3::from(d.world_from_decal.matrix3.z_axis).normalize()).collect();
+        for axis in [Vec3::X, Vec3::Y, Vec3::Z, Vec3::NEG_X, Vec3::NEG_Y, Vec3::NEG_Z] {
+            assert!(normals.iter().any(|n| n.abs_diff_eq(axis, 1e-4)), "no large decal facing {axis}: {normals:?}");
+        }
+        let many = reason(load_text("large_decals_many", "[[large_decals]]\ncount = 1000\n"));
+        assert!(many.starts_with("large_decals 0:") && many.contains("exceeds the maximum"), "{many}");
         let size = reason(load_text("scatter_decals_size", "[[scatter_decals]]\ncount = 4\nsize = -1.0\n"));
         assert!(size.starts_with("scatter_decals 0:") && size.contains("size -1 must be a finite length > 0"), "{size}");
         let empty = reason(load_text("scatter_decals_empty", "[[scatter_decals]]\ncount = 4\n"));
