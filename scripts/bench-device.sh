@@ -7,6 +7,8 @@
 #   scripts/bench-device.sh lights       pipelines × light methods on 28k small lights (issue 4)
 #   scripts/bench-device.sh decals       pipelines × decal methods on 100k decals (issue 4)
 #   scripts/bench-device.sh tests        the GPU-only test binaries under .bench/tests/, if any
+#   scripts/bench-device.sh table        `manylights bench`: the paper's Table 1, every pipeline and method (issue 5)
+#   scripts/bench-device.sh sweeps       `manylights bench`: lights and decals from 1k to 1M (issue 5)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -94,13 +96,22 @@ tests() {
   done
 }
 
+# The bench command's own report (bench.md, .json, .csv, plots) lands in the archive under bench-<set>/.
+bench() { # set name, then bench arguments
+  local name=$1; shift
+  echo "== bench $name"
+  timeout 570 $bin bench --scene $sponza --out "$out/bench-$name" "$@" && cat "$out/bench-$name/bench.md"
+}
+
 for set in "${@:-structures}"; do
   case $set in
     structures) structures ;;
     lights) matrix_lights ;;
     decals) matrix_decals ;;
     tests) tests ;;
-    *) echo "unknown set $set (structures, lights, decals or tests)" >&2; exit 2 ;;
+    table) bench table --sweeps none ;;
+    sweeps) bench sweeps --scenes none ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table or sweeps)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

@@ -422,7 +422,8 @@ fn run_jobs(ctx: &GpuContext, base: &Scene, camera: &Camera, jobs: &[Job], plan:
             measure::measure(ctx, made, camera, job.config.clone(), plan)
         };
         if let measure::Outcome::Failed(reason) = &outcome {
-            progress.println(format!("{} {} {}: {reason}", job.suite.name(), job.scene_name, describe_config(&job.config)));
+            // Not `progress.println`, which prints nothing when the bar is hidden (no terminal).
+            progress.suspend(|| eprintln!("{} {} {}: {reason}", job.suite.name(), job.scene_name, describe_config(&job.config)));
         }
         results.push(Measurement {
             suite: job.suite,
