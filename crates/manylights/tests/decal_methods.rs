@@ -69,6 +69,16 @@ fn demo_with_thousands_of_decals() {
     assert_decal_methods_agree(&scene, 128, 72, 0.0);
 }
 
+/// Wall-sized decals reach more froxels than one thread walks: the clustered build spreads them over
+/// workgroups (`cluster_build.wgsl`), beside small decals walked by single threads.
+#[test]
+fn large_decals_over_whole_walls() {
+    let mut scene = with_decals_and_lights(demo_scene(), 200, 100, 8);
+    generators::add_large_decals(&mut scene, &generators::LargeDecals { count: 6, seed: 3 }).unwrap();
+    assert!(decal_effect(&scene, 96, 54) > 1e-3, "the decals barely change the image");
+    assert_decal_methods_agree(&scene, 128, 72, 0.0);
+}
+
 #[test]
 fn sponza_with_thousands_of_decals_and_lights() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets/sponza/Sponza.gltf");

@@ -16,12 +16,14 @@ const HEIGHT: u32 = 560;
 const METHODS: [(&str, RGBColor); 3] =
     [("bvh", RGBColor(31, 119, 180)), ("clustered", RGBColor(255, 127, 14)), ("brute", RGBColor(44, 160, 44))];
 const REFERENCE: RGBColor = RGBColor(128, 128, 128);
+/// The name the plots' font is registered under.
+const FONT: &str = "hack";
 
-/// Text is drawn with egui's embedded font, so the plots need no system fonts.
+/// Text is drawn with egui's embedded Hack font, so the plots need no system fonts.
 fn register_font() -> anyhow::Result<()> {
     static REGISTERED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    let ok = *REGISTERED
-        .get_or_init(|| plotters::style::register_font("sans-serif", FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT).is_ok());
+    let ok =
+        *REGISTERED.get_or_init(|| plotters::style::register_font(FONT, FontStyle::Normal, epaint_default_fonts::HACK_REGULAR).is_ok());
     ok.then_some(()).ok_or_else(|| anyhow!("the plot font failed to load"))
 }
 
@@ -33,7 +35,7 @@ pub(crate) fn sweep(path: &Path, info: &RunInfo, sweep: SweepArg, rows: &[&Measu
         let root = BitMapBackend::with_buffer(&mut pixels, (WIDTH, HEIGHT)).into_drawing_area();
         root.fill(&WHITE).map_err(plot_error)?;
         let title = format!("{what} sweep: {}, {}×{}, {}", info.device, info.width, info.height, rows[0].config.pipeline.name());
-        let root = root.titled(&title, ("sans-serif", 22)).map_err(plot_error)?;
+        let root = root.titled(&title, (FONT, 22)).map_err(plot_error)?;
         let (left, right) = root.split_horizontally(WIDTH / 2);
         panel(&left, &format!("GPU build per frame (ms) against {what}"), PassGroup::Build, rows).map_err(plot_error)?;
         panel(&right, &format!("shading pass (ms) against {what}"), PassGroup::Shade, rows).map_err(plot_error)?;
@@ -73,13 +75,13 @@ fn panel(
     let points: Vec<(f64, f64)> =
         lines.iter().flat_map(|(_, _, s)| s.iter().copied()).chain(reference.iter().flat_map(|(_, s)| s.iter().copied())).collect();
     if points.is_empty() {
-        area.titled(&format!("{caption}: nothing timed"), ("sans-serif", 18))?;
+        area.titled(&format!("{caption}: nothing timed"), (FONT, 18))?;
         return Ok(());
     }
     let (x_min, x_max) = points.iter().fold((f64::MAX, f64::MIN), |(lo, hi), p| (lo.min(p.0), hi.max(p.0)));
     let (y_min, y_max) = points.iter().fold((f64::MAX, f64::MIN), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
     let mut chart = ChartBuilder::on(area)
-        .caption(caption, ("sans-serif", 18))
+        .caption(caption, (FONT, 18))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(64)
@@ -90,7 +92,7 @@ fn panel(
         .y_desc("ms (median)")
         .x_label_formatter(&|x| if *x >= 1e6 { format!("{:.1}M", x / 1e6) } else { format!("{:.0}k", x / 1e3) })
         .y_label_formatter(&|y| format!("{y:.3}"))
-        .label_style(("sans-serif", 14))
+        .label_style((FONT, 14))
         .draw()?;
     for (method, color, points) in lines.into_iter().filter(|(_, _, s)| !s.is_empty()) {
         chart
@@ -110,7 +112,7 @@ fn panel(
         .position(SeriesLabelPosition::UpperLeft)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
-        .label_font(("sans-serif", 14))
+        .label_font((FONT, 14))
         .draw()?;
     Ok(())
 }

@@ -31,7 +31,17 @@ const SCAN_WORKGROUP: u32 = 256;
 const ENTRY_BYTES: u64 = 8;
 /// Entries the lists start with, at least, per volume instance: grown when a frame needs more.
 const INITIAL_ENTRIES_PER_PAIR: u64 = 4;
-const PASSES: [&str; 5] = ["cluster_count", "cluster_scan_blocks", "cluster_scan_block_offsets", "cluster_scan_apply", "cluster_fill"];
+/// Workgroups of the spread passes (`SPREAD_WORKGROUPS` in `cluster_build.wgsl`).
+const SPREAD_WORKGROUPS: u32 = 1024;
+const PASSES: [&str; 7] = [
+    "cluster_count",
+    "cluster_count_spread",
+    "cluster_scan_blocks",
+    "cluster_scan_block_offsets",
+    "cluster_scan_apply",
+    "cluster_fill",
+    "cluster_fill_spread",
+];
 
 /// The froxel grid for an image size.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -150,6 +160,8 @@ pub struct ClusterLists {
     block_sums: wgpu::Buffer,
     status: wgpu::Buffer,
     status_readback: wgpu::Buffer,
+    /// Pairs reaching many froxels, queued for the spread passes: a count, then a pair index each.
+    spread: wgpu::Buffer,
 }
 
 impl ClusterLists {
@@ -207,12 +219,13 @@ impl ClusterLists {
         let block_sums = buffer("block sums", froxels.div_ceil(u64::from(SCAN_WORKGROUP)) * 4, U::STORAGE);
         let status = buffer("status", 8, U::STORAGE | U::COPY_SRC | U::COPY_DST);
         let status_readback = buffer("status readback", 8, U::MAP_READ | U::COPY_DST);
+        let spread = buffer("spread queue", 4 + pairs * 4, U::STORAGE | U::COPY_DST);
 
         let compute = wgpu::ShaderStages::COMPUTE;
         // Keep in sync with the bindings of `cluster_build.wgsl`.
         let mut entries_layout = vec![bindings::uniform(0, compute)];
         entries_layout.extend((1..=3).map(|b| bindings::storage_read(b, compute)));
-        entries_layout.extend((4..=9).map(|b| bindings::storage_read_write(b, compute)));
+        entries_layout.extend((4..=10).map(|b| bindings::storage_read_write(b, compute)));
         let layout = bindings::layout(device, "cluster build", &entries_layout);
         let shader = ShaderDesc::new("accel/cluster_build.wgsl");
         let pipelines = PASSES
@@ -222,7 +235,7 @@ impl ClusterLists {
         let bind_group = build_bind_group(
             ctx,
             &layout,
-            [&params, &inputs[0], &inputs[1], &inputs[2], &counts, &ranges, &cursors, &entries, &block_sums, &status],
+            [&params, &inputs[0], &inputs[1], &inputs[2], &counts, &ranges, &cursors, &entries, &block_sums, &status, &spread],
         );
         let mut lists = Self {
             bind_group,
@@ -244,6 +257,7 @@ impl ClusterLists {
             block_sums,
             status,
             status_readback,
+            spread,
         };
         lists.bind(ctx);
         Ok(lists)
@@ -274,6 +288,7 @@ impl ClusterLists {
             &self.entries,
             &self.block_sums,
             &self.status,
+            &self.spread,
         ];
         self.bind_group = build_bind_group(ctx, &self.layout, buffers);
     }
@@ -291,6 +306,7 @@ impl ClusterLists {
             return;
         }
         encoder.clear_buffer(&self.counts, 0, None);
+        encoder.clear_buffer(&self.spread, 0, Some(4));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(self.scope),
             timestamp_writes: timer.map(|t| t.compute_pass(self.scope)),
@@ -303,6 +319,7 @@ impl ClusterLists {
             pass.set_pipeline(pipeline);
             match *entry {
                 "cluster_count" | "cluster_fill" => pass.dispatch_workgroups(x, y, 1),
+                "cluster_count_spread" | "cluster_fill_spread" => pass.dispatch_workgroups(SPREAD_WORKGROUPS, 1, 1),
                 "cluster_scan_block_offsets" => pass.dispatch_workgroups(1, 1, 1),
                 _ => pass.dispatch_workgroups(blocks, 1, 1),
             }
@@ -349,7 +366,7 @@ impl ClusterLists {
 }
 
 /// The build's bind group, buffers in `cluster_build.wgsl`'s binding order.
-fn build_bind_group(ctx: &GpuContext, layout: &wgpu::BindGroupLayout, buffers: [&wgpu::Buffer; 10]) -> wgpu::BindGroup {
+fn build_bind_group(ctx: &GpuContext, layout: &wgpu::BindGroupLayout, buffers: [&wgpu::Buffer; 11]) -> wgpu::BindGroup {
     bindings::bind_group(&ctx.device, "cluster build", layout, buffers.iter().map(|b| b.as_entire_binding()).collect())
 }
 
