@@ -171,10 +171,18 @@ impl Bvh {
     ///
     /// # Panics
     /// On a BVH that fails [`Bvh::validate`] for `aabbs` (an index out of range); built ones pass.
-    pub fn query_point(&self, aabbs: &[Aabb], p: Vec3, mut visit: impl FnMut(u32)) {
+    pub fn query_point(&self, aabbs: &[Aabb], p: Vec3, visit: impl FnMut(u32)) {
+        let root = if self.nodes.is_empty() { END } else { 0 };
+        self.query_point_between(aabbs, p, [root, END], visit);
+    }
+
+    /// As [`query_point`](Self::query_point), from node `start` until the traversal reaches `stop`:
+    /// a subtree, when `stop` is the node after it (an [`EntryGrid`](super::entry_grid::EntryGrid)
+    /// cell names both).
+    pub fn query_point_between(&self, aabbs: &[Aabb], p: Vec3, [start, stop]: [u32; 2], mut visit: impl FnMut(u32)) {
         // The GPU's traversal, without a stack: into a node whose box holds the point, past it otherwise.
-        let mut n = if self.nodes.is_empty() { END } else { 0 };
-        while n != END {
+        let mut n = start;
+        while n != stop && n != END {
             let node = &self.nodes[n as usize];
             if !node.bounds().contains(p) {
                 n = node.skip;
@@ -438,7 +446,7 @@ fn partition(prims: &mut [Prim], left: impl Fn(&Prim) -> bool) -> usize {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use std::time::Instant;
 
     use rand::{Rng, SeedableRng};
@@ -455,7 +463,7 @@ mod tests {
         visited
     }
 
-    fn brute_force(aabbs: &[Aabb], p: Vec3) -> Vec<u32> {
+    pub(crate) fn brute_force(aabbs: &[Aabb], p: Vec3) -> Vec<u32> {
         (0..aabbs.len() as u32).filter(|&i| aabbs[i as usize].contains(p)).collect()
     }
 
@@ -482,7 +490,7 @@ mod tests {
 
     /// Random boxes mixing the cases a builder gets wrong: flat and point boxes, exact duplicates,
     /// and scales from 1e-30 to 1e30 within one set.
-    fn random_boxes(rng: &mut Pcg64, count: usize) -> Vec<Aabb> {
+    pub(crate) fn random_boxes(rng: &mut Pcg64, count: usize) -> Vec<Aabb> {
         let scale = [1.0, 1e-30, 1e30, 0.0][rng.random_range(0..4)];
         let mut boxes: Vec<Aabb> = Vec::with_capacity(count);
         for _ in 0..count {
@@ -514,7 +522,7 @@ mod tests {
 
     /// Random points and points on the boxes' faces, edges and corners: each coordinate is a random
     /// value, a box's min or max, or one ulp beside it.
-    fn random_points(rng: &mut Pcg64, boxes: &[Aabb], count: usize) -> Vec<Vec3> {
+    pub(crate) fn random_points(rng: &mut Pcg64, boxes: &[Aabb], count: usize) -> Vec<Vec3> {
         let mut points = Vec::with_capacity(count);
         for _ in 0..count {
             let scale = [1e-30, 1.0, 1e30][rng.random_range(0..3)];

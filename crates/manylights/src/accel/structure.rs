@@ -6,8 +6,8 @@
 //!
 //! One bind group per structure, read by `accel/volume_query.wgsl` and the enumeration modules:
 //! `items` (lights or decals, group after group, each in its group's space), `nodes` (the top level
-//! first, then each group's BVH), `primitives` (the top level's instance indices, then item indices)
-//! and `instances`. Sharing one node array between all BVHs keeps the binding count fixed; a
+//! first, then each group's BVH), `primitives` (the top level's instance indices, then item indices,
+//! then the entry grids' cells of CPU-built groups, `entry_grid.rs`) and `instances`. Sharing one node array between all BVHs keeps the binding count fixed; a
 //! structure over 1M volumes still stays under lavapipe's 128 MiB per binding.
 
 use std::ops::Range;
@@ -19,6 +19,7 @@ use super::{
     bvh::MAX_PRIMITIVES,
     clusters::{ClusterBounds, ClusterGrid, ClusterLists},
     decal_aabb,
+    entry_grid::EntryGrid,
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
     light_aabb, Aabb, Bvh, BvhNode,
 };
@@ -62,25 +63,51 @@ pub struct GpuVolumeInstance {
     pub blas_root: u32,
     /// Uniform scale of `world_from_group`: ranges grow with it.
     pub scale: f32,
+    /// The group's entry grid (`entry_grid.rs`), in its space: its corner, …
+    pub grid_min: [f32; 3],
+    /// … its first cell's index in the primitives array ([`NO_ENTRY_GRID`]: queries start at the root), …
+    pub grid_first_cell: u32,
+    /// … cells per unit length along each axis, …
+    pub grid_cells_per_unit: [f32; 3],
+    /// … and cells per axis, 10 bits each, x lowest.
+    pub grid_dims: u32,
 }
 
+/// `GpuVolumeInstance::grid_first_cell` of a group without an entry grid.
+pub const NO_ENTRY_GRID: u32 = u32::MAX;
+
 impl GpuVolumeInstance {
-    fn new(world_from_group: Affine3A, items: &Range<u32>, blas_root: u32) -> Self {
+    fn new(world_from_group: Affine3A, group: &Group) -> Self {
+        let grid = group.entry_grid.as_ref();
         Self {
             group_from_world: affine_rows(&world_from_group.inverse()),
             world_from_group: affine_rows(&world_from_group),
-            first_item: items.start,
-            item_count: items.len() as u32,
-            blas_root,
+            first_item: group.items.start,
+            item_count: group.items.len() as u32,
+            blas_root: group.blas_root,
             scale: world_from_group.matrix3.x_axis.length(),
+            grid_min: grid.map_or([0.0; 3], |g| g.min.to_array()),
+            grid_first_cell: grid.map_or(NO_ENTRY_GRID, |g| g.first_cell),
+            grid_cells_per_unit: grid.map_or([0.0; 3], |g| g.cells_per_unit.to_array()),
+            grid_dims: grid.map_or(0, |g| g.packed_dims),
         }
     }
+}
+
+/// A group's entry grid as the GPU reads it: its cells sit in the primitives array from `first_cell`.
+struct PlacedEntryGrid {
+    min: glam::Vec3,
+    cells_per_unit: glam::Vec3,
+    packed_dims: u32,
+    first_cell: u32,
 }
 
 /// A group's items and its BVH in the shared arrays.
 struct Group {
     items: Range<u32>,
     blas_root: u32,
+    /// Where queries start in a CPU-built BVH.
+    entry_grid: Option<PlacedEntryGrid>,
     /// Bounds of the group's volumes, in its space: the top level's boxes are their images.
     bounds: Aabb,
     /// Present when the group is rebuilt on the GPU.
@@ -241,10 +268,26 @@ impl VolumeStructure {
         if primitive_count > MAX_PRIMITIVES as u64 {
             return Err(Error::InvalidScene(format!("{count} {label}s; a structure holds at most {MAX_PRIMITIVES} volumes and instances")));
         }
-
+        // CPU builds first: their entry grids' cells follow the primitive indices in the same array.
+        let cpu_builds: Vec<Option<(Bvh, Option<EntryGrid>)>> = ranges
+            .iter()
+            .map(|range| {
+                let boxes = &volumes.boxes[range.clone()];
+                if build != BvhBuild::CpuOnce || boxes.is_empty() {
+                    return Ok(None);
+                }
+                let bvh = Bvh::build(boxes)?;
+                let grid = EntryGrid::build(&bvh, boxes);
+                Ok(Some((bvh, grid)))
+            })
+            .collect::<Result<_>>()?;
+        let cell_words: u64 = cpu_builds.iter().flatten().filter_map(|(_, g)| g.as_ref()).map(|g| 2 * g.cells.len() as u64).sum();
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let node_bytes = node_count * std::mem::size_of::<BvhNode>() as u64;
-        for (what, bytes) in [("items", volumes.items.len() as u64), ("BVH nodes", node_bytes)] {
+        let primitive_bytes = (primitive_count + cell_words) * 4;
+        for (what, bytes) in
+            [("items", volumes.items.len() as u64), ("BVH nodes", node_bytes), ("BVH primitives and entry grids", primitive_bytes)]
+        {
             if bytes > limit {
                 return Err(Error::InvalidScene(format!(
                     "the {label} {what} take {} MiB, over this GPU's storage binding limit of {} MiB; use fewer {label}s",
@@ -265,7 +308,7 @@ impl VolumeStructure {
             })
         };
         let nodes = storage("bvh nodes", node_bytes, U::COPY_DST | U::COPY_SRC);
-        let primitives = storage("bvh primitives", primitive_count * 4, U::COPY_DST | U::COPY_SRC);
+        let primitives = storage("bvh primitives", primitive_bytes, U::COPY_DST | U::COPY_SRC);
         let instance_buffer =
             storage("instances", u64::from(instance_slots) * std::mem::size_of::<GpuVolumeInstance>() as u64, U::COPY_DST);
         let items = if volumes.items.is_empty() {
@@ -279,14 +322,14 @@ impl VolumeStructure {
         };
 
         let mut groups = Vec::new();
-        for (range, &blas_root) in ranges.iter().zip(&group_bases) {
+        let mut next_cell = primitive_count as u32;
+        for ((range, &blas_root), cpu_build) in ranges.iter().zip(&group_bases).zip(cpu_builds) {
             let items_range = range.start as u32..range.end as u32;
             let boxes = &volumes.boxes[range.clone()];
             let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
-            let builder = match build {
-                _ if boxes.is_empty() => None,
-                BvhBuild::CpuOnce => {
-                    let bvh = Bvh::build(boxes)?;
+            let mut entry_grid = None;
+            let builder = match cpu_build {
+                Some((bvh, grid)) => {
                     let (group_nodes, group_primitives) = relocate(&bvh, blas_root, instance_slots + items_range.start, items_range.start);
                     ctx.queue.write_buffer(&nodes, u64::from(blas_root) * 32, bytemuck::cast_slice(&group_nodes));
                     ctx.queue.write_buffer(
@@ -294,9 +337,21 @@ impl VolumeStructure {
                         u64::from(instance_slots + items_range.start) * 4,
                         bytemuck::cast_slice(&group_primitives),
                     );
+                    if let Some(grid) = grid {
+                        let cells = relocate_cells(&grid, blas_root);
+                        ctx.queue.write_buffer(&primitives, u64::from(next_cell) * 4, bytemuck::cast_slice(&cells));
+                        entry_grid = Some(PlacedEntryGrid {
+                            min: grid.min,
+                            cells_per_unit: grid.cells_per_unit,
+                            packed_dims: grid.packed_dims(),
+                            first_cell: next_cell,
+                        });
+                        next_cell += cells.len() as u32;
+                    }
                     None
                 }
-                BvhBuild::GpuEveryFrame => {
+                None if boxes.is_empty() => None,
+                None => {
                     let target = LbvhTarget {
                         nodes: nodes.clone(),
                         primitives: primitives.clone(),
@@ -309,7 +364,7 @@ impl VolumeStructure {
                     Some(builder)
                 }
             };
-            groups.push(Group { items: items_range, blas_root, bounds, builder });
+            groups.push(Group { items: items_range, blas_root, entry_grid, bounds, builder });
         }
         let top_level_builder = if instances.len() > CPU_TOP_LEVEL_MAX_INSTANCES {
             let target = LbvhTarget { nodes: nodes.clone(), primitives: primitives.clone(), node_base: 0, primitive_base: 0, item_base: 0 };
@@ -402,7 +457,7 @@ impl VolumeStructure {
             return Ok(());
         }
         let placed: Vec<(Affine3A, &Group)> = self.instances.iter().map(|i| (i.world_from_group_at(time), &self.groups[i.group])).collect();
-        let gpu: Vec<GpuVolumeInstance> = placed.iter().map(|(t, g)| GpuVolumeInstance::new(*t, &g.items, g.blas_root)).collect();
+        let gpu: Vec<GpuVolumeInstance> = placed.iter().map(|(t, g)| GpuVolumeInstance::new(*t, g)).collect();
         let boxes: Vec<Aabb> = placed.iter().map(|(t, g)| g.bounds.transformed(t)).collect();
         if let Some(i) = boxes.iter().position(|b| !b.is_valid()) {
             return Err(Error::InvalidScene(format!("{} instance {i}: its bounds are not finite at time {time}", self.label)));
@@ -461,6 +516,13 @@ fn relocate(bvh: &Bvh, node_base: u32, primitive_base: u32, item_base: u32) -> (
     (nodes, primitives)
 }
 
+/// An entry grid's cells as (start, stop) words in the shared node numbering: node links by
+/// `node_base`; [`END`](super::END) stays.
+fn relocate_cells(grid: &EntryGrid, node_base: u32) -> Vec<u32> {
+    let relocate = |n: u32| if n == super::END { n } else { n + node_base };
+    grid.cells.iter().flat_map(|&[start, stop]| [relocate(start), relocate(stop)]).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use std::mem::{offset_of, size_of};
@@ -484,6 +546,10 @@ mod tests {
             ("item_count", offset_of!(GpuVolumeInstance, item_count)),
             ("blas_root", offset_of!(GpuVolumeInstance, blas_root)),
             ("scale", offset_of!(GpuVolumeInstance, scale)),
+            ("grid_min", offset_of!(GpuVolumeInstance, grid_min)),
+            ("grid_first_cell", offset_of!(GpuVolumeInstance, grid_first_cell)),
+            ("grid_cells_per_unit", offset_of!(GpuVolumeInstance, grid_cells_per_unit)),
+            ("grid_dims", offset_of!(GpuVolumeInstance, grid_dims)),
         ]
         .into_iter()
         .map(|(n, o)| (n.to_string(), o as u32))
@@ -498,7 +564,8 @@ mod tests {
             glam::Quat::from_rotation_y(0.5),
             glam::Vec3::new(1.0, 2.0, 3.0),
         );
-        let gpu = GpuVolumeInstance::new(t, &(4..9), 17);
+        let group = Group { items: 4..9, blas_root: 17, entry_grid: None, bounds: Aabb::EMPTY, builder: None };
+        let gpu = GpuVolumeInstance::new(t, &group);
         let apply =
             |rows: &[[f32; 4]; 3], p: glam::Vec3| glam::Vec3::from_array(rows.map(|r| glam::Vec4::from_array(r).dot(p.extend(1.0))));
         let p = glam::Vec3::new(0.3, -1.0, 2.0);
@@ -506,6 +573,7 @@ mod tests {
         assert!((apply(&gpu.group_from_world, apply(&gpu.world_from_group, p)) - p).length() < 1e-5);
         assert_eq!((gpu.first_item, gpu.item_count, gpu.blas_root), (4, 5, 17));
         assert!((gpu.scale - 2.0).abs() < 1e-6);
+        assert_eq!(gpu.grid_first_cell, NO_ENTRY_GRID);
     }
 
     #[test]

@@ -4,6 +4,9 @@
 // (`#include "accel/volume_query.wgsl" with VOLUMES=light`), naming its bindings `VOLUMES_nodes`,
 // `VOLUMES_primitives`, `VOLUMES_instances`, so lights and decals each get their own cursor.
 //
+// Inside a group the query starts where the group's entry grid says, if it has one (CPU-built groups),
+// and ends at the node after that subtree.
+//
 // A cursor: `VOLUMES_query_next_leaf` returns every group leaf whose box contains the point, and the
 // caller applies its own tight test to the leaf's items (light range and cone, decal box) without a
 // copy of the traversal per use. It hands out whole leaves: a cursor returning one item per call
@@ -20,6 +23,9 @@ var<private> VOLUMES_query_point: vec3<f32>;
 var<private> VOLUMES_query_instance: VolumeInstance;
 var<private> VOLUMES_query_instance_index: u32;
 var<private> VOLUMES_query_node: u32;
+// Where the group's traversal ends: BVH_END from its root, or the node after the subtree an entry
+// grid's cell starts it at.
+var<private> VOLUMES_query_stop: u32;
 var<private> VOLUMES_query_resume: u32;
 var<private> VOLUMES_query_in_group: bool;
 
@@ -35,7 +41,7 @@ fn VOLUMES_query_begin(point: vec3<f32>, instance_count: u32) {
 // (item indices); an empty range when the query is done (leaves are never empty).
 fn VOLUMES_query_next_leaf() -> vec2<u32> {
     loop {
-        if VOLUMES_query_node == BVH_END {
+        if VOLUMES_query_node == BVH_END || (VOLUMES_query_in_group && VOLUMES_query_node == VOLUMES_query_stop) {
             if !VOLUMES_query_in_group {
                 break;
             }
@@ -70,6 +76,13 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
         VOLUMES_query_point = instance_point_to_group(VOLUMES_query_instance, VOLUMES_query_world_point);
         VOLUMES_query_resume = VOLUMES_query_node;
         VOLUMES_query_node = VOLUMES_query_instance.blas_root;
+        VOLUMES_query_stop = BVH_END;
+        if VOLUMES_query_instance.grid_first_cell != NO_ENTRY_GRID {
+            // Start below the levels every leaf reaching the point's cell shares (`accel/entry_grid.rs`).
+            let cell = instance_grid_cell(VOLUMES_query_instance, VOLUMES_query_point);
+            VOLUMES_query_node = VOLUMES_primitives[cell];
+            VOLUMES_query_stop = VOLUMES_primitives[cell + 1u];
+        }
         VOLUMES_query_in_group = true;
     }
     return vec2<u32>(0u);
