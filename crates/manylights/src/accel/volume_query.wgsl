@@ -75,11 +75,12 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
         VOLUMES_query_instance = VOLUMES_instances[VOLUMES_query_instance_index];
         VOLUMES_query_point = instance_point_to_group(VOLUMES_query_instance, VOLUMES_query_world_point);
         VOLUMES_query_resume = VOLUMES_query_node;
-        VOLUMES_query_node = VOLUMES_query_instance.blas_root;
+        let root = VOLUMES_query_instance.blas_root & ~ENTRY_GRID_FLAG;
+        VOLUMES_query_node = root;
         VOLUMES_query_stop = BVH_END;
-        if VOLUMES_query_instance.grid_first_cell != NO_ENTRY_GRID {
+        if (VOLUMES_query_instance.blas_root & ENTRY_GRID_FLAG) != 0u {
             // Start below the levels every leaf reaching the point's cell shares (`accel/entry_grid.rs`).
-            let cell = instance_grid_cell(VOLUMES_query_instance, VOLUMES_query_point);
+            let cell = entry_grid_cell(VOLUMES_nodes[root - 1u], VOLUMES_query_point);
             VOLUMES_query_node = VOLUMES_primitives[cell];
             VOLUMES_query_stop = VOLUMES_primitives[cell + 1u];
         }
