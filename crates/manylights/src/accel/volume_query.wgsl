@@ -30,11 +30,35 @@ var<private> VOLUMES_query_resume: u32;
 var<private> VOLUMES_query_in_group: bool;
 
 // Starts a point query (world space), replacing any in flight; with no instances it finds nothing.
+// With one instance the top level is a single leaf: the query enters its group at once, saving the
+// two dependent loads of that leaf (the group's own boxes still bound the point).
 fn VOLUMES_query_begin(point: vec3<f32>, instance_count: u32) {
     VOLUMES_query_world_point = point;
     VOLUMES_query_point = point;
     VOLUMES_query_node = select(BVH_END, 0u, instance_count > 0u);
     VOLUMES_query_in_group = false;
+    if instance_count == 1u {
+        VOLUMES_query_node = BVH_END;
+        VOLUMES_query_enter(0u);
+    }
+}
+
+// Moves the query into an instance's group, to resume the top level at `VOLUMES_query_node` after it.
+fn VOLUMES_query_enter(instance_index: u32) {
+    VOLUMES_query_instance_index = instance_index;
+    VOLUMES_query_instance = VOLUMES_instances[instance_index];
+    VOLUMES_query_point = instance_point_to_group(VOLUMES_query_instance, VOLUMES_query_world_point);
+    VOLUMES_query_resume = VOLUMES_query_node;
+    let root = VOLUMES_query_instance.blas_root & ~ENTRY_GRID_FLAG;
+    VOLUMES_query_node = root;
+    VOLUMES_query_stop = BVH_END;
+    if (VOLUMES_query_instance.blas_root & ENTRY_GRID_FLAG) != 0u {
+        // Start below the levels every leaf reaching the point's cell shares (`accel/entry_grid.rs`).
+        let cell = entry_grid_cell(VOLUMES_nodes[root - 1u], VOLUMES_query_point);
+        VOLUMES_query_node = VOLUMES_primitives[cell];
+        VOLUMES_query_stop = VOLUMES_primitives[cell + 1u];
+    }
+    VOLUMES_query_in_group = true;
 }
 
 // The next group leaf whose box contains the point, as the range [x, y) of `VOLUMES_primitives`
@@ -70,21 +94,8 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
         if VOLUMES_query_in_group {
             return leaf;
         }
-        // A top-level leaf holds one instance (the top level is an LBVH): enter its group.
-        VOLUMES_query_instance_index = VOLUMES_primitives[leaf.x];
-        VOLUMES_query_instance = VOLUMES_instances[VOLUMES_query_instance_index];
-        VOLUMES_query_point = instance_point_to_group(VOLUMES_query_instance, VOLUMES_query_world_point);
-        VOLUMES_query_resume = VOLUMES_query_node;
-        let root = VOLUMES_query_instance.blas_root & ~ENTRY_GRID_FLAG;
-        VOLUMES_query_node = root;
-        VOLUMES_query_stop = BVH_END;
-        if (VOLUMES_query_instance.blas_root & ENTRY_GRID_FLAG) != 0u {
-            // Start below the levels every leaf reaching the point's cell shares (`accel/entry_grid.rs`).
-            let cell = entry_grid_cell(VOLUMES_nodes[root - 1u], VOLUMES_query_point);
-            VOLUMES_query_node = VOLUMES_primitives[cell];
-            VOLUMES_query_stop = VOLUMES_primitives[cell + 1u];
-        }
-        VOLUMES_query_in_group = true;
+        // A top-level leaf holds one instance: enter its group.
+        VOLUMES_query_enter(VOLUMES_primitives[leaf.x]);
     }
     return vec2<u32>(0u);
 }
