@@ -178,14 +178,8 @@ impl Bvh {
 
     /// As [`query_point`](Self::query_point), from node `start` until the traversal reaches `stop`:
     /// a subtree, when `stop` is the node after it (an [`EntryGrid`](super::entry_grid::EntryGrid)
-    /// cell names both). A `start` with [`LEAF`] set (not [`END`]) is a leaf's `entry`: only its
-    /// primitives are visited.
+    /// cell names both).
     pub fn query_point_between(&self, aabbs: &[Aabb], p: Vec3, [start, stop]: [u32; 2], mut visit: impl FnMut(u32)) {
-        if start != END && start & LEAF != 0 {
-            let leaf = BvhNode { entry: start, ..BvhNode::default() };
-            self.primitive_indices[leaf.leaf_range()].iter().filter(|&&i| aabbs[i as usize].contains(p)).for_each(|&i| visit(i));
-            return;
-        }
         // The GPU's traversal, without a stack: into a node whose box holds the point, past it otherwise.
         let mut n = start;
         while n != stop && n != END {

@@ -3,7 +3,7 @@
 // leaf's `BVH_LEAF | (count − 1) << 27 | first`, naming a range of the primitive index array; `skip`
 // is the node after the subtree, where the traversal goes when the point is outside the box or after
 // a leaf (BVH_END after the last). A lone BVH's root is node 0; in a two-level structure the top
-// level's root is node 0 and each group's is its instances' `blas_root`. Shared by the query
+// level's root is node 0 and each group's is its instances' `blas_root` (without ENTRY_GRID_FLAG). Shared by the query
 // (`volume_query.wgsl`) and the GPU builder (`lbvh.wgsl`).
 
 struct BvhNode {
@@ -34,24 +34,20 @@ struct VolumeInstance {
     blas_root: u32,
     // Uniform scale of `world_from_group`.
     scale: f32,
-    // The group's entry grid (`accel/entry_grid.rs`), in group space: its corner, its first cell's
-    // word in the primitives array (NO_ENTRY_GRID: queries start at `blas_root`), cells per unit
-    // length, and cells per axis, 10 bits each, x lowest. A cell is two words: where the query starts
-    // (a node, or with BVH_LEAF set a leaf's range) and the node it stops at.
-    grid_min: vec3<f32>,
-    grid_first_cell: u32,
-    grid_cells_per_unit: vec3<f32>,
-    grid_dims: u32,
 }
 
-const NO_ENTRY_GRID: u32 = 0xffffffffu;
+// Set in `VolumeInstance::blas_root` when the group has an entry grid (`accel/entry_grid.rs`).
+const ENTRY_GRID_FLAG: u32 = 0x80000000u;
 
 // The first word of the entry-grid cell holding the group-space point `p`, clamped into the grid (the
-// CPU's twin is `EntryGrid::cell_of`). The instance must have a grid.
-fn instance_grid_cell(instance: VolumeInstance, p: vec3<f32>) -> u32 {
-    let dims = (vec3<u32>(instance.grid_dims) >> vec3<u32>(0u, 10u, 20u)) & vec3<u32>(1023u);
-    let cell = vec3<u32>(clamp(floor((p - instance.grid_min) * instance.grid_cells_per_unit), vec3<f32>(0.0), vec3<f32>(dims - 1u)));
-    return instance.grid_first_cell + 2u * ((cell.z * dims.y + cell.y) * dims.x + cell.x);
+// CPU's twin is `EntryGrid::cell_of`). `header` is the node before the group's root (`structure.rs`,
+// `entry_grid_header`): the grid's corner (min), its first cell in the primitives array (entry), cells
+// per unit length (max) and cells per axis, 10 bits each (skip). A cell is two words: the node to
+// start at and the node the query stops at.
+fn entry_grid_cell(header: BvhNode, p: vec3<f32>) -> u32 {
+    let dims = (vec3<u32>(header.skip) >> vec3<u32>(0u, 10u, 20u)) & vec3<u32>(1023u);
+    let cell = vec3<u32>(clamp(floor((p - header.min) * header.max), vec3<f32>(0.0), vec3<f32>(dims - 1u)));
+    return header.entry + 2u * ((cell.z * dims.y + cell.y) * dims.x + cell.x);
 }
 
 fn instance_point_to_group(instance: VolumeInstance, p: vec3<f32>) -> vec3<f32> {

@@ -1,10 +1,8 @@
 //! Entry grids: where a point query starts in a group's BVH. A uniform grid over the group's bounds
-//! names, per cell, the deepest node whose subtree holds every primitive whose box reaches the cell,
-//! and the node after that subtree, where the query stops. A query then skips the levels above that
-//! node — for small volumes, most of the tree: a cell reached by no primitive ends the query at once,
-//! and a cell reached only by one leaf's names that leaf's primitive range itself (its `entry` word,
-//! [`LEAF`] set), which the query hands out without loading the node — and still finds exactly what
-//! a query from the root finds.
+//! names, per cell, the deepest node whose subtree holds every leaf whose box reaches the cell, and
+//! the node after that subtree, where the query stops. A query then skips the levels above that node
+//! — for small volumes, most of the tree: a cell reached by one leaf starts at that leaf, a cell
+//! reached by none ends the query at once — and still finds exactly what a query from the root finds.
 //!
 //! Built on the CPU with the group's BVH (`BvhBuild::CpuOnce`); groups rebuilt on the GPU start at
 //! their root. `structure.rs` stores the cells after the primitive indices and each instance's grid
@@ -12,7 +10,7 @@
 
 use glam::{UVec3, Vec3};
 
-use super::{Aabb, Bvh, END, LEAF};
+use super::{Aabb, Bvh, END};
 
 /// Groups with fewer primitives are queried from the root: their trees are a few levels deep.
 pub const MIN_PRIMITIVES: usize = 16;
@@ -29,9 +27,8 @@ pub struct EntryGrid {
     /// Cells per unit length along each axis (0 along an axis the bounds are flat in).
     pub cells_per_unit: Vec3,
     pub dims: UVec3,
-    /// Per cell, x fastest: (the node to start at, the node to stop at), node indices of the BVH; a
-    /// start with [`LEAF`] set is a leaf's `entry` (its primitive range) instead; ([`END`], [`END`])
-    /// where no primitive reaches the cell.
+    /// Per cell, x fastest: (the node to start at, the node to stop at), node indices of the BVH;
+    /// ([`END`], [`END`]) where no leaf reaches the cell.
     pub cells: Vec<[u32; 2]>,
 }
 
@@ -103,12 +100,11 @@ fn overlaps(a: &Aabb, b: &Aabb) -> bool {
     a.min.cmple(b.max).all() && b.min.cmple(a.max).all()
 }
 
-/// The lowest node whose subtree holds every primitive whose box reaches the cell (a leaf: its
-/// `entry`), and the node after its subtree; ([`END`], [`END`]) when no primitive reaches it.
+/// The lowest node whose subtree holds every primitive whose box reaches the cell, and the node
+/// after its subtree; ([`END`], [`END`]) when no primitive reaches it.
 fn entry_for(bvh: &Bvh, aabbs: &[Aabb], cell: &Aabb) -> [u32; 2] {
-    match lowest_common_ancestor(bvh, aabbs, 0, cell).map(|n| (n, &bvh.nodes[n as usize])) {
-        Some((_, node)) if node.is_leaf() => [node.entry, node.skip],
-        Some((n, node)) => [n, node.skip],
+    match lowest_common_ancestor(bvh, aabbs, 0, cell) {
+        Some(n) => [n, bvh.nodes[n as usize].skip],
         None => [END, END],
     }
 }
@@ -184,7 +180,7 @@ mod tests {
         let cells = grid.cells.len() as f64;
         assert!((5000.0..=20_000.0).contains(&cells), "{cells} cells for 5000 boxes");
         let empty = grid.cells.iter().filter(|c| c[0] == END).count() as f64;
-        let leaves = grid.cells.iter().filter(|c| c[0] != END && c[0] & LEAF != 0).count() as f64;
+        let leaves = grid.cells.iter().filter(|c| c[0] != END && bvh.nodes[c[0] as usize].is_leaf()).count() as f64;
         assert!(empty / cells > 0.3 && (empty + leaves) / cells > 0.6, "{empty} empty and {leaves} leaf cells of {cells}");
         for p in random_points(&mut rng, &boxes, 5000) {
             assert_eq!(query_from_grid(&bvh, &grid, &boxes, p), brute_force(&boxes, p), "at {p:?}");

@@ -6,7 +6,7 @@
 //!
 //! One bind group per structure, read by `accel/volume_query.wgsl` and the enumeration modules:
 //! `items` (lights or decals, group after group, each in its group's space), `nodes` (the top level
-//! first, then each group's BVH), `primitives` (the top level's instance indices, then item indices,
+//! first, then each group's entry-grid header node and BVH), `primitives` (the top level's instance indices, then item indices,
 //! then the entry grids' cells of CPU-built groups, `entry_grid.rs`) and `instances`. Sharing one node array between all BVHs keeps the binding count fixed; a
 //! structure over 1M volumes still stays under lavapipe's 128 MiB per binding.
 
@@ -63,51 +63,39 @@ pub struct GpuVolumeInstance {
     pub blas_root: u32,
     /// Uniform scale of `world_from_group`: ranges grow with it.
     pub scale: f32,
-    /// The group's entry grid (`entry_grid.rs`), in its space: its corner, …
-    pub grid_min: [f32; 3],
-    /// … its first cell's word in the primitives array ([`NO_ENTRY_GRID`]: queries start at the root), …
-    pub grid_first_cell: u32,
-    /// … cells per unit length along each axis, …
-    pub grid_cells_per_unit: [f32; 3],
-    /// … and cells per axis, 10 bits each, x lowest.
-    pub grid_dims: u32,
 }
 
-/// `GpuVolumeInstance::grid_first_cell` of a group without an entry grid.
-pub const NO_ENTRY_GRID: u32 = u32::MAX;
+/// Set in `GpuVolumeInstance::blas_root` when the group has an entry grid (`entry_grid.rs`), whose
+/// header is the node before the root.
+pub const ENTRY_GRID_FLAG: u32 = 1 << 31;
 
 impl GpuVolumeInstance {
     fn new(world_from_group: Affine3A, group: &Group) -> Self {
-        let grid = group.entry_grid.as_ref();
         Self {
             group_from_world: affine_rows(&world_from_group.inverse()),
             world_from_group: affine_rows(&world_from_group),
             first_item: group.items.start,
             item_count: group.items.len() as u32,
-            blas_root: group.blas_root,
+            blas_root: group.blas_root | if group.has_entry_grid { ENTRY_GRID_FLAG } else { 0 },
             scale: world_from_group.matrix3.x_axis.length(),
-            grid_min: grid.map_or([0.0; 3], |g| g.min.to_array()),
-            grid_first_cell: grid.map_or(NO_ENTRY_GRID, |g| g.first_cell),
-            grid_cells_per_unit: grid.map_or([0.0; 3], |g| g.cells_per_unit.to_array()),
-            grid_dims: grid.map_or(0, |g| g.packed_dims),
         }
     }
 }
 
-/// A group's entry grid as the GPU reads it: its cells sit in the primitives array from `first_cell`.
-struct PlacedEntryGrid {
-    min: glam::Vec3,
-    cells_per_unit: glam::Vec3,
-    packed_dims: u32,
-    first_cell: u32,
+/// The node before a group's root that describes its entry grid, read when a query enters the
+/// group: its corner (`min`), its first cell's index in the primitives array (`entry`), cells per unit
+/// length (`max`) and cells per axis, 10 bits each, x lowest (`skip`). Keep in sync with
+/// `entry_grid_cell` in `accel/bvh_types.wgsl`.
+fn entry_grid_header(grid: &EntryGrid, first_cell: u32) -> BvhNode {
+    BvhNode { min: grid.min.to_array(), entry: first_cell, max: grid.cells_per_unit.to_array(), skip: grid.packed_dims() }
 }
 
 /// A group's items and its BVH in the shared arrays.
 struct Group {
     items: Range<u32>,
     blas_root: u32,
-    /// Where queries start in a CPU-built BVH.
-    entry_grid: Option<PlacedEntryGrid>,
+    /// Whether queries start where an entry grid says (CPU-built groups).
+    has_entry_grid: bool,
     /// Bounds of the group's volumes, in its space: the top level's boxes are their images.
     bounds: Aabb,
     /// Present when the group is rebuilt on the GPU.
@@ -256,12 +244,13 @@ impl VolumeStructure {
         let instance_slots = instances.len().max(1) as u32;
         let top_level_nodes = 2 * instance_slots - 1;
 
-        // Node and primitive layout: the top level, then every group's BVH (at most 2n − 1 nodes).
+        // Node and primitive layout: the top level, then every group's entry-grid header and BVH (at
+        // most 2n − 1 nodes).
         let mut node_base = top_level_nodes;
         let mut group_bases = Vec::new();
         for range in &ranges {
-            group_bases.push(node_base);
-            node_base += (2 * range.len() as u32).saturating_sub(1);
+            group_bases.push(node_base + 1);
+            node_base += 1 + (2 * range.len() as u32).saturating_sub(1);
         }
         let node_count = u64::from(node_base);
         let primitive_count = u64::from(instance_slots) + count as u64;
@@ -327,7 +316,7 @@ impl VolumeStructure {
             let items_range = range.start as u32..range.end as u32;
             let boxes = &volumes.boxes[range.clone()];
             let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
-            let mut entry_grid = None;
+            let mut has_entry_grid = false;
             let builder = match cpu_build {
                 Some((bvh, grid)) => {
                     let (group_nodes, group_primitives) = relocate(&bvh, blas_root, instance_slots + items_range.start, items_range.start);
@@ -338,14 +327,11 @@ impl VolumeStructure {
                         bytemuck::cast_slice(&group_primitives),
                     );
                     if let Some(grid) = grid {
-                        let cells = relocate_cells(&grid, blas_root, instance_slots + items_range.start);
+                        let cells = relocate_cells(&grid, blas_root);
                         ctx.queue.write_buffer(&primitives, u64::from(next_cell) * 4, bytemuck::cast_slice(&cells));
-                        entry_grid = Some(PlacedEntryGrid {
-                            min: grid.min,
-                            cells_per_unit: grid.cells_per_unit,
-                            packed_dims: grid.packed_dims(),
-                            first_cell: next_cell,
-                        });
+                        let header = entry_grid_header(&grid, next_cell);
+                        ctx.queue.write_buffer(&nodes, u64::from(blas_root - 1) * 32, bytemuck::bytes_of(&header));
+                        has_entry_grid = true;
                         next_cell += cells.len() as u32;
                     }
                     None
@@ -364,7 +350,7 @@ impl VolumeStructure {
                     Some(builder)
                 }
             };
-            groups.push(Group { items: items_range, blas_root, entry_grid, bounds, builder });
+            groups.push(Group { items: items_range, blas_root, has_entry_grid, bounds, builder });
         }
         let top_level_builder = if instances.len() > CPU_TOP_LEVEL_MAX_INSTANCES {
             let target = LbvhTarget { nodes: nodes.clone(), primitives: primitives.clone(), node_base: 0, primitive_base: 0, item_base: 0 };
@@ -516,14 +502,10 @@ fn relocate(bvh: &Bvh, node_base: u32, primitive_base: u32, item_base: u32) -> (
     (nodes, primitives)
 }
 
-/// An entry grid's cells as (start, stop) words in the shared arrays: node indices by `node_base`,
-/// leaf starts' primitive ranges by `primitive_base`; [`END`](super::END) stays.
-fn relocate_cells(grid: &EntryGrid, node_base: u32, primitive_base: u32) -> Vec<u32> {
-    let relocate = |n: u32| match n {
-        super::END => n,
-        leaf if leaf & super::LEAF != 0 => BvhNode { entry: leaf, ..BvhNode::default() }.offset(0, primitive_base).entry,
-        node => node + node_base,
-    };
+/// An entry grid's cells as (start, stop) words in the shared node numbering: node links by
+/// `node_base`; [`END`](super::END) stays.
+fn relocate_cells(grid: &EntryGrid, node_base: u32) -> Vec<u32> {
+    let relocate = |n: u32| if n == super::END { n } else { n + node_base };
     grid.cells.iter().flat_map(|&[start, stop]| [relocate(start), relocate(stop)]).collect()
 }
 
@@ -550,10 +532,6 @@ mod tests {
             ("item_count", offset_of!(GpuVolumeInstance, item_count)),
             ("blas_root", offset_of!(GpuVolumeInstance, blas_root)),
             ("scale", offset_of!(GpuVolumeInstance, scale)),
-            ("grid_min", offset_of!(GpuVolumeInstance, grid_min)),
-            ("grid_first_cell", offset_of!(GpuVolumeInstance, grid_first_cell)),
-            ("grid_cells_per_unit", offset_of!(GpuVolumeInstance, grid_cells_per_unit)),
-            ("grid_dims", offset_of!(GpuVolumeInstance, grid_dims)),
         ]
         .into_iter()
         .map(|(n, o)| (n.to_string(), o as u32))
@@ -568,7 +546,7 @@ mod tests {
             glam::Quat::from_rotation_y(0.5),
             glam::Vec3::new(1.0, 2.0, 3.0),
         );
-        let group = Group { items: 4..9, blas_root: 17, entry_grid: None, bounds: Aabb::EMPTY, builder: None };
+        let mut group = Group { items: 4..9, blas_root: 17, has_entry_grid: false, bounds: Aabb::EMPTY, builder: None };
         let gpu = GpuVolumeInstance::new(t, &group);
         let apply =
             |rows: &[[f32; 4]; 3], p: glam::Vec3| glam::Vec3::from_array(rows.map(|r| glam::Vec4::from_array(r).dot(p.extend(1.0))));
@@ -577,7 +555,8 @@ mod tests {
         assert!((apply(&gpu.group_from_world, apply(&gpu.world_from_group, p)) - p).length() < 1e-5);
         assert_eq!((gpu.first_item, gpu.item_count, gpu.blas_root), (4, 5, 17));
         assert!((gpu.scale - 2.0).abs() < 1e-6);
-        assert_eq!(gpu.grid_first_cell, NO_ENTRY_GRID);
+        group.has_entry_grid = true;
+        assert_eq!(GpuVolumeInstance::new(t, &group).blas_root, 17 | ENTRY_GRID_FLAG);
     }
 
     #[test]

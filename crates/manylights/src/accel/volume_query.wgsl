@@ -5,7 +5,7 @@
 // `VOLUMES_primitives`, `VOLUMES_instances`, so lights and decals each get their own cursor.
 //
 // Inside a group the query starts where the group's entry grid says, if it has one (CPU-built groups),
-// and ends at the node after that subtree; a cell that names a single leaf hands it out directly.
+// and ends at the node after that subtree.
 //
 // A cursor: `VOLUMES_query_next_leaf` returns every group leaf whose box contains the point, and the
 // caller applies its own tight test to the leaf's items (light range and cone, decal box) without a
@@ -28,9 +28,6 @@ var<private> VOLUMES_query_node: u32;
 var<private> VOLUMES_query_stop: u32;
 var<private> VOLUMES_query_resume: u32;
 var<private> VOLUMES_query_in_group: bool;
-// A leaf's `entry` an entry-grid cell named, to hand out before anything else; 0 when none (a leaf's
-// entry has BVH_LEAF set).
-var<private> VOLUMES_query_leaf: u32;
 
 // Starts a point query (world space), replacing any in flight; with no instances it finds nothing.
 // With one instance the top level is a single leaf: the query enters its group at once, saving the
@@ -40,7 +37,6 @@ fn VOLUMES_query_begin(point: vec3<f32>, instance_count: u32) {
     VOLUMES_query_point = point;
     VOLUMES_query_node = select(BVH_END, 0u, instance_count > 0u);
     VOLUMES_query_in_group = false;
-    VOLUMES_query_leaf = 0u;
     if instance_count == 1u {
         VOLUMES_query_node = BVH_END;
         VOLUMES_query_enter(0u);
@@ -53,34 +49,22 @@ fn VOLUMES_query_enter(instance_index: u32) {
     VOLUMES_query_instance = VOLUMES_instances[instance_index];
     VOLUMES_query_point = instance_point_to_group(VOLUMES_query_instance, VOLUMES_query_world_point);
     VOLUMES_query_resume = VOLUMES_query_node;
-    VOLUMES_query_node = VOLUMES_query_instance.blas_root;
+    let root = VOLUMES_query_instance.blas_root & ~ENTRY_GRID_FLAG;
+    VOLUMES_query_node = root;
     VOLUMES_query_stop = BVH_END;
-    if VOLUMES_query_instance.grid_first_cell != NO_ENTRY_GRID {
-        // Start below the levels every primitive reaching the point's cell shares (`accel/entry_grid.rs`).
-        let cell = instance_grid_cell(VOLUMES_query_instance, VOLUMES_query_point);
-        let start = VOLUMES_primitives[cell];
+    if (VOLUMES_query_instance.blas_root & ENTRY_GRID_FLAG) != 0u {
+        // Start below the levels every leaf reaching the point's cell shares (`accel/entry_grid.rs`).
+        let cell = entry_grid_cell(VOLUMES_nodes[root - 1u], VOLUMES_query_point);
+        VOLUMES_query_node = VOLUMES_primitives[cell];
         VOLUMES_query_stop = VOLUMES_primitives[cell + 1u];
-        VOLUMES_query_node = start;
-        if start != BVH_END && (start & BVH_LEAF) != 0u {
-            // One leaf's range: handed out next without loading its node; then the group is done.
-            VOLUMES_query_leaf = start;
-            VOLUMES_query_node = VOLUMES_query_stop;
-        }
     }
     VOLUMES_query_in_group = true;
 }
 
 // The next group leaf whose box contains the point, as the range [x, y) of `VOLUMES_primitives`
-// (item indices); an empty range when the query is done (leaves are never empty). A leaf named by an
-// entry-grid cell comes without its box test: callers test every item anyway.
+// (item indices); an empty range when the query is done (leaves are never empty).
 fn VOLUMES_query_next_leaf() -> vec2<u32> {
     loop {
-        // A cell's leaf, set on entering a group: before the group ends (its node is already `stop`).
-        if VOLUMES_query_leaf != 0u {
-            let leaf = bvh_leaf_range(VOLUMES_query_leaf);
-            VOLUMES_query_leaf = 0u;
-            return leaf;
-        }
         if VOLUMES_query_node == BVH_END || (VOLUMES_query_in_group && VOLUMES_query_node == VOLUMES_query_stop) {
             if !VOLUMES_query_in_group {
                 break;
