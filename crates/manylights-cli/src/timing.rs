@@ -10,7 +10,8 @@ pub struct Stat {
 }
 
 impl Stat {
-    /// Nearest-rank statistics; `samples` must not be empty.
+    /// The sorted samples at ranks round(p·(n − 1)) for p = 0.5 and 0.95 (no interpolation); `samples`
+    /// must not be empty.
     pub fn of(samples: &[f64]) -> Self {
         let mut sorted = samples.to_vec();
         sorted.sort_by(f64::total_cmp);

@@ -161,6 +161,38 @@ fn quick_bench_writes_the_configurations_asked_for() {
     assert!(!out.join("sweep-decals.png").exists());
 }
 
+/// A scene that cannot be generated is a failed configuration in the report, not the end of the run.
+#[test]
+fn scenes_that_cannot_be_generated_are_reported_failed() {
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench_failed_scene");
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::create_dir_all(&out).unwrap();
+    // Grouped lights: scattering more into them is refused (`generators::add_scattered_lights`).
+    let box_gltf = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets/box/Box.gltf");
+    let scene = out.join("grouped.toml");
+    std::fs::write(&scene, format!("gltf = {:?}\n[[scatter_lights]]\ncount = 20\n[animate]\ngroups = 2\n", box_gltf.to_str().unwrap()))
+        .unwrap();
+    #[rustfmt::skip]
+    let args = [
+        "bench", "--quick", "--scene", scene.to_str().unwrap(), "--width", "32", "--height", "18", "--anisotropy", "1",
+        "--scenes", "small-lights", "--pipelines", "visbuffer", "--methods", "off,bvh", "--sweeps", "none",
+        "--out", out.to_str().unwrap(),
+    ];
+    let run = manylights(&args);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "bench failed: {stderr}");
+    assert!(stderr.contains("cannot generate the small-lights scene"), "{stderr}");
+    let json: Value = serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    let results = json["results"].as_array().unwrap();
+    let status = |scene: &str| results.iter().find(|r| r["scene"] == scene).map(|r| r["status"].as_str().unwrap().to_owned());
+    assert_eq!(status("base").as_deref(), Some("timed"));
+    assert_eq!(status("small-lights").as_deref(), Some("failed"));
+    let failed = results.iter().find(|r| r["scene"] == "small-lights").unwrap();
+    assert!(failed["reason"].as_str().unwrap().contains("grouped"), "{failed}");
+    let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
+    assert!(md.contains("## Failed configurations") && md.contains("grouped"), "{md}");
+}
+
 #[test]
 fn bad_bench_options_are_clear_errors() {
     let missing = failure(&["bench", "--scene", "/nonexistent/scene.gltf", "--quick"]);

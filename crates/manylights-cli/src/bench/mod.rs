@@ -2,7 +2,8 @@
 //! scaling sweeps of lights and decals from 1k to 1M, and their report (Markdown, JSON, CSV, PNG).
 //!
 //! One device serves every configuration (`measure.rs`); each gets a fresh renderer, a warm-up and
-//! timed frames, or is reported over the time cap or failed, and the run goes on. `report.rs` writes
+//! timed frames, or is reported over the time cap or failed (its scene could not be generated, or the
+//! renderer refused it), and the run goes on. `report.rs` writes
 //! the files, `plot.rs` the sweep plots.
 
 mod measure;
@@ -230,10 +231,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     for job in &jobs {
         job.config.validate(&ctx)?;
     }
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
     if !ctx.has_timestamps() {
         bail!("the benchmark times passes with GPU timestamp queries, which this adapter lacks ({})", ctx.describe());
     }
+    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
     let info = RunInfo {
         device: ctx.info.name.clone(),
         driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info).trim().to_owned(),
@@ -251,7 +252,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         quick: args.quick,
     };
     let plan = Plan { frames, warmup, time_cap_ms: args.time_cap_ms };
-    let results = run_jobs(&ctx, &base, &camera, &jobs, &plan, args.seed)?;
+    let results = run_jobs(&ctx, &base, &camera, &jobs, &plan, args.seed);
 
     let written = report::write_all(&args.out, &info, &results)?;
     for path in written {
@@ -397,23 +398,38 @@ fn decal_method(method: MethodArg) -> DecalMethod {
 
 /// Runs the jobs in order with a progress bar, generating each scene once. In a sweep, a method over
 /// the cap (or failing) at one count is skipped at larger ones.
-fn run_jobs(ctx: &GpuContext, base: &Scene, camera: &Camera, jobs: &[Job], plan: &Plan, seed: u64) -> anyhow::Result<Vec<Measurement>> {
+fn run_jobs(ctx: &GpuContext, base: &Scene, camera: &Camera, jobs: &[Job], plan: &Plan, seed: u64) -> Vec<Measurement> {
     let progress = ProgressBar::new(jobs.len() as u64);
     progress
         .set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} {elapsed_precise} {wide_msg}").expect("a valid progress template"));
     let mut results: Vec<Measurement> = Vec::with_capacity(jobs.len());
-    let mut scene: Option<(SceneRecipe, Scene, Option<f64>)> = None;
+    // The scene of the jobs in hand, generated once for all of them, or why it could not be.
+    let mut current: Option<SceneRecipe> = None;
+    let mut generated: Result<(Scene, Option<f64>), String> = Err(String::new());
     for job in jobs {
         progress.set_message(format!("{} {} {}", job.suite.name(), job.scene_name, describe_config(&job.config)));
-        if scene.as_ref().map(|(recipe, _, _)| *recipe) != Some(job.make_scene) {
-            let made = job.make_scene.build(base, seed).with_context(|| format!("cannot generate the {} scene", job.scene_name))?;
-            let overlap = match job.make_scene.varies() {
-                Some(kind) => Some(measure::mean_overlap(&made, kind, seed, OVERLAP_POINTS)?),
-                None => None,
-            };
-            scene = Some((job.make_scene, made, overlap));
+        if current != Some(job.make_scene) {
+            generated = generate(job.make_scene, base, seed);
+            current = Some(job.make_scene);
         }
-        let (_, made, overlap) = scene.as_ref().expect("generated above");
+        let (made, overlap) = match &generated {
+            Ok((made, overlap)) => (made, overlap),
+            Err(reason) => {
+                let reason = format!("cannot generate the {} scene: {reason}", job.scene_name);
+                progress.suspend(|| eprintln!("{} {}: {reason}", job.suite.name(), describe_config(&job.config)));
+                results.push(Measurement {
+                    suite: job.suite,
+                    scene: job.scene_name.clone(),
+                    lights: base.lights.len(),
+                    decals: base.decals.len(),
+                    overlap: None,
+                    config: job.config.clone(),
+                    outcome: measure::Outcome::Failed(reason),
+                });
+                progress.inc(1);
+                continue;
+            }
+        };
         let gave_up_below = matches!(job.suite, Suite::Sweep(_))
             && results.iter().any(|r| r.suite == job.suite && r.same_method(&job.config) && !r.outcome.is_timed());
         let outcome = if gave_up_below {
@@ -437,7 +453,17 @@ fn run_jobs(ctx: &GpuContext, base: &Scene, camera: &Camera, jobs: &[Job], plan:
         progress.inc(1);
     }
     progress.finish_and_clear();
-    Ok(results)
+    results
+}
+
+/// A job's scene and the mean overlap of what it varies, or why it cannot be made.
+fn generate(recipe: SceneRecipe, base: &Scene, seed: u64) -> Result<(Scene, Option<f64>), String> {
+    let made = recipe.build(base, seed).map_err(|e| e.to_string())?;
+    let overlap = match recipe.varies() {
+        Some(kind) => Some(measure::mean_overlap(&made, kind, seed, OVERLAP_POINTS).map_err(|e| e.to_string())?),
+        None => None,
+    };
+    Ok((made, overlap))
 }
 
 fn describe_config(config: &RenderConfig) -> String {

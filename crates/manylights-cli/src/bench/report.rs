@@ -255,8 +255,8 @@ fn table_one(md: &mut String, table: &[&Measurement]) {
     let _ = writeln!(md, "| scene | forward | visbuffer | deferred | deferred decals |\n| --- | ---: | ---: | ---: | ---: |");
     let paper_cell = |scene: &str, column: &str| {
         PAPER.iter().find(|(s, c, _, _)| *s == scene && *c == column).map_or("—".into(), |(_, _, without, with)| match without {
-            Some(w) => format!("{w} → {with}"),
-            None => format!("{with}"),
+            Some(w) => format!("{w:.1} → {with:.1}"),
+            None => format!("{with:.1}"),
         })
     };
     let row = |scene: &str| ["forward", "visbuffer", "deferred", "deferred decals"].map(|c| paper_cell(scene, c)).join(" | ");

@@ -235,8 +235,7 @@ fn cluster_spread(group: u32, local: u32, fill: bool) {
         let pair = pair_of(spread.pairs[slot]);
         let range = volume_froxels(instances[pair.x], bounds[pair.y]);
         let size = range.last - range.first + 1u;
-        let n = size.x * size.y * size.z;
-        for (var i = local; i < n; i += SPREAD_THREADS) {
+        for (var i = local; i < froxel_count(range); i += SPREAD_THREADS) {
             let column = range.first.x + i % size.x;
             let row = range.first.y + (i / size.x) % size.y;
             let slice = range.first.z + i / (size.x * size.y);
@@ -250,7 +249,7 @@ fn cluster_count(@builtin(global_invocation_id) id: vec3<u32>) {
     cluster_visit(id, false);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(SPREAD_THREADS)
 fn cluster_count_spread(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) local: u32) {
     cluster_spread(group.x, local, false);
 }
@@ -308,7 +307,7 @@ fn cluster_fill(@builtin(global_invocation_id) id: vec3<u32>) {
     cluster_visit(id, true);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(SPREAD_THREADS)
 fn cluster_fill_spread(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) local: u32) {
     cluster_spread(group.x, local, true);
 }

@@ -189,6 +189,14 @@ impl ClusterLists {
             return Err(Error::InvalidScene(format!("{pairs} {label} instances are too many for clustered lists; use the bvh method")));
         }
         pair_starts.push(pairs as u32);
+        let spread_bytes = 4 + pairs * 4;
+        if spread_bytes > ctx.limits.max_storage_buffer_binding_size {
+            return Err(Error::InvalidScene(format!(
+                "{pairs} {label} instances need a {} MiB queue for clustered lists, over this GPU's storage binding limit of {} MiB; use the bvh method or fewer instances",
+                spread_bytes >> 20,
+                ctx.limits.max_storage_buffer_binding_size >> 20
+            )));
+        }
         let capacity = (pairs * INITIAL_ENTRIES_PER_PAIR).clamp(1 << 16, u64::from(max_capacity)) as u32;
 
         use wgpu::util::DeviceExt;
@@ -219,7 +227,7 @@ impl ClusterLists {
         let block_sums = buffer("block sums", froxels.div_ceil(u64::from(SCAN_WORKGROUP)) * 4, U::STORAGE);
         let status = buffer("status", 8, U::STORAGE | U::COPY_SRC | U::COPY_DST);
         let status_readback = buffer("status readback", 8, U::MAP_READ | U::COPY_DST);
-        let spread = buffer("spread queue", 4 + pairs * 4, U::STORAGE | U::COPY_DST);
+        let spread = buffer("spread queue", spread_bytes, U::STORAGE | U::COPY_DST);
 
         let compute = wgpu::ShaderStages::COMPUTE;
         // Keep in sync with the bindings of `cluster_build.wgsl`.

@@ -5,8 +5,9 @@
 //! reached by none ends the query at once — and still finds exactly what a query from the root finds.
 //!
 //! Built on the CPU with the group's BVH (`BvhBuild::CpuOnce`); groups rebuilt on the GPU start at
-//! their root. `structure.rs` stores the cells after the primitive indices and each instance's grid
-//! placement; `volume_query.wgsl` looks the cell up as [`EntryGrid::start`] does here.
+//! their root. `structure.rs` stores the cells after the primitive indices and the grid's placement in
+//! a header node before the group's root (flagged in the instances' `blas_root`);
+//! `volume_query.wgsl` looks the cell up as [`EntryGrid::start`] does here.
 
 use glam::{UVec3, Vec3};
 
@@ -17,7 +18,7 @@ pub const MIN_PRIMITIVES: usize = 16;
 /// Cells per primitive the grid aims at, and the most one grid has (16 MiB of cells).
 const CELLS_PER_PRIMITIVE: f64 = 2.0;
 const MAX_CELLS: f64 = (1 << 21) as f64;
-/// Cells per axis fit 10 bits each in `GpuVolumeInstance::grid_dims`.
+/// Cells per axis fit 10 bits each in the header node's `skip` (`structure.rs`, `entry_grid_header`).
 pub const MAX_CELLS_PER_AXIS: u32 = 1023;
 
 #[derive(Clone, Debug, PartialEq)]

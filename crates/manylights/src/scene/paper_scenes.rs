@@ -36,10 +36,6 @@ impl PaperScene {
         }
     }
 
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|s| s.name() == name)
-    }
-
     /// The row label of the paper's table.
     pub fn label(self) -> &'static str {
         match self {
