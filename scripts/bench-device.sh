@@ -9,6 +9,7 @@
 #   scripts/bench-device.sh tests        the GPU-only test binaries under .bench/tests/, if any
 #   scripts/bench-device.sh table        `manylights bench`: the paper's Table 1, every pipeline and method (issue 5)
 #   scripts/bench-device.sh sweeps       `manylights bench`: lights and decals from 1k to 1M (issue 5)
+#   scripts/bench-device.sh particles    moving particle lights through the 3D-texture grid (issue 6)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -83,6 +84,19 @@ matrix_decals() {
   done
 }
 
+# 262,144 and 1,048,576 moving particle lights from 256 emitters over Sponza, splatted into 1 m (and
+# 0.5 m) voxels, in every pipeline; no other local lights or decals.
+particles() {
+  local n p
+  for n in 262144 1048576; do
+    for p in visbuffer deferred forward; do
+      run "particles_${n}_$p" 200 --scene $sponza --particles $n --particle-emitters 256 --pipeline $p --light-method off --decal-method off
+    done
+    run "particles_${n}_visbuffer_half_metre" 200 --scene $sponza --particles $n --particle-emitters 256 --particle-voxel-size 0.5 \
+      --light-method off --decal-method off
+  done
+}
+
 # Test binaries built with `cargo test --release --no-run`, run here against the GPU, each test in its
 # own process (after a dozen devices opened and closed in one process, the NVIDIA driver listed no
 # adapter to the next).
@@ -109,9 +123,10 @@ for set in "${@:-structures}"; do
     lights) matrix_lights ;;
     decals) matrix_decals ;;
     tests) tests ;;
+    particles) particles ;;
     table) bench table --sweeps none ;;
     sweeps) bench sweeps --scenes none ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table or sweeps)" >&2; exit 2 ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps or particles)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

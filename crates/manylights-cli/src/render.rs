@@ -9,7 +9,7 @@ use manylights::{
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
     image_io,
-    pipelines::{DecalMethod, LightMethod, PipelineKind},
+    pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
     renderer::{FrameTiming, Renderer},
     scene::{Camera, Scene},
 };
@@ -51,6 +51,13 @@ pub struct RenderArgs {
     /// How the decal BVH is built (with --decal-method bvh): once on the CPU, or every frame on the GPU.
     #[arg(long, value_enum, default_value_t = BvhBuildArg::CpuOnce)]
     decal_bvh_build: BvhBuildArg,
+    /// How particle lights (--particles, or a scene file's [particles]) light the scene: not at all,
+    /// or through the 3D textures they are splatted into every frame.
+    #[arg(long, value_enum, default_value_t = ParticleMethodArg::Grid)]
+    particle_method: ParticleMethodArg,
+    /// Edge of the particle grid's voxels, in metres.
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    particle_voxel_size: f32,
     #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
     tonemap: TonemapArg,
     /// Largest texture size kept on the GPU (larger images are downsampled).
@@ -114,6 +121,12 @@ enum DecalMethodArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum ParticleMethodArg {
+    Off,
+    Grid,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum BvhBuildArg {
     CpuOnce,
     GpuEveryFrame,
@@ -160,6 +173,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             DecalMethodArg::DeferredDecals => DecalMethod::DeferredDecals,
         },
         decal_bvh_build: args.decal_bvh_build.into(),
+        particle_method: match args.particle_method {
+            ParticleMethodArg::Off => ParticleMethod::Off,
+            ParticleMethodArg::Grid => ParticleMethod::Grid,
+        },
+        particle_voxel_size: args.particle_voxel_size,
         tonemapper: match args.tonemap {
             TonemapArg::Aces => Tonemapper::Aces,
             TonemapArg::Agx => Tonemapper::Agx,

@@ -4,7 +4,7 @@ use anyhow::bail;
 use clap::Args;
 use manylights::scene::{
     self,
-    generators::{ScatterDecals, ScatterLights, DEFAULT_ANIMATION_GROUPS},
+    generators::{ScatterDecals, ScatterLights, ScatterParticles, DEFAULT_ANIMATION_GROUPS},
     Groups, Scene,
 };
 
@@ -25,6 +25,12 @@ pub struct SceneArgs {
     /// Seed of the light and decal scatter and of the animation groups.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Launch this many moving particle lights from emitters on the scene's upward-facing surfaces.
+    #[arg(long, default_value_t = 0)]
+    pub particles: u32,
+    /// Emitters of the particles (with --particles).
+    #[arg(long, default_value_t = 16, requires = "particles")]
+    pub particle_emitters: usize,
     /// Group the lights and decals into groups that spin about their centres as frames advance.
     #[arg(long)]
     pub animate: bool,
@@ -52,6 +58,10 @@ impl SceneArgs {
         if self.decals > 0 {
             let params = ScatterDecals { count: self.decals as usize, seed: self.seed, size: self.decal_size };
             scene::generators::add_scattered_decals(&mut scene, &params)?;
+        }
+        if self.particles > 0 {
+            let params = ScatterParticles { count: self.particles, seed: self.seed, emitters: self.particle_emitters };
+            scene::generators::add_particles(&mut scene, &params)?;
         }
         if self.animate {
             scene::generators::group_for_animation(&mut scene, self.groups, self.seed)?;

@@ -3,7 +3,7 @@
 use crate::{
     accel::BvhBuild,
     gpu::GpuContext,
-    pipelines::{DecalMethod, LightMethod, PipelineKind},
+    pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
     Error, Result,
 };
 
@@ -28,6 +28,10 @@ pub struct RenderConfig {
     pub decal_method: DecalMethod,
     /// How the decal groups' BVHs are built, for `DecalMethod::Bvh`.
     pub decal_bvh_build: BvhBuild,
+    /// How shading finds the particle lights, when the scene has particles.
+    pub particle_method: ParticleMethod,
+    /// Edge of the particle grid's voxels, in metres (`ParticleMethod::Grid`).
+    pub particle_voxel_size: f32,
     pub tonemapper: Tonemapper,
     /// Largest texture layer size; larger images are downsampled at upload.
     pub max_texture_size: u32,
@@ -46,6 +50,8 @@ impl Default for RenderConfig {
             light_bvh_build: BvhBuild::CpuOnce,
             decal_method: DecalMethod::Brute,
             decal_bvh_build: BvhBuild::CpuOnce,
+            particle_method: ParticleMethod::Grid,
+            particle_voxel_size: 1.0,
             tonemapper: Tonemapper::Aces,
             max_texture_size: 1024,
             anisotropy: 8,
@@ -89,6 +95,12 @@ impl RenderConfig {
         }
         if self.max_texture_size == 0 {
             return Err(Error::InvalidConfig("the maximum texture size must be at least 1".into()));
+        }
+        if !(self.particle_voxel_size.is_finite() && self.particle_voxel_size > 0.0) {
+            return Err(Error::InvalidConfig(format!(
+                "particle voxel size {} must be a finite length > 0, in metres",
+                self.particle_voxel_size
+            )));
         }
         if !(1..=16).contains(&self.anisotropy) {
             return Err(Error::InvalidConfig(format!("anisotropy {} must be between 1 and 16", self.anisotropy)));

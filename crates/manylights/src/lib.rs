@@ -9,6 +9,7 @@ pub mod config;
 pub mod error;
 pub mod gpu;
 pub mod image_io;
+pub mod particles;
 pub mod passes;
 pub mod pipelines;
 pub mod renderer;

@@ -1,12 +1,15 @@
 //! The renderer: a device, an uploaded scene and a pipeline. `render` draws one frame for a camera;
 //! images are read back on request so benchmarks time frames without readback in the way.
 
+use glam::Vec3;
+
 use crate::{
     accel::{clusters::ClusterGrid, VolumeStructure},
     config::RenderConfig,
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
-    pipelines::{DecalMethod, FrameInputs, FramePipeline, LightMethod},
-    scene::{Camera, Scene},
+    particles::{ParticleGrid, ParticleSystem},
+    pipelines::{DecalMethod, FrameInputs, FramePipeline, LightMethod, ParticleMethod, ShadingMethods},
+    scene::{Aabb, Camera, Scene},
     Result,
 };
 
@@ -20,6 +23,8 @@ pub struct Renderer {
     pipeline: FramePipeline,
     lights: VolumeStructure,
     decals: VolumeStructure,
+    /// Present when the scene has particles and the grid method lights them.
+    particles: Option<ParticleSystem>,
     timer: Option<GpuTimer>,
     /// Scene time of the next frame, in seconds: where animated groups are.
     pub time: f32,
@@ -64,7 +69,20 @@ pub struct Image<T> {
 impl Renderer {
     pub fn new(ctx: GpuContext, scene: &Scene, config: RenderConfig) -> Result<Self> {
         config.validate(&ctx)?;
-        let gpu_scene = GpuScene::upload(&ctx, scene, config.max_texture_size, effective_anisotropy(&ctx, &config))?;
+        let particles = match &scene.particles {
+            Some(settings) if settings.count > 0 && config.particle_method == ParticleMethod::Grid => {
+                // The scene's bounds and a particle's reach around them: voxel centres on both sides of
+                // every surface, so trilinear sampling at a surface blends both.
+                let bounds = scene.bounds();
+                let reach = Vec3::splat(settings.radius.1);
+                let covered = Aabb::new(bounds.min - reach, bounds.max + reach);
+                let grid = ParticleGrid::covering(&covered, config.particle_voxel_size, ctx.limits.max_texture_dimension_3d)?;
+                Some(ParticleSystem::new(&ctx, settings, grid)?)
+            }
+            _ => None,
+        };
+        let particle_grids = particles.as_ref().map(|p| [&p.color_texture, &p.direction_texture]);
+        let gpu_scene = GpuScene::upload(&ctx, scene, config.max_texture_size, effective_anisotropy(&ctx, &config), particle_grids)?;
         // Brute force reads the structures' items and instances only: their BVHs are built once on the
         // CPU, so a GPU rebuild every frame is timed only where a method uses it.
         let build = |uses_bvh: bool, build| if uses_bvh { build } else { crate::accel::BvhBuild::CpuOnce };
@@ -89,13 +107,13 @@ impl Renderer {
             &ctx,
             &gpu_scene,
             config.pipeline,
-            (config.light_method, config.decal_method),
+            ShadingMethods { lights: config.light_method, decals: config.decal_method, particles: config.particle_method },
             (&lights, &decals),
             (config.width, config.height),
         )?;
         let timer = GpuTimer::new(&ctx);
         ctx.check_errors()?;
-        Ok(Self { ctx, scene: gpu_scene, config, pipeline, lights, decals, timer, time: 0.0 })
+        Ok(Self { ctx, scene: gpu_scene, config, pipeline, lights, decals, particles, timer, time: 0.0 })
     }
 
     /// Whether `render` returns per-pass GPU timings.
@@ -133,6 +151,10 @@ impl Renderer {
         let mut uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.constants, self.config.tonemapper);
         uniforms.light_instance_count = self.lights.instance_count();
         uniforms.decal_instance_count = self.decals.instance_count();
+        if let Some(particles) = &self.particles {
+            uniforms.particle_grid = particles.grid.origin.extend(particles.grid.voxel_size).to_array();
+            uniforms.particle_grid_dims = particles.grid.dims.extend(1).to_array();
+        }
         self.scene.write_frame(&self.ctx.queue, &uniforms);
         let mut timings = Vec::new();
         let mut cpu_ms = Vec::with_capacity(count as usize);
@@ -149,6 +171,9 @@ impl Renderer {
             for structure in [&mut self.lights, &mut self.decals] {
                 structure.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time)?;
                 structure.record_clusters(&mut encoder, self.timer.as_mut(), &self.scene.bind_group);
+            }
+            if let Some(particles) = &self.particles {
+                particles.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time);
             }
             let inputs = FrameInputs { scene: &self.scene, lights: &self.lights, decals: &self.decals, eye: camera.position() };
             self.pipeline.record(&mut encoder, self.timer.as_mut(), &inputs);

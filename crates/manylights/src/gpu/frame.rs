@@ -27,6 +27,10 @@ pub struct FrameUniforms {
     pub cluster_grid: [u32; 4],
     /// Its depth slicing: near plane, slices per doubling of view depth; the camera's near plane.
     pub cluster_depth: [f32; 4],
+    /// The particle grid: corner and voxel edge; voxels per axis and 1 when particles light the
+    /// scene (`particles/`), set by the renderer.
+    pub particle_grid: [f32; 4],
+    pub particle_grid_dims: [u32; 4],
 }
 
 /// What a frame needs of the scene besides its buffers, kept by `GpuScene` from the CPU scene.
@@ -63,6 +67,8 @@ impl FrameUniforms {
             decal_instance_count: 0,
             cluster_grid: ClusterGrid::for_resolution(width, height).uniform(),
             cluster_depth: ClusterGrid::depth_slicing(camera, &scene.bounds),
+            particle_grid: [0.0; 4],
+            particle_grid_dims: [0; 4],
         }
     }
 }

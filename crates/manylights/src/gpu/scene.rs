@@ -192,8 +192,15 @@ impl GpuScene {
     }
 
     /// Uploads `scene`. `max_texture_size` caps the layer size of the texture arrays; `anisotropy` is
-    /// the sampler's maximum anisotropy (1 = trilinear).
-    pub fn upload(ctx: &GpuContext, scene: &Scene, max_texture_size: u32, anisotropy: u16) -> Result<Self> {
+    /// the sampler's maximum anisotropy (1 = trilinear); `particle_grids` are the particle system's
+    /// colour and direction textures, bound for shading (1×1×1 placeholders without particles).
+    pub fn upload(
+        ctx: &GpuContext,
+        scene: &Scene,
+        max_texture_size: u32,
+        anisotropy: u16,
+        particle_grids: Option<[&wgpu::Texture; 2]>,
+    ) -> Result<Self> {
         scene.validate()?;
         let device = &ctx.device;
 
@@ -293,6 +300,30 @@ impl GpuScene {
             })
             .collect();
 
+        // The particle grids shading samples: the particle system's (`particles/`), or placeholders.
+        let placeholder = || {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("no particle grid"),
+                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D3,
+                format: wgpu::TextureFormat::Rgba16Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        };
+        let particle_views = match particle_grids {
+            Some(grids) => grids.map(|t| t.create_view(&Default::default())),
+            None => [placeholder(), placeholder()].map(|t| t.create_view(&Default::default())),
+        };
+        let particle_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("particle grid sampler"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+
         let bind_group_layout = Self::create_bind_group_layout(device);
         let bind_group = bindings::bind_group(
             device,
@@ -309,6 +340,8 @@ impl GpuScene {
             ]
             .into_iter()
             .chain(samplers.iter().map(wgpu::BindingResource::Sampler))
+            .chain(particle_views.iter().map(wgpu::BindingResource::TextureView))
+            .chain([wgpu::BindingResource::Sampler(&particle_sampler)])
             .collect(),
         );
         ctx.check_errors()?;
@@ -340,6 +373,10 @@ impl GpuScene {
         ];
         // 7..=15: one material sampler per pair of wrap modes
         entries.extend((0..WRAP_SAMPLERS).map(|i| bindings::sampler(7 + i, all)));
+        let float = wgpu::TextureSampleType::Float { filterable: true };
+        entries.push(bindings::texture(16, all, float, wgpu::TextureViewDimension::D3)); // particle colour grid
+        entries.push(bindings::texture(17, all, float, wgpu::TextureViewDimension::D3)); // particle direction grid
+        entries.push(bindings::sampler(18, all)); // particle grid sampler
         bindings::layout(device, "scene", &entries)
     }
 
@@ -494,7 +531,9 @@ mod tests {
                 tonemapper,
                 decal_instance_count,
                 cluster_grid,
-                cluster_depth
+                cluster_depth,
+                particle_grid,
+                particle_grid_dims
             ]
         );
     }

@@ -52,6 +52,11 @@ const SOURCES: &[(&str, &str)] = &[
     ("passes/gbuffer_surface.wgsl", include_str!("../passes/gbuffer_surface.wgsl")),
     ("passes/deferred_decals.wgsl", include_str!("../passes/deferred_decals.wgsl")),
     ("passes/transparent_shade.wgsl", include_str!("../passes/transparent_shade.wgsl")),
+    ("particles/types.wgsl", include_str!("../particles/types.wgsl")),
+    ("particles/motion.wgsl", include_str!("../particles/motion.wgsl")),
+    ("particles/splat.wgsl", include_str!("../particles/splat.wgsl")),
+    ("shading/enumerate/particles_off.wgsl", include_str!("../shading/enumerate/particles_off.wgsl")),
+    ("shading/enumerate/particles_grid.wgsl", include_str!("../shading/enumerate/particles_grid.wgsl")),
 ];
 
 /// A shader to build: an entry file and the values of its `$NAME` includes.
@@ -176,18 +181,23 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("passes/deferred_decals.wgsl"),
         ShaderDesc::new("passes/depth_prepass.wgsl"),
         ShaderDesc::new("passes/gbuffer_raster.wgsl"),
+        ShaderDesc::new("particles/motion.wgsl"),
+        ShaderDesc::new("particles/splat.wgsl"),
     ];
-    use crate::pipelines::{DecalMethod, LightMethod, PipelineKind};
+    use crate::pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind, ShadingMethods};
     for lights in LightMethod::ALL {
         for decals in DecalMethod::ALL {
-            if decals.works_in(PipelineKind::Visbuffer) {
-                shaders.push(crate::passes::visbuffer_shade::shader(lights, decals));
+            for particles in ParticleMethod::ALL {
+                let methods = ShadingMethods { lights, decals, particles };
+                if decals.works_in(PipelineKind::Visbuffer) {
+                    shaders.push(crate::passes::visbuffer_shade::shader(methods));
+                }
+                if decals.works_in(PipelineKind::Forward) {
+                    shaders.push(crate::passes::forward_shade::shader(methods));
+                }
+                shaders.push(crate::passes::deferred_shade::shader(methods));
+                shaders.push(crate::passes::transparent_shade::shader(methods));
             }
-            if decals.works_in(PipelineKind::Forward) {
-                shaders.push(crate::passes::forward_shade::shader(lights, decals));
-            }
-            shaders.push(crate::passes::deferred_shade::shader(lights, decals));
-            shaders.push(crate::passes::transparent_shade::shader(lights, decals));
         }
     }
     shaders
@@ -242,9 +252,9 @@ mod tests {
 
     #[test]
     fn templates_are_instantiated_once_per_value() {
-        let source = crate::passes::visbuffer_shade::shader(crate::pipelines::LightMethod::Bvh, crate::pipelines::DecalMethod::Bvh)
-            .compose()
-            .unwrap();
+        use crate::pipelines::{DecalMethod, LightMethod, ShadingMethods};
+        let methods = ShadingMethods { lights: LightMethod::Bvh, decals: DecalMethod::Bvh, ..Default::default() };
+        let source = crate::passes::visbuffer_shade::shader(methods).compose().unwrap();
         assert_eq!(source.matches("fn light_query_next_leaf(").count(), 1);
         assert_eq!(source.matches("fn decal_query_next_leaf(").count(), 1);
         assert!(!source.contains("VOLUMES_"));

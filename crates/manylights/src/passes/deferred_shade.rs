@@ -4,12 +4,12 @@
 use crate::accel::VolumeStructure;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::passes::visbuffer_shade::HDR_FORMAT;
-use crate::pipelines::{DecalMethod, FrameInputs, LightMethod};
+use crate::pipelines::{FrameInputs, ShadingMethods};
 use crate::Result;
 
-/// The shader for a pair of enumeration methods.
-pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
-    super::shading_core_shader("passes/deferred_shade.wgsl", lights, decals)
+/// The shader for a set of shading methods.
+pub fn shader(methods: ShadingMethods) -> ShaderDesc {
+    super::shading_core_shader("passes/deferred_shade.wgsl", methods)
 }
 
 pub struct DeferredShade {
@@ -22,7 +22,7 @@ impl DeferredShade {
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
-        methods: (LightMethod, DecalMethod),
+        methods: ShadingMethods,
         (lights, decals): (&VolumeStructure, &VolumeStructure),
         (depth, gbuffer): (&wgpu::TextureView, &[wgpu::TextureView; 4]),
         hdr: &wgpu::TextureView,
@@ -45,7 +45,7 @@ impl DeferredShade {
             ],
         );
         let layouts = [&scene.bind_group_layout, &layout, &lights.bind_group_layout, &decals.bind_group_layout];
-        let pipeline = bindings::compute_pipeline(device, "deferred_shade", &shader(methods.0, methods.1), &layouts)?;
+        let pipeline = bindings::compute_pipeline(device, "deferred_shade", &shader(methods), &layouts)?;
         let mut views = vec![wgpu::BindingResource::TextureView(depth)];
         views.extend(gbuffer.iter().map(wgpu::BindingResource::TextureView));
         views.push(wgpu::BindingResource::TextureView(hdr));

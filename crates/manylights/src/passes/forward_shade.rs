@@ -9,12 +9,12 @@ use super::{visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
 use crate::accel::VolumeStructure;
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
-use crate::pipelines::{DecalMethod, FrameInputs, LightMethod};
+use crate::pipelines::{FrameInputs, ShadingMethods};
 use crate::Result;
 
-/// The shader for a pair of enumeration methods.
-pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
-    super::shading_core_shader("passes/forward_shade.wgsl", lights, decals)
+/// The shader for a set of shading methods.
+pub fn shader(methods: ShadingMethods) -> ShaderDesc {
+    super::shading_core_shader("passes/forward_shade.wgsl", methods)
 }
 
 pub struct ForwardShade {
@@ -29,11 +29,11 @@ impl ForwardShade {
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
-        methods: (LightMethod, DecalMethod),
+        methods: ShadingMethods,
         (lights, decals): (&VolumeStructure, &VolumeStructure),
     ) -> Result<Self> {
         let device = &ctx.device;
-        let module = shaders::create_module(device, &shader(methods.0, methods.1))?;
+        let module = shaders::create_module(device, &shader(methods))?;
         let empty = bindings::layout(device, "forward_shade (unused)", &[]);
         let layout = bindings::pipeline_layout(
             device,

@@ -9,7 +9,7 @@ use crate::gpu::{
     shaders::ShaderDesc,
     GpuScene,
 };
-use crate::pipelines::{DecalMethod, LightMethod};
+use crate::pipelines::ShadingMethods;
 
 pub mod deferred_decals;
 pub mod deferred_shade;
@@ -21,10 +21,13 @@ pub mod transparent_shade;
 pub mod visbuffer_raster;
 pub mod visbuffer_shade;
 
-/// A pass's shader that calls the shading core, composed with the WGSL modules of a pair of
-/// enumeration methods (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION` and `$DECAL_ENUMERATION`).
-pub fn shading_core_shader(entry: &'static str, lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
-    ShaderDesc::new(entry).with("LIGHT_ENUMERATION", lights.enumeration_module()).with("DECAL_ENUMERATION", decals.enumeration_module())
+/// A pass's shader that calls the shading core, composed with the WGSL modules of its methods
+/// (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION`, `$DECAL_ENUMERATION` and `$PARTICLE_LIGHTING`).
+pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods) -> ShaderDesc {
+    ShaderDesc::new(entry)
+        .with("LIGHT_ENUMERATION", methods.lights.enumeration_module())
+        .with("DECAL_ENUMERATION", methods.decals.enumeration_module())
+        .with("PARTICLE_LIGHTING", methods.particles.lighting_module())
 }
 
 /// Workgroup edge of the 2D compute passes (`@workgroup_size(8, 8)` in their WGSL).

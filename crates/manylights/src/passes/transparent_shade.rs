@@ -11,12 +11,12 @@ use super::{visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
 use crate::accel::VolumeStructure;
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
-use crate::pipelines::{DecalMethod, FrameInputs, LightMethod};
+use crate::pipelines::{FrameInputs, ShadingMethods};
 use crate::{Error, Result};
 
-/// The shader for a pair of enumeration methods.
-pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
-    super::shading_core_shader("passes/transparent_shade.wgsl", lights, decals)
+/// The shader for a set of shading methods.
+pub fn shader(methods: ShadingMethods) -> ShaderDesc {
+    super::shading_core_shader("passes/transparent_shade.wgsl", methods)
 }
 
 pub struct TransparentShade {
@@ -30,7 +30,7 @@ impl TransparentShade {
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
-        methods: (LightMethod, DecalMethod),
+        methods: ShadingMethods,
         (lights, decals): (&VolumeStructure, &VolumeStructure),
     ) -> Result<Option<Self>> {
         if scene.transparent_draw_commands.is_empty() {
@@ -44,7 +44,7 @@ impl TransparentShade {
             )));
         }
         let device = &ctx.device;
-        let module = shaders::create_module(device, &shader(methods.0, methods.1))?;
+        let module = shaders::create_module(device, &shader(methods))?;
         let empty = bindings::layout(device, "transparent_shade (unused)", &[]);
         let layout = bindings::pipeline_layout(
             device,

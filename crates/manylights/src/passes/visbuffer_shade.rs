@@ -2,15 +2,15 @@
 
 use crate::accel::VolumeStructure;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
-use crate::pipelines::{DecalMethod, FrameInputs, LightMethod};
+use crate::pipelines::{FrameInputs, ShadingMethods};
 use crate::Result;
 
 /// f32 rather than f16: methods are compared in linear HDR to 1e-3, finer than f16 steps above 1.
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
-/// The shader for a pair of enumeration methods.
-pub fn shader(lights: LightMethod, decals: DecalMethod) -> ShaderDesc {
-    super::shading_core_shader("passes/visbuffer_shade.wgsl", lights, decals)
+/// The shader for a set of shading methods.
+pub fn shader(methods: ShadingMethods) -> ShaderDesc {
+    super::shading_core_shader("passes/visbuffer_shade.wgsl", methods)
 }
 
 pub struct VisbufferShade {
@@ -23,7 +23,7 @@ impl VisbufferShade {
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
-        methods: (LightMethod, DecalMethod),
+        methods: ShadingMethods,
         (lights, decals): (&VolumeStructure, &VolumeStructure),
         visibility: &wgpu::TextureView,
         depth: &wgpu::TextureView,
@@ -42,7 +42,7 @@ impl VisbufferShade {
             ],
         );
         let layouts = [&scene.bind_group_layout, &layout, &lights.bind_group_layout, &decals.bind_group_layout];
-        let pipeline = bindings::compute_pipeline(device, "visbuffer_shade", &shader(methods.0, methods.1), &layouts)?;
+        let pipeline = bindings::compute_pipeline(device, "visbuffer_shade", &shader(methods), &layouts)?;
         let bind_group = bindings::bind_group(
             device,
             "visbuffer_shade",

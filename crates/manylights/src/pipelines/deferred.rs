@@ -30,7 +30,7 @@ use crate::passes::{
     transparent_shade::TransparentShade,
 };
 use crate::{
-    pipelines::{DecalMethod, FrameInputs, FrameTargets, LightMethod},
+    pipelines::{DecalMethod, FrameInputs, FrameTargets, ShadingMethods},
     Result,
 };
 
@@ -52,7 +52,7 @@ impl DeferredPipeline {
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
-        methods: (LightMethod, DecalMethod),
+        methods: ShadingMethods,
         structures: (&VolumeStructure, &VolumeStructure),
         width: u32,
         height: u32,
@@ -73,7 +73,7 @@ impl DeferredPipeline {
         });
         let gbuffer = textures.each_ref().map(view);
         let (depth_view, hdr_view, ldr_view) = (view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
-        let decals = match methods.1 {
+        let decals = match methods.decals {
             DecalMethod::DeferredDecals => {
                 let copy =
                     super::target(&ctx.device, "surface normals", width, height, GBUFFER_FORMATS[1], U::COPY_DST | U::TEXTURE_BINDING);

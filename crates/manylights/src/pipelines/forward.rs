@@ -22,7 +22,7 @@ use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{depth_prepass::DepthPrepass, forward_shade::ForwardShade, tonemap::Tonemap, transparent_shade::TransparentShade};
 use crate::{
-    pipelines::{DecalMethod, FrameInputs, FrameTargets, LightMethod},
+    pipelines::{FrameInputs, FrameTargets, ShadingMethods},
     Result,
 };
 
@@ -41,7 +41,7 @@ impl ForwardPipeline {
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
-        methods: (LightMethod, DecalMethod),
+        methods: ShadingMethods,
         structures: (&VolumeStructure, &VolumeStructure),
         width: u32,
         height: u32,

@@ -53,7 +53,7 @@ impl FramePipeline {
         ctx: &GpuContext,
         scene: &GpuScene,
         kind: PipelineKind,
-        methods: (LightMethod, DecalMethod),
+        methods: ShadingMethods,
         structures: (&VolumeStructure, &VolumeStructure),
         (width, height): (u32, u32),
     ) -> Result<Self> {
@@ -225,4 +225,41 @@ impl DecalMethod {
             DecalMethod::DeferredDecals => "deferred-decals",
         }
     }
+}
+
+/// How the shading core lights a point with the particle lights (`particles/`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum ParticleMethod {
+    /// No particle lights.
+    #[default]
+    Off,
+    /// Sample the two 3D textures the particles are splatted into every frame.
+    Grid,
+}
+
+impl ParticleMethod {
+    pub const ALL: [ParticleMethod; 2] = [ParticleMethod::Off, ParticleMethod::Grid];
+
+    /// The WGSL module that defines `shade_particle_lights` for this method.
+    pub fn lighting_module(self) -> &'static str {
+        match self {
+            ParticleMethod::Off => "shading/enumerate/particles_off.wgsl",
+            ParticleMethod::Grid => "shading/enumerate/particles_grid.wgsl",
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ParticleMethod::Off => "off",
+            ParticleMethod::Grid => "grid",
+        }
+    }
+}
+
+/// The methods a shading core is composed with: one per kind of light source and for decals.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub struct ShadingMethods {
+    pub lights: LightMethod,
+    pub decals: DecalMethod,
+    pub particles: ParticleMethod,
 }

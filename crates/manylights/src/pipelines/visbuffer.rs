@@ -25,7 +25,7 @@ use crate::passes::{
     visbuffer_shade::VisbufferShade,
 };
 use crate::{
-    pipelines::{DecalMethod, FrameInputs, FrameTargets, LightMethod},
+    pipelines::{FrameInputs, FrameTargets, ShadingMethods},
     Result,
 };
 
@@ -45,7 +45,7 @@ impl VisbufferPipeline {
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
-        methods: (LightMethod, DecalMethod),
+        methods: ShadingMethods,
         structures: (&VolumeStructure, &VolumeStructure),
         width: u32,
         height: u32,

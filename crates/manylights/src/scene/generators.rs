@@ -349,6 +349,61 @@ fn flat_surfaces(surfaces: &Surfaces, diagonal: f32) -> Vec<FlatSurface> {
     planes
 }
 
+/// Most particle emitters one generator call places.
+pub const MAX_PARTICLE_EMITTERS: usize = 4096;
+
+/// Particle lights launched from emitters on the scene's upward-facing surfaces
+/// (`particles::ParticleSettings` with its defaults otherwise).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScatterParticles {
+    pub count: u32,
+    pub seed: u64,
+    pub emitters: usize,
+}
+
+/// Sets the scene's particles: `params.count` particle lights from `params.emitters` emitters on
+/// seeded surface points facing up (or any surface points when none faces up), launched fast enough
+/// to rise about a sixth of the scene's height. Deterministic.
+pub fn add_particles(scene: &mut Scene, params: &ScatterParticles) -> Result<()> {
+    if params.emitters == 0 || params.emitters > MAX_PARTICLE_EMITTERS {
+        return Err(Error::InvalidConfig(format!("particles: {} emitters; give 1 to {MAX_PARTICLE_EMITTERS}", params.emitters)));
+    }
+    scene.validate()?;
+    let surfaces = Surfaces::new(scene);
+    let area = surfaces.total_area();
+    if !(area.is_finite() && area > 0.0) {
+        return Err(Error::InvalidConfig(format!(
+            "cannot place {} particle emitters: the scene has no triangles with any area",
+            params.emitters
+        )));
+    }
+    let mut settings = crate::particles::ParticleSettings {
+        count: params.count,
+        seed: params.seed as u32 ^ (params.seed >> 32) as u32,
+        ..Default::default()
+    };
+    let bounds = scene.bounds();
+    let height = (bounds.max.y - bounds.min.y).max(1e-3);
+    let speed = (2.0 * settings.gravity * height / 6.0).sqrt();
+    let mut rng = Pcg64::seed_from_u64(params.seed);
+    // Upward-facing points, drawn among at most 64 tries each; any surface point after that.
+    settings.emitters = (0..params.emitters)
+        .map(|_| {
+            let mut point = surfaces.sample(&mut rng);
+            for _ in 0..64 {
+                if point.1.y > 0.7 {
+                    break;
+                }
+                point = surfaces.sample(&mut rng);
+            }
+            (point.0, speed)
+        })
+        .collect();
+    settings.validate()?;
+    scene.particles = Some(settings);
+    Ok(())
+}
+
 /// World-space items appended to grouped ones would land in the wrong space and break the grouping.
 fn check_ungrouped(groups: &Groups, what: &str) -> Result<()> {
     if *groups != Groups::default() {

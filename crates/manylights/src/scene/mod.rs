@@ -359,6 +359,8 @@ pub struct Scene {
     pub ambient: Vec3,
     /// Linear scale applied to radiance before tonemapping.
     pub exposure: f32,
+    /// Moving particle lights (`particles/`), if any.
+    pub particles: Option<crate::particles::ParticleSettings>,
 }
 
 impl Default for Scene {
@@ -376,6 +378,7 @@ impl Default for Scene {
             sun: None,
             ambient: Vec3::splat(0.03),
             exposure: 1.0,
+            particles: None,
         }
     }
 }
@@ -402,6 +405,9 @@ impl Scene {
     /// Checks the invariants every consumer relies on: indices in range, finite numbers, valid
     /// references. Importers and generators call it so bad data fails early with a clear message.
     pub fn validate(&self) -> crate::Result<()> {
+        if let Some(particles) = &self.particles {
+            particles.validate()?;
+        }
         let err = |m: String| Err(crate::Error::InvalidScene(m));
         for (mi, mesh) in self.meshes.iter().enumerate() {
             for (pi, p) in mesh.primitives.iter().enumerate() {

@@ -67,6 +67,14 @@
 //! count = 6               # required: one per plane, largest first
 //! seed = 1                # default 1: picks their built-in materials
 //!
+//! [particles]             # moving particle lights (particles::ParticleSettings, generators::add_particles)
+//! count = 262144          # required
+//! seed = 1                # default 1
+//! emitters = 16           # default 16: on seeded upward-facing surface points
+//! radius = [0.5, 1.5]     # light range in metres, uniform per launch; default [0.5, 1.5]
+//! intensity = 0.2         # candela of the brightest channel; default 0.2
+//! lifetime = [2.0, 4.0]   # seconds between launches; default [2, 4]
+//!
 //! [animate]               # group all lights and decals into spinning groups (generators::group_for_animation)
 //! groups = 16             # default 16
 //! seed = 1                # default 1
@@ -81,7 +89,7 @@ use std::path::{Path, PathBuf};
 use glam::{Affine3A, Vec3, Vec4};
 use serde::Deserialize;
 
-use super::generators::{self, LargeDecals, ScatterDecals, ScatterLights};
+use super::generators::{self, LargeDecals, ScatterDecals, ScatterLights, ScatterParticles};
 use super::{
     validate_decal, validate_light, Camera, Decal, Light, LightKind, Material, Scene, Sun, Texture, TextureRef, Wrap, DECAL_LAYERS,
     DEFAULT_LIGHT_CUTOFF,
@@ -124,6 +132,7 @@ struct SceneFile {
     scatter_decals: Vec<ScatterDecalsSpec>,
     #[serde(default)]
     large_decals: Vec<LargeDecalsSpec>,
+    particles: Option<ParticlesSpec>,
     animate: Option<AnimateSpec>,
 }
 
@@ -225,6 +234,29 @@ struct LargeDecalsSpec {
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
+struct ParticlesSpec {
+    count: u32,
+    seed: Option<u64>,
+    emitters: Option<usize>,
+    radius: Option<(f32, f32)>,
+    intensity: Option<f32>,
+    lifetime: Option<(f32, f32)>,
+}
+
+impl ParticlesSpec {
+    fn apply(&self, scene: &mut Scene) -> Result<(), String> {
+        let params = ScatterParticles { count: self.count, seed: self.seed.unwrap_or(1), emitters: self.emitters.unwrap_or(16) };
+        generators::add_particles(scene, &params).map_err(inner_message)?;
+        let settings = scene.particles.as_mut().expect("set by add_particles");
+        settings.radius = self.radius.unwrap_or(settings.radius);
+        settings.intensity = self.intensity.unwrap_or(settings.intensity);
+        settings.lifetime = self.lifetime.unwrap_or(settings.lifetime);
+        settings.validate().map_err(inner_message)
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct AnimateSpec {
     groups: Option<usize>,
     seed: Option<u64>,
@@ -269,6 +301,9 @@ impl SceneFile {
         for (i, spec) in self.scatter_decals.iter().enumerate() {
             let params = ScatterDecals { count: spec.count, seed: spec.seed.unwrap_or(ScatterDecals::default().seed), size: spec.size };
             generators::add_scattered_decals(scene, &params).map_err(|e| format!("scatter_decals {i}: {}", inner_message(e)))?;
+        }
+        if let Some(particles) = &self.particles {
+            particles.apply(scene).map_err(|m| format!("particles: {m}"))?;
         }
         if let Some(animate) = &self.animate {
             let groups = animate.groups.unwrap_or(generators::DEFAULT_ANIMATION_GROUPS);
@@ -844,6 +879,12 @@ roughness_metallic = "decals/rm.png"
         for axis in [Vec3::X, Vec3::Y, Vec3::Z, Vec3::NEG_X, Vec3::NEG_Y, Vec3::NEG_Z] {
             assert!(normals.iter().any(|n| n.abs_diff_eq(axis, 1e-4)), "no large decal facing {axis}: {normals:?}");
         }
+        std::fs::write(&path, "gltf = 'Box.gltf'\n[particles]\ncount = 500\nemitters = 3\nradius = [0.2, 0.4]\n").unwrap();
+        let particles = load(&path).unwrap().particles.unwrap();
+        assert_eq!((particles.count, particles.emitters.len(), particles.radius), (500, 3, (0.2, 0.4)));
+        std::fs::write(&path, "gltf = 'Box.gltf'\n[particles]\ncount = 5\nradius = [2.0, 1.0]\n").unwrap();
+        let inverted = reason(load(&path));
+        assert!(inverted.starts_with("particles:") && inverted.contains("radius"), "{inverted}");
         let many = reason(load_text("large_decals_many", "[[large_decals]]\ncount = 1000\n"));
         assert!(many.starts_with("large_decals 0:") && many.contains("exceeds the maximum"), "{many}");
         let size = reason(load_text("scatter_decals_size", "[[scatter_decals]]\ncount = 4\nsize = -1.0\n"));

@@ -22,3 +22,8 @@
 @group(0) @binding(13) var wrap_u0_v2: sampler;
 @group(0) @binding(14) var wrap_u1_v2: sampler;
 @group(0) @binding(15) var wrap_u2_v2: sampler;
+// The particle lights' grids (`particles/`): colour and direction sums per voxel, filtered
+// trilinearly and clamped; 1×1×1 placeholders without particles.
+@group(0) @binding(16) var particle_color_grid: texture_3d<f32>;
+@group(0) @binding(17) var particle_direction_grid: texture_3d<f32>;
+@group(0) @binding(18) var particle_sampler: sampler;

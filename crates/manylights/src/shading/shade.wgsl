@@ -1,13 +1,14 @@
 // The shading core: one function, used by every pipeline, that lights a `ShadingInput`.
-// The light and decal enumeration modules (`shading/enumerate/*.wgsl`) are chosen when the shader is
-// composed: they define `shade_local_lights` and `apply_decals`, which pipelines call on the surface
-// before `shade`.
+// The light, decal and particle modules (`shading/enumerate/*.wgsl`) are chosen when the shader is
+// composed: they define `shade_local_lights`, `shade_particle_lights` and `apply_decals` (which
+// pipelines call on the surface before `shade`).
 #include "shading/scene_bindings.wgsl"
 #include "shading/shading_input.wgsl"
 #include "shading/brdf.wgsl"
 #include "shading/lights.wgsl"
 #include "$LIGHT_ENUMERATION"
 #include "$DECAL_ENUMERATION"
+#include "$PARTICLE_LIGHTING"
 
 // Outgoing radiance towards the viewer.
 fn shade(s: ShadingInput) -> vec3<f32> {
@@ -19,6 +20,7 @@ fn shade(s: ShadingInput) -> vec3<f32> {
         radiance += frame.sun_radiance.rgb * brdf_times_cosine(s, -frame.sun_direction.xyz);
     }
     radiance += shade_local_lights(s);
+    radiance += shade_particle_lights(s);
     return radiance;
 }
 

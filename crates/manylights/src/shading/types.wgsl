@@ -110,4 +110,8 @@ struct FrameUniforms {
     // x: near plane of the depth slicing; y: slices per doubling of view depth; z: the camera's near
     // plane, in front of which nothing is visible.
     cluster_depth: vec4<f32>,
+    // The particle grid (`particles/`): xyz its corner, w the voxel edge; and its voxels per axis,
+    // w 1 when particles light the scene.
+    particle_grid: vec4<f32>,
+    particle_grid_dims: vec4<u32>,
 }

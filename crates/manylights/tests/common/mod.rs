@@ -8,7 +8,7 @@ use manylights::{
     accel::BvhBuild,
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
-    pipelines::{DecalMethod, LightMethod, PipelineKind},
+    pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
     renderer::{Image, Renderer},
     scene::{Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Vertex},
 };
@@ -26,6 +26,8 @@ pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfi
         light_bvh_build: BvhBuild::CpuOnce,
         decal_method: DecalMethod::Brute,
         decal_bvh_build: BvhBuild::CpuOnce,
+        particle_method: ParticleMethod::Grid,
+        particle_voxel_size: 1.0,
         tonemapper: Tonemapper::Aces,
         max_texture_size: 256,
         anisotropy: 1,

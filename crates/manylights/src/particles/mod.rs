@@ -1,0 +1,468 @@
+//! Dynamic particle lights through 3D textures, after "GPU-based dynamic point light particles
+//! rendering using 3D textures" (Korea Computer Graphics Society, 2020). Every frame a compute pass
+//! places each particle (`motion.wgsl`, a function of time alone: frames can be rendered again and give
+//! the same particles), a second one splats every particle into the voxels its radius reaches — its
+//! colour times the point-light falloff, and its direction weighted alike — and resolves the sums into
+//! two filterable 3D textures (`splat.wgsl`), which shading samples at the surface.
+//!
+//! [`ParticleSettings`] describes the particles (the CPU scene's part) and computes any particle's
+//! light on the CPU ([`ParticleSettings::particle_at`], the GPU's twin); [`ParticleGrid`] is the
+//! voxel grid; [`ParticleSystem`] owns the GPU buffers, the textures and the passes.
+
+use glam::{UVec3, Vec3};
+
+use crate::gpu::{bindings, readback, shaders::ShaderDesc, GpuContext, GpuTimer};
+use crate::scene::Aabb;
+use crate::{Error, Result};
+
+/// Most particles one system holds (2²⁴): their lights take 32 bytes each, 512 MiB at this count.
+pub const MAX_PARTICLES: u32 = 1 << 24;
+/// Fixed-point steps per unit of the splat's sums: contributions are rounded to 1/1024, and a voxel's
+/// sum may reach about 2 million before the i32 overflows.
+pub const SPLAT_SCALE: f32 = 1024.0;
+/// Threads per workgroup of the per-particle passes.
+const WORKGROUP: u32 = 256;
+const VOXEL_WORKGROUP: u32 = 4;
+
+/// The particles of a scene: how many, their emitters, and how they move and shine.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParticleSettings {
+    pub count: u32,
+    pub seed: u32,
+    /// Launch points (world space) with their launch speed in m/s; particle `i` uses emitter
+    /// `i % emitters.len()`.
+    pub emitters: Vec<(Vec3, f32)>,
+    /// Seconds a particle flies before it is launched again, uniform in [min, max] per particle.
+    pub lifetime: (f32, f32),
+    /// Light radius (range) in metres, uniform in [min, max] per launch.
+    pub radius: (f32, f32),
+    /// Intensity (candela) of the brightest channel; colours are saturated hues.
+    pub intensity: f32,
+    /// Downward acceleration, m/s².
+    pub gravity: f32,
+    /// Turn about the emitter's vertical axis, radians per second of flight.
+    pub swirl: f32,
+    /// Launch directions lie within this angle of +Y, in degrees.
+    pub cone_degrees: f32,
+}
+
+impl Default for ParticleSettings {
+    fn default() -> Self {
+        Self {
+            count: 0,
+            seed: 1,
+            emitters: Vec::new(),
+            lifetime: (2.0, 4.0),
+            radius: (0.5, 1.5),
+            intensity: 0.2,
+            gravity: 3.0,
+            swirl: 1.0,
+            cone_degrees: 25.0,
+        }
+    }
+}
+
+/// One particle at one time: a point light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParticleLight {
+    pub position: Vec3,
+    pub radius: f32,
+    pub color: Vec3,
+}
+
+/// Keep in sync with `ParticleParams` in `particles/types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuParticleParams {
+    count: u32,
+    emitter_count: u32,
+    seed: u32,
+    row_threads: u32,
+    time: f32,
+    gravity: f32,
+    swirl: f32,
+    cos_cone: f32,
+    lifetime_min: f32,
+    lifetime_max: f32,
+    radius_min: f32,
+    radius_max: f32,
+    intensity: f32,
+    _pad: [f32; 3],
+}
+
+/// Keep in sync with `ParticleLight` in `particles/types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuParticleLight {
+    pub position: [f32; 3],
+    pub radius: f32,
+    pub color: [f32; 3],
+    pub _pad: f32,
+}
+
+/// Keep in sync with `ParticleGrid` in `particles/types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuParticleGrid {
+    origin: [f32; 3],
+    voxel_size: f32,
+    dims: [u32; 3],
+    scale: f32,
+}
+
+/// PCG hash, as `pcg` in `motion.wgsl`.
+fn pcg(v: u32) -> u32 {
+    let state = v.wrapping_mul(747796405).wrapping_add(2891336453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
+    (word >> 22) ^ word
+}
+
+impl ParticleSettings {
+    /// Checks what the GPU relies on; errors name the setting and the fix.
+    pub fn validate(&self) -> Result<()> {
+        let invalid = |m: String| Err(Error::InvalidConfig(format!("particles: {m}")));
+        if self.count > MAX_PARTICLES {
+            return invalid(format!("{} particles exceed the maximum of {MAX_PARTICLES}", self.count));
+        }
+        if self.count > 0 && self.emitters.is_empty() {
+            return invalid("particles need at least one emitter".into());
+        }
+        if let Some((p, s)) = self.emitters.iter().find(|(p, s)| !p.is_finite() || !s.is_finite() || *s < 0.0) {
+            return invalid(format!("emitter at {p} with speed {s}: positions must be finite and speeds finite and ≥ 0"));
+        }
+        let range = |name: &str, (min, max): (f32, f32), low: f32| {
+            if min.is_finite() && max.is_finite() && min > low && min <= max {
+                Ok(())
+            } else {
+                invalid(format!("{name} [{min}, {max}] must be finite with {low} < min ≤ max"))
+            }
+        };
+        range("lifetime", self.lifetime, 0.0)?;
+        range("radius", self.radius, 0.0)?;
+        for (name, value) in [("intensity", self.intensity), ("gravity", self.gravity), ("swirl", self.swirl)] {
+            if !value.is_finite() {
+                return invalid(format!("{name} {value} must be finite"));
+            }
+        }
+        if !(self.intensity >= 0.0 && (0.0..=180.0).contains(&self.cone_degrees)) {
+            return invalid(format!("intensity {} must be ≥ 0 and the cone {}° within 0–180°", self.intensity, self.cone_degrees));
+        }
+        Ok(())
+    }
+
+    /// A uniform value in [0, 1), as `random01` in `motion.wgsl`.
+    fn random01(&self, particle: u32, generation: u32, k: u32) -> f32 {
+        let h = pcg(pcg(pcg(particle ^ self.seed).wrapping_add(generation)).wrapping_add(k));
+        (h >> 8) as f32 * (1.0 / 16_777_216.0)
+    }
+
+    /// Particle `i`'s light at `time` seconds: the CPU twin of `particle_motion`.
+    pub fn particle_at(&self, i: u32, time: f32) -> ParticleLight {
+        let (emitter, emitter_speed) = self.emitters[i as usize % self.emitters.len()];
+        let mix = |(a, b): (f32, f32), t: f32| a + (b - a) * t;
+        let lifetime = mix(self.lifetime, self.random01(i, 0, 0));
+        let clock = time + lifetime * self.random01(i, 0, 1);
+        let generation = (clock / lifetime).floor() as u32;
+        let age = clock - generation as f32 * lifetime;
+        let angle = std::f32::consts::TAU * self.random01(i, generation, 2);
+        let cos_tilt = mix((1.0, self.cone_degrees.to_radians().cos()), self.random01(i, generation, 3));
+        let sin_tilt = (1.0 - cos_tilt * cos_tilt).max(0.0).sqrt();
+        let speed = emitter_speed * mix((0.6, 1.0), self.random01(i, generation, 4));
+        let velocity = Vec3::new(angle.cos() * sin_tilt, cos_tilt, angle.sin() * sin_tilt) * speed;
+        let offset = velocity * age - Vec3::new(0.0, 0.5 * self.gravity * age * age, 0.0);
+        let (sin, cos) = (self.swirl * age).sin_cos();
+        let offset = Vec3::new(offset.x * cos - offset.z * sin, offset.y, offset.x * sin + offset.z * cos);
+        let hue = self.random01(i, generation, 6);
+        ParticleLight {
+            position: emitter + offset,
+            radius: mix(self.radius, self.random01(i, generation, 5)),
+            color: hue_color(hue) * self.intensity,
+        }
+    }
+
+    fn gpu_params(&self, time: f32, row_threads: u32) -> GpuParticleParams {
+        GpuParticleParams {
+            count: self.count,
+            emitter_count: self.emitters.len().max(1) as u32,
+            seed: self.seed,
+            row_threads,
+            time,
+            gravity: self.gravity,
+            swirl: self.swirl,
+            cos_cone: self.cone_degrees.to_radians().cos(),
+            lifetime_min: self.lifetime.0,
+            lifetime_max: self.lifetime.1,
+            radius_min: self.radius.0,
+            radius_max: self.radius.1,
+            intensity: self.intensity,
+            _pad: [0.0; 3],
+        }
+    }
+}
+
+/// As `hue_color` in `motion.wgsl`.
+fn hue_color(hue: f32) -> Vec3 {
+    let channel = |n: f32| {
+        let k = (n + hue * 6.0) % 6.0;
+        1.0 - k.min(4.0 - k).clamp(0.0, 1.0)
+    };
+    Vec3::new(channel(5.0), channel(3.0), channel(1.0))
+}
+
+/// The voxel grid particles are splatted into: voxel (i, j, k) is centred on
+/// `origin + (ijk + 0.5) × voxel_size`, one voxel per `voxel_size` of world (1 m by default).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParticleGrid {
+    pub origin: Vec3,
+    pub voxel_size: f32,
+    pub dims: UVec3,
+}
+
+impl ParticleGrid {
+    /// The grid of `voxel_size` covering `bounds`; errors when the size is not a positive finite
+    /// length or the grid would exceed `max_dimension` voxels along an axis (the device's 3D texture
+    /// limit).
+    pub fn covering(bounds: &Aabb, voxel_size: f32, max_dimension: u32) -> Result<Self> {
+        if !(voxel_size.is_finite() && voxel_size > 0.0) {
+            return Err(Error::InvalidConfig(format!("particle voxel size {voxel_size} must be a finite length > 0, in metres")));
+        }
+        if !bounds.is_valid() {
+            return Err(Error::InvalidConfig("the particle grid needs finite bounds to cover".into()));
+        }
+        let extent = (bounds.max - bounds.min) / voxel_size;
+        let dims = extent.ceil().max(Vec3::ONE);
+        if dims.max_element() > max_dimension as f32 {
+            return Err(Error::InvalidConfig(format!(
+                "a particle grid of {voxel_size} m voxels over {:.1} × {:.1} × {:.1} m needs {} × {} × {} voxels, over this GPU's 3D texture limit of {max_dimension} per axis; use larger voxels",
+                bounds.max.x - bounds.min.x,
+                bounds.max.y - bounds.min.y,
+                bounds.max.z - bounds.min.z,
+                dims.x,
+                dims.y,
+                dims.z
+            )));
+        }
+        Ok(Self { origin: bounds.min, voxel_size, dims: dims.as_uvec3() })
+    }
+
+    pub fn voxel_count(&self) -> u64 {
+        u64::from(self.dims.x) * u64::from(self.dims.y) * u64::from(self.dims.z)
+    }
+
+    /// Index of voxel (x, y, z), x fastest.
+    pub fn index(&self, voxel: UVec3) -> usize {
+        ((voxel.z * self.dims.y + voxel.y) * self.dims.x + voxel.x) as usize
+    }
+
+    pub fn centre(&self, voxel: UVec3) -> Vec3 {
+        self.origin + (voxel.as_vec3() + 0.5) * self.voxel_size
+    }
+
+    /// The splat's weight at `distance` from a particle of `radius`, as `splat_falloff` in `splat.wgsl`.
+    pub fn falloff(&self, distance: f32, radius: f32) -> f32 {
+        let ratio_sq = distance * distance / (radius * radius);
+        let window = (1.0 - ratio_sq * ratio_sq).clamp(0.0, 1.0);
+        let near = 0.5 * self.voxel_size;
+        window * window / (distance * distance).max(near * near)
+    }
+}
+
+/// The GPU side: particle lights, the splat's sums and the two textures, and the passes.
+pub struct ParticleSystem {
+    settings: ParticleSettings,
+    pub grid: ParticleGrid,
+    /// Colour sums (rgb) and direction sums (xyz, unnormalised), RGBA16F, sampled by shading.
+    pub color_texture: wgpu::Texture,
+    pub direction_texture: wgpu::Texture,
+    params: wgpu::Buffer,
+    particles: wgpu::Buffer,
+    sums: wgpu::Buffer,
+    motion: (wgpu::ComputePipeline, wgpu::BindGroup),
+    splat: (wgpu::ComputePipeline, wgpu::ComputePipeline, wgpu::BindGroup),
+}
+
+impl ParticleSystem {
+    pub fn new(ctx: &GpuContext, settings: &ParticleSettings, grid: ParticleGrid) -> Result<Self> {
+        settings.validate()?;
+        let device = &ctx.device;
+        let limit = ctx.limits.max_storage_buffer_binding_size;
+        let particle_bytes = u64::from(settings.count.max(1)) * std::mem::size_of::<GpuParticleLight>() as u64;
+        let sum_bytes = grid.voxel_count() * 6 * 4;
+        for (what, bytes) in [("particle lights", particle_bytes), ("particle grid's sums", sum_bytes)] {
+            if bytes > limit {
+                return Err(Error::InvalidConfig(format!(
+                    "the {what} take {} MiB, over this GPU's storage binding limit of {} MiB; use fewer particles or larger voxels",
+                    bytes >> 20,
+                    limit >> 20
+                )));
+            }
+        }
+        use wgpu::util::DeviceExt;
+        use wgpu::BufferUsages as U;
+        let buffer = |label: &str, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+        };
+        let params = buffer("particle params", std::mem::size_of::<GpuParticleParams>() as u64, U::UNIFORM | U::COPY_DST);
+        let emitters: Vec<[f32; 4]> = settings.emitters.iter().map(|(p, s)| p.extend(*s).to_array()).collect();
+        let emitters = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("particle emitters"),
+            contents: bytemuck::cast_slice(if emitters.is_empty() { &[[0.0f32; 4]] } else { &emitters[..] }),
+            usage: U::STORAGE,
+        });
+        let particles = buffer("particle lights", particle_bytes, U::STORAGE | U::COPY_SRC);
+        let sums = buffer("particle splat sums", sum_bytes, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+        let grid_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("particle grid"),
+            contents: bytemuck::bytes_of(&GpuParticleGrid {
+                origin: grid.origin.to_array(),
+                voxel_size: grid.voxel_size,
+                dims: grid.dims.to_array(),
+                scale: SPLAT_SCALE,
+            }),
+            usage: U::UNIFORM,
+        });
+        let texture = |label: &str| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d { width: grid.dims.x, height: grid.dims.y, depth_or_array_layers: grid.dims.z },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D3,
+                format: wgpu::TextureFormat::Rgba16Float,
+                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        };
+        let color_texture = texture("particle colour grid");
+        let direction_texture = texture("particle direction grid");
+
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let motion_layout = bindings::layout(
+            device,
+            "particle motion",
+            &[bindings::uniform(0, compute), bindings::storage_read(1, compute), bindings::storage_read_write(2, compute)],
+        );
+        let motion_pipeline =
+            bindings::compute_pipeline(device, "particle_motion", &ShaderDesc::new("particles/motion.wgsl"), &[&motion_layout])?;
+        let motion_group = bindings::bind_group(
+            device,
+            "particle motion",
+            &motion_layout,
+            vec![params.as_entire_binding(), emitters.as_entire_binding(), particles.as_entire_binding()],
+        );
+        let storage_3d = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: compute,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format: wgpu::TextureFormat::Rgba16Float,
+                view_dimension: wgpu::TextureViewDimension::D3,
+            },
+            count: None,
+        };
+        let splat_layout = bindings::layout(
+            device,
+            "particle splat",
+            &[
+                bindings::uniform(0, compute),
+                bindings::uniform(1, compute),
+                bindings::storage_read(2, compute),
+                bindings::storage_read_write(3, compute),
+                storage_3d(4),
+                storage_3d(5),
+            ],
+        );
+        let splat_shader = ShaderDesc::new("particles/splat.wgsl");
+        let splat_pipeline = bindings::compute_pipeline(device, "particle_splat", &splat_shader, &[&splat_layout])?;
+        let resolve_pipeline = bindings::compute_pipeline(device, "particle_resolve", &splat_shader, &[&splat_layout])?;
+        let color_view = color_texture.create_view(&Default::default());
+        let direction_view = direction_texture.create_view(&Default::default());
+        let splat_group = bindings::bind_group(
+            device,
+            "particle splat",
+            &splat_layout,
+            vec![
+                params.as_entire_binding(),
+                grid_uniform.as_entire_binding(),
+                particles.as_entire_binding(),
+                sums.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&color_view),
+                wgpu::BindingResource::TextureView(&direction_view),
+            ],
+        );
+        ctx.check_errors()?;
+        Ok(Self {
+            settings: settings.clone(),
+            grid,
+            color_texture,
+            direction_texture,
+            params,
+            particles,
+            sums,
+            motion: (motion_pipeline, motion_group),
+            splat: (splat_pipeline, resolve_pipeline, splat_group),
+        })
+    }
+
+    /// Workgroups of the per-particle passes, as (x, y): rows of at most 65535.
+    fn dispatch(&self) -> (u32, u32) {
+        let groups = self.settings.count.div_ceil(WORKGROUP).max(1);
+        let x = groups.min(65535);
+        (x, groups.div_ceil(x))
+    }
+
+    /// Records the particles' motion to `time` and the splat into the textures, timed as
+    /// `particle_motion` and `particle_splat`.
+    pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, time: f32) {
+        let (x, y) = self.dispatch();
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&self.settings.gpu_params(time, x * WORKGROUP)));
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("particle_motion"),
+                timestamp_writes: timer.as_deref_mut().map(|t| t.compute_pass("particle_motion")),
+            });
+            pass.set_pipeline(&self.motion.0);
+            pass.set_bind_group(0, &self.motion.1, &[]);
+            if self.settings.count > 0 {
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
+        encoder.clear_buffer(&self.sums, 0, None);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("particle_splat"),
+            timestamp_writes: timer.map(|t| t.compute_pass("particle_splat")),
+        });
+        pass.set_bind_group(0, &self.splat.2, &[]);
+        if self.settings.count > 0 {
+            pass.set_pipeline(&self.splat.0);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        pass.set_pipeline(&self.splat.1);
+        let voxels = self.grid.dims.map(|d| d.div_ceil(VOXEL_WORKGROUP));
+        pass.dispatch_workgroups(voxels.x, voxels.y, voxels.z);
+    }
+
+    /// The particle lights of the last recorded frame (for tests and the exact method's oracle).
+    pub fn read_particles(&self, ctx: &GpuContext) -> Result<Vec<GpuParticleLight>> {
+        self.read(ctx, &self.particles)
+    }
+
+    /// The splat's sums per voxel, as floats: colour rgb, direction xyz.
+    pub fn read_sums(&self, ctx: &GpuContext) -> Result<Vec<[f32; 6]>> {
+        let raw: Vec<[i32; 6]> = self.read(ctx, &self.sums)?;
+        Ok(raw.into_iter().map(|v| v.map(|x| x as f32 / SPLAT_SCALE)).collect())
+    }
+
+    fn read<T: bytemuck::Pod>(&self, ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<T>> {
+        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("particle readback"),
+            size: buffer.size(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+        ctx.queue.submit([encoder.finish()]);
+        readback::map_buffer(ctx, &staging, 0, buffer.size())
+    }
+}
