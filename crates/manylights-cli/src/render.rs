@@ -9,6 +9,7 @@ use manylights::{
     config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
     image_io,
+    particles::ParticleFilter,
     pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
     renderer::{FrameTiming, Renderer},
     scene::{Camera, Scene},
@@ -58,6 +59,14 @@ pub struct RenderArgs {
     /// Edge of the particle grid's voxels, in metres.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     particle_voxel_size: f32,
+    /// How shading reads the particle grid: the voxel the point is in, the eight around it, or a cubic
+    /// B-spline over 64 (smooth across voxel faces).
+    #[arg(long, value_enum, default_value_t = ParticleFilterArg::Trilinear)]
+    particle_filter: ParticleFilterArg,
+    /// Points around each shading point, within half a voxel, whose grid light is averaged
+    /// (supersampling; 1 = the point alone).
+    #[arg(long, default_value_t = 1)]
+    particle_samples: u32,
     #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
     tonemap: TonemapArg,
     /// Largest texture size kept on the GPU (larger images are downsampled).
@@ -127,6 +136,13 @@ enum ParticleMethodArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum ParticleFilterArg {
+    Nearest,
+    Trilinear,
+    Tricubic,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum BvhBuildArg {
     CpuOnce,
     GpuEveryFrame,
@@ -178,6 +194,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             ParticleMethodArg::Grid => ParticleMethod::Grid,
         },
         particle_voxel_size: args.particle_voxel_size,
+        particle_filter: match args.particle_filter {
+            ParticleFilterArg::Nearest => ParticleFilter::Nearest,
+            ParticleFilterArg::Trilinear => ParticleFilter::Trilinear,
+            ParticleFilterArg::Tricubic => ParticleFilter::Tricubic,
+        },
+        particle_samples: args.particle_samples,
         tonemapper: match args.tonemap {
             TonemapArg::Aces => Tonemapper::Aces,
             TonemapArg::Agx => Tonemapper::Agx,

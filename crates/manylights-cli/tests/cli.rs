@@ -124,6 +124,20 @@ fn nan_in_a_scene_file_light() {
 }
 
 #[test]
+fn bad_particle_options() {
+    let zero = failure(&["render", "--particles", "100", "--particle-voxel-size", "0", "--width", "16", "--height", "16"]);
+    assert!(zero.contains("particle voxel size 0") && zero.contains("> 0"), "{zero}");
+    let negative = failure(&["render", "--particles", "100", "--particle-voxel-size", "-1", "--width", "16", "--height", "16"]);
+    assert!(negative.contains("particle voxel size -1"), "{negative}");
+    let tiny = failure(&["render", "--particles", "100", "--particle-voxel-size", "0.001", "--width", "16", "--height", "16"]);
+    assert!(tiny.contains("3D texture limit") && tiny.contains("larger voxels"), "{tiny}");
+    let samples = failure(&["render", "--particles", "100", "--particle-samples", "0", "--width", "16", "--height", "16"]);
+    assert!(samples.contains("particle samples") && samples.contains("1 to 64"), "{samples}");
+    let emitters = failure(&["render", "--particles", "100", "--particle-emitters", "0", "--width", "16", "--height", "16"]);
+    assert!(emitters.contains("emitters") && emitters.contains("1 to"), "{emitters}");
+}
+
+#[test]
 fn huge_frame_counts_are_refused_not_allocated() {
     let err = failure(&["render", "--frames", "4294967295", "--width", "64", "--height", "36"]);
     assert!(err.contains("--frames must be between 1 and"), "{err}");

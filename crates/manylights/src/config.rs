@@ -3,6 +3,7 @@
 use crate::{
     accel::BvhBuild,
     gpu::GpuContext,
+    particles::{ParticleFilter, MAX_PARTICLE_SAMPLES},
     pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
     Error, Result,
 };
@@ -32,6 +33,10 @@ pub struct RenderConfig {
     pub particle_method: ParticleMethod,
     /// Edge of the particle grid's voxels, in metres (`ParticleMethod::Grid`).
     pub particle_voxel_size: f32,
+    /// How shading filters the particle grid, and at how many jittered points per shading point
+    /// (1 to [`MAX_PARTICLE_SAMPLES`]; 1 samples at the point itself).
+    pub particle_filter: ParticleFilter,
+    pub particle_samples: u32,
     pub tonemapper: Tonemapper,
     /// Largest texture layer size; larger images are downsampled at upload.
     pub max_texture_size: u32,
@@ -52,6 +57,8 @@ impl Default for RenderConfig {
             decal_bvh_build: BvhBuild::CpuOnce,
             particle_method: ParticleMethod::Grid,
             particle_voxel_size: 1.0,
+            particle_filter: ParticleFilter::Trilinear,
+            particle_samples: 1,
             tonemapper: Tonemapper::Aces,
             max_texture_size: 1024,
             anisotropy: 8,
@@ -100,6 +107,12 @@ impl RenderConfig {
             return Err(Error::InvalidConfig(format!(
                 "particle voxel size {} must be a finite length > 0, in metres",
                 self.particle_voxel_size
+            )));
+        }
+        if !(1..=MAX_PARTICLE_SAMPLES).contains(&self.particle_samples) {
+            return Err(Error::InvalidConfig(format!(
+                "{} particle samples per point: give 1 to {MAX_PARTICLE_SAMPLES}",
+                self.particle_samples
             )));
         }
         if !(1..=16).contains(&self.anisotropy) {

@@ -154,6 +154,7 @@ impl Renderer {
         if let Some(particles) = &self.particles {
             uniforms.particle_grid = particles.grid.origin.extend(particles.grid.voxel_size).to_array();
             uniforms.particle_grid_dims = particles.grid.dims.extend(1).to_array();
+            uniforms.particle_filter = [self.config.particle_filter as u32, self.config.particle_samples, 0, 0];
         }
         self.scene.write_frame(&self.ctx.queue, &uniforms);
         let mut timings = Vec::new();

@@ -31,6 +31,8 @@ pub struct FrameUniforms {
     /// scene (`particles/`), set by the renderer.
     pub particle_grid: [f32; 4],
     pub particle_grid_dims: [u32; 4],
+    /// The grid's filter (`ParticleFilter` as u32) and samples per shading point.
+    pub particle_filter: [u32; 4],
 }
 
 /// What a frame needs of the scene besides its buffers, kept by `GpuScene` from the CPU scene.
@@ -69,6 +71,7 @@ impl FrameUniforms {
             cluster_depth: ClusterGrid::depth_slicing(camera, &scene.bounds),
             particle_grid: [0.0; 4],
             particle_grid_dims: [0; 4],
+            particle_filter: [0; 4],
         }
     }
 }

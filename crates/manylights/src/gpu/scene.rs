@@ -533,7 +533,8 @@ mod tests {
                 cluster_grid,
                 cluster_depth,
                 particle_grid,
-                particle_grid_dims
+                particle_grid_dims,
+                particle_filter
             ]
         );
     }

@@ -20,6 +20,34 @@ pub const MAX_PARTICLES: u32 = 1 << 24;
 /// Fixed-point steps per unit of the splat's sums: contributions are rounded to 1/1024, and a voxel's
 /// sum may reach about 2 million before the i32 overflows.
 pub const SPLAT_SCALE: f32 = 1024.0;
+/// Most jittered points one shading point samples the grid at (`RenderConfig::particle_samples`).
+pub const MAX_PARTICLE_SAMPLES: u32 = 64;
+
+/// How shading reads the grid; the paper's remedies for its blocks are the filters past nearest, and
+/// supersampling (`RenderConfig::particle_samples`). Keep in sync with `PARTICLE_FILTER_*` in
+/// `shading/types.wgsl`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum ParticleFilter {
+    /// The voxel the point lies in.
+    Nearest = 0,
+    /// The eight voxels around the point, by the hardware.
+    #[default]
+    Trilinear = 1,
+    /// A cubic B-spline over the 64 voxels around it, as eight trilinear taps (Sigg & Hadwiger 2005):
+    /// smooth across voxel faces, slightly blurred.
+    Tricubic = 2,
+}
+
+impl ParticleFilter {
+    pub fn name(self) -> &'static str {
+        match self {
+            ParticleFilter::Nearest => "nearest",
+            ParticleFilter::Trilinear => "trilinear",
+            ParticleFilter::Tricubic => "tricubic",
+        }
+    }
+}
+
 /// Threads per workgroup of the per-particle passes.
 const WORKGROUP: u32 = 256;
 const VOXEL_WORKGROUP: u32 = 4;

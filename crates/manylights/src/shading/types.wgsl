@@ -114,4 +114,11 @@ struct FrameUniforms {
     // w 1 when particles light the scene.
     particle_grid: vec4<f32>,
     particle_grid_dims: vec4<u32>,
+    // How shading filters the grid: x PARTICLE_FILTER_*, y samples per point (1: at the point only).
+    particle_filter: vec4<u32>,
 }
+
+// Keep in sync with `ParticleFilter` in `particles/mod.rs`.
+const PARTICLE_FILTER_NEAREST: u32 = 0u;
+const PARTICLE_FILTER_TRILINEAR: u32 = 1u;
+const PARTICLE_FILTER_TRICUBIC: u32 = 2u;
