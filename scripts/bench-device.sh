@@ -94,7 +94,15 @@ particles() {
     done
     run "particles_${n}_visbuffer_half_metre" 200 --scene $sponza --particles $n --particle-emitters 256 --particle-voxel-size 0.5 \
       --light-method off --decal-method off
+    # The exact method: every particle a point light in the light BVH, rebuilt every frame.
+    for p in visbuffer deferred forward; do
+      run "particles_${n}_${p}_exact" 100 --scene $sponza --particles $n --particle-emitters 256 --pipeline $p --particle-method bvh \
+        --light-method bvh --decal-method off
+    done
   done
+  echo "== particle-error 262144"
+  timeout 300 $bin particle-error --scene $sponza --particles 262144 --particle-emitters 256 --width 1920 --height 1080 \
+    --voxel-sizes 1,0.5,0.25 --filters nearest,trilinear,tricubic --samples 1,8 2>&1 | grep -v "^GPU"
 }
 
 # Test binaries built with `cargo test --release --no-run`, run here against the GPU, each test in its

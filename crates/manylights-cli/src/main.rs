@@ -2,6 +2,7 @@
 
 mod bench;
 mod info;
+mod particle_error;
 mod render;
 mod scene_args;
 mod timing;
@@ -25,6 +26,9 @@ enum Command {
     /// every pipeline with every method, and sweep lights and decals from 1k to 1M; writes Markdown,
     /// JSON, CSV and PNG plots.
     Bench(bench::BenchArgs),
+    /// Compare particle-grid settings (voxel size, filter, samples) with the exact method (the same
+    /// particles as point lights through the BVH): error of the particles' light and PSNR.
+    ParticleError(particle_error::ParticleErrorArgs),
     /// List GPU adapters, the one manylights would choose, its driver and the features it uses; then
     /// what the scene (with the same scene options as `render`) holds.
     Info(scene_args::SceneArgs),
@@ -37,6 +41,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Info(args) => info::run(&args),
+        Command::ParticleError(args) => particle_error::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

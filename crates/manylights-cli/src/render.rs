@@ -53,7 +53,8 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = BvhBuildArg::CpuOnce)]
     decal_bvh_build: BvhBuildArg,
     /// How particle lights (--particles, or a scene file's [particles]) light the scene: not at all,
-    /// or through the 3D textures they are splatted into every frame.
+    /// through the 3D textures they are splatted into every frame, or exactly, as point lights in the
+    /// lights' BVH rebuilt every frame (with --light-method bvh).
     #[arg(long, value_enum, default_value_t = ParticleMethodArg::Grid)]
     particle_method: ParticleMethodArg,
     /// Edge of the particle grid's voxels, in metres.
@@ -133,13 +134,24 @@ enum DecalMethodArg {
 enum ParticleMethodArg {
     Off,
     Grid,
+    Bvh,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum ParticleFilterArg {
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum ParticleFilterArg {
     Nearest,
     Trilinear,
     Tricubic,
+}
+
+impl From<ParticleFilterArg> for ParticleFilter {
+    fn from(arg: ParticleFilterArg) -> Self {
+        match arg {
+            ParticleFilterArg::Nearest => ParticleFilter::Nearest,
+            ParticleFilterArg::Trilinear => ParticleFilter::Trilinear,
+            ParticleFilterArg::Tricubic => ParticleFilter::Tricubic,
+        }
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -192,13 +204,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         particle_method: match args.particle_method {
             ParticleMethodArg::Off => ParticleMethod::Off,
             ParticleMethodArg::Grid => ParticleMethod::Grid,
+            ParticleMethodArg::Bvh => ParticleMethod::Bvh,
         },
         particle_voxel_size: args.particle_voxel_size,
-        particle_filter: match args.particle_filter {
-            ParticleFilterArg::Nearest => ParticleFilter::Nearest,
-            ParticleFilterArg::Trilinear => ParticleFilter::Trilinear,
-            ParticleFilterArg::Tricubic => ParticleFilter::Tricubic,
-        },
+        particle_filter: args.particle_filter.into(),
         particle_samples: args.particle_samples,
         tonemapper: match args.tonemap {
             TonemapArg::Aces => Tonemapper::Aces,

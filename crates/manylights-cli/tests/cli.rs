@@ -138,6 +138,28 @@ fn bad_particle_options() {
 }
 
 #[test]
+fn particle_error_compares_grid_settings_with_the_exact_method() {
+    #[rustfmt::skip]
+    let out = manylights(&[
+        "particle-error", "--particles", "2000", "--width", "48", "--height", "27",
+        "--voxel-sizes", "1,0.5", "--filters", "trilinear", "--samples", "1",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // One row per setting: voxel, filter, samples, error %, PSNR dB.
+    let rows: Vec<Vec<&str>> =
+        stdout.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.len() == 5 && f[1] == "trilinear").collect();
+    assert_eq!(rows.len(), 2, "{stdout}");
+    for row in rows {
+        let error: f64 = row[3].parse().unwrap();
+        let psnr: f64 = row[4].parse().unwrap();
+        assert!(error.is_finite() && error > 0.0 && psnr.is_finite() && psnr > 0.0, "{row:?}");
+    }
+    let none = failure(&["particle-error", "--width", "16", "--height", "16"]);
+    assert!(none.contains("no particles") && none.contains("--particles"), "{none}");
+}
+
+#[test]
 fn huge_frame_counts_are_refused_not_allocated() {
     let err = failure(&["render", "--frames", "4294967295", "--width", "64", "--height", "36"]);
     assert!(err.contains("--frames must be between 1 and"), "{err}");

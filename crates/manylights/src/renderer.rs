@@ -10,7 +10,7 @@ use crate::{
     particles::{ParticleGrid, ParticleSystem},
     pipelines::{DecalMethod, FrameInputs, FramePipeline, LightMethod, ParticleMethod, ShadingMethods},
     scene::{Aabb, Camera, Scene},
-    Result,
+    Error, Result,
 };
 
 /// Time between frames rendered back to back: animated groups move by this much per frame.
@@ -23,7 +23,7 @@ pub struct Renderer {
     pipeline: FramePipeline,
     lights: VolumeStructure,
     decals: VolumeStructure,
-    /// Present when the scene has particles and the grid method lights them.
+    /// Present when the scene has particles and a particle method lights them.
     particles: Option<ParticleSystem>,
     timer: Option<GpuTimer>,
     /// Scene time of the next frame, in seconds: where animated groups are.
@@ -69,8 +69,9 @@ pub struct Image<T> {
 impl Renderer {
     pub fn new(ctx: GpuContext, scene: &Scene, config: RenderConfig) -> Result<Self> {
         config.validate(&ctx)?;
-        let particles = match &scene.particles {
-            Some(settings) if settings.count > 0 && config.particle_method == ParticleMethod::Grid => {
+        let particle_settings = scene.particles.as_ref().filter(|s| s.count > 0);
+        let grid_particles = match particle_settings {
+            Some(settings) if config.particle_method == ParticleMethod::Grid => {
                 // The scene's bounds and a particle's reach around them: voxel centres on both sides of
                 // every surface, so trilinear sampling at a surface blends both.
                 let bounds = scene.bounds();
@@ -81,21 +82,46 @@ impl Renderer {
             }
             _ => None,
         };
-        let particle_grids = particles.as_ref().map(|p| [&p.color_texture, &p.direction_texture]);
-        let gpu_scene = GpuScene::upload(&ctx, scene, config.max_texture_size, effective_anisotropy(&ctx, &config), particle_grids)?;
+        let light_particles = particle_settings.filter(|_| config.particle_method == ParticleMethod::Bvh);
+        if light_particles.is_some() && config.light_method != LightMethod::Bvh {
+            return Err(Error::InvalidConfig(format!(
+                "--particle-method bvh makes the particles lights in the lights' BVH, which --light-method {} does not read; use --light-method bvh",
+                config.light_method.name()
+            )));
+        }
+        let gpu_scene = GpuScene::upload(
+            &ctx,
+            scene,
+            config.max_texture_size,
+            effective_anisotropy(&ctx, &config),
+            grid_particles.as_ref().and_then(ParticleSystem::grid_textures),
+        )?;
         // Brute force reads the structures' items and instances only: their BVHs are built once on the
         // CPU, so a GPU rebuild every frame is timed only where a method uses it.
         let build = |uses_bvh: bool, build| if uses_bvh { build } else { crate::accel::BvhBuild::CpuOnce };
         // Clustered lists are built every frame only where the method reads them.
         let grid = ClusterGrid::for_resolution(config.width, config.height);
         let clusters = |clustered: bool| clustered.then_some((grid, &gpu_scene.bind_group_layout));
-        let lights = VolumeStructure::for_lights(
-            &ctx,
-            &scene.lights,
-            &scene.light_groups,
-            build(config.light_method == LightMethod::Bvh, config.light_bvh_build),
-            clusters(config.light_method == LightMethod::Clustered),
-        )?;
+        let light_build = build(config.light_method == LightMethod::Bvh, config.light_bvh_build);
+        let (lights, particles) = match light_particles {
+            Some(settings) => {
+                let lights = VolumeStructure::for_lights_and_particles(
+                    &ctx,
+                    &scene.lights,
+                    &scene.light_groups,
+                    light_build,
+                    settings.count,
+                    settings.bounds(),
+                )?;
+                let targets = lights.dynamic_group().ok_or_else(|| Error::Gpu("the particle lights' group is missing".into()))?;
+                let particles = ParticleSystem::with_lights(&ctx, settings, targets)?;
+                (lights, Some(particles))
+            }
+            None => {
+                let clustered = clusters(config.light_method == LightMethod::Clustered);
+                (VolumeStructure::for_lights(&ctx, &scene.lights, &scene.light_groups, light_build, clustered)?, grid_particles)
+            }
+        };
         let decals = VolumeStructure::for_decals(
             &ctx,
             &scene.decals,
@@ -151,9 +177,9 @@ impl Renderer {
         let mut uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.constants, self.config.tonemapper);
         uniforms.light_instance_count = self.lights.instance_count();
         uniforms.decal_instance_count = self.decals.instance_count();
-        if let Some(particles) = &self.particles {
-            uniforms.particle_grid = particles.grid.origin.extend(particles.grid.voxel_size).to_array();
-            uniforms.particle_grid_dims = particles.grid.dims.extend(1).to_array();
+        if let Some(grid) = self.particles.as_ref().and_then(ParticleSystem::grid) {
+            uniforms.particle_grid = grid.origin.extend(grid.voxel_size).to_array();
+            uniforms.particle_grid_dims = grid.dims.extend(1).to_array();
             uniforms.particle_filter = [self.config.particle_filter as u32, self.config.particle_samples, 0, 0];
         }
         self.scene.write_frame(&self.ctx.queue, &uniforms);
@@ -169,12 +195,13 @@ impl Renderer {
             }
             // From here to the submit is the CPU's work for the frame (waits for the timer are before).
             let recording = std::time::Instant::now();
+            // Particles first: as lights, they are the light structure's dynamic group.
+            if let Some(particles) = &self.particles {
+                particles.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time);
+            }
             for structure in [&mut self.lights, &mut self.decals] {
                 structure.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time)?;
                 structure.record_clusters(&mut encoder, self.timer.as_mut(), &self.scene.bind_group);
-            }
-            if let Some(particles) = &self.particles {
-                particles.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time);
             }
             let inputs = FrameInputs { scene: &self.scene, lights: &self.lights, decals: &self.decals, eye: camera.position() };
             self.pipeline.record(&mut encoder, self.timer.as_mut(), &inputs);

@@ -260,3 +260,57 @@ fn every_filter_and_supersampling_light_the_wall_like_the_point_light() {
         assert!(supersampled < 0.05, "{}: supersampled error {supersampled}", pipeline.name());
     }
 }
+
+/// The exact method: the particles as point lights in the lights' BVH, rebuilt on the GPU every
+/// frame beside the scene's own light, light the scene as the same lights from the CPU twin do
+/// through brute force.
+#[test]
+fn particles_as_lights_equal_their_point_lights() {
+    let scene_light = point_light(Vec3::new(3.0, 2.0, 1.5), 2.0, 4.0);
+    let (mut scene, camera) = wall_scene(vec![scene_light]);
+    let settings = ParticleSettings {
+        count: 3000,
+        seed: 5,
+        emitters: vec![(Vec3::new(-2.0, -1.0, 0.5), 2.0), (Vec3::new(1.5, 0.5, 1.0), 1.5)],
+        radius: (0.3, 1.0),
+        intensity: 0.05,
+        ..ParticleSettings::default()
+    };
+    scene.particles = Some(settings.clone());
+    let time = 1.7;
+    let exact =
+        RenderConfig { particle_method: ParticleMethod::Bvh, decal_method: DecalMethod::Off, ..config(SIZE.0, SIZE.1, LightMethod::Bvh) };
+    let mut renderer = common::renderer(&scene, exact);
+    renderer.time = time;
+    renderer.render(&camera).unwrap();
+    let image = renderer.read_hdr().unwrap();
+
+    let lights: Vec<Light> = (0..settings.count)
+        .map(|i| {
+            let p = settings.particle_at(i, time);
+            Light { kind: LightKind::Point, position: p.position, direction: Vec3::NEG_Y, color: p.color, intensity: 1.0, range: p.radius }
+        })
+        .chain([scene_light])
+        .collect();
+    let (reference_scene, _) = wall_scene(lights);
+    let reference = render_with(
+        &reference_scene,
+        &camera,
+        RenderConfig { decal_method: DecalMethod::Off, ..config(SIZE.0, SIZE.1, LightMethod::Brute) },
+    )
+    .1;
+    assert!(reference.pixels.iter().map(|&p| luminance(p)).fold(0.0, f32::max) > 0.05, "the particles light nothing");
+    let difference = max_abs_difference(&image, &reference);
+    assert!(difference <= 1e-3, "max abs difference {difference} from the point lights");
+
+    // Other light methods do not read the particles' lights: a clear error.
+    let err = manylights::renderer::Renderer::new(
+        GpuContext::new().unwrap(),
+        &scene,
+        RenderConfig { particle_method: ParticleMethod::Bvh, ..config(SIZE.0, SIZE.1, LightMethod::Clustered) },
+    )
+    .err()
+    .expect("clustered lights with bvh particles")
+    .to_string();
+    assert!(err.contains("--light-method bvh"), "{err}");
+}

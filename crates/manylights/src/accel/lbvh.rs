@@ -191,6 +191,36 @@ impl GpuLbvh {
         Ok(())
     }
 
+    /// Sets every following build to `count` boxes that a GPU pass writes into [`boxes`](Self::boxes)
+    /// before each build (`GpuBox` layout: min, max as vec4s), with Morton codes over `centres`: box
+    /// centres outside it are clamped into it, which keeps the tree exact, only looser.
+    pub fn set_gpu_boxes(&mut self, queue: &wgpu::Queue, count: u32, centres: &Aabb) -> Result<()> {
+        if count > self.capacity {
+            return Err(Error::InvalidConfig(format!("{count} volumes exceed the BVH's capacity of {}", self.capacity)));
+        }
+        if !centres.is_valid() {
+            return Err(Error::InvalidScene(format!("the Morton domain {centres:?} of GPU-written boxes is not finite")));
+        }
+        self.count = count;
+        self.sort.set_problem(queue, count, MORTON_BITS)?;
+        let t = &self.target;
+        let params = LbvhParams {
+            count,
+            node_base: t.node_base,
+            primitive_base: t.primitive_base,
+            item_base: t.item_base,
+            centre_min: centres.min.extend(0.0).to_array(),
+            centre_max: centres.max.extend(0.0).to_array(),
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        Ok(())
+    }
+
+    /// The boxes the next build reads, for a GPU pass to write (see [`set_gpu_boxes`](Self::set_gpu_boxes)).
+    pub fn boxes(&self) -> &wgpu::Buffer {
+        &self.boxes
+    }
+
     /// Number of nodes the last `set_boxes` builds (0 for no boxes).
     pub fn node_count(&self) -> u32 {
         (2 * self.count).saturating_sub(1)

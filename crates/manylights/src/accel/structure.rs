@@ -96,6 +96,8 @@ struct Group {
     blas_root: u32,
     /// Whether queries start where an entry grid says (CPU-built groups).
     has_entry_grid: bool,
+    /// Written on the GPU every frame (`Volumes::dynamic`).
+    dynamic: bool,
     /// Bounds of the group's volumes, in its space: the top level's boxes are their images.
     bounds: Aabb,
     /// Present when the group is rebuilt on the GPU.
@@ -133,6 +135,27 @@ pub struct Volumes<'a> {
     pub items: &'a [u8],
     pub boxes: &'a [Aabb],
     pub groups: &'a Groups,
+    /// Volumes written on the GPU every frame, after the others: one more group, placed at identity
+    /// and rebuilt on the GPU every frame (particle lights, `particles/`).
+    pub dynamic: Option<DynamicGroup>,
+}
+
+/// A group whose items and boxes a GPU pass writes every frame ([`VolumeStructure::dynamic_group`]).
+#[derive(Clone, Copy, Debug)]
+pub struct DynamicGroup {
+    pub count: u32,
+    /// Bytes of one item (`GpuLight` or `GpuDecal`).
+    pub item_bytes: u64,
+    /// Bounds every one of its boxes stays within (its place in the top level).
+    pub bounds: Aabb,
+}
+
+/// Where a GPU pass writes a [`DynamicGroup`]'s volumes each frame: items from `first_item` of
+/// `items`, and their boxes into `boxes`, before the structure's `record`.
+pub struct DynamicTargets<'a> {
+    pub items: &'a wgpu::Buffer,
+    pub first_item: u32,
+    pub boxes: &'a wgpu::Buffer,
 }
 
 /// The clustered method's lists, for structures that shading reads through them: the froxel grid,
@@ -183,8 +206,32 @@ impl VolumeStructure {
             bounds: lights.iter().map(ClusterBounds::of_light).collect(),
             frame_layout,
         });
-        let volumes = Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups };
+        let volumes = Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: None };
         Self::new(ctx, &volumes, build, clustering)
+    }
+
+    /// The structure over a scene's lights and `particle_lights` point lights more, which a GPU pass
+    /// writes every frame ([`dynamic_group`](Self::dynamic_group)) within `particle_bounds`.
+    pub fn for_lights_and_particles(
+        ctx: &GpuContext,
+        lights: &[Light],
+        groups: &Groups,
+        build: BvhBuild,
+        particle_lights: u32,
+        particle_bounds: Aabb,
+    ) -> Result<Self> {
+        let items: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
+        let boxes: Vec<Aabb> = lights.iter().map(light_aabb).collect();
+        let dynamic = DynamicGroup { count: particle_lights, item_bytes: std::mem::size_of::<GpuLight>() as u64, bounds: particle_bounds };
+        let volumes =
+            Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: Some(dynamic) };
+        Self::new(ctx, &volumes, build, None)
+    }
+
+    /// Where the GPU writes the dynamic group's volumes, if the structure has one.
+    pub fn dynamic_group(&self) -> Option<DynamicTargets<'_>> {
+        let group = self.groups.iter().find(|g| g.dynamic)?;
+        Some(DynamicTargets { items: &self.items, first_item: group.items.start, boxes: group.builder.as_ref()?.boxes() })
     }
 
     /// The structure over a scene's decals; with clustered lists on `clusters`' grid when given.
@@ -202,7 +249,7 @@ impl VolumeStructure {
             bounds: decals.iter().map(ClusterBounds::of_decal).collect(),
             frame_layout,
         });
-        let volumes = Volumes { kind: VolumeKind::Decals, items: bytemuck::cast_slice(&items), boxes: &boxes, groups };
+        let volumes = Volumes { kind: VolumeKind::Decals, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: None };
         let mut structure = Self::new(ctx, &volumes, build, clustering)?;
         structure.layers = decals.iter().map(|d| d.layer).collect();
         Ok(structure)
@@ -240,7 +287,13 @@ impl VolumeStructure {
             )));
         }
         let (ranges, all_instances) = volumes.groups.resolve(count);
-        let instances: Vec<GroupInstance> = all_instances.into_iter().filter(|i| !ranges[i.group].is_empty()).collect();
+        let mut instances: Vec<GroupInstance> = all_instances.into_iter().filter(|i| !ranges[i.group].is_empty()).collect();
+        let dynamic = volumes.dynamic.filter(|d| d.count > 0);
+        if dynamic.is_some() {
+            // The dynamic group comes after the others, at identity.
+            instances.push(GroupInstance { group: ranges.len(), world_from_group: Affine3A::IDENTITY, spin: None });
+        }
+        let dynamic_count = dynamic.map_or(0, |d| d.count);
         let instance_slots = instances.len().max(1) as u32;
         let top_level_nodes = 2 * instance_slots - 1;
 
@@ -252,8 +305,10 @@ impl VolumeStructure {
             group_bases.push(node_base + 1);
             node_base += 1 + (2 * range.len() as u32).saturating_sub(1);
         }
+        let dynamic_root = node_base + 1;
+        node_base += 1 + (2 * dynamic_count).saturating_sub(1);
         let node_count = u64::from(node_base);
-        let primitive_count = u64::from(instance_slots) + count as u64;
+        let primitive_count = u64::from(instance_slots) + count as u64 + u64::from(dynamic_count);
         if primitive_count > MAX_PRIMITIVES as u64 {
             return Err(Error::InvalidScene(format!("{count} {label}s; a structure holds at most {MAX_PRIMITIVES} volumes and instances")));
         }
@@ -274,9 +329,8 @@ impl VolumeStructure {
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let node_bytes = node_count * std::mem::size_of::<BvhNode>() as u64;
         let primitive_bytes = (primitive_count + cell_words) * 4;
-        for (what, bytes) in
-            [("items", volumes.items.len() as u64), ("BVH nodes", node_bytes), ("BVH primitives and entry grids", primitive_bytes)]
-        {
+        let item_bytes = volumes.items.len() as u64 + dynamic.map_or(0, |d| u64::from(d.count) * d.item_bytes);
+        for (what, bytes) in [("items", item_bytes), ("BVH nodes", node_bytes), ("BVH primitives and entry grids", primitive_bytes)] {
             if bytes > limit {
                 return Err(Error::InvalidScene(format!(
                     "the {label} {what} take {} MiB, over this GPU's storage binding limit of {} MiB; use fewer {label}s",
@@ -300,7 +354,13 @@ impl VolumeStructure {
         let primitives = storage("bvh primitives", primitive_bytes, U::COPY_DST | U::COPY_SRC);
         let instance_buffer =
             storage("instances", u64::from(instance_slots) * std::mem::size_of::<GpuVolumeInstance>() as u64, U::COPY_DST);
-        let items = if volumes.items.is_empty() {
+        let items = if let Some(d) = dynamic {
+            let buffer = storage("items", volumes.items.len() as u64 + u64::from(d.count) * d.item_bytes, U::COPY_DST);
+            if !volumes.items.is_empty() {
+                ctx.queue.write_buffer(&buffer, 0, volumes.items);
+            }
+            buffer
+        } else if volumes.items.is_empty() {
             storage("items", 64, U::empty())
         } else {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -350,7 +410,27 @@ impl VolumeStructure {
                     Some(builder)
                 }
             };
-            groups.push(Group { items: items_range, blas_root, has_entry_grid, bounds, builder });
+            groups.push(Group { items: items_range, blas_root, has_entry_grid, dynamic: false, bounds, builder });
+        }
+        if let Some(d) = dynamic {
+            let first = count as u32;
+            let target = LbvhTarget {
+                nodes: nodes.clone(),
+                primitives: primitives.clone(),
+                node_base: dynamic_root,
+                primitive_base: instance_slots + first,
+                item_base: first,
+            };
+            let mut builder = GpuLbvh::with_target(ctx, d.count, target)?;
+            builder.set_gpu_boxes(&ctx.queue, d.count, &d.bounds)?;
+            groups.push(Group {
+                items: first..first + d.count,
+                blas_root: dynamic_root,
+                has_entry_grid: false,
+                dynamic: true,
+                bounds: d.bounds,
+                builder: Some(builder),
+            });
         }
         let top_level_builder = if instances.len() > CPU_TOP_LEVEL_MAX_INSTANCES {
             let target = LbvhTarget { nodes: nodes.clone(), primitives: primitives.clone(), node_base: 0, primitive_base: 0, item_base: 0 };
@@ -546,7 +626,7 @@ mod tests {
             glam::Quat::from_rotation_y(0.5),
             glam::Vec3::new(1.0, 2.0, 3.0),
         );
-        let mut group = Group { items: 4..9, blas_root: 17, has_entry_grid: false, bounds: Aabb::EMPTY, builder: None };
+        let mut group = Group { items: 4..9, blas_root: 17, has_entry_grid: false, dynamic: false, bounds: Aabb::EMPTY, builder: None };
         let gpu = GpuVolumeInstance::new(t, &group);
         let apply =
             |rows: &[[f32; 4]; 3], p: glam::Vec3| glam::Vec3::from_array(rows.map(|r| glam::Vec4::from_array(r).dot(p.extend(1.0))));

@@ -55,6 +55,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("particles/types.wgsl", include_str!("../particles/types.wgsl")),
     ("particles/motion.wgsl", include_str!("../particles/motion.wgsl")),
     ("particles/splat.wgsl", include_str!("../particles/splat.wgsl")),
+    ("particles/lights.wgsl", include_str!("../particles/lights.wgsl")),
     ("shading/enumerate/particles_off.wgsl", include_str!("../shading/enumerate/particles_off.wgsl")),
     ("shading/enumerate/particles_grid.wgsl", include_str!("../shading/enumerate/particles_grid.wgsl")),
 ];
@@ -183,11 +184,13 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("passes/gbuffer_raster.wgsl"),
         ShaderDesc::new("particles/motion.wgsl"),
         ShaderDesc::new("particles/splat.wgsl"),
+        ShaderDesc::new("particles/lights.wgsl"),
     ];
     use crate::pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind, ShadingMethods};
     for lights in LightMethod::ALL {
         for decals in DecalMethod::ALL {
-            for particles in ParticleMethod::ALL {
+            // `ParticleMethod::Bvh` composes as `Off`: its particles are lights.
+            for particles in [ParticleMethod::Off, ParticleMethod::Grid] {
                 let methods = ShadingMethods { lights, decals, particles };
                 if decals.works_in(PipelineKind::Visbuffer) {
                     shaders.push(crate::passes::visbuffer_shade::shader(methods));

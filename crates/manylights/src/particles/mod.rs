@@ -5,12 +5,17 @@
 //! colour times the point-light falloff, and its direction weighted alike — and resolves the sums into
 //! two filterable 3D textures (`splat.wgsl`), which shading samples at the surface.
 //!
+//! The exact alternative (`ParticleMethod::Bvh`) makes each particle a point light in the lights'
+//! acceleration structure instead (`lights.wgsl`: its record and its box, for a group rebuilt on the
+//! GPU every frame), shaded like any light.
+//!
 //! [`ParticleSettings`] describes the particles (the CPU scene's part) and computes any particle's
 //! light on the CPU ([`ParticleSettings::particle_at`], the GPU's twin); [`ParticleGrid`] is the
 //! voxel grid; [`ParticleSystem`] owns the GPU buffers, the textures and the passes.
 
 use glam::{UVec3, Vec3};
 
+use crate::accel::structure::DynamicTargets;
 use crate::gpu::{bindings, readback, shaders::ShaderDesc, GpuContext, GpuTimer};
 use crate::scene::Aabb;
 use crate::{Error, Result};
@@ -208,6 +213,16 @@ impl ParticleSettings {
         }
     }
 
+    /// Bounds every particle light stays within, at any time: the emitters' bounds grown by the
+    /// furthest flight (launch speed and gravity over the longest lifetime) and the largest radius.
+    pub fn bounds(&self) -> Aabb {
+        let speed = self.emitters.iter().map(|(_, s)| *s).fold(0.0f32, f32::max);
+        let t = self.lifetime.1;
+        let reach = Vec3::splat(speed * t + 0.5 * self.gravity.abs() * t * t + self.radius.1);
+        let (low, high) = self.emitters.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), (p, _)| (l.min(*p), h.max(*p)));
+        Aabb::new(low - reach, high + reach)
+    }
+
     fn gpu_params(&self, time: f32, row_threads: u32) -> GpuParticleParams {
         GpuParticleParams {
             count: self.count,
@@ -295,36 +310,92 @@ impl ParticleGrid {
     }
 }
 
-/// The GPU side: particle lights, the splat's sums and the two textures, and the passes.
+/// The GPU side: particle lights, what they are turned into (the grid's textures, or lights in an
+/// acceleration structure), and the passes.
 pub struct ParticleSystem {
     settings: ParticleSettings,
-    pub grid: ParticleGrid,
-    /// Colour sums (rgb) and direction sums (xyz, unnormalised), RGBA16F, sampled by shading.
-    pub color_texture: wgpu::Texture,
-    pub direction_texture: wgpu::Texture,
     params: wgpu::Buffer,
     particles: wgpu::Buffer,
-    sums: wgpu::Buffer,
     motion: (wgpu::ComputePipeline, wgpu::BindGroup),
-    splat: (wgpu::ComputePipeline, wgpu::ComputePipeline, wgpu::BindGroup),
+    output: Output,
+}
+
+enum Output {
+    // Boxed: its handles outweigh the other variant's several times.
+    Grid(Box<GridSplat>),
+    /// `particle_lights`: records and boxes for the lights' dynamic group.
+    Lights(wgpu::ComputePipeline, wgpu::BindGroup),
+}
+
+/// The splat's sums, the two textures and its passes.
+struct GridSplat {
+    grid: ParticleGrid,
+    /// Colour sums (rgb) and direction sums (xyz, unnormalised), RGBA16F, sampled by shading.
+    color_texture: wgpu::Texture,
+    direction_texture: wgpu::Texture,
+    sums: wgpu::Buffer,
+    splat: wgpu::ComputePipeline,
+    resolve: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
 }
 
 impl ParticleSystem {
+    /// Particles splatted into `grid` every frame.
     pub fn new(ctx: &GpuContext, settings: &ParticleSettings, grid: ParticleGrid) -> Result<Self> {
+        let (params, particles, motion) = Self::motion(ctx, settings)?;
+        let splat = GridSplat::new(ctx, grid, &params, &particles)?;
+        ctx.check_errors()?;
+        Ok(Self { settings: settings.clone(), params, particles, motion, output: Output::Grid(Box::new(splat)) })
+    }
+
+    /// Particles written every frame as point lights into a light structure's dynamic group.
+    pub fn with_lights(ctx: &GpuContext, settings: &ParticleSettings, targets: DynamicTargets) -> Result<Self> {
+        let (params, particles, motion) = Self::motion(ctx, settings)?;
+        let device = &ctx.device;
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let layout = bindings::layout(
+            device,
+            "particle lights",
+            &[
+                bindings::uniform(0, compute),
+                bindings::storage_read(1, compute),
+                bindings::storage_read_write(2, compute),
+                bindings::storage_read_write(3, compute),
+                bindings::uniform(4, compute),
+            ],
+        );
+        let pipeline = bindings::compute_pipeline(device, "particle_lights", &ShaderDesc::new("particles/lights.wgsl"), &[&layout])?;
+        use wgpu::util::DeviceExt;
+        let first_light = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("particle first light"),
+            contents: bytemuck::cast_slice(&[targets.first_item, 0, 0, 0]),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let bind_group = bindings::bind_group(
+            device,
+            "particle lights",
+            &layout,
+            vec![
+                params.as_entire_binding(),
+                particles.as_entire_binding(),
+                targets.items.as_entire_binding(),
+                targets.boxes.as_entire_binding(),
+                first_light.as_entire_binding(),
+            ],
+        );
+        ctx.check_errors()?;
+        Ok(Self { settings: settings.clone(), params, particles, motion, output: Output::Lights(pipeline, bind_group) })
+    }
+
+    /// The parameters, the particle lights and the motion pass, shared by both outputs.
+    fn motion(
+        ctx: &GpuContext,
+        settings: &ParticleSettings,
+    ) -> Result<(wgpu::Buffer, wgpu::Buffer, (wgpu::ComputePipeline, wgpu::BindGroup))> {
         settings.validate()?;
         let device = &ctx.device;
-        let limit = ctx.limits.max_storage_buffer_binding_size;
         let particle_bytes = u64::from(settings.count.max(1)) * std::mem::size_of::<GpuParticleLight>() as u64;
-        let sum_bytes = grid.voxel_count() * 6 * 4;
-        for (what, bytes) in [("particle lights", particle_bytes), ("particle grid's sums", sum_bytes)] {
-            if bytes > limit {
-                return Err(Error::InvalidConfig(format!(
-                    "the {what} take {} MiB, over this GPU's storage binding limit of {} MiB; use fewer particles or larger voxels",
-                    bytes >> 20,
-                    limit >> 20
-                )));
-            }
-        }
+        check_binding("particle lights", particle_bytes, ctx)?;
         use wgpu::util::DeviceExt;
         use wgpu::BufferUsages as U;
         let buffer = |label: &str, size: u64, usage| {
@@ -338,7 +409,122 @@ impl ParticleSystem {
             usage: U::STORAGE,
         });
         let particles = buffer("particle lights", particle_bytes, U::STORAGE | U::COPY_SRC);
-        let sums = buffer("particle splat sums", sum_bytes, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let layout = bindings::layout(
+            device,
+            "particle motion",
+            &[bindings::uniform(0, compute), bindings::storage_read(1, compute), bindings::storage_read_write(2, compute)],
+        );
+        let pipeline = bindings::compute_pipeline(device, "particle_motion", &ShaderDesc::new("particles/motion.wgsl"), &[&layout])?;
+        let bind_group = bindings::bind_group(
+            device,
+            "particle motion",
+            &layout,
+            vec![params.as_entire_binding(), emitters.as_entire_binding(), particles.as_entire_binding()],
+        );
+        Ok((params, particles, (pipeline, bind_group)))
+    }
+
+    /// The grid the particles are splatted into, with the method that has one.
+    pub fn grid(&self) -> Option<&ParticleGrid> {
+        match &self.output {
+            Output::Grid(splat) => Some(&splat.grid),
+            Output::Lights(..) => None,
+        }
+    }
+
+    /// The grid's colour and direction textures, with the method that has them.
+    pub fn grid_textures(&self) -> Option<[&wgpu::Texture; 2]> {
+        match &self.output {
+            Output::Grid(splat) => Some([&splat.color_texture, &splat.direction_texture]),
+            Output::Lights(..) => None,
+        }
+    }
+
+    /// Workgroups of the per-particle passes, as (x, y): rows of at most 65535.
+    fn dispatch(&self) -> (u32, u32) {
+        let groups = self.settings.count.div_ceil(WORKGROUP).max(1);
+        let x = groups.min(65535);
+        (x, groups.div_ceil(x))
+    }
+
+    /// Records the particles' motion to `time`, timed as `particle_motion`, and what they become:
+    /// the splat into the textures (`particle_splat`), or lights (within `particle_motion`).
+    pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, time: f32) {
+        let (x, y) = self.dispatch();
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&self.settings.gpu_params(time, x * WORKGROUP)));
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("particle_motion"),
+                timestamp_writes: timer.as_deref_mut().map(|t| t.compute_pass("particle_motion")),
+            });
+            if self.settings.count > 0 {
+                pass.set_pipeline(&self.motion.0);
+                pass.set_bind_group(0, &self.motion.1, &[]);
+                pass.dispatch_workgroups(x, y, 1);
+                if let Output::Lights(pipeline, bind_group) = &self.output {
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(0, bind_group, &[]);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+            }
+        }
+        if let Output::Grid(splat) = &self.output {
+            splat.record(encoder, timer, self.settings.count > 0, (x, y));
+        }
+    }
+
+    /// The particle lights of the last recorded frame (for tests and the exact method's oracle).
+    pub fn read_particles(&self, ctx: &GpuContext) -> Result<Vec<GpuParticleLight>> {
+        self.read(ctx, &self.particles)
+    }
+
+    /// The splat's sums per voxel, as floats: colour rgb, direction xyz (none without a grid).
+    pub fn read_sums(&self, ctx: &GpuContext) -> Result<Vec<[f32; 6]>> {
+        let Output::Grid(splat) = &self.output else { return Ok(Vec::new()) };
+        let raw: Vec<[i32; 6]> = self.read(ctx, &splat.sums)?;
+        Ok(raw.into_iter().map(|v| v.map(|x| x as f32 / SPLAT_SCALE)).collect())
+    }
+
+    fn read<T: bytemuck::Pod>(&self, ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<T>> {
+        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("particle readback"),
+            size: buffer.size(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+        ctx.queue.submit([encoder.finish()]);
+        readback::map_buffer(ctx, &staging, 0, buffer.size())
+    }
+}
+
+fn check_binding(what: &str, bytes: u64, ctx: &GpuContext) -> Result<()> {
+    let limit = ctx.limits.max_storage_buffer_binding_size;
+    if bytes > limit {
+        return Err(Error::InvalidConfig(format!(
+            "the {what} take {} MiB, over this GPU's storage binding limit of {} MiB; use fewer particles or larger voxels",
+            bytes >> 20,
+            limit >> 20
+        )));
+    }
+    Ok(())
+}
+
+impl GridSplat {
+    fn new(ctx: &GpuContext, grid: ParticleGrid, params: &wgpu::Buffer, particles: &wgpu::Buffer) -> Result<Self> {
+        let device = &ctx.device;
+        let sum_bytes = grid.voxel_count() * 6 * 4;
+        check_binding("particle grid's sums", sum_bytes, ctx)?;
+        use wgpu::util::DeviceExt;
+        use wgpu::BufferUsages as U;
+        let sums = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("particle splat sums"),
+            size: sum_bytes,
+            usage: U::STORAGE | U::COPY_DST | U::COPY_SRC,
+            mapped_at_creation: false,
+        });
         let grid_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("particle grid"),
             contents: bytemuck::bytes_of(&GpuParticleGrid {
@@ -363,21 +549,7 @@ impl ParticleSystem {
         };
         let color_texture = texture("particle colour grid");
         let direction_texture = texture("particle direction grid");
-
         let compute = wgpu::ShaderStages::COMPUTE;
-        let motion_layout = bindings::layout(
-            device,
-            "particle motion",
-            &[bindings::uniform(0, compute), bindings::storage_read(1, compute), bindings::storage_read_write(2, compute)],
-        );
-        let motion_pipeline =
-            bindings::compute_pipeline(device, "particle_motion", &ShaderDesc::new("particles/motion.wgsl"), &[&motion_layout])?;
-        let motion_group = bindings::bind_group(
-            device,
-            "particle motion",
-            &motion_layout,
-            vec![params.as_entire_binding(), emitters.as_entire_binding(), particles.as_entire_binding()],
-        );
         let storage_3d = |binding| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: compute,
@@ -388,7 +560,7 @@ impl ParticleSystem {
             },
             count: None,
         };
-        let splat_layout = bindings::layout(
+        let layout = bindings::layout(
             device,
             "particle splat",
             &[
@@ -400,15 +572,15 @@ impl ParticleSystem {
                 storage_3d(5),
             ],
         );
-        let splat_shader = ShaderDesc::new("particles/splat.wgsl");
-        let splat_pipeline = bindings::compute_pipeline(device, "particle_splat", &splat_shader, &[&splat_layout])?;
-        let resolve_pipeline = bindings::compute_pipeline(device, "particle_resolve", &splat_shader, &[&splat_layout])?;
+        let shader = ShaderDesc::new("particles/splat.wgsl");
+        let splat = bindings::compute_pipeline(device, "particle_splat", &shader, &[&layout])?;
+        let resolve = bindings::compute_pipeline(device, "particle_resolve", &shader, &[&layout])?;
         let color_view = color_texture.create_view(&Default::default());
         let direction_view = direction_texture.create_view(&Default::default());
-        let splat_group = bindings::bind_group(
+        let bind_group = bindings::bind_group(
             device,
             "particle splat",
-            &splat_layout,
+            &layout,
             vec![
                 params.as_entire_binding(),
                 grid_uniform.as_entire_binding(),
@@ -418,79 +590,23 @@ impl ParticleSystem {
                 wgpu::BindingResource::TextureView(&direction_view),
             ],
         );
-        ctx.check_errors()?;
-        Ok(Self {
-            settings: settings.clone(),
-            grid,
-            color_texture,
-            direction_texture,
-            params,
-            particles,
-            sums,
-            motion: (motion_pipeline, motion_group),
-            splat: (splat_pipeline, resolve_pipeline, splat_group),
-        })
+        Ok(Self { grid, color_texture, direction_texture, sums, splat, resolve, bind_group })
     }
 
-    /// Workgroups of the per-particle passes, as (x, y): rows of at most 65535.
-    fn dispatch(&self) -> (u32, u32) {
-        let groups = self.settings.count.div_ceil(WORKGROUP).max(1);
-        let x = groups.min(65535);
-        (x, groups.div_ceil(x))
-    }
-
-    /// Records the particles' motion to `time` and the splat into the textures, timed as
-    /// `particle_motion` and `particle_splat`.
-    pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, time: f32) {
-        let (x, y) = self.dispatch();
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&self.settings.gpu_params(time, x * WORKGROUP)));
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("particle_motion"),
-                timestamp_writes: timer.as_deref_mut().map(|t| t.compute_pass("particle_motion")),
-            });
-            pass.set_pipeline(&self.motion.0);
-            pass.set_bind_group(0, &self.motion.1, &[]);
-            if self.settings.count > 0 {
-                pass.dispatch_workgroups(x, y, 1);
-            }
-        }
+    /// Clears the sums, splats every particle and resolves the textures, timed as `particle_splat`.
+    fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, any: bool, (x, y): (u32, u32)) {
         encoder.clear_buffer(&self.sums, 0, None);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("particle_splat"),
             timestamp_writes: timer.map(|t| t.compute_pass("particle_splat")),
         });
-        pass.set_bind_group(0, &self.splat.2, &[]);
-        if self.settings.count > 0 {
-            pass.set_pipeline(&self.splat.0);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        if any {
+            pass.set_pipeline(&self.splat);
             pass.dispatch_workgroups(x, y, 1);
         }
-        pass.set_pipeline(&self.splat.1);
+        pass.set_pipeline(&self.resolve);
         let voxels = self.grid.dims.map(|d| d.div_ceil(VOXEL_WORKGROUP));
         pass.dispatch_workgroups(voxels.x, voxels.y, voxels.z);
-    }
-
-    /// The particle lights of the last recorded frame (for tests and the exact method's oracle).
-    pub fn read_particles(&self, ctx: &GpuContext) -> Result<Vec<GpuParticleLight>> {
-        self.read(ctx, &self.particles)
-    }
-
-    /// The splat's sums per voxel, as floats: colour rgb, direction xyz.
-    pub fn read_sums(&self, ctx: &GpuContext) -> Result<Vec<[f32; 6]>> {
-        let raw: Vec<[i32; 6]> = self.read(ctx, &self.sums)?;
-        Ok(raw.into_iter().map(|v| v.map(|x| x as f32 / SPLAT_SCALE)).collect())
-    }
-
-    fn read<T: bytemuck::Pod>(&self, ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<T>> {
-        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("particle readback"),
-            size: buffer.size(),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
-        ctx.queue.submit([encoder.finish()]);
-        readback::map_buffer(ctx, &staging, 0, buffer.size())
     }
 }

@@ -235,16 +235,21 @@ pub enum ParticleMethod {
     Off,
     /// Sample the two 3D textures the particles are splatted into every frame.
     Grid,
+    /// Exact: every particle a point light in the lights' BVH, rebuilt on the GPU every frame (needs
+    /// `LightMethod::Bvh`, which then shades them).
+    Bvh,
 }
 
 impl ParticleMethod {
-    pub const ALL: [ParticleMethod; 2] = [ParticleMethod::Off, ParticleMethod::Grid];
+    pub const ALL: [ParticleMethod; 3] = [ParticleMethod::Off, ParticleMethod::Grid, ParticleMethod::Bvh];
 
     /// The WGSL module that defines `shade_particle_lights` for this method.
     pub fn lighting_module(self) -> &'static str {
         match self {
             ParticleMethod::Off => "shading/enumerate/particles_off.wgsl",
             ParticleMethod::Grid => "shading/enumerate/particles_grid.wgsl",
+            // The particles are among the lights: `shade_local_lights` reaches them.
+            ParticleMethod::Bvh => "shading/enumerate/particles_off.wgsl",
         }
     }
 
@@ -252,6 +257,7 @@ impl ParticleMethod {
         match self {
             ParticleMethod::Off => "off",
             ParticleMethod::Grid => "grid",
+            ParticleMethod::Bvh => "bvh",
         }
     }
 }

@@ -1,0 +1,126 @@
+//! `manylights particle-error`: how far each particle-grid setting is from the exact method (the same
+//! particles as point lights through the BVH), on a scene at one time: the particles' light in error,
+//! relative to their exact light, and the PSNR of the tonemapped image.
+
+use anyhow::bail;
+use clap::Args;
+use manylights::{
+    config::RenderConfig,
+    gpu::GpuContext,
+    particles::ParticleFilter,
+    pipelines::{DecalMethod, LightMethod, ParticleMethod},
+    renderer::{Image, Renderer},
+    scene::Scene,
+};
+
+use crate::render::{choose_camera, ParticleFilterArg, PipelineArg};
+use crate::scene_args::SceneArgs;
+
+#[derive(Args)]
+pub struct ParticleErrorArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[arg(long, default_value_t = 640)]
+    width: u32,
+    #[arg(long, default_value_t = 360)]
+    height: u32,
+    #[arg(long)]
+    camera: Option<usize>,
+    #[arg(long, value_enum, default_value_t = PipelineArg::Visbuffer)]
+    pipeline: PipelineArg,
+    /// Scene time of the compared frame, in seconds.
+    #[arg(long, default_value_t = 1.0)]
+    time: f32,
+    /// Voxel edges to compare, in metres, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [1.0, 0.5, 0.25])]
+    voxel_sizes: Vec<f32>,
+    /// Filters to compare, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [ParticleFilterArg::Trilinear, ParticleFilterArg::Tricubic])]
+    filters: Vec<ParticleFilterArg>,
+    /// Samples per shading point to compare, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [1, 8])]
+    samples: Vec<u32>,
+}
+
+/// A frame as linear radiance and tonemapped.
+type Frame = (Image<[f32; 4]>, Image<[u8; 4]>);
+
+pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
+    let scene = args.scene.load()?;
+    if scene.particles.as_ref().is_none_or(|p| p.count == 0) {
+        bail!("the scene has no particles; add them with --particles N (or a scene file's [particles])");
+    }
+    if !(args.time.is_finite() && args.time >= 0.0) {
+        bail!("--time {}: give a finite time ≥ 0 in seconds", args.time);
+    }
+    let camera = choose_camera(&scene, args.camera)?;
+    let ctx = GpuContext::new()?;
+    let config = |particle_method| RenderConfig {
+        width: args.width,
+        height: args.height,
+        pipeline: args.pipeline.into(),
+        light_method: LightMethod::Bvh,
+        decal_method: DecalMethod::Bvh,
+        particle_method,
+        ..RenderConfig::default()
+    };
+    let frame = |config: RenderConfig| -> anyhow::Result<Frame> {
+        let mut renderer = Renderer::new(ctx.clone(), &scene, config)?;
+        renderer.time = args.time;
+        renderer.render(&camera)?;
+        Ok((renderer.read_hdr()?, renderer.read_ldr()?))
+    };
+    let (without, _) = frame(config(ParticleMethod::Off))?;
+    let (exact, exact_ldr) = frame(config(ParticleMethod::Bvh))?;
+    let exact_light: f64 = exact.pixels.iter().zip(&without.pixels).map(|(e, w)| f64::from((luminance(e) - luminance(w)).abs())).sum();
+    if exact_light <= 0.0 {
+        bail!("the particles light nothing the camera sees at {} s; choose another --time or --camera", args.time);
+    }
+    println!("GPU: {}", ctx.describe());
+    println!(
+        "{} particles, {}×{}, {} s; error: Σ|grid − exact| / Σ|exact − no particles| (luminance), PSNR of the tonemapped image",
+        particle_count(&scene),
+        args.width,
+        args.height,
+        args.time
+    );
+    println!("{:>8} {:>10} {:>8} {:>12} {:>9}", "voxel m", "filter", "samples", "error %", "PSNR dB");
+    for &voxel in &args.voxel_sizes {
+        for &filter in &args.filters {
+            for &samples in &args.samples {
+                let filter: ParticleFilter = filter.into();
+                let config = RenderConfig {
+                    particle_voxel_size: voxel,
+                    particle_filter: filter,
+                    particle_samples: samples,
+                    ..config(ParticleMethod::Grid)
+                };
+                let (grid, grid_ldr) = frame(config)?;
+                let error: f64 = grid.pixels.iter().zip(&exact.pixels).map(|(g, e)| f64::from((luminance(g) - luminance(e)).abs())).sum();
+                println!(
+                    "{voxel:>8} {:>10} {samples:>8} {:>12.2} {:>9.2}",
+                    filter.name(),
+                    100.0 * error / exact_light,
+                    psnr(&grid_ldr, &exact_ldr)
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+fn particle_count(scene: &Scene) -> u32 {
+    scene.particles.as_ref().map_or(0, |p| p.count)
+}
+
+fn luminance(p: &[f32; 4]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+/// Peak signal-to-noise ratio of two 8-bit images' colour channels, in dB (infinite when equal).
+fn psnr(a: &Image<[u8; 4]>, b: &Image<[u8; 4]>) -> f64 {
+    let squared: f64 =
+        a.pixels.iter().zip(&b.pixels).flat_map(|(p, q)| (0..3).map(move |c| (f64::from(p[c]) - f64::from(q[c])).powi(2))).sum();
+    let mse = squared / (a.pixels.len() * 3) as f64;
+    10.0 * (255.0 * 255.0 / mse).log10()
+}
