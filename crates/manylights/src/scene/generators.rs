@@ -361,9 +361,9 @@ pub struct ScatterParticles {
     pub emitters: usize,
 }
 
-/// Sets the scene's particles: `params.count` particle lights from `params.emitters` emitters on
-/// seeded surface points facing up (or any surface points when none faces up), launched fast enough
-/// to rise about a sixth of the scene's height. Deterministic.
+/// Sets the scene's particles: `params.count` particle lights from `params.emitters` emitters a
+/// particle's reach above seeded surface points facing up (or any surface points when none faces
+/// up), launched fast enough to rise about a sixth of the scene's height. Deterministic.
 pub fn add_particles(scene: &mut Scene, params: &ScatterParticles) -> Result<()> {
     if params.emitters == 0 || params.emitters > MAX_PARTICLE_EMITTERS {
         return Err(Error::InvalidConfig(format!("particles: {} emitters; give 1 to {MAX_PARTICLE_EMITTERS}", params.emitters)));
@@ -386,7 +386,10 @@ pub fn add_particles(scene: &mut Scene, params: &ScatterParticles) -> Result<()>
     let height = (bounds.max.y - bounds.min.y).max(1e-3);
     let speed = (2.0 * settings.gravity * height / 6.0).sqrt();
     let mut rng = Pcg64::seed_from_u64(params.seed);
-    // Upward-facing points, drawn among at most 64 tries each; any surface point after that.
+    // Upward-facing points, drawn among at most 64 tries each; any surface point after that. Each
+    // emitter floats a particle's reach above its point: a light touching a surface is a singular
+    // hot spot as a point light, which no grid voxel can hold.
+    let lift = settings.radius.1;
     settings.emitters = (0..params.emitters)
         .map(|_| {
             let mut point = surfaces.sample(&mut rng);
@@ -396,7 +399,7 @@ pub fn add_particles(scene: &mut Scene, params: &ScatterParticles) -> Result<()>
                 }
                 point = surfaces.sample(&mut rng);
             }
-            (point.0, speed)
+            (point.0 + point.1 * lift, speed)
         })
         .collect();
     settings.validate()?;
