@@ -54,20 +54,20 @@ pub struct RenderArgs {
     decal_bvh_build: BvhBuildArg,
     /// How particle lights (--particles, or a scene file's [particles]) light the scene: not at all,
     /// through the 3D textures they are splatted into every frame, or exactly, as point lights in the
-    /// lights' BVH rebuilt every frame (with --light-method bvh).
-    #[arg(long, value_enum, default_value_t = ParticleMethodArg::Grid)]
-    particle_method: ParticleMethodArg,
-    /// Edge of the particle grid's voxels, in metres.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
-    particle_voxel_size: f32,
+    /// lights' BVH rebuilt every frame (with --light-method bvh). [default: the scene file's, or grid]
+    #[arg(long, value_enum)]
+    particle_method: Option<ParticleMethodArg>,
+    /// Edge of the particle grid's voxels, in metres. [default: the scene file's, or 1]
+    #[arg(long, allow_negative_numbers = true)]
+    particle_voxel_size: Option<f32>,
     /// How shading reads the particle grid: the voxel the point is in, the eight around it, or a cubic
-    /// B-spline over 64 (smooth across voxel faces).
-    #[arg(long, value_enum, default_value_t = ParticleFilterArg::Trilinear)]
-    particle_filter: ParticleFilterArg,
+    /// B-spline over 64 (smooth across voxel faces). [default: the scene file's, or trilinear]
+    #[arg(long, value_enum)]
+    particle_filter: Option<ParticleFilterArg>,
     /// Points around each shading point, within half a voxel, whose grid light is averaged
-    /// (supersampling; 1 = the point alone).
-    #[arg(long, default_value_t = 1)]
-    particle_samples: u32,
+    /// (supersampling; 1 = the point alone). [default: the scene file's, or 1]
+    #[arg(long)]
+    particle_samples: Option<u32>,
     #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
     tonemap: TonemapArg,
     /// Largest texture size kept on the GPU (larger images are downsampled).
@@ -182,6 +182,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let scene = args.scene.load()?;
     let camera = choose_camera(&scene, args.camera)?;
+    let hints = scene.particles.as_ref().map(|p| p.rendering).unwrap_or_default();
+    let defaults = RenderConfig::default();
     let config = RenderConfig {
         width: args.width,
         height: args.height,
@@ -201,14 +203,19 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             DecalMethodArg::DeferredDecals => DecalMethod::DeferredDecals,
         },
         decal_bvh_build: args.decal_bvh_build.into(),
-        particle_method: match args.particle_method {
-            ParticleMethodArg::Off => ParticleMethod::Off,
-            ParticleMethodArg::Grid => ParticleMethod::Grid,
-            ParticleMethodArg::Bvh => ParticleMethod::Bvh,
-        },
-        particle_voxel_size: args.particle_voxel_size,
-        particle_filter: args.particle_filter.into(),
-        particle_samples: args.particle_samples,
+        // The command line first, then the scene file, then the defaults.
+        particle_method: args
+            .particle_method
+            .map(|m| match m {
+                ParticleMethodArg::Off => ParticleMethod::Off,
+                ParticleMethodArg::Grid => ParticleMethod::Grid,
+                ParticleMethodArg::Bvh => ParticleMethod::Bvh,
+            })
+            .or(hints.method)
+            .unwrap_or(defaults.particle_method),
+        particle_voxel_size: args.particle_voxel_size.or(hints.voxel_size).unwrap_or(defaults.particle_voxel_size),
+        particle_filter: args.particle_filter.map(Into::into).or(hints.filter).unwrap_or(defaults.particle_filter),
+        particle_samples: args.particle_samples.or(hints.samples).unwrap_or(defaults.particle_samples),
         tonemapper: match args.tonemap {
             TonemapArg::Aces => Tonemapper::Aces,
             TonemapArg::Agx => Tonemapper::Agx,

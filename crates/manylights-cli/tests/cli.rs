@@ -137,6 +137,26 @@ fn bad_particle_options() {
     assert!(emitters.contains("emitters") && emitters.contains("1 to"), "{emitters}");
 }
 
+/// A scene file's particle rendering choices apply unless a flag overrides them.
+#[test]
+fn scene_file_particle_settings_yield_to_flags() {
+    let dir = temp_dir("particle_scene");
+    let scene = dir.join("particles.toml");
+    let gltf = assets().join("box/Box.gltf");
+    std::fs::write(&scene, format!("gltf = {:?}\n[particles]\ncount = 200\nmethod = 'bvh'\n", gltf.to_str().unwrap())).unwrap();
+    let scene = scene.to_str().unwrap();
+    // bvh particles need bvh lights, and the default light method is brute: the scene's choice applied.
+    let err = failure(&["render", "--scene", scene, "--width", "16", "--height", "16"]);
+    assert!(err.contains("--particle-method bvh") && err.contains("--light-method bvh"), "{err}");
+    let out = dir.join("out.png");
+    for extra in [["--light-method", "bvh"], ["--particle-method", "grid"]] {
+        let mut args = vec!["render", "--scene", scene, "--width", "16", "--height", "16", "-o", out.to_str().unwrap()];
+        args.extend(extra);
+        let run = manylights(&args);
+        assert!(run.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&run.stderr));
+    }
+}
+
 #[test]
 fn particle_error_compares_grid_settings_with_the_exact_method() {
     #[rustfmt::skip]

@@ -57,6 +57,16 @@ impl ParticleFilter {
 const WORKGROUP: u32 = 256;
 const VOXEL_WORKGROUP: u32 = 4;
 
+/// How a scene file asks for its particles to be rendered; each unset field, and each one a
+/// command-line flag overrides, falls back to `RenderConfig`'s.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ParticleRendering {
+    pub method: Option<crate::pipelines::ParticleMethod>,
+    pub voxel_size: Option<f32>,
+    pub filter: Option<ParticleFilter>,
+    pub samples: Option<u32>,
+}
+
 /// The particles of a scene: how many, their emitters, and how they move and shine.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParticleSettings {
@@ -77,6 +87,8 @@ pub struct ParticleSettings {
     pub swirl: f32,
     /// Launch directions lie within this angle of +Y, in degrees.
     pub cone_degrees: f32,
+    /// The scene file's rendering choices for them.
+    pub rendering: ParticleRendering,
 }
 
 impl Default for ParticleSettings {
@@ -91,6 +103,7 @@ impl Default for ParticleSettings {
             gravity: 3.0,
             swirl: 1.0,
             cone_degrees: 25.0,
+            rendering: ParticleRendering::default(),
         }
     }
 }

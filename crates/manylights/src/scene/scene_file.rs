@@ -74,6 +74,10 @@
 //! radius = [0.5, 1.5]     # light range in metres, uniform per launch; default [0.5, 1.5]
 //! intensity = 0.2         # candela of the brightest channel; default 0.2
 //! lifetime = [2.0, 4.0]   # seconds between launches; default [2, 4]
+//! method = "grid"         # how to render them, unless the command line says: "off", "grid" or "bvh"
+//! voxel_size = 0.5        # the grid's voxel edge in metres, likewise
+//! filter = "tricubic"     # "nearest", "trilinear" or "tricubic", likewise
+//! samples = 4             # jittered samples per shading point, likewise
 //!
 //! [animate]               # group all lights and decals into spinning groups (generators::group_for_animation)
 //! groups = 16             # default 16
@@ -241,6 +245,10 @@ struct ParticlesSpec {
     radius: Option<(f32, f32)>,
     intensity: Option<f32>,
     lifetime: Option<(f32, f32)>,
+    method: Option<String>,
+    voxel_size: Option<f32>,
+    filter: Option<String>,
+    samples: Option<u32>,
 }
 
 impl ParticlesSpec {
@@ -251,6 +259,29 @@ impl ParticlesSpec {
         settings.radius = self.radius.unwrap_or(settings.radius);
         settings.intensity = self.intensity.unwrap_or(settings.intensity);
         settings.lifetime = self.lifetime.unwrap_or(settings.lifetime);
+        use crate::{particles::ParticleFilter, pipelines::ParticleMethod};
+        settings.rendering.method = match self.method.as_deref() {
+            None => None,
+            Some("off") => Some(ParticleMethod::Off),
+            Some("grid") => Some(ParticleMethod::Grid),
+            Some("bvh") => Some(ParticleMethod::Bvh),
+            Some(other) => return Err(format!("method {other:?}: use \"off\", \"grid\" or \"bvh\"")),
+        };
+        settings.rendering.filter = match self.filter.as_deref() {
+            None => None,
+            Some("nearest") => Some(ParticleFilter::Nearest),
+            Some("trilinear") => Some(ParticleFilter::Trilinear),
+            Some("tricubic") => Some(ParticleFilter::Tricubic),
+            Some(other) => return Err(format!("filter {other:?}: use \"nearest\", \"trilinear\" or \"tricubic\"")),
+        };
+        if let Some(size) = self.voxel_size.filter(|s| !(s.is_finite() && *s > 0.0)) {
+            return Err(format!("voxel_size {size} must be a finite length > 0, in metres"));
+        }
+        if let Some(samples) = self.samples.filter(|s| !(1..=crate::particles::MAX_PARTICLE_SAMPLES).contains(s)) {
+            return Err(format!("samples {samples}: give 1 to {}", crate::particles::MAX_PARTICLE_SAMPLES));
+        }
+        settings.rendering.voxel_size = self.voxel_size;
+        settings.rendering.samples = self.samples;
         settings.validate().map_err(inner_message)
     }
 }
@@ -882,6 +913,22 @@ roughness_metallic = "decals/rm.png"
         std::fs::write(&path, "gltf = 'Box.gltf'\n[particles]\ncount = 500\nemitters = 3\nradius = [0.2, 0.4]\n").unwrap();
         let particles = load(&path).unwrap().particles.unwrap();
         assert_eq!((particles.count, particles.emitters.len(), particles.radius), (500, 3, (0.2, 0.4)));
+        std::fs::write(
+            &path,
+            "gltf = 'Box.gltf'\n[particles]\ncount = 5\nmethod = 'bvh'\nvoxel_size = 0.5\nfilter = 'tricubic'\nsamples = 4\n",
+        )
+        .unwrap();
+        let rendering = load(&path).unwrap().particles.unwrap().rendering;
+        assert_eq!(rendering.method, Some(crate::pipelines::ParticleMethod::Bvh));
+        assert_eq!(
+            (rendering.voxel_size, rendering.filter, rendering.samples),
+            (Some(0.5), Some(crate::particles::ParticleFilter::Tricubic), Some(4))
+        );
+        std::fs::write(&path, "gltf = 'Box.gltf'\n[particles]\ncount = 5\nmethod = 'magic'\n").unwrap();
+        let magic = reason(load(&path));
+        assert!(magic.starts_with("particles:") && magic.contains("\"grid\""), "{magic}");
+        std::fs::write(&path, "gltf = 'Box.gltf'\n[particles]\ncount = 5\nvoxel_size = -2.0\n").unwrap();
+        assert!(reason(load(&path)).contains("voxel_size -2"));
         std::fs::write(&path, "gltf = 'Box.gltf'\n[particles]\ncount = 5\nradius = [2.0, 1.0]\n").unwrap();
         let inverted = reason(load(&path));
         assert!(inverted.starts_with("particles:") && inverted.contains("radius"), "{inverted}");
