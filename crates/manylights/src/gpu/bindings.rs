@@ -40,14 +40,23 @@ pub fn texture(
 }
 
 pub fn storage_texture_write(binding: u32, visibility: wgpu::ShaderStages, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+    storage_texture_write_dimension(binding, visibility, format, wgpu::TextureViewDimension::D2)
+}
+
+pub fn storage_texture_3d_write(binding: u32, visibility: wgpu::ShaderStages, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+    storage_texture_write_dimension(binding, visibility, format, wgpu::TextureViewDimension::D3)
+}
+
+fn storage_texture_write_dimension(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    format: wgpu::TextureFormat,
+    view_dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
-        ty: wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::WriteOnly,
-            format,
-            view_dimension: wgpu::TextureViewDimension::D2,
-        },
+        ty: wgpu::BindingType::StorageTexture { access: wgpu::StorageTextureAccess::WriteOnly, format, view_dimension },
         count: None,
     }
 }

@@ -21,6 +21,20 @@ pub fn map_buffer<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffer, off
     Ok(data)
 }
 
+/// Copies a whole COPY_SRC buffer into a staging buffer and returns it as `T`s.
+pub fn read_buffer<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<T>> {
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: buffer.size(),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+    ctx.queue.submit([encoder.finish()]);
+    map_buffer(ctx, &staging, 0, buffer.size())
+}
+
 /// Reads a whole 2D texture of `bytes_per_pixel`-sized texels, tightly packed, row by row.
 pub fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture, bytes_per_pixel: u32) -> Result<Vec<u8>> {
     let (width, height) = (texture.width(), texture.height());

@@ -489,27 +489,14 @@ impl ParticleSystem {
 
     /// The particle lights of the last recorded frame (for tests and the exact method's oracle).
     pub fn read_particles(&self, ctx: &GpuContext) -> Result<Vec<GpuParticleLight>> {
-        self.read(ctx, &self.particles)
+        readback::read_buffer(ctx, &self.particles)
     }
 
     /// The splat's sums per voxel, as floats: colour rgb, direction xyz (none without a grid).
     pub fn read_sums(&self, ctx: &GpuContext) -> Result<Vec<[f32; 6]>> {
         let Output::Grid(splat) = &self.output else { return Ok(Vec::new()) };
-        let raw: Vec<[i32; 6]> = self.read(ctx, &splat.sums)?;
+        let raw: Vec<[i32; 6]> = readback::read_buffer(ctx, &splat.sums)?;
         Ok(raw.into_iter().map(|v| v.map(|x| x as f32 / SPLAT_SCALE)).collect())
-    }
-
-    fn read<T: bytemuck::Pod>(&self, ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<T>> {
-        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("particle readback"),
-            size: buffer.size(),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
-        ctx.queue.submit([encoder.finish()]);
-        readback::map_buffer(ctx, &staging, 0, buffer.size())
     }
 }
 
@@ -563,16 +550,7 @@ impl GridSplat {
         let color_texture = texture("particle colour grid");
         let direction_texture = texture("particle direction grid");
         let compute = wgpu::ShaderStages::COMPUTE;
-        let storage_3d = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: compute,
-            ty: wgpu::BindingType::StorageTexture {
-                access: wgpu::StorageTextureAccess::WriteOnly,
-                format: wgpu::TextureFormat::Rgba16Float,
-                view_dimension: wgpu::TextureViewDimension::D3,
-            },
-            count: None,
-        };
+        let storage_3d = |binding| bindings::storage_texture_3d_write(binding, compute, wgpu::TextureFormat::Rgba16Float);
         let layout = bindings::layout(
             device,
             "particle splat",
