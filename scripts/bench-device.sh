@@ -105,6 +105,20 @@ particles() {
     --voxel-sizes 1,0.5,0.25 --filters nearest,trilinear,tricubic --samples 1,8 2>&1 | grep -v "^GPU"
 }
 
+# Camera-centred clipmap cascades against the one grid over the scene, 1M particles.
+clipmap() {
+  local n=1048576 v
+  for v in 1 0.5; do
+    run "particles_${n}_visbuffer_world_$v" 200 --scene $sponza --particles $n --particle-emitters 256 --particle-voxel-size $v \
+      --light-method off --decal-method off
+    run "particles_${n}_visbuffer_clipmap4x64_$v" 200 --scene $sponza --particles $n --particle-emitters 256 --particle-voxel-size $v \
+      --particle-cascades 4 --particle-cascade-resolution 64 --light-method off --decal-method off
+  done
+  echo "== particle-error 262144, cascades"
+  timeout 300 $bin particle-error --scene $sponza --particles 262144 --particle-emitters 256 --width 1920 --height 1080 \
+    --voxel-sizes 1,0.5 --filters trilinear --samples 1 --cascades 0,2,4 --cascade-resolution 64 2>&1 | grep -v "^GPU"
+}
+
 # Test binaries built with `cargo test --release --no-run`, run here against the GPU, each test in its
 # own process (after a dozen devices opened and closed in one process, the NVIDIA driver listed no
 # adapter to the next).
@@ -132,9 +146,10 @@ for set in "${@:-structures}"; do
     decals) matrix_decals ;;
     tests) tests ;;
     particles) particles ;;
+    clipmap) clipmap ;;
     table) bench table --sweeps none ;;
     sweeps) bench sweeps --scenes none ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps or particles)" >&2; exit 2 ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles or clipmap)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

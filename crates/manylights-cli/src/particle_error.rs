@@ -40,6 +40,12 @@ pub struct ParticleErrorArgs {
     /// Samples per shading point to compare, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [1, 8])]
     samples: Vec<u32>,
+    /// Clipmap cascade counts to compare, comma-separated (0: one grid over the scene).
+    #[arg(long, value_delimiter = ',', default_values_t = [0])]
+    cascades: Vec<u32>,
+    /// Voxels per axis of each cascade.
+    #[arg(long, default_value_t = 64)]
+    cascade_resolution: u32,
 }
 
 /// A frame as linear radiance and tonemapped.
@@ -84,25 +90,30 @@ pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
         args.height,
         args.time
     );
-    println!("{:>8} {:>10} {:>8} {:>12} {:>9}", "voxel m", "filter", "samples", "error %", "PSNR dB");
-    for &voxel in &args.voxel_sizes {
-        for &filter in &args.filters {
-            for &samples in &args.samples {
-                let filter: ParticleFilter = filter.into();
-                let config = RenderConfig {
-                    particle_voxel_size: voxel,
-                    particle_filter: filter,
-                    particle_samples: samples,
-                    ..config(ParticleMethod::Grid)
-                };
-                let (grid, grid_ldr) = frame(config)?;
-                let error: f64 = grid.pixels.iter().zip(&exact.pixels).map(|(g, e)| f64::from((luminance(g) - luminance(e)).abs())).sum();
-                println!(
-                    "{voxel:>8} {:>10} {samples:>8} {:>12.2} {:>9.2}",
-                    filter.name(),
-                    100.0 * error / exact_light,
-                    psnr(&grid_ldr, &exact_ldr)
-                );
+    println!("{:>8} {:>8} {:>10} {:>8} {:>12} {:>9}", "cascades", "voxel m", "filter", "samples", "error %", "PSNR dB");
+    for &cascades in &args.cascades {
+        for &voxel in &args.voxel_sizes {
+            for &filter in &args.filters {
+                for &samples in &args.samples {
+                    let filter: ParticleFilter = filter.into();
+                    let config = RenderConfig {
+                        particle_voxel_size: voxel,
+                        particle_filter: filter,
+                        particle_samples: samples,
+                        particle_cascades: cascades,
+                        particle_cascade_resolution: args.cascade_resolution,
+                        ..config(ParticleMethod::Grid)
+                    };
+                    let (grid, grid_ldr) = frame(config)?;
+                    let error: f64 =
+                        grid.pixels.iter().zip(&exact.pixels).map(|(g, e)| f64::from((luminance(g) - luminance(e)).abs())).sum();
+                    println!(
+                        "{cascades:>8} {voxel:>8} {:>10} {samples:>8} {:>12.2} {:>9.2}",
+                        filter.name(),
+                        100.0 * error / exact_light,
+                        psnr(&grid_ldr, &exact_ldr)
+                    );
+                }
             }
         }
     }

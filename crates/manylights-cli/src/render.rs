@@ -68,6 +68,14 @@ pub struct RenderArgs {
     /// (supersampling; 1 = the point alone). [default: the scene file's, or 1]
     #[arg(long)]
     particle_samples: Option<u32>,
+    /// Camera-centred clipmap cascades of the particle grid, each with voxels twice the size of the
+    /// one before; 0 is one grid fixed over the whole scene, whose size grows with the world.
+    /// [default: the scene file's, or 0]
+    #[arg(long)]
+    particle_cascades: Option<u32>,
+    /// Voxels per axis of each particle cascade (even). [default: the scene file's, or 64]
+    #[arg(long)]
+    particle_cascade_resolution: Option<u32>,
     #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
     tonemap: TonemapArg,
     /// Largest texture size kept on the GPU (larger images are downsampled).
@@ -216,6 +224,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         particle_voxel_size: args.particle_voxel_size.or(hints.voxel_size).unwrap_or(defaults.particle_voxel_size),
         particle_filter: args.particle_filter.map(Into::into).or(hints.filter).unwrap_or(defaults.particle_filter),
         particle_samples: args.particle_samples.or(hints.samples).unwrap_or(defaults.particle_samples),
+        particle_cascades: args.particle_cascades.or(hints.cascades).unwrap_or(defaults.particle_cascades),
+        particle_cascade_resolution: args
+            .particle_cascade_resolution
+            .or(hints.cascade_resolution)
+            .unwrap_or(defaults.particle_cascade_resolution),
         tonemapper: match args.tonemap {
             TonemapArg::Aces => Tonemapper::Aces,
             TonemapArg::Agx => Tonemapper::Agx,
@@ -291,6 +304,22 @@ impl TimingReport {
             args.frames,
             args.warmup
         );
+        if let Some(particles) = scene.particles.as_ref().filter(|p| p.count > 0) {
+            let config = &renderer.config;
+            let grid = match (config.particle_method, config.particle_cascades) {
+                (ParticleMethod::Grid, 0) => {
+                    format!(", {} m voxels over the scene, {}", config.particle_voxel_size, config.particle_filter.name())
+                }
+                (ParticleMethod::Grid, cascades) => format!(
+                    ", {cascades} cascades of {}³ from {} m voxels, {}",
+                    config.particle_cascade_resolution,
+                    config.particle_voxel_size,
+                    config.particle_filter.name()
+                ),
+                _ => String::new(),
+            };
+            println!("{} particles, method {}{grid}", particles.count, config.particle_method.name());
+        }
         println!("{:<20} {:>10} {:>10}", "pass", "median ms", "p95 ms");
         let line = |name: &str, samples: &[f64]| {
             let Stat { median, p95 } = Stat::of(samples);
@@ -323,6 +352,7 @@ impl TimingReport {
             "decals": scene.decals.len(),
             "decal_method": renderer.config.decal_method.name(),
             "animated": is_animated(scene),
+            "particles": particles_json(renderer, scene),
             "warmup_frames": args.warmup,
             "timed_frames": args.frames,
             "passes": passes,
@@ -330,6 +360,27 @@ impl TimingReport {
             "cpu_frame": pass(&self.samples.cpu_frame),
         })
     }
+}
+
+/// The particles and how they were rendered; null without particles.
+fn particles_json(renderer: &Renderer, scene: &Scene) -> serde_json::Value {
+    let Some(particles) = scene.particles.as_ref().filter(|p| p.count > 0) else { return serde_json::Value::Null };
+    let config = &renderer.config;
+    let mut json = serde_json::json!({
+        "count": particles.count,
+        "emitters": particles.emitters.len(),
+        "method": config.particle_method.name(),
+    });
+    if config.particle_method == ParticleMethod::Grid {
+        json["voxel_size"] = config.particle_voxel_size.into();
+        json["filter"] = config.particle_filter.name().into();
+        json["samples"] = config.particle_samples.into();
+        json["cascades"] = config.particle_cascades.into();
+        if config.particle_cascades > 0 {
+            json["cascade_resolution"] = config.particle_cascade_resolution.into();
+        }
+    }
+    json
 }
 
 fn is_animated(scene: &Scene) -> bool {

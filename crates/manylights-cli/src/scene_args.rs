@@ -60,7 +60,14 @@ impl SceneArgs {
             scene::generators::add_scattered_decals(&mut scene, &params)?;
         }
         if self.particles > 0 {
-            let params = ScatterParticles { count: self.particles, seed: self.seed, emitters: self.particle_emitters };
+            if let Some(existing) = &scene.particles {
+                bail!(
+                    "--particles {}: the scene file already has [particles] ({} particles); change its count there, or drop its [particles] to use --particles",
+                    self.particles,
+                    existing.count
+                );
+            }
+            let params = ScatterParticles::new(self.particles, self.seed, self.particle_emitters);
             scene::generators::add_particles(&mut scene, &params)?;
         }
         if self.animate {

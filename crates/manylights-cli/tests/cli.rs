@@ -135,6 +135,10 @@ fn bad_particle_options() {
     assert!(samples.contains("particle samples") && samples.contains("1 to 64"), "{samples}");
     let emitters = failure(&["render", "--particles", "100", "--particle-emitters", "0", "--width", "16", "--height", "16"]);
     assert!(emitters.contains("emitters") && emitters.contains("1 to"), "{emitters}");
+    let cascades = failure(&["render", "--particles", "100", "--particle-cascades", "9", "--width", "16", "--height", "16"]);
+    assert!(cascades.contains("9 particle cascades") && cascades.contains("give 1 to 8"), "{cascades}");
+    let odd = failure(&["render", "--particles", "100", "--particle-cascades", "2", "--particle-cascade-resolution", "33"]);
+    assert!(odd.contains("resolution 33") && odd.contains("even"), "{odd}");
 }
 
 /// A scene file's particle rendering choices apply unless a flag overrides them.
@@ -155,6 +159,21 @@ fn scene_file_particle_settings_yield_to_flags() {
         let run = manylights(&args);
         assert!(run.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&run.stderr));
     }
+    // Particles from the command line would silently replace the file's: an error instead.
+    let twice = failure(&["render", "--scene", scene, "--particles", "50", "--width", "16", "--height", "16"]);
+    assert!(twice.contains("already has [particles]") && twice.contains("200 particles"), "{twice}");
+    // The timings JSON says how the particles were rendered.
+    let json = dir.join("timings.json");
+    #[rustfmt::skip]
+    let run = manylights(&[
+        "render", "--scene", scene, "--particle-method", "grid", "--particle-cascades", "2", "--particle-cascade-resolution", "16",
+        "--width", "16", "--height", "16", "-o", out.to_str().unwrap(), "--timings-json", json.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let particles = &json["particles"];
+    assert_eq!((particles["count"].as_u64(), particles["method"].as_str()), (Some(200), Some("grid")), "{json}");
+    assert_eq!((particles["cascades"].as_u64(), particles["cascade_resolution"].as_u64()), (Some(2), Some(16)), "{json}");
 }
 
 #[test]
@@ -162,17 +181,17 @@ fn particle_error_compares_grid_settings_with_the_exact_method() {
     #[rustfmt::skip]
     let out = manylights(&[
         "particle-error", "--particles", "2000", "--width", "48", "--height", "27",
-        "--voxel-sizes", "1,0.5", "--filters", "trilinear", "--samples", "1",
+        "--voxel-sizes", "1,0.5", "--filters", "trilinear", "--samples", "1", "--cascades", "0,2", "--cascade-resolution", "32",
     ]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    // One row per setting: voxel, filter, samples, error %, PSNR dB.
+    // One row per setting: cascades, voxel, filter, samples, error %, PSNR dB.
     let rows: Vec<Vec<&str>> =
-        stdout.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.len() == 5 && f[1] == "trilinear").collect();
-    assert_eq!(rows.len(), 2, "{stdout}");
+        stdout.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.len() == 6 && f[2] == "trilinear").collect();
+    assert_eq!(rows.len(), 4, "{stdout}");
     for row in rows {
-        let error: f64 = row[3].parse().unwrap();
-        let psnr: f64 = row[4].parse().unwrap();
+        let error: f64 = row[4].parse().unwrap();
+        let psnr: f64 = row[5].parse().unwrap();
         assert!(error.is_finite() && error > 0.0 && psnr.is_finite() && psnr > 0.0, "{row:?}");
     }
     let none = failure(&["particle-error", "--width", "16", "--height", "16"]);

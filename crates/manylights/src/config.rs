@@ -37,6 +37,10 @@ pub struct RenderConfig {
     /// (1 to [`MAX_PARTICLE_SAMPLES`]; 1 samples at the point itself).
     pub particle_filter: ParticleFilter,
     pub particle_samples: u32,
+    /// Camera-centred cascades of the particle grid (`particles::ParticleVolume::Clipmap`), each of
+    /// `particle_cascade_resolution`³ voxels; 0 for one grid fixed over the scene.
+    pub particle_cascades: u32,
+    pub particle_cascade_resolution: u32,
     pub tonemapper: Tonemapper,
     /// Largest texture layer size; larger images are downsampled at upload.
     pub max_texture_size: u32,
@@ -59,6 +63,8 @@ impl Default for RenderConfig {
             particle_voxel_size: 1.0,
             particle_filter: ParticleFilter::Trilinear,
             particle_samples: 1,
+            particle_cascades: 0,
+            particle_cascade_resolution: 64,
             tonemapper: Tonemapper::Aces,
             max_texture_size: 1024,
             anisotropy: 8,

@@ -7,7 +7,7 @@ use crate::{
     accel::{clusters::ClusterGrid, VolumeStructure},
     config::RenderConfig,
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
-    particles::{ParticleGrid, ParticleSystem},
+    particles::{ParticleGrid, ParticleSystem, ParticleVolume},
     pipelines::{DecalMethod, FrameInputs, FramePipeline, LightMethod, ParticleMethod, ShadingMethods},
     scene::{Aabb, Camera, Scene},
     Error, Result,
@@ -74,11 +74,19 @@ impl Renderer {
             Some(settings) if config.particle_method == ParticleMethod::Grid => {
                 // The scene's bounds and a particle's reach around them: voxel centres on both sides of
                 // every surface, so trilinear sampling at a surface blends both.
-                let bounds = scene.bounds();
-                let reach = Vec3::splat(settings.radius.1);
-                let covered = Aabb::new(bounds.min - reach, bounds.max + reach);
-                let grid = ParticleGrid::covering(&covered, config.particle_voxel_size, ctx.limits.max_texture_dimension_3d)?;
-                Some(ParticleSystem::new(&ctx, settings, grid)?)
+                let max_dimension = ctx.limits.max_texture_dimension_3d;
+                let volume = match config.particle_cascades {
+                    0 => {
+                        let bounds = scene.bounds();
+                        let reach = Vec3::splat(settings.radius.1);
+                        let covered = Aabb::new(bounds.min - reach, bounds.max + reach);
+                        ParticleVolume::World(ParticleGrid::covering(&covered, config.particle_voxel_size, max_dimension)?)
+                    }
+                    cascades => {
+                        ParticleVolume::clipmap(config.particle_voxel_size, config.particle_cascade_resolution, cascades, max_dimension)?
+                    }
+                };
+                Some(ParticleSystem::new(&ctx, settings, volume)?)
             }
             _ => None,
         };
@@ -177,10 +185,15 @@ impl Renderer {
         let mut uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.constants, self.config.tonemapper);
         uniforms.light_instance_count = self.lights.instance_count();
         uniforms.decal_instance_count = self.decals.instance_count();
-        if let Some(grid) = self.particles.as_ref().and_then(ParticleSystem::grid) {
-            uniforms.particle_grid = grid.origin.extend(grid.voxel_size).to_array();
-            uniforms.particle_grid_dims = grid.dims.extend(1).to_array();
-            uniforms.particle_filter = [self.config.particle_filter as u32, self.config.particle_samples, 0, 0];
+        if let Some(particles) = &self.particles {
+            if let (Some(volume), Some(scales)) = (particles.volume(), particles.scales()) {
+                uniforms.particle_volume = volume.dims().extend(volume.cascade_count()).to_array();
+                uniforms.particle_filter = [self.config.particle_filter as u32, self.config.particle_samples, 0, 0];
+                uniforms.particle_texture_unscale = [1.0 / scales.texture; 4];
+                for (slot, grid) in uniforms.particle_cascades.iter_mut().zip(volume.cascades(camera.position())) {
+                    *slot = grid.origin.extend(grid.voxel_size).to_array();
+                }
+            }
         }
         self.scene.write_frame(&self.ctx.queue, &uniforms);
         let mut timings = Vec::new();
@@ -197,7 +210,7 @@ impl Renderer {
             let recording = std::time::Instant::now();
             // Particles first: as lights, they are the light structure's dynamic group.
             if let Some(particles) = &self.particles {
-                particles.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time);
+                particles.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time, camera.position());
             }
             for structure in [&mut self.lights, &mut self.decals] {
                 structure.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time)?;

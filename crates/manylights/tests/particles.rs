@@ -9,7 +9,7 @@ use glam::{UVec3, Vec3};
 use manylights::{
     config::RenderConfig,
     gpu::GpuContext,
-    particles::{ParticleFilter, ParticleGrid, ParticleSettings, ParticleSystem, SPLAT_SCALE},
+    particles::{ParticleFilter, ParticleGrid, ParticleSettings, ParticleSystem, ParticleVolume},
     pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
     renderer::Image,
     scene::{Aabb, Light, LightKind},
@@ -28,10 +28,13 @@ fn grid(voxel_size: f32) -> ParticleGrid {
     ParticleGrid::covering(&Aabb::new(Vec3::new(-12.0, -8.0, -12.0), Vec3::new(12.0, 10.0, 12.0)), voxel_size, 2048).unwrap()
 }
 
+/// Where `run` places the camera (the clipmaps' centre).
+const EYE: Vec3 = Vec3::new(1.3, 2.2, -0.7);
+
 /// Runs the motion and splat passes for `time` and waits.
 fn run(ctx: &GpuContext, system: &ParticleSystem, time: f32) {
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    system.record(ctx, &mut encoder, None, time);
+    system.record(ctx, &mut encoder, None, time, EYE);
     ctx.queue.submit([encoder.finish()]);
     ctx.wait_idle().unwrap();
 }
@@ -40,7 +43,7 @@ fn run(ctx: &GpuContext, system: &ParticleSystem, time: f32) {
 fn motion_follows_the_cpu_twin_and_depends_on_time_alone() {
     let ctx = GpuContext::new().expect("a GPU adapter");
     let settings = settings(20_000);
-    let system = ParticleSystem::new(&ctx, &settings, grid(1.0)).unwrap();
+    let system = ParticleSystem::new(&ctx, &settings, ParticleVolume::World(grid(1.0))).unwrap();
     for time in [0.0, 0.4, 7.3] {
         run(&ctx, &system, time);
         let gpu = system.read_particles(&ctx).unwrap();
@@ -108,27 +111,85 @@ fn the_splat_sums_the_falloff_over_the_voxels() {
     let ctx = GpuContext::new().expect("a GPU adapter");
     let settings = settings(2_000);
     let grid = grid(0.75);
-    let system = ParticleSystem::new(&ctx, &settings, grid).unwrap();
+    let system = ParticleSystem::new(&ctx, &settings, ParticleVolume::World(grid)).unwrap();
     run(&ctx, &system, 1.3);
     let lights = system.read_particles(&ctx).unwrap();
     let gpu = system.read_sums(&ctx).unwrap();
     let (cpu, contributions) = cpu_splat(&grid, &lights);
+    assert_eq!(system.scales().unwrap().fixed, manylights::particles::MAX_SPLAT_SCALE, "2,000 dim particles need no coarser steps");
+    assert_sums_match(&gpu, &cpu, &contributions, system.scales().unwrap().fixed, "");
+}
+
+/// The GPU's sums equal the CPU's within the fixed-point rounding of each contribution (dithered: under
+/// one step of 1 / `fixed`), and hold the same light in total (conservation) to a part in a thousand.
+fn assert_sums_match(gpu: &[[f32; 6]], cpu: &[[f64; 6]], contributions: &[u32], fixed: f32, what: &str) {
     assert_eq!(gpu.len(), cpu.len());
-    // Each contribution is rounded to 1/SPLAT_SCALE; f32 arithmetic adds a little.
     let mut total = ([0.0f64; 6], [0.0f64; 6]);
-    for (v, ((g, c), n)) in gpu.iter().zip(&cpu).zip(&contributions).enumerate() {
+    for (v, ((g, c), n)) in gpu.iter().zip(cpu).zip(contributions).enumerate() {
         for k in 0..6 {
-            let tolerance = f64::from(*n) * 0.5 / f64::from(SPLAT_SCALE) + 1e-4 * c[k].abs() + 1e-6;
-            assert!((f64::from(g[k]) - c[k]).abs() <= tolerance, "voxel {v} channel {k}: GPU {} against {} ({n} particles)", g[k], c[k]);
+            let tolerance = f64::from(*n) / f64::from(fixed) + 1e-4 * c[k].abs() + 1e-6;
+            assert!(
+                (f64::from(g[k]) - c[k]).abs() <= tolerance,
+                "{what}voxel {v} channel {k}: GPU {} against {} ({n} particles)",
+                g[k],
+                c[k]
+            );
             total.0[k] += f64::from(g[k]);
             total.1[k] += c[k];
         }
     }
-    // Conservation: the light the grid holds is the particles' light, to a part in a thousand.
     for k in 0..3 {
-        assert!(total.1[k] > 1.0, "channel {k} holds almost no light: the test would mean nothing");
-        assert!((total.0[k] - total.1[k]).abs() <= 1e-3 * total.1[k], "channel {k}: GPU total {} against {}", total.0[k], total.1[k]);
+        assert!(total.1[k] > 1.0, "{what}channel {k} holds almost no light: the test would mean nothing");
+        assert!((total.0[k] - total.1[k]).abs() <= 1e-3 * total.1[k], "{what}channel {k}: GPU total {} against {}", total.0[k], total.1[k]);
     }
+}
+
+/// A clipmap's cascades sit around the eye, and each holds the splat of the particles into its own
+/// voxels, one cascade after the other.
+#[test]
+fn every_cascade_of_a_clipmap_holds_its_own_splat() {
+    let ctx = GpuContext::new().expect("a GPU adapter");
+    let settings = settings(1_500);
+    let volume = ParticleVolume::clipmap(0.5, 20, 3, 2048).unwrap();
+    let system = ParticleSystem::new(&ctx, &settings, volume).unwrap();
+    run(&ctx, &system, 0.9);
+    let lights = system.read_particles(&ctx).unwrap();
+    let gpu = system.read_sums(&ctx).unwrap();
+    let cascades = volume.cascades(EYE);
+    assert_eq!(gpu.len() as u64, volume.voxel_count());
+    let per_cascade = cascades[0].voxel_count() as usize;
+    for (k, cascade) in cascades.iter().enumerate() {
+        let (cpu, contributions) = cpu_splat(cascade, &lights);
+        let gpu = &gpu[k * per_cascade..(k + 1) * per_cascade];
+        assert_sums_match(gpu, &cpu, &contributions, system.scales().unwrap().fixed, &format!("cascade {k}: "));
+    }
+}
+
+/// Particles crowded into one spot, bright enough that fixed steps of 1/1024 would wrap a voxel's
+/// i32 sum and the sums would overflow half floats (65504): the splat's scales keep both in range,
+/// and the wall is lit as the one particle lights it, times all their colours.
+#[test]
+fn crowded_bright_particles_neither_wrap_nor_overflow() {
+    let crowd = ParticleSettings { count: 200_000, radius: (1.0, 1.0), ..still_particle() };
+    let scales = manylights::particles::SplatScales::new(&crowd, 0.5);
+    assert!(scales.fixed < 1024.0 && scales.texture < 1.0, "{scales:?}: the crowd would not have overflowed");
+    let alone = ParticleSettings { count: 1, ..crowd.clone() };
+    let one = particle_wall_of(alone.clone());
+    let all = particle_wall_of(crowd.clone());
+    // Every particle sits at the emitter with the same radius: the wall's light scales with the
+    // luminance of their summed colours.
+    let luminance_of = |c: Vec3| c.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+    let total: Vec3 = (0..crowd.count).map(|i| crowd.particle_at(i, 0.0).color).sum();
+    let ratio = luminance_of(total) / luminance_of(alone.particle_at(0, 0.0).color);
+    let peak = one.pixels.iter().map(|&p| luminance(p)).fold(0.0, f32::max);
+    let mut worst = 0.0f32;
+    for (a, o) in all.pixels.iter().zip(&one.pixels) {
+        assert!(a.iter().all(|c| c.is_finite()), "a pixel is {a:?}");
+        if luminance(*o) > 0.05 * peak {
+            worst = worst.max((luminance(*a) / (luminance(*o) * ratio) - 1.0).abs());
+        }
+    }
+    assert!(worst < 0.01, "the crowd's light is off by {worst} of the expected");
 }
 
 #[test]
@@ -146,6 +207,22 @@ fn bad_particle_settings_are_clear_errors() {
     assert!(err.contains("radius"), "{err}");
     let err = ParticleSettings { count: manylights::particles::MAX_PARTICLES + 1, ..settings(10) }.validate().unwrap_err().to_string();
     assert!(err.contains("exceed the maximum"), "{err}");
+    for (voxel, resolution, cascades, expected) in [
+        (0.5, 32, 0, "give 1 to 8"),
+        (0.5, 32, 9, "give 1 to 8"),
+        (0.5, 31, 2, "even number"),
+        (0.5, 2, 2, "at least 4"),
+        (0.5, 512, 8, "3D texture limit of 2048"),
+        (-1.0, 32, 2, "voxel size"),
+    ] {
+        let err = ParticleVolume::clipmap(voxel, resolution, cascades, 2048).unwrap_err().to_string();
+        assert!(err.contains(expected), "{voxel} m, {resolution}, {cascades}: {err}");
+    }
+    // A particle reaching 16 m splats into more voxels of 0.25 m than any particle may.
+    let ctx = GpuContext::new().expect("a GPU adapter");
+    let wide = ParticleSettings { radius: (1.0, 16.0), ..settings(10) };
+    let err = ParticleSystem::new(&ctx, &wide, ParticleVolume::World(grid(0.25))).err().expect("a 16 m particle").to_string();
+    assert!(err.contains("larger voxels") && err.contains("smaller particle radius"), "{err}");
 }
 
 /// One particle that stays where it is launched (no speed, no gravity): 1 m in front of the white
@@ -170,17 +247,65 @@ fn particle_wall(voxel_size: f32, pipeline: PipelineKind) -> Image<[f32; 4]> {
 }
 
 fn particle_wall_filtered(voxel_size: f32, pipeline: PipelineKind, filter: ParticleFilter, samples: u32) -> Image<[f32; 4]> {
+    let config =
+        RenderConfig { pipeline, particle_voxel_size: voxel_size, particle_filter: filter, particle_samples: samples, ..wall_config() };
+    particle_wall_with(still_particle(), config)
+}
+
+fn wall_config() -> RenderConfig {
+    RenderConfig { particle_voxel_size: 0.5, decal_method: DecalMethod::Off, ..config(SIZE.0, SIZE.1, LightMethod::Off) }
+}
+
+/// The wall lit by `particles` through the grid of 0.5 m voxels over the scene.
+fn particle_wall_of(particles: ParticleSettings) -> Image<[f32; 4]> {
+    particle_wall_with(particles, wall_config())
+}
+
+fn particle_wall_with(particles: ParticleSettings, config: RenderConfig) -> Image<[f32; 4]> {
+    let (mut scene, camera) = wall_scene(Vec::new());
+    scene.particles = Some(particles);
+    render_with(&scene, &camera, config).1
+}
+
+fn clipmap_config(voxel_size: f32, resolution: u32, cascades: u32) -> RenderConfig {
+    RenderConfig { particle_voxel_size: voxel_size, particle_cascades: cascades, particle_cascade_resolution: resolution, ..wall_config() }
+}
+
+/// The camera stands 4 m from the wall. A clipmap whose finest cascade holds the wall's visible part
+/// (32 voxels of 0.5 m around the eye) lies on the same voxel lattice as the grid over the scene at
+/// 0.5 m, and lights the wall the same; so does one whose finest cascade (24 voxels of 0.25 m) ends
+/// before the wall, through its coarser cascade of 0.5 m voxels.
+#[test]
+fn a_clipmap_lights_the_wall_as_the_grid_over_the_scene_does() {
+    let world = particle_wall_of(still_particle());
+    for (voxel_size, resolution, what) in [(0.5, 32, "the finest cascade"), (0.25, 24, "the coarser cascade")] {
+        let clipmap = particle_wall_with(still_particle(), clipmap_config(voxel_size, resolution, 2));
+        let difference = max_abs_difference(&world, &clipmap);
+        assert!(difference < 1e-4, "through {what}: max abs difference {difference} from the grid over the scene");
+    }
+    // Three cascades: the wall lies in the band where the 0.5 m cascade blends into the 1 m one,
+    // still close to the particle's point light.
+    let blended = particle_wall_with(still_particle(), clipmap_config(0.25, 24, 3));
+    let error = mean_relative_error(&blended, &point_light_wall());
+    assert!(error < 0.15, "blended cascades: mean relative error {error} against the point light");
+}
+
+/// A world kilometres wide: one grid over it would exceed the 3D texture limit, the clipmap's size
+/// does not depend on it, and lights the wall exactly as in the small world.
+#[test]
+fn a_clipmap_needs_no_world_sized_texture() {
     let (mut scene, camera) = wall_scene(Vec::new());
     scene.particles = Some(still_particle());
-    let config = RenderConfig {
-        pipeline,
-        particle_voxel_size: voxel_size,
-        particle_filter: filter,
-        particle_samples: samples,
-        decal_method: DecalMethod::Off,
-        ..config(SIZE.0, SIZE.1, LightMethod::Off)
-    };
-    render_with(&scene, &camera, config).1
+    let far = manylights::scene::Instance { mesh: 0, world_from_local: glam::Mat4::from_translation(Vec3::new(5000.0, 0.0, 0.0)) };
+    scene.instances.push(far);
+    let err = manylights::renderer::Renderer::new(GpuContext::new().unwrap(), &scene, wall_config())
+        .err()
+        .expect("a 5 km grid of 0.5 m voxels")
+        .to_string();
+    assert!(err.contains("3D texture limit") && err.contains("--particle-cascades"), "{err}");
+    let large = render_with(&scene, &camera, clipmap_config(0.5, 32, 4)).1;
+    let small = particle_wall_with(still_particle(), clipmap_config(0.5, 32, 4));
+    assert_eq!(large.pixels, small.pixels);
 }
 
 /// The wall lit by the particle as an ordinary point light (same place, colour and range).

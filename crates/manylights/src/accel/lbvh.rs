@@ -287,6 +287,15 @@ impl GpuLbvh {
 }
 
 fn check_binding_size(ctx: &GpuContext, capacity: u32, node_bytes: u64) -> Result<()> {
+    // The per-item passes are one row of workgroups.
+    let groups = capacity.div_ceil(WORKGROUP);
+    if groups > ctx.limits.max_compute_workgroups_per_dimension {
+        return Err(Error::InvalidConfig(format!(
+            "a GPU-built BVH over {capacity} volumes needs {groups} workgroups in a row, over this GPU's limit of {}; use at most {} volumes per group",
+            ctx.limits.max_compute_workgroups_per_dimension,
+            ctx.limits.max_compute_workgroups_per_dimension * WORKGROUP
+        )));
+    }
     let limit = ctx.limits.max_storage_buffer_binding_size;
     if node_bytes > limit {
         return Err(Error::InvalidConfig(format!(

@@ -12,7 +12,8 @@ struct LbvhParams {
     node_base: u32,
     primitive_base: u32,
     item_base: u32,
-    // Bounds of the box centres (computed on the CPU, which uploads the boxes): the Morton grid.
+    // The Morton grid: the bounds of the box centres when the CPU uploads the boxes, or bounds the
+    // centres are known to stay within when a GPU pass writes them (centres outside are clamped in).
     centre_min: vec4<f32>,
     centre_max: vec4<f32>,
 }

@@ -27,12 +27,14 @@ pub struct FrameUniforms {
     pub cluster_grid: [u32; 4],
     /// Its depth slicing: near plane, slices per doubling of view depth; the camera's near plane.
     pub cluster_depth: [f32; 4],
-    /// The particle grid: corner and voxel edge; voxels per axis and 1 when particles light the
-    /// scene (`particles/`), set by the renderer.
-    pub particle_grid: [f32; 4],
-    pub particle_grid_dims: [u32; 4],
-    /// The grid's filter (`ParticleFilter` as u32) and samples per shading point.
+    /// The particle grid (`particles/`), set by the renderer: voxels per axis of each cascade and
+    /// the number of cascades (0 when no grid lights the scene); the filter (`ParticleFilter` as
+    /// u32) and samples per shading point; the inverse of the splat's texture scale; each cascade's
+    /// corner and voxel edge.
+    pub particle_volume: [u32; 4],
     pub particle_filter: [u32; 4],
+    pub particle_texture_unscale: [f32; 4],
+    pub particle_cascades: [[f32; 4]; crate::particles::MAX_PARTICLE_CASCADES as usize],
 }
 
 /// What a frame needs of the scene besides its buffers, kept by `GpuScene` from the CPU scene.
@@ -69,9 +71,10 @@ impl FrameUniforms {
             decal_instance_count: 0,
             cluster_grid: ClusterGrid::for_resolution(width, height).uniform(),
             cluster_depth: ClusterGrid::depth_slicing(camera, &scene.bounds),
-            particle_grid: [0.0; 4],
-            particle_grid_dims: [0; 4],
+            particle_volume: [0; 4],
             particle_filter: [0; 4],
+            particle_texture_unscale: [1.0; 4],
+            particle_cascades: [[0.0; 4]; crate::particles::MAX_PARTICLE_CASCADES as usize],
         }
     }
 }

@@ -532,9 +532,10 @@ mod tests {
                 decal_instance_count,
                 cluster_grid,
                 cluster_depth,
-                particle_grid,
-                particle_grid_dims,
-                particle_filter
+                particle_volume,
+                particle_filter,
+                particle_texture_unscale,
+                particle_cascades
             ]
         );
     }

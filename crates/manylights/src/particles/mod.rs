@@ -9,9 +9,17 @@
 //! acceleration structure instead (`lights.wgsl`: its record and its box, for a group rebuilt on the
 //! GPU every frame), shaded like any light.
 //!
+//! The grid is one volume fixed over the scene (the paper's), or a clipmap: cascades of the same
+//! voxel count centred on the camera, each with voxels twice the size of the one before, so a large
+//! world needs no world-sized texture ([`ParticleVolume`]). The cascades are stacked along z in the
+//! same two textures. Everything is splatted again every frame, so a moving camera needs no
+//! toroidal scrolling: each frame's cascades are simply placed around the eye, snapped to their
+//! voxels so lighting does not swim.
+//!
 //! [`ParticleSettings`] describes the particles (the CPU scene's part) and computes any particle's
-//! light on the CPU ([`ParticleSettings::particle_at`], the GPU's twin); [`ParticleGrid`] is the
-//! voxel grid; [`ParticleSystem`] owns the GPU buffers, the textures and the passes.
+//! light on the CPU ([`ParticleSettings::particle_at`], the GPU's twin); [`ParticleGrid`] is one
+//! cascade's voxel grid, [`ParticleVolume`] where the cascades lie; [`ParticleSystem`] owns the GPU
+//! buffers, the textures and the passes.
 
 use glam::{UVec3, Vec3};
 
@@ -22,9 +30,14 @@ use crate::{Error, Result};
 
 /// Most particles one system holds (2²⁴): their lights take 32 bytes each, 512 MiB at this count.
 pub const MAX_PARTICLES: u32 = 1 << 24;
-/// Fixed-point steps per unit of the splat's sums: contributions are rounded to 1/1024, and a voxel's
-/// sum may reach about 2 million before the i32 overflows.
-pub const SPLAT_SCALE: f32 = 1024.0;
+/// Most fixed-point steps per unit of the splat's sums: contributions are rounded (dithered) to 1/1024 at
+/// best. Crowded or bright particles get fewer ([`SplatScales`]), so no voxel's i32 sum can wrap.
+pub const MAX_SPLAT_SCALE: f32 = 1024.0;
+/// Most voxels one particle may splat into (32³): beyond, the splat's cost per particle is out of
+/// proportion to the light it carries, and a million particles would stall the GPU.
+pub const MAX_SPLAT_VOXELS: u64 = 32 * 32 * 32;
+/// Most cascades of a clipmap ([`ParticleVolume::Clipmap`]).
+pub const MAX_PARTICLE_CASCADES: u32 = 8;
 /// Most jittered points one shading point samples the grid at (`RenderConfig::particle_samples`).
 pub const MAX_PARTICLE_SAMPLES: u32 = 64;
 
@@ -65,6 +78,8 @@ pub struct ParticleRendering {
     pub voxel_size: Option<f32>,
     pub filter: Option<ParticleFilter>,
     pub samples: Option<u32>,
+    pub cascades: Option<u32>,
+    pub cascade_resolution: Option<u32>,
 }
 
 /// The particles of a scene: how many, their emitters, and how they move and shine.
@@ -146,14 +161,17 @@ pub struct GpuParticleLight {
     pub _pad: f32,
 }
 
-/// Keep in sync with `ParticleGrid` in `particles/types.wgsl`.
+/// Keep in sync with `ParticleVolume` in `particles/types.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParticleGrid {
-    origin: [f32; 3],
-    voxel_size: f32,
+struct GpuParticleVolume {
     dims: [u32; 3],
-    scale: f32,
+    cascade_count: u32,
+    fixed_scale: f32,
+    texture_scale: f32,
+    _pad: [f32; 2],
+    /// Per cascade: corner (xyz) and voxel edge (w).
+    cascades: [[f32; 4]; MAX_PARTICLE_CASCADES as usize],
 }
 
 /// PCG hash, as `pcg` in `motion.wgsl`.
@@ -209,7 +227,8 @@ impl ParticleSettings {
         let lifetime = mix(self.lifetime, self.random01(i, 0, 0));
         let clock = time + lifetime * self.random01(i, 0, 1);
         let generation = (clock / lifetime).floor() as u32;
-        let age = clock - generation as f32 * lifetime;
+        // Rounding can put the difference a hair outside the lifetime.
+        let age = (clock - generation as f32 * lifetime).clamp(0.0, lifetime);
         let angle = std::f32::consts::TAU * self.random01(i, generation, 2);
         let cos_tilt = mix((1.0, self.cone_degrees.to_radians().cos()), self.random01(i, generation, 3));
         let sin_tilt = (1.0 - cos_tilt * cos_tilt).max(0.0).sqrt();
@@ -265,7 +284,7 @@ fn hue_color(hue: f32) -> Vec3 {
     Vec3::new(channel(5.0), channel(3.0), channel(1.0))
 }
 
-/// The voxel grid particles are splatted into: voxel (i, j, k) is centred on
+/// One voxel grid particles are splatted into (a cascade): voxel (i, j, k) is centred on
 /// `origin + (ijk + 0.5) × voxel_size`, one voxel per `voxel_size` of world (1 m by default).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ParticleGrid {
@@ -274,14 +293,20 @@ pub struct ParticleGrid {
     pub dims: UVec3,
 }
 
+fn check_voxel_size(voxel_size: f32) -> Result<()> {
+    if voxel_size.is_finite() && voxel_size > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidConfig(format!("particle voxel size {voxel_size} must be a finite length > 0, in metres")))
+    }
+}
+
 impl ParticleGrid {
     /// The grid of `voxel_size` covering `bounds`; errors when the size is not a positive finite
     /// length or the grid would exceed `max_dimension` voxels along an axis (the device's 3D texture
     /// limit).
     pub fn covering(bounds: &Aabb, voxel_size: f32, max_dimension: u32) -> Result<Self> {
-        if !(voxel_size.is_finite() && voxel_size > 0.0) {
-            return Err(Error::InvalidConfig(format!("particle voxel size {voxel_size} must be a finite length > 0, in metres")));
-        }
+        check_voxel_size(voxel_size)?;
         if !bounds.is_valid() {
             return Err(Error::InvalidConfig("the particle grid needs finite bounds to cover".into()));
         }
@@ -289,7 +314,7 @@ impl ParticleGrid {
         let dims = extent.ceil().max(Vec3::ONE);
         if dims.max_element() > max_dimension as f32 {
             return Err(Error::InvalidConfig(format!(
-                "a particle grid of {voxel_size} m voxels over {:.1} × {:.1} × {:.1} m needs {} × {} × {} voxels, over this GPU's 3D texture limit of {max_dimension} per axis; use larger voxels",
+                "a particle grid of {voxel_size} m voxels over {:.1} × {:.1} × {:.1} m needs {} × {} × {} voxels, over this GPU's 3D texture limit of {max_dimension} per axis; use larger voxels, or camera-centred cascades (--particle-cascades)",
                 bounds.max.x - bounds.min.x,
                 bounds.max.y - bounds.min.y,
                 bounds.max.z - bounds.min.z,
@@ -323,6 +348,121 @@ impl ParticleGrid {
     }
 }
 
+/// Where the particle grid lies: its cascades, all of the same voxel count, stacked along z in the
+/// textures (cascade k's voxels follow cascade k − 1's in the sums, x fastest).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ParticleVolume {
+    /// One grid fixed over the scene, as in the paper: its memory grows with the world.
+    World(ParticleGrid),
+    /// A clipmap: `cascades` grids of `resolution`³ voxels centred on the camera, cascade k's voxels
+    /// `voxel_size` × 2ᵏ: fine near the eye, coarse far away, the same memory whatever the world.
+    Clipmap { voxel_size: f32, resolution: u32, cascades: u32 },
+}
+
+impl ParticleVolume {
+    /// A clipmap, checked against the device's 3D texture limit (`max_dimension`): its cascades stack
+    /// `resolution × cascades` voxels along z.
+    pub fn clipmap(voxel_size: f32, resolution: u32, cascades: u32, max_dimension: u32) -> Result<Self> {
+        check_voxel_size(voxel_size)?;
+        if !(1..=MAX_PARTICLE_CASCADES).contains(&cascades) {
+            return Err(Error::InvalidConfig(format!(
+                "{cascades} particle cascades: give 1 to {MAX_PARTICLE_CASCADES}, or 0 for one grid over the scene"
+            )));
+        }
+        if resolution < 4 || !resolution.is_multiple_of(2) {
+            return Err(Error::InvalidConfig(format!(
+                "particle cascade resolution {resolution}: give an even number of voxels per axis, at least 4"
+            )));
+        }
+        if u64::from(resolution) * u64::from(cascades) > u64::from(max_dimension) {
+            return Err(Error::InvalidConfig(format!(
+                "{cascades} particle cascades of {resolution}³ voxels stack {} voxels along z, over this GPU's 3D texture limit of {max_dimension}; use fewer cascades or a lower resolution",
+                u64::from(resolution) * u64::from(cascades)
+            )));
+        }
+        Ok(Self::Clipmap { voxel_size, resolution, cascades })
+    }
+
+    /// Voxels per axis of each cascade.
+    pub fn dims(&self) -> UVec3 {
+        match self {
+            Self::World(grid) => grid.dims,
+            Self::Clipmap { resolution, .. } => UVec3::splat(*resolution),
+        }
+    }
+
+    pub fn cascade_count(&self) -> u32 {
+        match self {
+            Self::World(_) => 1,
+            Self::Clipmap { cascades, .. } => *cascades,
+        }
+    }
+
+    pub fn finest_voxel_size(&self) -> f32 {
+        match self {
+            Self::World(grid) => grid.voxel_size,
+            Self::Clipmap { voxel_size, .. } => *voxel_size,
+        }
+    }
+
+    /// Voxels of all cascades.
+    pub fn voxel_count(&self) -> u64 {
+        let dims = self.dims();
+        u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z) * u64::from(self.cascade_count())
+    }
+
+    /// The cascades for a camera at `eye`, finest first. A clipmap's are centred on the eye with
+    /// their corners on multiples of their voxel, so the voxels stay put in the world as it moves.
+    pub fn cascades(&self, eye: Vec3) -> Vec<ParticleGrid> {
+        match *self {
+            Self::World(grid) => vec![grid],
+            Self::Clipmap { voxel_size, resolution, cascades } => (0..cascades)
+                .map(|k| {
+                    let voxel = voxel_size * (1u32 << k) as f32;
+                    let corner = ((eye / voxel).floor() - Vec3::splat((resolution / 2) as f32)) * voxel;
+                    ParticleGrid { origin: corner, voxel_size: voxel, dims: UVec3::splat(resolution) }
+                })
+                .collect(),
+        }
+    }
+
+    fn gpu(&self, eye: Vec3, scales: SplatScales) -> GpuParticleVolume {
+        let mut cascades = [[0.0; 4]; MAX_PARTICLE_CASCADES as usize];
+        for (slot, grid) in cascades.iter_mut().zip(self.cascades(eye)) {
+            *slot = grid.origin.extend(grid.voxel_size).to_array();
+        }
+        GpuParticleVolume {
+            dims: self.dims().to_array(),
+            cascade_count: self.cascade_count(),
+            fixed_scale: scales.fixed,
+            texture_scale: scales.texture,
+            _pad: [0.0; 2],
+            cascades,
+        }
+    }
+}
+
+/// How the splat stores its sums: i32 steps per unit (`fixed`), and the factor the RGBA16F textures
+/// hold them at (`texture`, which shading divides out). Both are powers of two chosen from the
+/// brightest any voxel can get — every particle at full intensity within half a voxel of its centre
+/// — so no sum wraps and no texel overflows 65504, however crowded the emitters; the price is
+/// coarser steps (2³⁰ / that brightest) for very many or very bright particles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SplatScales {
+    pub fixed: f32,
+    pub texture: f32,
+}
+
+impl SplatScales {
+    pub fn new(settings: &ParticleSettings, finest_voxel_size: f32) -> Self {
+        let near = 0.5 * f64::from(finest_voxel_size);
+        let brightest = (f64::from(settings.count.max(1)) * f64::from(settings.intensity) / (near * near)).max(1e-30);
+        // Powers of two: scaling and unscaling are exact. Half the i32 range is left to the rounding.
+        let power = |limit: f64, most: f64| (limit / brightest).log2().floor().clamp(-100.0, most.log2()).exp2() as f32;
+        Self { fixed: power(2f64.powi(30), f64::from(MAX_SPLAT_SCALE)), texture: power(2f64.powi(15), 1.0) }
+    }
+}
+
 /// The GPU side: particle lights, what they are turned into (the grid's textures, or lights in an
 /// acceleration structure), and the passes.
 pub struct ParticleSystem {
@@ -342,7 +482,10 @@ enum Output {
 
 /// The splat's sums, the two textures and its passes.
 struct GridSplat {
-    grid: ParticleGrid,
+    volume: ParticleVolume,
+    scales: SplatScales,
+    /// `GpuParticleVolume`: the cascades move with the camera.
+    volume_uniform: wgpu::Buffer,
     /// Colour sums (rgb) and direction sums (xyz, unnormalised), RGBA16F, sampled by shading.
     color_texture: wgpu::Texture,
     direction_texture: wgpu::Texture,
@@ -353,10 +496,19 @@ struct GridSplat {
 }
 
 impl ParticleSystem {
-    /// Particles splatted into `grid` every frame.
-    pub fn new(ctx: &GpuContext, settings: &ParticleSettings, grid: ParticleGrid) -> Result<Self> {
+    /// Particles splatted into `volume`'s cascades every frame. Errors when a particle would reach
+    /// more than [`MAX_SPLAT_VOXELS`] voxels of the finest cascade.
+    pub fn new(ctx: &GpuContext, settings: &ParticleSettings, volume: ParticleVolume) -> Result<Self> {
+        let voxel = volume.finest_voxel_size();
+        let reach = u64::from((2.0 * settings.radius.1 / voxel).floor() as u32).saturating_add(1).pow(3);
+        if reach > MAX_SPLAT_VOXELS {
+            return Err(Error::InvalidConfig(format!(
+                "particles reaching {} m splat into up to {reach} voxels of {voxel} m each, over the {MAX_SPLAT_VOXELS} a particle may reach; use larger voxels (--particle-voxel-size) or a smaller particle radius",
+                settings.radius.1
+            )));
+        }
         let (params, particles, motion) = Self::motion(ctx, settings)?;
-        let splat = GridSplat::new(ctx, grid, &params, &particles)?;
+        let splat = GridSplat::new(ctx, volume, SplatScales::new(settings, voxel), &params, &particles)?;
         ctx.check_errors()?;
         Ok(Self { settings: settings.clone(), params, particles, motion, output: Output::Grid(Box::new(splat)) })
     }
@@ -438,10 +590,18 @@ impl ParticleSystem {
         Ok((params, particles, (pipeline, bind_group)))
     }
 
-    /// The grid the particles are splatted into, with the method that has one.
-    pub fn grid(&self) -> Option<&ParticleGrid> {
+    /// Where the particles are splatted, with the method that has a grid.
+    pub fn volume(&self) -> Option<&ParticleVolume> {
         match &self.output {
-            Output::Grid(splat) => Some(&splat.grid),
+            Output::Grid(splat) => Some(&splat.volume),
+            Output::Lights(..) => None,
+        }
+    }
+
+    /// How the splat scales its sums, with the method that has a grid.
+    pub fn scales(&self) -> Option<SplatScales> {
+        match &self.output {
+            Output::Grid(splat) => Some(splat.scales),
             Output::Lights(..) => None,
         }
     }
@@ -462,8 +622,9 @@ impl ParticleSystem {
     }
 
     /// Records the particles' motion to `time`, timed as `particle_motion`, and what they become:
-    /// the splat into the textures (`particle_splat`), or lights (within `particle_motion`).
-    pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, time: f32) {
+    /// the splat into the textures around a camera at `eye` (`particle_splat`), or lights (within
+    /// `particle_motion`).
+    pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, time: f32, eye: Vec3) {
         let (x, y) = self.dispatch();
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&self.settings.gpu_params(time, x * WORKGROUP)));
         {
@@ -483,6 +644,7 @@ impl ParticleSystem {
             }
         }
         if let Output::Grid(splat) = &self.output {
+            ctx.queue.write_buffer(&splat.volume_uniform, 0, bytemuck::bytes_of(&splat.volume.gpu(eye, splat.scales)));
             splat.record(encoder, timer, self.settings.count > 0, (x, y));
         }
     }
@@ -492,11 +654,12 @@ impl ParticleSystem {
         readback::read_buffer(ctx, &self.particles)
     }
 
-    /// The splat's sums per voxel, as floats: colour rgb, direction xyz (none without a grid).
+    /// The splat's sums per voxel, as floats: colour rgb, direction xyz (none without a grid), the
+    /// cascades one after the other.
     pub fn read_sums(&self, ctx: &GpuContext) -> Result<Vec<[f32; 6]>> {
         let Output::Grid(splat) = &self.output else { return Ok(Vec::new()) };
         let raw: Vec<[i32; 6]> = readback::read_buffer(ctx, &splat.sums)?;
-        Ok(raw.into_iter().map(|v| v.map(|x| x as f32 / SPLAT_SCALE)).collect())
+        Ok(raw.into_iter().map(|v| v.map(|x| x as f32 / splat.scales.fixed)).collect())
     }
 }
 
@@ -513,11 +676,10 @@ fn check_binding(what: &str, bytes: u64, ctx: &GpuContext) -> Result<()> {
 }
 
 impl GridSplat {
-    fn new(ctx: &GpuContext, grid: ParticleGrid, params: &wgpu::Buffer, particles: &wgpu::Buffer) -> Result<Self> {
+    fn new(ctx: &GpuContext, volume: ParticleVolume, scales: SplatScales, params: &wgpu::Buffer, particles: &wgpu::Buffer) -> Result<Self> {
         let device = &ctx.device;
-        let sum_bytes = grid.voxel_count() * 6 * 4;
+        let sum_bytes = volume.voxel_count() * 6 * 4;
         check_binding("particle grid's sums", sum_bytes, ctx)?;
-        use wgpu::util::DeviceExt;
         use wgpu::BufferUsages as U;
         let sums = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("particle splat sums"),
@@ -525,20 +687,17 @@ impl GridSplat {
             usage: U::STORAGE | U::COPY_DST | U::COPY_SRC,
             mapped_at_creation: false,
         });
-        let grid_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("particle grid"),
-            contents: bytemuck::bytes_of(&GpuParticleGrid {
-                origin: grid.origin.to_array(),
-                voxel_size: grid.voxel_size,
-                dims: grid.dims.to_array(),
-                scale: SPLAT_SCALE,
-            }),
-            usage: U::UNIFORM,
+        let volume_uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("particle volume"),
+            size: std::mem::size_of::<GpuParticleVolume>() as u64,
+            usage: U::UNIFORM | U::COPY_DST,
+            mapped_at_creation: false,
         });
+        let dims = volume.dims();
         let texture = |label: &str| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
-                size: wgpu::Extent3d { width: grid.dims.x, height: grid.dims.y, depth_or_array_layers: grid.dims.z },
+                size: wgpu::Extent3d { width: dims.x, height: dims.y, depth_or_array_layers: dims.z * volume.cascade_count() },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D3,
@@ -574,17 +733,18 @@ impl GridSplat {
             &layout,
             vec![
                 params.as_entire_binding(),
-                grid_uniform.as_entire_binding(),
+                volume_uniform.as_entire_binding(),
                 particles.as_entire_binding(),
                 sums.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&color_view),
                 wgpu::BindingResource::TextureView(&direction_view),
             ],
         );
-        Ok(Self { grid, color_texture, direction_texture, sums, splat, resolve, bind_group })
+        Ok(Self { volume, scales, volume_uniform, color_texture, direction_texture, sums, splat, resolve, bind_group })
     }
 
-    /// Clears the sums, splats every particle and resolves the textures, timed as `particle_splat`.
+    /// Clears the sums, splats every particle into every cascade (one dispatch row per cascade) and
+    /// resolves the textures, timed as `particle_splat`.
     fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, any: bool, (x, y): (u32, u32)) {
         encoder.clear_buffer(&self.sums, 0, None);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -592,12 +752,56 @@ impl GridSplat {
             timestamp_writes: timer.map(|t| t.compute_pass("particle_splat")),
         });
         pass.set_bind_group(0, &self.bind_group, &[]);
+        let cascades = self.volume.cascade_count();
         if any {
             pass.set_pipeline(&self.splat);
-            pass.dispatch_workgroups(x, y, 1);
+            pass.dispatch_workgroups(x, y, cascades);
         }
         pass.set_pipeline(&self.resolve);
-        let voxels = self.grid.dims.map(|d| d.div_ceil(VOXEL_WORKGROUP));
+        let voxels = (self.volume.dims() * UVec3::new(1, 1, cascades)).map(|d| d.div_ceil(VOXEL_WORKGROUP));
         pass.dispatch_workgroups(voxels.x, voxels.y, voxels.z);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each cascade holds the eye near its centre, its corner on a multiple of its voxel, and its
+    /// voxels twice the size of the finer one's; moving the eye within a voxel moves nothing.
+    #[test]
+    fn cascades_centre_on_the_eye_snapped_to_their_voxels() {
+        let volume = ParticleVolume::clipmap(0.25, 16, 4, 2048).unwrap();
+        for eye in [Vec3::ZERO, Vec3::new(3.7, -120.2, 0.01), Vec3::new(-1e4, 5e3, 2.5e3)] {
+            let cascades = volume.cascades(eye);
+            assert_eq!(cascades.len(), 4);
+            for (k, grid) in cascades.iter().enumerate() {
+                assert_eq!(grid.voxel_size, 0.25 * (1 << k) as f32);
+                assert_eq!(grid.dims, UVec3::splat(16));
+                let steps = grid.origin / grid.voxel_size;
+                assert!((steps - steps.round()).abs().max_element() < 1e-3, "cascade {k} corner {} is off its voxels", grid.origin);
+                let offset = (eye - grid.origin) / grid.voxel_size;
+                assert!(offset.min_element() >= 7.99 && offset.max_element() <= 9.01, "eye {eye} at {offset} voxels into cascade {k}");
+            }
+            let nudged = volume.cascades(eye.floor() + Vec3::splat(0.01));
+            let moved = volume.cascades(eye.floor() + Vec3::splat(0.2));
+            assert_eq!(nudged, moved, "a move within the finest voxel moved a cascade");
+        }
+    }
+
+    #[test]
+    fn splat_scales_shrink_with_crowds_and_fine_voxels() {
+        let settings = |count, intensity| ParticleSettings { count, intensity, emitters: vec![(Vec3::ZERO, 1.0)], ..Default::default() };
+        assert_eq!(SplatScales::new(&settings(1000, 0.2), 1.0), SplatScales { fixed: MAX_SPLAT_SCALE, texture: 1.0 });
+        for (count, intensity, voxel) in [(1 << 20, 0.2, 0.5), (1 << 24, 10.0, 0.1), (1, 1e6, 0.01)] {
+            let scales = SplatScales::new(&settings(count, intensity), voxel);
+            let brightest = f64::from(count) * f64::from(intensity) / (0.5 * f64::from(voxel)).powi(2);
+            assert!(brightest * f64::from(scales.fixed) <= 2f64.powi(30), "{count} × {intensity} at {voxel} m: {scales:?}");
+            assert!(brightest * f64::from(scales.texture) <= 32768.0, "{count} × {intensity} at {voxel} m: {scales:?}");
+            assert!(
+                brightest * f64::from(scales.fixed) > 2f64.powi(28) || scales.fixed == MAX_SPLAT_SCALE,
+                "needlessly coarse: {scales:?}"
+            );
+        }
     }
 }

@@ -9,13 +9,6 @@
 @group(0) @binding(1) var<storage, read> emitters: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> particles: array<ParticleLight>;
 
-// PCG hash (Jarzynski & Olano 2020): well mixed 32-bit values from 32-bit inputs.
-fn pcg(v: u32) -> u32 {
-    let state = v * 747796405u + 2891336453u;
-    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
-}
-
 // A uniform value in [0, 1) for (particle, generation, which value).
 fn random01(particle: u32, generation: u32, k: u32) -> f32 {
     let h = pcg(pcg(pcg(particle ^ params.seed) + generation) + k);
@@ -39,7 +32,8 @@ fn particle_motion(@builtin(global_invocation_id) id: vec3<u32>) {
     let lifetime = mix(params.lifetime_min, params.lifetime_max, random01(i, 0u, 0u));
     let clock = params.time + lifetime * random01(i, 0u, 1u);
     let generation = u32(floor(clock / lifetime));
-    let age = clock - f32(generation) * lifetime;
+    // Rounding can put the difference a hair outside the lifetime.
+    let age = clamp(clock - f32(generation) * lifetime, 0.0, lifetime);
 
     let angle = 6.2831853 * random01(i, generation, 2u);
     let cos_tilt = mix(1.0, params.cos_cone, random01(i, generation, 3u));

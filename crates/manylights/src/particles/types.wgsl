@@ -22,6 +22,13 @@ struct ParticleParams {
     _pad2: f32,
 }
 
+// PCG hash (Jarzynski & Olano 2020): well mixed 32-bit values from 32-bit inputs.
+fn pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
 // A particle this frame: a point light of `color` intensity (candela per channel) reaching `radius`.
 struct ParticleLight {
     position: vec3<f32>,
@@ -30,12 +37,16 @@ struct ParticleLight {
     _pad: f32,
 }
 
-// The voxel grid particle lights are splatted into: voxel (i, j, k) is centred on
-// origin + (ijk + 0.5) × voxel_size.
-struct ParticleGrid {
-    origin: vec3<f32>,
-    voxel_size: f32,
+// Where particle lights are splatted (`ParticleVolume` in `particles/mod.rs`): `cascade_count` grids of
+// `dims` voxels each, stacked along z in the sums and textures; cascade k's voxel (i, j, l) is centred
+// on cascades[k].xyz + (ijl + 0.5) × cascades[k].w.
+struct ParticleVolume {
     dims: vec3<u32>,
-    // Fixed-point scale of the accumulation (values are stored × scale as i32).
-    scale: f32,
+    cascade_count: u32,
+    // Sums are stored × fixed_scale as i32; the textures hold them × texture_scale.
+    fixed_scale: f32,
+    texture_scale: f32,
+    _pad0: f32,
+    _pad1: f32,
+    cascades: array<vec4<f32>, 8>,
 }

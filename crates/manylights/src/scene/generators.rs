@@ -359,6 +359,16 @@ pub struct ScatterParticles {
     pub count: u32,
     pub seed: u64,
     pub emitters: usize,
+    /// Light radius (range) in metres, uniform in [min, max] per launch; emitters float the largest
+    /// above their surfaces.
+    pub radius: (f32, f32),
+}
+
+impl ScatterParticles {
+    /// `count` particles from `emitters` emitters, with the default radius.
+    pub fn new(count: u32, seed: u64, emitters: usize) -> Self {
+        Self { count, seed, emitters, radius: crate::particles::ParticleSettings::default().radius }
+    }
 }
 
 /// Sets the scene's particles: `params.count` particle lights from `params.emitters` emitters a
@@ -367,6 +377,10 @@ pub struct ScatterParticles {
 pub fn add_particles(scene: &mut Scene, params: &ScatterParticles) -> Result<()> {
     if params.emitters == 0 || params.emitters > MAX_PARTICLE_EMITTERS {
         return Err(Error::InvalidConfig(format!("particles: {} emitters; give 1 to {MAX_PARTICLE_EMITTERS}", params.emitters)));
+    }
+    let (low, high) = params.radius;
+    if !(low.is_finite() && high.is_finite() && low > 0.0 && low <= high) {
+        return Err(Error::InvalidConfig(format!("particles: radius [{low}, {high}] must be finite with 0 < min ≤ max")));
     }
     scene.validate()?;
     let surfaces = Surfaces::new(scene);
@@ -380,6 +394,7 @@ pub fn add_particles(scene: &mut Scene, params: &ScatterParticles) -> Result<()>
     let mut settings = crate::particles::ParticleSettings {
         count: params.count,
         seed: params.seed as u32 ^ (params.seed >> 32) as u32,
+        radius: params.radius,
         ..Default::default()
     };
     let bounds = scene.bounds();

@@ -78,6 +78,8 @@
 //! voxel_size = 0.5        # the grid's voxel edge in metres, likewise
 //! filter = "tricubic"     # "nearest", "trilinear" or "tricubic", likewise
 //! samples = 4             # jittered samples per shading point, likewise
+//! cascades = 4            # camera-centred clipmap cascades (0: one grid over the scene), likewise
+//! cascade_resolution = 64 # voxels per axis of each cascade, likewise
 //!
 //! [animate]               # group all lights and decals into spinning groups (generators::group_for_animation)
 //! groups = 16             # default 16
@@ -249,14 +251,16 @@ struct ParticlesSpec {
     voxel_size: Option<f32>,
     filter: Option<String>,
     samples: Option<u32>,
+    cascades: Option<u32>,
+    cascade_resolution: Option<u32>,
 }
 
 impl ParticlesSpec {
     fn apply(&self, scene: &mut Scene) -> Result<(), String> {
-        let params = ScatterParticles { count: self.count, seed: self.seed.unwrap_or(1), emitters: self.emitters.unwrap_or(16) };
+        let mut params = ScatterParticles::new(self.count, self.seed.unwrap_or(1), self.emitters.unwrap_or(16));
+        params.radius = self.radius.unwrap_or(params.radius);
         generators::add_particles(scene, &params).map_err(inner_message)?;
         let settings = scene.particles.as_mut().expect("set by add_particles");
-        settings.radius = self.radius.unwrap_or(settings.radius);
         settings.intensity = self.intensity.unwrap_or(settings.intensity);
         settings.lifetime = self.lifetime.unwrap_or(settings.lifetime);
         use crate::{particles::ParticleFilter, pipelines::ParticleMethod};
@@ -280,8 +284,16 @@ impl ParticlesSpec {
         if let Some(samples) = self.samples.filter(|s| !(1..=crate::particles::MAX_PARTICLE_SAMPLES).contains(s)) {
             return Err(format!("samples {samples}: give 1 to {}", crate::particles::MAX_PARTICLE_SAMPLES));
         }
+        if let Some(cascades) = self.cascades.filter(|c| *c > crate::particles::MAX_PARTICLE_CASCADES) {
+            return Err(format!("cascades {cascades}: give 0 (one grid over the scene) to {}", crate::particles::MAX_PARTICLE_CASCADES));
+        }
+        if let Some(resolution) = self.cascade_resolution.filter(|r| *r < 4 || !r.is_multiple_of(2)) {
+            return Err(format!("cascade_resolution {resolution}: give an even number of voxels per axis, at least 4"));
+        }
         settings.rendering.voxel_size = self.voxel_size;
         settings.rendering.samples = self.samples;
+        settings.rendering.cascades = self.cascades;
+        settings.rendering.cascade_resolution = self.cascade_resolution;
         settings.validate().map_err(inner_message)
     }
 }

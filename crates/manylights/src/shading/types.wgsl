@@ -110,12 +110,15 @@ struct FrameUniforms {
     // x: near plane of the depth slicing; y: slices per doubling of view depth; z: the camera's near
     // plane, in front of which nothing is visible.
     cluster_depth: vec4<f32>,
-    // The particle grid (`particles/`): xyz its corner, w the voxel edge; and its voxels per axis,
-    // w 1 when particles light the scene.
-    particle_grid: vec4<f32>,
-    particle_grid_dims: vec4<u32>,
+    // The particle grid (`particles/`): voxels per axis of each cascade, w the cascades (0 when no
+    // grid lights the scene).
+    particle_volume: vec4<u32>,
     // How shading filters the grid: x PARTICLE_FILTER_*, y samples per point (1: at the point only).
     particle_filter: vec4<u32>,
+    // x: the factor that undoes the splat's texture scale.
+    particle_texture_unscale: vec4<f32>,
+    // Per cascade, finest first: xyz its corner, w its voxel edge.
+    particle_cascades: array<vec4<f32>, 8>,
 }
 
 // Keep in sync with `ParticleFilter` in `particles/mod.rs`.

@@ -31,6 +31,8 @@ pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfi
         particle_voxel_size: 1.0,
         particle_filter: ParticleFilter::Trilinear,
         particle_samples: 1,
+        particle_cascades: 0,
+        particle_cascade_resolution: 64,
         tonemapper: Tonemapper::Aces,
         max_texture_size: 256,
         anisotropy: 1,
