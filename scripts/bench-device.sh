@@ -10,6 +10,7 @@
 #   scripts/bench-device.sh table        `manylights bench`: the paper's Table 1, every pipeline and method (issue 5)
 #   scripts/bench-device.sh sweeps       `manylights bench`: lights and decals from 1k to 1M (issue 5)
 #   scripts/bench-device.sh particles    moving particle lights through the 3D-texture grid (issue 6)
+#   scripts/bench-device.sh clipmap      1M particles: clipmap cascades against the grid over the scene (issue 6)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
