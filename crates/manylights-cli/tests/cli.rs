@@ -166,14 +166,14 @@ fn scene_file_particle_settings_yield_to_flags() {
     let json = dir.join("timings.json");
     #[rustfmt::skip]
     let run = manylights(&[
-        "render", "--scene", scene, "--particle-method", "grid", "--particle-cascades", "2", "--particle-cascade-resolution", "16",
+        "render", "--scene", scene, "--particle-method", "grid", "--particle-cascades", "2", "--particle-cascade-resolution", "24",
         "--width", "16", "--height", "16", "-o", out.to_str().unwrap(), "--timings-json", json.to_str().unwrap(),
     ]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let particles = &json["particles"];
     assert_eq!((particles["count"].as_u64(), particles["method"].as_str()), (Some(200), Some("grid")), "{json}");
-    assert_eq!((particles["cascades"].as_u64(), particles["cascade_resolution"].as_u64()), (Some(2), Some(16)), "{json}");
+    assert_eq!((particles["cascades"].as_u64(), particles["cascade_resolution"].as_u64()), (Some(2), Some(24)), "{json}");
 }
 
 #[test]

@@ -121,6 +121,9 @@ impl RenderConfig {
                 self.particle_samples
             )));
         }
+        if self.particle_cascades > 0 {
+            crate::particles::check_clipmap(self.particle_cascade_resolution, self.particle_cascades)?;
+        }
         if !(1..=16).contains(&self.anisotropy) {
             return Err(Error::InvalidConfig(format!("anisotropy {} must be between 1 and 16", self.anisotropy)));
         }

@@ -150,7 +150,7 @@ fn assert_sums_match(gpu: &[[f32; 6]], cpu: &[[f64; 6]], contributions: &[u32], 
 fn every_cascade_of_a_clipmap_holds_its_own_splat() {
     let ctx = GpuContext::new().expect("a GPU adapter");
     let settings = settings(1_500);
-    let volume = ParticleVolume::clipmap(0.5, 20, 3, 2048).unwrap();
+    let volume = ParticleVolume::clipmap(0.5, 24, 3, 2048).unwrap();
     let system = ParticleSystem::new(&ctx, &settings, volume).unwrap();
     run(&ctx, &system, 0.9);
     let lights = system.read_particles(&ctx).unwrap();
@@ -208,10 +208,10 @@ fn bad_particle_settings_are_clear_errors() {
     let err = ParticleSettings { count: manylights::particles::MAX_PARTICLES + 1, ..settings(10) }.validate().unwrap_err().to_string();
     assert!(err.contains("exceed the maximum"), "{err}");
     for (voxel, resolution, cascades, expected) in [
-        (0.5, 32, 0, "give 1 to 8"),
+        (0.5, 32, 0, "at least 1 particle cascade"),
         (0.5, 32, 9, "give 1 to 8"),
         (0.5, 31, 2, "even number"),
-        (0.5, 2, 2, "at least 4"),
+        (0.5, 16, 2, "at least 24"),
         (0.5, 512, 8, "3D texture limit of 2048"),
         (-1.0, 32, 2, "voxel size"),
     ] {

@@ -28,8 +28,9 @@ use crate::gpu::{bindings, readback, shaders::ShaderDesc, GpuContext, GpuTimer};
 use crate::scene::Aabb;
 use crate::{Error, Result};
 
-/// Most particles one system holds (2²⁴): their lights take 32 bytes each, 512 MiB at this count.
-pub const MAX_PARTICLES: u32 = 1 << 24;
+/// Most particles one system holds (about 2²⁴: as many as one row of 65535 workgroups of 256 threads,
+/// which the exact method's LBVH build dispatches): their lights take 32 bytes each.
+pub const MAX_PARTICLES: u32 = 65535 * 256;
 /// Most fixed-point steps per unit of the splat's sums: contributions are rounded (dithered) to 1/1024 at
 /// best. Crowded or bright particles get fewer ([`SplatScales`]), so no voxel's i32 sum can wrap.
 pub const MAX_SPLAT_SCALE: f32 = 1024.0;
@@ -314,7 +315,7 @@ impl ParticleGrid {
         let dims = extent.ceil().max(Vec3::ONE);
         if dims.max_element() > max_dimension as f32 {
             return Err(Error::InvalidConfig(format!(
-                "a particle grid of {voxel_size} m voxels over {:.1} × {:.1} × {:.1} m needs {} × {} × {} voxels, over this GPU's 3D texture limit of {max_dimension} per axis; use larger voxels, or camera-centred cascades (--particle-cascades)",
+                "a particle grid of {voxel_size} m voxels over {:.1} × {:.1} × {:.1} m needs {} × {} × {} voxels, over this GPU's 3D texture limit of {max_dimension} per axis; use larger voxels, or camera-centred cascades (--particle-cascades, or `cascades` in a scene file's [particles])",
                 bounds.max.x - bounds.min.x,
                 bounds.max.y - bounds.min.y,
                 bounds.max.z - bounds.min.z,
@@ -348,6 +349,25 @@ impl ParticleGrid {
     }
 }
 
+/// Fewest voxels per axis of a clipmap cascade: a point that the finer cascade's edge hands over lies
+/// deep enough in the coarser one (past its own blend band) that the switch leaves no seam.
+pub const MIN_CASCADE_RESOLUTION: u32 = 24;
+
+/// Checks a clipmap's cascade count (0, one grid over the scene, allowed) and resolution.
+pub fn check_clipmap(resolution: u32, cascades: u32) -> Result<()> {
+    if cascades > MAX_PARTICLE_CASCADES {
+        return Err(Error::InvalidConfig(format!(
+            "{cascades} particle cascades: give 1 to {MAX_PARTICLE_CASCADES}, or 0 for one grid over the scene"
+        )));
+    }
+    if resolution < MIN_CASCADE_RESOLUTION || !resolution.is_multiple_of(2) {
+        return Err(Error::InvalidConfig(format!(
+            "particle cascade resolution {resolution}: give an even number of voxels per axis, at least {MIN_CASCADE_RESOLUTION}"
+        )));
+    }
+    Ok(())
+}
+
 /// Where the particle grid lies: its cascades, all of the same voxel count, stacked along z in the
 /// textures (cascade k's voxels follow cascade k − 1's in the sums, x fastest).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -364,16 +384,10 @@ impl ParticleVolume {
     /// `resolution × cascades` voxels along z.
     pub fn clipmap(voxel_size: f32, resolution: u32, cascades: u32, max_dimension: u32) -> Result<Self> {
         check_voxel_size(voxel_size)?;
-        if !(1..=MAX_PARTICLE_CASCADES).contains(&cascades) {
-            return Err(Error::InvalidConfig(format!(
-                "{cascades} particle cascades: give 1 to {MAX_PARTICLE_CASCADES}, or 0 for one grid over the scene"
-            )));
+        if cascades == 0 {
+            return Err(Error::InvalidConfig("a clipmap needs at least 1 particle cascade".into()));
         }
-        if resolution < 4 || !resolution.is_multiple_of(2) {
-            return Err(Error::InvalidConfig(format!(
-                "particle cascade resolution {resolution}: give an even number of voxels per axis, at least 4"
-            )));
-        }
+        check_clipmap(resolution, cascades)?;
         if u64::from(resolution) * u64::from(cascades) > u64::from(max_dimension) {
             return Err(Error::InvalidConfig(format!(
                 "{cascades} particle cascades of {resolution}³ voxels stack {} voxels along z, over this GPU's 3D texture limit of {max_dimension}; use fewer cascades or a lower resolution",
@@ -500,10 +514,10 @@ impl ParticleSystem {
     /// more than [`MAX_SPLAT_VOXELS`] voxels of the finest cascade.
     pub fn new(ctx: &GpuContext, settings: &ParticleSettings, volume: ParticleVolume) -> Result<Self> {
         let voxel = volume.finest_voxel_size();
-        let reach = u64::from((2.0 * settings.radius.1 / voxel).floor() as u32).saturating_add(1).pow(3);
-        if reach > MAX_SPLAT_VOXELS {
+        let reach = ((2.0 * f64::from(settings.radius.1) / f64::from(voxel)).floor() + 1.0).powi(3);
+        if reach > MAX_SPLAT_VOXELS as f64 {
             return Err(Error::InvalidConfig(format!(
-                "particles reaching {} m splat into up to {reach} voxels of {voxel} m each, over the {MAX_SPLAT_VOXELS} a particle may reach; use larger voxels (--particle-voxel-size) or a smaller particle radius",
+                "particles reaching {} m splat into up to {reach:.0} voxels of {voxel} m each, over the {MAX_SPLAT_VOXELS} a particle may reach; use larger voxels (--particle-voxel-size) or a smaller particle radius",
                 settings.radius.1
             )));
         }
@@ -771,17 +785,17 @@ mod tests {
     /// voxels twice the size of the finer one's; moving the eye within a voxel moves nothing.
     #[test]
     fn cascades_centre_on_the_eye_snapped_to_their_voxels() {
-        let volume = ParticleVolume::clipmap(0.25, 16, 4, 2048).unwrap();
+        let volume = ParticleVolume::clipmap(0.25, 24, 4, 2048).unwrap();
         for eye in [Vec3::ZERO, Vec3::new(3.7, -120.2, 0.01), Vec3::new(-1e4, 5e3, 2.5e3)] {
             let cascades = volume.cascades(eye);
             assert_eq!(cascades.len(), 4);
             for (k, grid) in cascades.iter().enumerate() {
                 assert_eq!(grid.voxel_size, 0.25 * (1 << k) as f32);
-                assert_eq!(grid.dims, UVec3::splat(16));
+                assert_eq!(grid.dims, UVec3::splat(24));
                 let steps = grid.origin / grid.voxel_size;
                 assert!((steps - steps.round()).abs().max_element() < 1e-3, "cascade {k} corner {} is off its voxels", grid.origin);
                 let offset = (eye - grid.origin) / grid.voxel_size;
-                assert!(offset.min_element() >= 7.99 && offset.max_element() <= 9.01, "eye {eye} at {offset} voxels into cascade {k}");
+                assert!(offset.min_element() >= 11.99 && offset.max_element() <= 13.01, "eye {eye} at {offset} voxels into cascade {k}");
             }
             let nudged = volume.cascades(eye.floor() + Vec3::splat(0.01));
             let moved = volume.cascades(eye.floor() + Vec3::splat(0.2));

@@ -287,8 +287,9 @@ impl ParticlesSpec {
         if let Some(cascades) = self.cascades.filter(|c| *c > crate::particles::MAX_PARTICLE_CASCADES) {
             return Err(format!("cascades {cascades}: give 0 (one grid over the scene) to {}", crate::particles::MAX_PARTICLE_CASCADES));
         }
-        if let Some(resolution) = self.cascade_resolution.filter(|r| *r < 4 || !r.is_multiple_of(2)) {
-            return Err(format!("cascade_resolution {resolution}: give an even number of voxels per axis, at least 4"));
+        let minimum = crate::particles::MIN_CASCADE_RESOLUTION;
+        if let Some(resolution) = self.cascade_resolution.filter(|r| *r < minimum || !r.is_multiple_of(2)) {
+            return Err(format!("cascade_resolution {resolution}: give an even number of voxels per axis, at least {minimum}"));
         }
         settings.rendering.voxel_size = self.voxel_size;
         settings.rendering.samples = self.samples;
