@@ -190,9 +190,7 @@ impl Renderer {
                 uniforms.particle_volume = volume.dims().extend(volume.cascade_count()).to_array();
                 uniforms.particle_filter = [self.config.particle_filter as u32, self.config.particle_samples, 0, 0];
                 uniforms.particle_texture_unscale = [1.0 / scales.texture; 4];
-                for (slot, grid) in uniforms.particle_cascades.iter_mut().zip(volume.cascades(camera.position())) {
-                    *slot = grid.origin.extend(grid.voxel_size).to_array();
-                }
+                uniforms.particle_cascades = volume.gpu_cascades(camera.position());
             }
         }
         self.scene.write_frame(&self.ctx.queue, &uniforms);

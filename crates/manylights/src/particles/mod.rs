@@ -440,18 +440,24 @@ impl ParticleVolume {
         }
     }
 
-    fn gpu(&self, eye: Vec3, scales: SplatScales) -> GpuParticleVolume {
+    /// The cascades for a camera at `eye` as the GPU reads them: corner (xyz) and voxel edge (w),
+    /// finest first, unused slots zero.
+    pub fn gpu_cascades(&self, eye: Vec3) -> [[f32; 4]; MAX_PARTICLE_CASCADES as usize] {
         let mut cascades = [[0.0; 4]; MAX_PARTICLE_CASCADES as usize];
         for (slot, grid) in cascades.iter_mut().zip(self.cascades(eye)) {
             *slot = grid.origin.extend(grid.voxel_size).to_array();
         }
+        cascades
+    }
+
+    fn gpu(&self, eye: Vec3, scales: SplatScales) -> GpuParticleVolume {
         GpuParticleVolume {
             dims: self.dims().to_array(),
             cascade_count: self.cascade_count(),
             fixed_scale: scales.fixed,
             texture_scale: scales.texture,
             _pad: [0.0; 2],
-            cascades,
+            cascades: self.gpu_cascades(eye),
         }
     }
 }
