@@ -11,6 +11,7 @@ use manylights::{
     image_io,
     particles::ParticleFilter,
     pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
+    rays::{RaySettings, SunShadows, MAX_REFLECTION_BOUNCES},
     renderer::{FrameTiming, Renderer},
     scene::{Camera, Scene},
 };
@@ -76,6 +77,8 @@ pub struct RenderArgs {
     /// Voxels per axis of each particle cascade (even). [default: the scene file's, or 64]
     #[arg(long)]
     particle_cascade_resolution: Option<u32>,
+    #[command(flatten)]
+    rays: RayArgs,
     #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
     tonemap: TonemapArg,
     /// Largest texture size kept on the GPU (larger images are downsampled).
@@ -102,6 +105,72 @@ pub struct RenderArgs {
     /// Untimed frames before timing starts.
     #[arg(long, default_value_t = 0)]
     warmup: u32,
+}
+
+/// Ray-traced effects; each overrides the scene file's `[rays]`.
+#[derive(Args)]
+pub(crate) struct RayArgs {
+    /// Sun shadows by rays from every pixel: none, one ray to the sun's centre, or rays to points of
+    /// its disc (--shadow-rays) and a spatial filter. [default: the scene file's, or off]
+    #[arg(long, value_enum)]
+    shadows: Option<ShadowsArg>,
+    /// The sun's angular diameter in degrees: the width of soft shadows' penumbrae. [default: the
+    /// scene file's, or 0.53]
+    #[arg(long, allow_negative_numbers = true)]
+    sun_angle: Option<f32>,
+    /// Rays per pixel towards the sun's disc with --shadows soft (1 to 64). [default: the scene
+    /// file's, or 4]
+    #[arg(long)]
+    shadow_rays: Option<u32>,
+    /// Ray-traced reflections on glossy surfaces, their hits shaded by the full shading core.
+    #[arg(long)]
+    reflections: bool,
+    /// Reflection bounces with --reflections (1 to 8). [default: the scene file's, or 1]
+    #[arg(long, requires = "reflections")]
+    bounces: Option<u32>,
+    /// Surfaces below this perceptual roughness reflect (above 0, at most 1). [default: the scene
+    /// file's, or 0.3]
+    #[arg(long, allow_negative_numbers = true)]
+    reflection_roughness: Option<f32>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum ShadowsArg {
+    Off,
+    Hard,
+    Soft,
+}
+
+impl From<ShadowsArg> for SunShadows {
+    fn from(arg: ShadowsArg) -> Self {
+        match arg {
+            ShadowsArg::Off => SunShadows::Off,
+            ShadowsArg::Hard => SunShadows::Hard,
+            ShadowsArg::Soft => SunShadows::Soft,
+        }
+    }
+}
+
+impl RayArgs {
+    /// The command line's choices over the scene file's, over the defaults.
+    pub(crate) fn settings(&self, scene: &Scene) -> anyhow::Result<RaySettings> {
+        let hints = scene.ray_hints;
+        let defaults = RaySettings::default();
+        let reflection_bounces = match (self.reflections, self.bounces) {
+            (true, Some(0)) => {
+                bail!("--bounces 0 would trace no reflections: give 1 to {MAX_REFLECTION_BOUNCES}, or leave out --reflections")
+            }
+            (true, bounces) => bounces.or(hints.reflection_bounces.filter(|&b| b > 0)).unwrap_or(1),
+            (false, _) => hints.reflection_bounces.unwrap_or(defaults.reflection_bounces),
+        };
+        Ok(RaySettings {
+            sun_shadows: self.shadows.map(Into::into).or(hints.sun_shadows).unwrap_or(defaults.sun_shadows),
+            sun_angle_degrees: self.sun_angle.or(hints.sun_angle_degrees).unwrap_or(defaults.sun_angle_degrees),
+            shadow_rays: self.shadow_rays.or(hints.shadow_rays).unwrap_or(defaults.shadow_rays),
+            reflection_bounces,
+            reflection_roughness: self.reflection_roughness.or(hints.reflection_roughness).unwrap_or(defaults.reflection_roughness),
+        })
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -236,6 +305,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         },
         max_texture_size: args.texture_size,
         anisotropy: args.anisotropy,
+        rays: args.rays.settings(&scene)?,
     };
 
     let ctx = GpuContext::new()?;
@@ -320,6 +390,23 @@ impl TimingReport {
             };
             println!("{} particles, method {}{grid}", particles.count, config.particle_method.name());
         }
+        let rays = &renderer.config.rays;
+        if rays.traces_rays() {
+            println!(
+                "sun shadows {}{}, reflections: {}",
+                rays.sun_shadows.name(),
+                if rays.sun_shadows == SunShadows::Soft {
+                    format!(" ({} rays, sun {}°)", rays.shadow_rays, rays.sun_angle_degrees)
+                } else {
+                    String::new()
+                },
+                if rays.reflection_bounces > 0 {
+                    format!("{} bounce(s) below roughness {}", rays.reflection_bounces, rays.reflection_roughness)
+                } else {
+                    "off".into()
+                }
+            );
+        }
         println!("{:<20} {:>10} {:>10}", "pass", "median ms", "p95 ms");
         let line = |name: &str, samples: &[f64]| {
             let Stat { median, p95 } = Stat::of(samples);
@@ -353,6 +440,7 @@ impl TimingReport {
             "decal_method": renderer.config.decal_method.name(),
             "animated": is_animated(scene),
             "particles": particles_json(renderer, scene),
+            "rays": rays_json(&renderer.config.rays),
             "warmup_frames": args.warmup,
             "timed_frames": args.frames,
             "passes": passes,
@@ -381,6 +469,17 @@ fn particles_json(renderer: &Renderer, scene: &Scene) -> serde_json::Value {
         }
     }
     json
+}
+
+/// The ray-traced effects and their budgets.
+fn rays_json(rays: &RaySettings) -> serde_json::Value {
+    serde_json::json!({
+        "shadows": rays.sun_shadows.name(),
+        "sun_angle_degrees": rays.sun_angle_degrees,
+        "shadow_rays": rays.shadow_rays,
+        "reflection_bounces": rays.reflection_bounces,
+        "reflection_roughness": rays.reflection_roughness,
+    })
 }
 
 fn is_animated(scene: &Scene) -> bool {

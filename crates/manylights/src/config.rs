@@ -5,6 +5,7 @@ use crate::{
     gpu::GpuContext,
     particles::{ParticleFilter, MAX_PARTICLE_SAMPLES},
     pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
+    rays::RaySettings,
     Error, Result,
 };
 
@@ -47,6 +48,8 @@ pub struct RenderConfig {
     /// Maximum anisotropy of texture filtering, 1 (trilinear) to 16. Software rasterisers are many
     /// times slower with anisotropic filtering, so the tests use 1.
     pub anisotropy: u16,
+    /// Ray-traced effects: sun shadows and reflections, and their budgets (`rays/`).
+    pub rays: RaySettings,
 }
 
 impl Default for RenderConfig {
@@ -68,6 +71,7 @@ impl Default for RenderConfig {
             tonemapper: Tonemapper::Aces,
             max_texture_size: 1024,
             anisotropy: 8,
+            rays: RaySettings::default(),
         }
     }
 }
@@ -124,6 +128,7 @@ impl RenderConfig {
         if self.particle_cascades > 0 {
             crate::particles::check_clipmap(self.particle_cascade_resolution, self.particle_cascades)?;
         }
+        self.rays.validate()?;
         if !(1..=16).contains(&self.anisotropy) {
             return Err(Error::InvalidConfig(format!("anisotropy {} must be between 1 and 16", self.anisotropy)));
         }

@@ -9,6 +9,7 @@ use crate::{
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
     particles::{ParticleGrid, ParticleSystem, ParticleVolume},
     pipelines::{DecalMethod, FrameInputs, FramePipeline, LightMethod, ParticleMethod, ShadingMethods},
+    rays::RayStructure,
     scene::{Aabb, Camera, Scene},
     Error, Result,
 };
@@ -97,12 +98,24 @@ impl Renderer {
                 config.light_method.name()
             )));
         }
+        // The triangles' hierarchy is built (on the CPU, once) only for frames that trace rays.
+        let rays = config.rays.traces_rays().then(|| RayStructure::build(scene)).transpose()?;
+        if let Some(rays) = &rays {
+            log::info!(
+                "ray hierarchy: {} triangles, {} instances; BLAS build {:.1} ms, TLAS build {:.2} ms",
+                rays.triangles.len(),
+                rays.instances.len(),
+                rays.blas_build_ms,
+                rays.tlas_build_ms
+            );
+        }
         let gpu_scene = GpuScene::upload(
             &ctx,
             scene,
             config.max_texture_size,
             effective_anisotropy(&ctx, &config),
             grid_particles.as_ref().and_then(ParticleSystem::grid_textures),
+            rays.as_ref(),
         )?;
         // Brute force reads the structures' items and instances only: their BVHs are built once on the
         // CPU, so a GPU rebuild every frame is timed only where a method uses it.
@@ -137,11 +150,17 @@ impl Renderer {
             build(config.decal_method == DecalMethod::Bvh, config.decal_bvh_build),
             clusters(config.decal_method == DecalMethod::Clustered),
         )?;
+        let methods = ShadingMethods {
+            lights: config.light_method,
+            decals: config.decal_method,
+            particles: config.particle_method,
+            reflections: config.rays.reflection_bounces > 0,
+        };
         let pipeline = FramePipeline::new(
             &ctx,
             &gpu_scene,
             config.pipeline,
-            ShadingMethods { lights: config.light_method, decals: config.decal_method, particles: config.particle_method },
+            (methods, config.rays.sun_shadows),
             (&lights, &decals),
             (config.width, config.height),
         )?;
@@ -185,6 +204,7 @@ impl Renderer {
         let mut uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.constants, self.config.tonemapper);
         uniforms.light_instance_count = self.lights.instance_count();
         uniforms.decal_instance_count = self.decals.instance_count();
+        (uniforms.ray_options, uniforms.ray_settings) = self.config.rays.uniforms(camera, self.config.height);
         if let Some(particles) = &self.particles {
             if let (Some(volume), Some(scales)) = (particles.volume(), particles.scales()) {
                 uniforms.particle_volume = volume.dims().extend(volume.cascade_count()).to_array();

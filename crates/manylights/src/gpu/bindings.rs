@@ -93,13 +93,24 @@ pub fn compute_pipeline(
     shader: &ShaderDesc,
     bind_group_layouts: &[&wgpu::BindGroupLayout],
 ) -> Result<wgpu::ComputePipeline> {
+    compute_pipeline_with_constants(device, entry, shader, bind_group_layouts, &[])
+}
+
+/// As [`compute_pipeline`], with values for the shader's `override` constants.
+pub fn compute_pipeline_with_constants(
+    device: &wgpu::Device,
+    entry: &'static str,
+    shader: &ShaderDesc,
+    bind_group_layouts: &[&wgpu::BindGroupLayout],
+    constants: &[(&str, f64)],
+) -> Result<wgpu::ComputePipeline> {
     let module = shaders::create_module(device, shader)?;
     Ok(device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(entry),
         layout: Some(&pipeline_layout(device, entry, bind_group_layouts)),
         module: &module,
         entry_point: Some(entry),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions { constants, ..Default::default() },
         cache: None,
     }))
 }

@@ -35,6 +35,11 @@ pub struct FrameUniforms {
     pub particle_filter: [u32; 4],
     pub particle_texture_unscale: [f32; 4],
     pub particle_cascades: [[f32; 4]; crate::particles::MAX_PARTICLE_CASCADES as usize],
+    /// Ray-traced effects (`rays::RaySettings::uniforms`), set by the renderer: sun shadow mode,
+    /// shadow rays per pixel, reflection bounces; the sun's angular radius, the reflection roughness
+    /// threshold, a pixel's spread angle and its width at the camera.
+    pub ray_options: [u32; 4],
+    pub ray_settings: [f32; 4],
 }
 
 /// What a frame needs of the scene besides its buffers, kept by `GpuScene` from the CPU scene.
@@ -75,6 +80,8 @@ impl FrameUniforms {
             particle_filter: [0; 4],
             particle_texture_unscale: [1.0; 4],
             particle_cascades: [[0.0; 4]; crate::particles::MAX_PARTICLE_CASCADES as usize],
+            ray_options: [0; 4],
+            ray_settings: [0.0; 4],
         }
     }
 }

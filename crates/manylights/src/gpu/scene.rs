@@ -13,6 +13,8 @@ use super::{
     FrameUniforms, GpuContext,
 };
 use crate::{
+    accel::{BvhNode, END},
+    rays::RayStructure,
     scene::{AlphaMode, Decal, Light, LightKind, Material, Scene, TextureRef, Wrap},
     Error, Result,
 };
@@ -193,13 +195,15 @@ impl GpuScene {
 
     /// Uploads `scene`. `max_texture_size` caps the layer size of the texture arrays; `anisotropy` is
     /// the sampler's maximum anisotropy (1 = trilinear); `particle_grids` are the particle system's
-    /// colour and direction textures, bound for shading (1×1×1 placeholders without particles).
+    /// colour and direction textures, bound for shading (1×1×1 placeholders without particles);
+    /// `rays` is the scene's ray-tracing hierarchy, for ray-traced effects (without it, an empty one).
     pub fn upload(
         ctx: &GpuContext,
         scene: &Scene,
         max_texture_size: u32,
         anisotropy: u16,
         particle_grids: Option<[&wgpu::Texture; 2]>,
+        rays: Option<&RayStructure>,
     ) -> Result<Self> {
         scene.validate()?;
         let device = &ctx.device;
@@ -277,6 +281,12 @@ impl GpuScene {
         let index_buffer = storage_buffer(device, "indices", &indices, limit, wgpu::BufferUsages::INDEX)?;
         let draw_buffer = storage_buffer(device, "draws", &draws, limit, wgpu::BufferUsages::empty())?;
         let material_buffer = storage_buffer(device, "materials", &materials, limit, wgpu::BufferUsages::empty())?;
+        // A ray entering node 0 of an empty hierarchy meets an empty box and ends.
+        let no_rays = RayStructure { nodes: vec![BvhNode { min: [1.0; 3], max: [-1.0; 3], entry: 0, skip: END }], ..Default::default() };
+        let rays = rays.filter(|r| !r.nodes.is_empty()).unwrap_or(&no_rays);
+        let ray_node_buffer = storage_buffer(device, "ray hierarchy nodes", &rays.nodes, limit, wgpu::BufferUsages::empty())?;
+        let ray_triangle_buffer = storage_buffer(device, "ray triangles", &rays.triangles, limit, wgpu::BufferUsages::empty())?;
+        let ray_instance_buffer = storage_buffer(device, "ray instances", &rays.instances, limit, wgpu::BufferUsages::empty())?;
         let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
             size: std::mem::size_of::<FrameUniforms>() as u64,
@@ -342,6 +352,7 @@ impl GpuScene {
             .chain(samplers.iter().map(wgpu::BindingResource::Sampler))
             .chain(particle_views.iter().map(wgpu::BindingResource::TextureView))
             .chain([wgpu::BindingResource::Sampler(&particle_sampler)])
+            .chain([&ray_node_buffer, &ray_triangle_buffer, &ray_instance_buffer].map(|b| b.as_entire_binding()))
             .collect(),
         );
         ctx.check_errors()?;
@@ -377,6 +388,9 @@ impl GpuScene {
         entries.push(bindings::texture(16, all, float, wgpu::TextureViewDimension::D3)); // particle colour grid
         entries.push(bindings::texture(17, all, float, wgpu::TextureViewDimension::D3)); // particle direction grid
         entries.push(bindings::sampler(18, all)); // particle grid sampler
+        entries.push(bindings::storage_read(19, all)); // ray hierarchy nodes
+        entries.push(bindings::storage_read(20, all)); // ray triangles
+        entries.push(bindings::storage_read(21, all)); // ray instances
         bindings::layout(device, "scene", &entries)
     }
 
@@ -471,11 +485,12 @@ mod tests {
     use super::*;
     use crate::{gpu::FrameUniforms, scene::Vertex};
 
-    /// Each WGSL struct in `shading/types.wgsl` against its Rust twin: same size, same members at the
-    /// same offsets, so uploads are read as written.
+    /// Each WGSL struct of the scene's bindings (`shading/types.wgsl`, `rays/ray_types.wgsl`) against
+    /// its Rust twin: same size, same members at the same offsets, so uploads are read as written.
     #[test]
     fn rust_structs_match_their_wgsl_layout() {
-        let module = naga::front::wgsl::parse_str(include_str!("../shading/types.wgsl")).unwrap();
+        let source = crate::gpu::shaders::ShaderDesc::new("shading/scene_bindings.wgsl").compose().unwrap();
+        let module = naga::front::wgsl::parse_str(&source).unwrap();
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).unwrap();
         let wgsl_layout = |name: &str| -> (u32, Vec<(String, u32)>) {
@@ -515,6 +530,8 @@ mod tests {
         );
         check!("Light", GpuLight, [position, range, radiant, kind, direction, spot_scale, spot_offset]);
         check!("Decal", GpuDecal, [decal_from_group, material, layer, weight]);
+        check!("RayTriangle", crate::rays::RayTriangle, [v0, draw_offset, e1, triangle, e2]);
+        check!("RayInstance", crate::rays::RayInstance, [local_from_world, blas_root, first_draw, scene_instance]);
         check!(
             "FrameUniforms",
             FrameUniforms,
@@ -535,7 +552,9 @@ mod tests {
                 particle_volume,
                 particle_filter,
                 particle_texture_unscale,
-                particle_cascades
+                particle_cascades,
+                ray_options,
+                ray_settings
             ]
         );
     }

@@ -58,6 +58,17 @@ const SOURCES: &[(&str, &str)] = &[
     ("particles/lights.wgsl", include_str!("../particles/lights.wgsl")),
     ("shading/enumerate/particles_off.wgsl", include_str!("../shading/enumerate/particles_off.wgsl")),
     ("shading/enumerate/particles_grid.wgsl", include_str!("../shading/enumerate/particles_grid.wgsl")),
+    ("shading/triangle_surface.wgsl", include_str!("../shading/triangle_surface.wgsl")),
+    ("shading/depth_normal.wgsl", include_str!("../shading/depth_normal.wgsl")),
+    ("shading/sun_shadow.wgsl", include_str!("../shading/sun_shadow.wgsl")),
+    ("shading/sun_shadow_mask.wgsl", include_str!("../shading/sun_shadow_mask.wgsl")),
+    ("shading/reflections.wgsl", include_str!("../shading/reflections.wgsl")),
+    ("shading/reflections_off.wgsl", include_str!("../shading/reflections_off.wgsl")),
+    ("rays/ray_types.wgsl", include_str!("../rays/ray_types.wgsl")),
+    ("rays/trace.wgsl", include_str!("../rays/trace.wgsl")),
+    ("rays/trace_probe.wgsl", include_str!("../rays/trace_probe.wgsl")),
+    ("passes/ray_shadows.wgsl", include_str!("../passes/ray_shadows.wgsl")),
+    ("passes/shadow_filter.wgsl", include_str!("../passes/shadow_filter.wgsl")),
 ];
 
 /// A shader to build: an entry file and the values of its `$NAME` includes.
@@ -185,13 +196,16 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("particles/motion.wgsl"),
         ShaderDesc::new("particles/splat.wgsl"),
         ShaderDesc::new("particles/lights.wgsl"),
+        ShaderDesc::new("rays/trace_probe.wgsl"),
+        ShaderDesc::new("passes/ray_shadows.wgsl"),
+        ShaderDesc::new("passes/shadow_filter.wgsl"),
     ];
     use crate::pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind, ShadingMethods};
     for lights in LightMethod::ALL {
         for decals in DecalMethod::ALL {
             // `ParticleMethod::Bvh` composes as `Off`: its particles are lights.
-            for particles in [ParticleMethod::Off, ParticleMethod::Grid] {
-                let methods = ShadingMethods { lights, decals, particles };
+            for (particles, reflections) in [(ParticleMethod::Off, false), (ParticleMethod::Grid, false), (ParticleMethod::Grid, true)] {
+                let methods = ShadingMethods { lights, decals, particles, reflections };
                 if decals.works_in(PipelineKind::Visbuffer) {
                     shaders.push(crate::passes::visbuffer_shade::shader(methods));
                 }

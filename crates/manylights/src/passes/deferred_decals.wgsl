@@ -101,7 +101,7 @@ fn deferred_decal_fragment(in: DecalVertex) -> DecalTexel {
         discard;
     }
     let pixel = in.clip_position.xy;
-    let relative_position = gbuffer_relative_position(pixel, z);
+    let relative_position = depth_relative_position(pixel, z);
     var s: ShadingInput;
     s.position = relative_position + frame.world_from_view[3].xyz;
     s.normal = gbuffer_decode_normal(textureLoad(surface_normals, texel, 0));

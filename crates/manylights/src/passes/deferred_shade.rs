@@ -3,6 +3,7 @@
 
 use crate::accel::VolumeStructure;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::passes::ray_shadows::{self, RayShadows};
 use crate::passes::visbuffer_shade::HDR_FORMAT;
 use crate::pipelines::{FrameInputs, ShadingMethods};
 use crate::Result;
@@ -18,12 +19,14 @@ pub struct DeferredShade {
 }
 
 impl DeferredShade {
-    /// The light and decal structures are bound as groups 2 and 3, whichever the methods.
+    /// The light and decal structures are bound as groups 2 and 3, whichever the methods; `shadows`
+    /// are the sun's ray-traced shadows, if the frame has them.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         methods: ShadingMethods,
         (lights, decals): (&VolumeStructure, &VolumeStructure),
+        shadows: Option<&RayShadows>,
         (depth, gbuffer): (&wgpu::TextureView, &[wgpu::TextureView; 4]),
         hdr: &wgpu::TextureView,
     ) -> Result<Self> {
@@ -42,13 +45,17 @@ impl DeferredShade {
                 texture(3, float), // roughness, metallic
                 texture(4, float), // emission
                 bindings::storage_texture_write(5, compute, HDR_FORMAT),
+                ray_shadows::shading_mask_entry(6, compute), // sun visibility
             ],
         );
         let layouts = [&scene.bind_group_layout, &layout, &lights.bind_group_layout, &decals.bind_group_layout];
-        let pipeline = bindings::compute_pipeline(device, "deferred_shade", &shader(methods), &layouts)?;
+        let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
+        let constants = [("SUN_SHADOW_MASK", has_mask)];
+        let pipeline = bindings::compute_pipeline_with_constants(device, "deferred_shade", &shader(methods), &layouts, &constants)?;
         let mut views = vec![wgpu::BindingResource::TextureView(depth)];
         views.extend(gbuffer.iter().map(wgpu::BindingResource::TextureView));
         views.push(wgpu::BindingResource::TextureView(hdr));
+        views.push(wgpu::BindingResource::TextureView(&mask));
         let bind_group = bindings::bind_group(device, "deferred_shade", &layout, views);
         Ok(Self { pipeline, bind_group })
     }

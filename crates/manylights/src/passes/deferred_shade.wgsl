@@ -1,10 +1,14 @@
 // Deferred lighting in compute: per pixel, the surface from the G-buffer (`passes/gbuffer.wgsl`) and
 // the depth, then decals and lights through the shading core, exactly as the visibility-buffer
-// resolve hands its surface over. Decal texture gradients come from the neighbouring pixels' rays
+// resolve hands its surface over, in the sun's ray-traced shadow and with ray-traced reflections when
+// the frame has them. Decal texture gradients come from the neighbouring pixels' rays
 // meeting the surface's tangent plane (`gbuffer_surface.wgsl`).
 #include "shading/shade.wgsl"
 #include "passes/gbuffer.wgsl"
 #include "passes/gbuffer_surface.wgsl"
+#include "shading/depth_normal.wgsl"
+#include "shading/sun_shadow_mask.wgsl"
+#include "$REFLECTIONS"
 
 @group(1) @binding(0) var depth: texture_depth_2d;
 @group(1) @binding(1) var albedo: texture_2d<f32>;
@@ -12,6 +16,8 @@
 @group(1) @binding(3) var roughness_metallic: texture_2d<f32>;
 @group(1) @binding(4) var emission: texture_2d<f32>;
 @group(1) @binding(5) var hdr_output: texture_storage_2d<rgba32float, write>;
+// The sun's visibility per pixel (`passes/ray_shadows.rs`), read when SUN_SHADOW_MASK is set.
+@group(1) @binding(6) var sun_shadow_mask: texture_2d<f32>;
 
 @compute @workgroup_size(8, 8)
 fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -26,7 +32,7 @@ fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {
         textureStore(hdr_output, id.xy, vec4<f32>(sky_radiance(ray.dir), 1.0));
         return;
     }
-    let relative_position = gbuffer_relative_position(pixel, z);
+    let relative_position = depth_relative_position(pixel, z);
 
     var s: ShadingInput;
     s.position = relative_position + frame.world_from_view[3].xyz;
@@ -40,5 +46,11 @@ fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     s.emissive = textureLoad(emission, id.xy, 0).rgb;
 
     let dp = gbuffer_position_gradients(pixel, relative_position, s.normal);
-    textureStore(hdr_output, id.xy, vec4<f32>(shade(apply_decals(s, dp)), 1.0));
+    let decaled = apply_decals(s, dp);
+    var radiance = shade(decaled, sun_visibility(id.xy));
+    if frame.ray_options.z > 0u {
+        let geometric_normal = depth_geometric_normal(depth, id.xy, relative_position, z);
+        radiance += reflected_radiance(decaled, geometric_normal, pixel_footprint(relative_position));
+    }
+    textureStore(hdr_output, id.xy, vec4<f32>(radiance, 1.0));
 }

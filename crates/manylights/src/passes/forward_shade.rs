@@ -9,6 +9,7 @@ use super::{visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
 use crate::accel::VolumeStructure;
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::passes::ray_shadows::{self, RayShadows};
 use crate::pipelines::{FrameInputs, ShadingMethods};
 use crate::Result;
 
@@ -20,26 +21,31 @@ pub fn shader(methods: ShadingMethods) -> ShaderDesc {
 pub struct ForwardShade {
     pipelines: HashMap<RasterState, wgpu::RenderPipeline>,
     sky: wgpu::RenderPipeline,
-    /// Group 1, empty: the shading core's light and decal bindings are groups 2 and 3 everywhere.
-    empty: wgpu::BindGroup,
+    /// Group 1: the sun's visibility mask (the shading core's light and decal bindings are groups 2
+    /// and 3 everywhere).
+    bind_group: wgpu::BindGroup,
 }
 
 impl ForwardShade {
-    /// The light and decal structures are bound as groups 2 and 3, as in the compute resolve.
+    /// The light and decal structures are bound as groups 2 and 3, as in the compute resolve;
+    /// `shadows` are the sun's ray-traced shadows, if the frame has them.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         methods: ShadingMethods,
         (lights, decals): (&VolumeStructure, &VolumeStructure),
+        shadows: Option<&RayShadows>,
     ) -> Result<Self> {
         let device = &ctx.device;
         let module = shaders::create_module(device, &shader(methods))?;
-        let empty = bindings::layout(device, "forward_shade (unused)", &[]);
+        let group = bindings::layout(device, "forward_shade", &[ray_shadows::shading_mask_entry(0, wgpu::ShaderStages::FRAGMENT)]);
         let layout = bindings::pipeline_layout(
             device,
             "forward_shade",
-            &[&scene.bind_group_layout, &empty, &lights.bind_group_layout, &decals.bind_group_layout],
+            &[&scene.bind_group_layout, &group, &lights.bind_group_layout, &decals.bind_group_layout],
         );
+        let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
+        let constants = [("SUN_SHADOW_MASK", has_mask)];
         // EQUAL against the prepass's depth: only the visible fragment of each pixel is shaded.
         let depth_equal = wgpu::DepthStencilState {
             format: DEPTH_FORMAT,
@@ -64,7 +70,7 @@ impl ForwardShade {
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
                     entry_point: Some(fragment_entry),
-                    compilation_options: Default::default(),
+                    compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
                     targets: &[Some(HDR_FORMAT.into())],
                 }),
                 multiview_mask: None,
@@ -78,8 +84,8 @@ impl ForwardShade {
             })
             .collect();
         let sky = pipeline("forward_sky", "forward_sky_vertex", "forward_sky", wgpu::PrimitiveState::default());
-        let empty = bindings::bind_group(device, "forward_shade (unused)", &empty, Vec::new());
-        Ok(Self { pipelines, sky, empty })
+        let bind_group = bindings::bind_group(device, "forward_shade", &group, vec![wgpu::BindingResource::TextureView(&mask)]);
+        Ok(Self { pipelines, sky, bind_group })
     }
 
     pub fn record(
@@ -107,7 +113,7 @@ impl ForwardShade {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_bind_group(1, &self.empty, &[]);
+        pass.set_bind_group(1, &self.bind_group, &[]);
         pass.set_bind_group(2, &inputs.lights.bind_group, &[]);
         pass.set_bind_group(3, &inputs.decals.bind_group, &[]);
         super::draw_scene(&mut pass, inputs.scene, inputs.eye, &self.pipelines);

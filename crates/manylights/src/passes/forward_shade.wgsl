@@ -1,13 +1,24 @@
 // Forward shading in the fragment stage, after the depth prepass (EQUAL depth test, so each pixel is
 // shaded once): the same shading core as the visibility-buffer resolve — material, decals, lights —
-// with the fragment stage's derivatives instead of analytic ones for texture and decal gradients.
+// with the fragment stage's derivatives instead of analytic ones for texture and decal gradients, in
+// the sun's ray-traced shadow and with ray-traced reflections when the frame has them.
 // A full-screen triangle at the cleared depth fills the sky.
 #include "shading/shade.wgsl"
 #include "shading/camera.wgsl"
 #include "passes/surface_raster.wgsl"
+#include "shading/sun_shadow_mask.wgsl"
+#include "$REFLECTIONS"
+
+// The sun's visibility per pixel (`passes/ray_shadows.rs`), read when SUN_SHADOW_MASK is set.
+@group(1) @binding(0) var sun_shadow_mask: texture_2d<f32>;
 
 fn forward_radiance(in: ForwardVertex, front_facing: bool, g: UvGradients, dp: PositionGradients) -> vec3<f32> {
-    return shade(apply_decals(fragment_surface(in, front_facing, g), dp));
+    let s = apply_decals(fragment_surface(in, front_facing, g), dp);
+    var radiance = shade(s, sun_visibility(vec2<u32>(in.clip_position.xy)));
+    if frame.ray_options.z > 0u {
+        radiance += reflected_radiance(s, fragment_geometric_normal(dp, s.view_dir), pixel_footprint(in.relative_position));
+    }
+    return radiance;
 }
 
 @fragment

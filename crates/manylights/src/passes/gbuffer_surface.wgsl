@@ -4,15 +4,6 @@
 #include "shading/camera.wgsl"
 #include "shading/decals.wgsl"
 
-// The point at `depth` (reverse Z) seen through pixel coordinates `pixel`, relative to the camera
-// like the camera rays.
-fn gbuffer_relative_position(pixel: vec2<f32>, depth: f32) -> vec3<f32> {
-    let ndc = vec2<f32>(pixel.x * frame.viewport.z * 2.0 - 1.0, 1.0 - pixel.y * frame.viewport.w * 2.0);
-    let view = frame.view_from_clip * vec4<f32>(ndc, depth, 1.0);
-    let world_from_view = mat3x3<f32>(frame.world_from_view[0].xyz, frame.world_from_view[1].xyz, frame.world_from_view[2].xyz);
-    return world_from_view * (view.xyz / view.w);
-}
-
 // Where a ray meets the plane through `point` with normal `n` (all camera-relative).
 fn ray_plane_point(ray: Ray, point: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let facing = dot(ray.dir, n);

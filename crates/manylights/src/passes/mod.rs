@@ -16,18 +16,22 @@ pub mod deferred_shade;
 pub mod depth_prepass;
 pub mod forward_shade;
 pub mod gbuffer_raster;
+pub mod ray_shadows;
+pub mod shadow_filter;
 pub mod tonemap;
 pub mod transparent_shade;
 pub mod visbuffer_raster;
 pub mod visbuffer_shade;
 
 /// A pass's shader that calls the shading core, composed with the WGSL modules of its methods
-/// (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION`, `$DECAL_ENUMERATION` and `$PARTICLE_LIGHTING`).
+/// (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION`, `$DECAL_ENUMERATION` and `$PARTICLE_LIGHTING`;
+/// the opaque surfaces' shading passes include `$REFLECTIONS`).
 pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods) -> ShaderDesc {
     ShaderDesc::new(entry)
         .with("LIGHT_ENUMERATION", methods.lights.enumeration_module())
         .with("DECAL_ENUMERATION", methods.decals.enumeration_module())
         .with("PARTICLE_LIGHTING", methods.particles.lighting_module())
+        .with("REFLECTIONS", if methods.reflections { "shading/reflections.wgsl" } else { "shading/reflections_off.wgsl" })
 }
 
 /// Workgroup edge of the 2D compute passes (`@workgroup_size(8, 8)` in their WGSL).

@@ -60,3 +60,10 @@ fn forward_alpha_covers(in: ForwardVertex, g: UvGradients) -> bool {
     let material = materials[draws[in.draw_index].material];
     return material_base_color(material, g).a >= material.alpha_cutoff;
 }
+
+// The unit geometric normal of the fragment's triangle, from its position derivatives, on the
+// viewer's side.
+fn fragment_geometric_normal(dp: PositionGradients, view_dir: vec3<f32>) -> vec3<f32> {
+    let n = normalize(cross(dp.ddx, dp.ddy));
+    return select(n, -n, dot(n, view_dir) < 0.0);
+}

@@ -2,6 +2,7 @@
 
 use crate::accel::VolumeStructure;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::passes::ray_shadows::{self, RayShadows};
 use crate::pipelines::{FrameInputs, ShadingMethods};
 use crate::Result;
 
@@ -19,15 +20,15 @@ pub struct VisbufferShade {
 }
 
 impl VisbufferShade {
-    /// The light and decal structures are bound as groups 2 and 3, whichever the methods.
+    /// The light and decal structures are bound as groups 2 and 3, whichever the methods; `shadows`
+    /// are the sun's ray-traced shadows, if the frame has them.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         methods: ShadingMethods,
         (lights, decals): (&VolumeStructure, &VolumeStructure),
-        visibility: &wgpu::TextureView,
-        depth: &wgpu::TextureView,
-        hdr: &wgpu::TextureView,
+        shadows: Option<&RayShadows>,
+        (visibility, depth, hdr): (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
     ) -> Result<Self> {
         let device = &ctx.device;
         let compute = wgpu::ShaderStages::COMPUTE;
@@ -39,10 +40,13 @@ impl VisbufferShade {
                 bindings::texture(0, compute, wgpu::TextureSampleType::Uint, wgpu::TextureViewDimension::D2), // visibility ids
                 bindings::storage_texture_write(1, compute, HDR_FORMAT),                                      // HDR output
                 bindings::texture(2, compute, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2), // depth
+                ray_shadows::shading_mask_entry(3, compute),                                                  // sun visibility
             ],
         );
         let layouts = [&scene.bind_group_layout, &layout, &lights.bind_group_layout, &decals.bind_group_layout];
-        let pipeline = bindings::compute_pipeline(device, "visbuffer_shade", &shader(methods), &layouts)?;
+        let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
+        let constants = [("SUN_SHADOW_MASK", has_mask)];
+        let pipeline = bindings::compute_pipeline_with_constants(device, "visbuffer_shade", &shader(methods), &layouts, &constants)?;
         let bind_group = bindings::bind_group(
             device,
             "visbuffer_shade",
@@ -51,6 +55,7 @@ impl VisbufferShade {
                 wgpu::BindingResource::TextureView(visibility),
                 wgpu::BindingResource::TextureView(hdr),
                 wgpu::BindingResource::TextureView(depth),
+                wgpu::BindingResource::TextureView(&mask),
             ],
         );
         Ok(Self { pipeline, bind_group })

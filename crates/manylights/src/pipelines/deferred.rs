@@ -20,17 +20,17 @@
 //!             tonemap ─▶ ldr (Rgba8Unorm, sRGB-encoded)
 //! ```
 
-use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
     deferred_decals::DeferredDecals,
     deferred_shade::DeferredShade,
     gbuffer_raster::{GBufferRaster, GBUFFER_FORMATS},
+    ray_shadows::RayShadows,
     tonemap::Tonemap,
     transparent_shade::TransparentShade,
 };
 use crate::{
-    pipelines::{DecalMethod, FrameInputs, FrameTargets, ShadingMethods},
+    pipelines::{DecalMethod, FrameInputs, FrameSetup, FrameTargets},
     Result,
 };
 
@@ -42,6 +42,8 @@ pub struct DeferredPipeline {
     raster: GBufferRaster,
     /// With deferred decals: the pass, the G-buffer's normals and the copy of them the pass reads.
     decals: Option<(DeferredDecals, wgpu::Texture, wgpu::Texture)>,
+    /// Present when the sun casts ray-traced shadows.
+    shadows: Option<RayShadows>,
     shade: DeferredShade,
     /// Present when the scene has transparent draws.
     transparent: Option<TransparentShade>,
@@ -49,14 +51,8 @@ pub struct DeferredPipeline {
 }
 
 impl DeferredPipeline {
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        methods: ShadingMethods,
-        structures: (&VolumeStructure, &VolumeStructure),
-        width: u32,
-        height: u32,
-    ) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, setup: FrameSetup) -> Result<Self> {
+        let FrameSetup { methods, shadows, structures, size: (width, height) } = setup;
         let targets = FrameTargets::new(&ctx.device, width, height);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         use wgpu::TextureUsages as U;
@@ -81,10 +77,12 @@ impl DeferredPipeline {
             }
             _ => None,
         };
+        let shadows = shadows.map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
         Ok(Self {
             raster: GBufferRaster::new(ctx, scene)?,
             decals,
-            shade: DeferredShade::new(ctx, scene, methods, structures, (&depth_view, &gbuffer), &hdr_view)?,
+            shade: DeferredShade::new(ctx, scene, methods, structures, shadows.as_ref(), (&depth_view, &gbuffer), &hdr_view)?,
+            shadows,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
             targets,
@@ -101,6 +99,9 @@ impl DeferredPipeline {
         if let Some((decals, normals, copy)) = &self.decals {
             encoder.copy_texture_to_texture(normals.as_image_copy(), copy.as_image_copy(), normals.size());
             decals.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.decals, &self.gbuffer, &self.depth_view);
+        }
+        if let Some(shadows) = &self.shadows {
+            shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (width, height));
         }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
         if let Some(transparent) = &self.transparent {

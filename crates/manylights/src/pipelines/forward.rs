@@ -9,6 +9,9 @@
 //! GpuScene ─▶ depth_prepass ─▶ depth (cleared to 0)
 //!                                   │
 //!                                   ▼
+//!             ray_shadows (+ shadow_filter), with sun shadows ─▶ sun visibility (R32Float)
+//!                                   │
+//!                                   ▼
 //!             forward_shade (EQUAL depth; material, decals, lights; then sky) ─▶ hdr (Rgba32Float)
 //!                                   │
 //!                                   ▼
@@ -18,11 +21,13 @@
 //!             tonemap ─▶ ldr (Rgba8Unorm, sRGB-encoded)
 //! ```
 
-use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
-use crate::passes::{depth_prepass::DepthPrepass, forward_shade::ForwardShade, tonemap::Tonemap, transparent_shade::TransparentShade};
+use crate::passes::{
+    depth_prepass::DepthPrepass, forward_shade::ForwardShade, ray_shadows::RayShadows, tonemap::Tonemap,
+    transparent_shade::TransparentShade,
+};
 use crate::{
-    pipelines::{FrameInputs, FrameTargets, ShadingMethods},
+    pipelines::{FrameInputs, FrameSetup, FrameTargets},
     Result,
 };
 
@@ -31,6 +36,8 @@ pub struct ForwardPipeline {
     depth_view: wgpu::TextureView,
     hdr_view: wgpu::TextureView,
     prepass: DepthPrepass,
+    /// Present when the sun casts ray-traced shadows.
+    shadows: Option<RayShadows>,
     shade: ForwardShade,
     /// Present when the scene has transparent draws.
     transparent: Option<TransparentShade>,
@@ -38,20 +45,16 @@ pub struct ForwardPipeline {
 }
 
 impl ForwardPipeline {
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        methods: ShadingMethods,
-        structures: (&VolumeStructure, &VolumeStructure),
-        width: u32,
-        height: u32,
-    ) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, setup: FrameSetup) -> Result<Self> {
+        let FrameSetup { methods, shadows, structures, size: (width, height) } = setup;
         let targets = FrameTargets::new(&ctx.device, width, height);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let (depth_view, hdr_view, ldr_view) = (view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
+        let shadows = shadows.map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
         Ok(Self {
             prepass: DepthPrepass::new(ctx, scene)?,
-            shade: ForwardShade::new(ctx, scene, methods, structures)?,
+            shade: ForwardShade::new(ctx, scene, methods, structures, shadows.as_ref())?,
+            shadows,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
             targets,
@@ -63,6 +66,9 @@ impl ForwardPipeline {
     /// Records one frame. The frame uniforms must already be written.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         self.prepass.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.depth_view);
+        if let Some(shadows) = &self.shadows {
+            shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (self.targets.width, self.targets.height));
+        }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));

@@ -15,6 +15,7 @@ pub use visbuffer::VisbufferPipeline;
 use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{tonemap::LDR_FORMAT, visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
+use crate::rays::SunShadows;
 use crate::Result;
 
 /// Which frame graph renders.
@@ -49,18 +50,24 @@ pub enum FramePipeline {
 }
 
 impl FramePipeline {
+    /// `shadows` is how the sun's shadows are traced (`passes::ray_shadows`), in every pipeline.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         kind: PipelineKind,
-        methods: ShadingMethods,
+        (methods, shadows): (ShadingMethods, SunShadows),
         structures: (&VolumeStructure, &VolumeStructure),
         (width, height): (u32, u32),
     ) -> Result<Self> {
+        let shadows = match shadows {
+            SunShadows::Off => None,
+            mode => Some(mode),
+        };
+        let setup = FrameSetup { methods, shadows, structures, size: (width, height) };
         Ok(match kind {
-            PipelineKind::Visbuffer => Self::Visbuffer(Box::new(VisbufferPipeline::new(ctx, scene, methods, structures, width, height)?)),
-            PipelineKind::Deferred => Self::Deferred(Box::new(DeferredPipeline::new(ctx, scene, methods, structures, width, height)?)),
-            PipelineKind::Forward => Self::Forward(Box::new(ForwardPipeline::new(ctx, scene, methods, structures, width, height)?)),
+            PipelineKind::Visbuffer => Self::Visbuffer(Box::new(VisbufferPipeline::new(ctx, scene, setup)?)),
+            PipelineKind::Deferred => Self::Deferred(Box::new(DeferredPipeline::new(ctx, scene, setup)?)),
+            PipelineKind::Forward => Self::Forward(Box::new(ForwardPipeline::new(ctx, scene, setup)?)),
         })
     }
 
@@ -80,6 +87,16 @@ impl FramePipeline {
             Self::Forward(p) => &p.targets,
         }
     }
+}
+
+/// What every pipeline is built for: the shading core's methods, how the sun's shadows are traced
+/// (`None`: not at all), the light and decal structures, the image size.
+#[derive(Clone, Copy)]
+pub struct FrameSetup<'a> {
+    pub methods: ShadingMethods,
+    pub shadows: Option<SunShadows>,
+    pub structures: (&'a VolumeStructure, &'a VolumeStructure),
+    pub size: (u32, u32),
 }
 
 /// What a frame reads besides its pipeline's own images: the scene, the light and decal structures
@@ -262,10 +279,12 @@ impl ParticleMethod {
     }
 }
 
-/// The methods a shading core is composed with: one per kind of light source and for decals.
+/// The methods a shading core is composed with: one per kind of light source and for decals, and
+/// whether glossy surfaces trace reflections (`shading/reflections.wgsl`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub struct ShadingMethods {
     pub lights: LightMethod,
     pub decals: DecalMethod,
     pub particles: ParticleMethod,
+    pub reflections: bool,
 }

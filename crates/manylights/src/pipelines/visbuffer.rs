@@ -7,7 +7,10 @@
 //! GpuScene ─▶ visbuffer_raster ─▶ visibility (R32Uint, not cleared) + depth (cleared to 0)
 //!                                   │
 //!                                   ▼
-//!             visbuffer_shade (material, decals, lights) ─▶ hdr (Rgba32Float)
+//!             ray_shadows (+ shadow_filter), with sun shadows ─▶ sun visibility (R32Float)
+//!                                   │
+//!                                   ▼
+//!             visbuffer_shade (material, decals, lights; reflections) ─▶ hdr (Rgba32Float)
 //!                                   │
 //!                                   ▼
 //!             transparent_shade (BLEND draws, back to front, fragments) ─▶ blended over hdr
@@ -16,16 +19,16 @@
 //!             tonemap ─▶ ldr (Rgba8Unorm, sRGB-encoded)
 //! ```
 
-use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
+    ray_shadows::RayShadows,
     tonemap::Tonemap,
     transparent_shade::TransparentShade,
     visbuffer_raster::{VisbufferRaster, VISIBILITY_FORMAT},
     visbuffer_shade::VisbufferShade,
 };
 use crate::{
-    pipelines::{FrameInputs, FrameTargets, ShadingMethods},
+    pipelines::{FrameInputs, FrameSetup, FrameTargets},
     Result,
 };
 
@@ -35,6 +38,8 @@ pub struct VisbufferPipeline {
     depth_view: wgpu::TextureView,
     hdr_view: wgpu::TextureView,
     raster: VisbufferRaster,
+    /// Present when the sun casts ray-traced shadows.
+    shadows: Option<RayShadows>,
     shade: VisbufferShade,
     /// Present when the scene has transparent draws.
     transparent: Option<TransparentShade>,
@@ -42,23 +47,19 @@ pub struct VisbufferPipeline {
 }
 
 impl VisbufferPipeline {
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        methods: ShadingMethods,
-        structures: (&VolumeStructure, &VolumeStructure),
-        width: u32,
-        height: u32,
-    ) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, setup: FrameSetup) -> Result<Self> {
+        let FrameSetup { methods, shadows, structures, size: (width, height) } = setup;
         let targets = FrameTargets::new(&ctx.device, width, height);
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
         let visibility = super::target(&ctx.device, "visibility", width, height, VISIBILITY_FORMAT, usage);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let (visibility_view, depth_view, hdr_view, ldr_view) =
             (view(&visibility), view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
+        let shadows = shadows.map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
         Ok(Self {
             raster: VisbufferRaster::new(ctx, scene)?,
-            shade: VisbufferShade::new(ctx, scene, methods, structures, &visibility_view, &depth_view, &hdr_view)?,
+            shade: VisbufferShade::new(ctx, scene, methods, structures, shadows.as_ref(), (&visibility_view, &depth_view, &hdr_view))?,
+            shadows,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
             targets,
@@ -72,6 +73,9 @@ impl VisbufferPipeline {
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         let (width, height) = (self.targets.width, self.targets.height);
         self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.visibility_view, &self.depth_view);
+        if let Some(shadows) = &self.shadows {
+            shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (width, height));
+        }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));

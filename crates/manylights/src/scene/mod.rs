@@ -361,6 +361,8 @@ pub struct Scene {
     pub exposure: f32,
     /// Moving particle lights (`particles/`), if any.
     pub particles: Option<crate::particles::ParticleSettings>,
+    /// The scene file's choice of ray-traced effects, for the renderer's caller to apply.
+    pub ray_hints: crate::rays::RayHints,
 }
 
 impl Default for Scene {
@@ -379,6 +381,7 @@ impl Default for Scene {
             ambient: Vec3::splat(0.03),
             exposure: 1.0,
             particles: None,
+            ray_hints: crate::rays::RayHints::default(),
         }
     }
 }

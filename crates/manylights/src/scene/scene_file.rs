@@ -81,6 +81,13 @@
 //! cascades = 4            # camera-centred clipmap cascades (0: one grid over the scene), likewise
 //! cascade_resolution = 64 # voxels per axis of each cascade, likewise
 //!
+//! [rays]                  # ray-traced effects (rays::RaySettings), unless the command line says
+//! shadows = "soft"        # the sun's: "off", "hard" (one ray per pixel) or "soft"; default "off"
+//! sun_angle = 0.53        # the sun's angular diameter in degrees (soft shadows); default 0.53
+//! shadow_rays = 4         # rays per pixel towards the sun's disc (soft shadows), 1 to 64; default 4
+//! reflections = 1         # reflection bounces on glossy surfaces, 0 (none) to 8; default 0
+//! reflection_roughness = 0.3      # surfaces below this perceptual roughness reflect; default 0.3
+//!
 //! [animate]               # group all lights and decals into spinning groups (generators::group_for_animation)
 //! groups = 16             # default 16
 //! seed = 1                # default 1
@@ -100,6 +107,7 @@ use super::{
     validate_decal, validate_light, Camera, Decal, Light, LightKind, Material, Scene, Sun, Texture, TextureRef, Wrap, DECAL_LAYERS,
     DEFAULT_LIGHT_CUTOFF,
 };
+use crate::rays::{RayHints, SunShadows};
 use crate::{Error, Result};
 
 /// Loads a TOML scene file and the glTF it references.
@@ -139,7 +147,51 @@ struct SceneFile {
     #[serde(default)]
     large_decals: Vec<LargeDecalsSpec>,
     particles: Option<ParticlesSpec>,
+    rays: Option<RaysSpec>,
     animate: Option<AnimateSpec>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RaysSpec {
+    shadows: Option<String>,
+    sun_angle: Option<f32>,
+    shadow_rays: Option<u32>,
+    reflections: Option<u32>,
+    reflection_roughness: Option<f32>,
+}
+
+impl RaysSpec {
+    fn to_hints(&self) -> Result<RayHints, String> {
+        let sun_shadows = match self.shadows.as_deref() {
+            None => None,
+            Some(name) => Some(
+                SunShadows::ALL
+                    .into_iter()
+                    .find(|s| s.name() == name)
+                    .ok_or_else(|| format!("shadows {name:?}: use \"off\", \"hard\" or \"soft\""))?,
+            ),
+        };
+        let hints = RayHints {
+            sun_shadows,
+            sun_angle_degrees: self.sun_angle,
+            shadow_rays: self.shadow_rays,
+            reflection_bounces: self.reflections,
+            reflection_roughness: self.reflection_roughness,
+        };
+        // The command line's flag names mean nothing in a scene file: say which key is wrong.
+        hints.settings().validate().map_err(|e| {
+            let message = inner_message(e);
+            let keys = [
+                ("--sun-angle", "sun_angle"),
+                ("--shadow-rays", "shadow_rays"),
+                ("--bounces", "reflections"),
+                ("--reflection-roughness", "reflection_roughness"),
+            ];
+            keys.iter().fold(message, |m, (flag, key)| m.replace(flag, key))
+        })?;
+        Ok(hints)
+    }
 }
 
 #[derive(Debug, Deserialize)]
@@ -348,6 +400,9 @@ impl SceneFile {
         }
         if let Some(particles) = &self.particles {
             particles.apply(scene).map_err(|m| format!("particles: {m}"))?;
+        }
+        if let Some(rays) = &self.rays {
+            scene.ray_hints = rays.to_hints().map_err(|m| format!("rays: {m}"))?;
         }
         if let Some(animate) = &self.animate {
             let groups = animate.groups.unwrap_or(generators::DEFAULT_ANIMATION_GROUPS);

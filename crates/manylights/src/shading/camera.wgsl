@@ -18,3 +18,18 @@ fn camera_ray(pixel: vec2<f32>) -> Ray {
     let world_from_view = mat3x3<f32>(frame.world_from_view[0].xyz, frame.world_from_view[1].xyz, frame.world_from_view[2].xyz);
     return Ray(world_from_view * origin, normalize(world_from_view * (mid.xyz / mid.w - origin)));
 }
+
+// The point at `depth` (reverse Z) seen through pixel coordinates `pixel`, relative to the camera
+// like the camera rays: how passes that read a depth buffer rebuild positions.
+fn depth_relative_position(pixel: vec2<f32>, depth: f32) -> vec3<f32> {
+    let ndc = vec2<f32>(pixel.x * frame.viewport.z * 2.0 - 1.0, 1.0 - pixel.y * frame.viewport.w * 2.0);
+    let view = frame.view_from_clip * vec4<f32>(ndc, depth, 1.0);
+    let world_from_view = mat3x3<f32>(frame.world_from_view[0].xyz, frame.world_from_view[1].xyz, frame.world_from_view[2].xyz);
+    return world_from_view * (view.xyz / view.w);
+}
+
+// The width of a pixel's cone at a point (relative to the camera): how far apart neighbouring
+// pixels' rays are there. Rays leaving the surface start their cones with it.
+fn pixel_footprint(relative_position: vec3<f32>) -> f32 {
+    return frame.ray_settings.w + length(relative_position) * frame.ray_settings.z;
+}

@@ -11,13 +11,6 @@
 #include "shading/material.wgsl"
 #include "accel/bvh_types.wgsl"
 
-// World-space change of the shading position from one pixel to the next in x and y: decal textures
-// are sampled with gradients from it (compute has no implicit derivatives).
-struct PositionGradients {
-    ddx: vec3<f32>,
-    ddy: vec3<f32>,
-}
-
 const DECAL_LAYERS: u32 = 4u;
 // Decals fade out as the surface turns edge-on to the projector: fully applied from this cosine up.
 const DECAL_FULL_FACING: f32 = 0.25;

@@ -1,6 +1,7 @@
 // Group 0: the GPU scene and the frame, shared by every pass (raster and compute).
 // Keep in sync with `gpu/scene.rs` (`GpuScene::bind_group_layout`), binding for binding.
 #include "shading/types.wgsl"
+#include "rays/ray_types.wgsl"
 
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
 @group(0) @binding(1) var<storage, read> vertices: array<Vertex>;
@@ -27,3 +28,8 @@
 @group(0) @binding(16) var particle_color_grid: texture_3d<f32>;
 @group(0) @binding(17) var particle_direction_grid: texture_3d<f32>;
 @group(0) @binding(18) var particle_sampler: sampler;
+// The scene's ray-tracing hierarchy (`rays/`): nodes (TLAS then BLASes), triangles in leaf order and
+// mesh instances. Without ray-traced effects, one empty node that no ray enters.
+@group(0) @binding(19) var<storage, read> ray_nodes: array<BvhNode>;
+@group(0) @binding(20) var<storage, read> ray_triangles: array<RayTriangle>;
+@group(0) @binding(21) var<storage, read> ray_instances: array<RayInstance>;

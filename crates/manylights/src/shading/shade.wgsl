@@ -10,14 +10,15 @@
 #include "$DECAL_ENUMERATION"
 #include "$PARTICLE_LIGHTING"
 
-// Outgoing radiance towards the viewer.
-fn shade(s: ShadingInput) -> vec3<f32> {
+// Outgoing radiance towards the viewer; `sun_visibility` is the fraction of the sun the point sees
+// (`shading/sun_shadow*.wgsl`).
+fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
     // Ambient stands in for indirect light: diffuse only, with the metal's tint kept as a crude
     // specular term so metals do not turn black.
     let ambient_albedo = mix(s.base_color, s.base_color * 0.5, s.metallic);
     var radiance = s.emissive + frame.ambient.rgb * ambient_albedo;
-    if frame.sun_direction.w > 0.0 {
-        radiance += frame.sun_radiance.rgb * brdf_times_cosine(s, -frame.sun_direction.xyz);
+    if frame.sun_direction.w > 0.0 && sun_visibility > 0.0 {
+        radiance += frame.sun_radiance.rgb * sun_visibility * brdf_times_cosine(s, -frame.sun_direction.xyz);
     }
     radiance += shade_local_lights(s);
     radiance += shade_particle_lights(s);

@@ -14,3 +14,11 @@ struct ShadingInput {
     roughness: f32,
     emissive: vec3<f32>,
 }
+
+// World-space change of the shading position from one pixel to the next in x and y (or, at a ray's
+// hit, across its cone): decal textures are sampled with gradients from it (compute has no implicit
+// derivatives).
+struct PositionGradients {
+    ddx: vec3<f32>,
+    ddy: vec3<f32>,
+}

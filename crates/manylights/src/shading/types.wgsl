@@ -119,7 +119,19 @@ struct FrameUniforms {
     particle_texture_unscale: vec4<f32>,
     // Per cascade, finest first: xyz its corner, w its voxel edge.
     particle_cascades: array<vec4<f32>, 8>,
+    // Ray-traced effects (`rays/`): x the sun's shadows (RAY_SHADOWS_*), y rays per pixel towards the
+    // sun's disc (soft shadows), z reflection bounces (0: none).
+    ray_options: vec4<u32>,
+    // x: the sun's angular radius (radians); y: surfaces below this perceptual roughness reflect;
+    // z: the angle between neighbouring pixels' rays (perspective); w: a pixel's width at the camera
+    // (orthographic). A pixel's footprint at distance d is w + d · z.
+    ray_settings: vec4<f32>,
 }
+
+// Keep in sync with `SunShadows` in `rays/mod.rs`.
+const RAY_SHADOWS_OFF: u32 = 0u;
+const RAY_SHADOWS_HARD: u32 = 1u;
+const RAY_SHADOWS_SOFT: u32 = 2u;
 
 // Keep in sync with `ParticleFilter` in `particles/mod.rs`.
 const PARTICLE_FILTER_NEAREST: u32 = 0u;

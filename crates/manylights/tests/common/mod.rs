@@ -10,6 +10,7 @@ use manylights::{
     gpu::GpuContext,
     particles::ParticleFilter,
     pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
+    rays::RaySettings,
     renderer::{Image, Renderer},
     scene::{Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Vertex},
 };
@@ -36,6 +37,7 @@ pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfi
         tonemapper: Tonemapper::Aces,
         max_texture_size: 256,
         anisotropy: 1,
+        rays: RaySettings::default(),
     }
 }
 

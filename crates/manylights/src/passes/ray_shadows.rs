@@ -1,0 +1,120 @@
+//! Ray-traced sun shadows from the depth buffer, before shading (`ray_shadows.wgsl`), and for soft
+//! shadows their spatial filter (`shadow_filter.rs`). The shading passes read the resulting mask
+//! (`shading/sun_shadow_mask.wgsl`); every pipeline records this after its depth is written.
+
+use super::shadow_filter::ShadowFilter;
+use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::rays::SunShadows;
+use crate::Result;
+
+/// The sun's visibility per pixel, 0 to 1.
+pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+
+pub struct RayShadows {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    /// Soft shadows only: smooths `traced` into the mask the shading reads.
+    filter: Option<ShadowFilter>,
+    /// What shading reads: the filter's output, or the traced mask itself.
+    mask_view: wgpu::TextureView,
+}
+
+impl RayShadows {
+    /// The passes for `mode` (not `Off`) over `depth`, with their masks.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        mode: SunShadows,
+        depth: &wgpu::TextureView,
+        (width, height): (u32, u32),
+    ) -> Result<Self> {
+        let device = &ctx.device;
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let layout = bindings::layout(
+            device,
+            "ray_shadows",
+            &[
+                bindings::texture(0, compute, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2), // depth
+                bindings::storage_texture_write(1, compute, MASK_FORMAT),                                      // sun visibility
+            ],
+        );
+        let pipeline = bindings::compute_pipeline(
+            device,
+            "ray_shadows",
+            &ShaderDesc::new("passes/ray_shadows.wgsl"),
+            &[&scene.bind_group_layout, &layout],
+        )?;
+        let traced = mask(device, "sun visibility (traced)", width, height);
+        let traced_view = traced.create_view(&Default::default());
+        let bind_group = bindings::bind_group(
+            device,
+            "ray_shadows",
+            &layout,
+            vec![wgpu::BindingResource::TextureView(depth), wgpu::BindingResource::TextureView(&traced_view)],
+        );
+        let (filter, mask_view) = match mode {
+            SunShadows::Soft => {
+                let filtered = mask(device, "sun visibility (filtered)", width, height);
+                let filtered_view = filtered.create_view(&Default::default());
+                (Some(ShadowFilter::new(ctx, scene, depth, &traced_view, &filtered_view)?), filtered_view)
+            }
+            _ => (None, traced_view),
+        };
+        Ok(Self { pipeline, bind_group, filter, mask_view })
+    }
+
+    /// The mask the shading passes read.
+    pub fn mask_view(&self) -> &wgpu::TextureView {
+        &self.mask_view
+    }
+
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        mut timer: Option<&mut GpuTimer>,
+        scene: &GpuScene,
+        (width, height): (u32, u32),
+    ) {
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("ray_shadows"),
+                timestamp_writes: timer.as_deref_mut().map(|t| t.compute_pass("ray_shadows")),
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &scene.bind_group, &[]);
+            pass.set_bind_group(1, &self.bind_group, &[]);
+            let (x, y) = super::dispatch_size(width, height);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        if let Some(filter) = &self.filter {
+            filter.record(encoder, timer, scene, (width, height));
+        }
+    }
+}
+
+/// The shading passes' binding of the mask and the value of their `SUN_SHADOW_MASK` constant: the
+/// shadow passes' mask, or — without sun shadows — a 1×1 stand-in the shader never reads.
+pub fn shading_mask_binding(device: &wgpu::Device, shadows: Option<&RayShadows>) -> (wgpu::TextureView, f64) {
+    match shadows {
+        Some(shadows) => (shadows.mask_view().clone(), 1.0),
+        None => (mask(device, "no sun shadows", 1, 1).create_view(&Default::default()), 0.0),
+    }
+}
+
+/// The layout entry of the mask in a shading pass's group.
+pub fn shading_mask_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    bindings::texture(binding, visibility, wgpu::TextureSampleType::Float { filterable: false }, wgpu::TextureViewDimension::D2)
+}
+
+fn mask(device: &wgpu::Device, label: &str, width: u32, height: u32) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: MASK_FORMAT,
+        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
+}

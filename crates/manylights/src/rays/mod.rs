@@ -1,0 +1,424 @@
+//! Ray tracing against the scene's triangles, for the hybrid passes (PowerVR's "rays from the
+//! G-buffer"): sun shadows (`passes/ray_shadows.rs`) and reflections shaded by the shading core at
+//! their hit points (`shading/reflections.wgsl`).
+//!
+//! No GPU here has ray queries, so the hierarchy is our own, in the node layout of the volume
+//! structures (`accel/bvh.rs`): a bottom level (BLAS) per mesh over its triangles in mesh space,
+//! built once on the CPU with the binned SAH builder, and a top level (TLAS) over the scene's mesh
+//! instances, one instance per leaf, each with the inverse of its affine transform, so a mesh placed
+//! many times is stored once. `trace.wgsl` walks both levels without a stack, as the point query does
+//! (`entry` into a node whose box the ray meets, `skip` past it otherwise), for the closest hit or any
+//! hit; alpha-masked triangles are tested against their material's alpha at the hit.
+//!
+//! Triangles are stored in leaf order with one vertex and two edges (Möller–Trumbore needs nothing
+//! else), so a leaf's triangles are one contiguous read; leaves and top-level leaves name their
+//! triangles and instances directly, without an index array. Alpha-blended (glTF `BLEND`)
+//! primitives are left out: rays see opaque and alpha-masked surfaces.
+
+use glam::{Affine3A, Vec3};
+
+use crate::{
+    accel::{Bvh, BvhNode},
+    scene::{Aabb, AlphaMode, Scene},
+    Error, Result,
+};
+
+/// How the sun's shadows are made. Keep the discriminants in sync with `RAY_SHADOWS_*` in
+/// `shading/types.wgsl`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SunShadows {
+    /// The sun lights every surface facing it.
+    #[default]
+    Off = 0,
+    /// One ray per pixel towards the sun's centre (`passes/ray_shadows.rs`).
+    Hard = 1,
+    /// Rays to points of the sun's disc, jittered per pixel, then a depth-aware spatial filter
+    /// (`passes/shadow_filter.rs`): penumbrae from the sun's angular size.
+    Soft = 2,
+}
+
+impl SunShadows {
+    pub const ALL: [SunShadows; 3] = [SunShadows::Off, SunShadows::Hard, SunShadows::Soft];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SunShadows::Off => "off",
+            SunShadows::Hard => "hard",
+            SunShadows::Soft => "soft",
+        }
+    }
+}
+
+/// Most rays per pixel towards the sun's disc, and most reflection bounces.
+pub const MAX_SHADOW_RAYS: u32 = 64;
+pub const MAX_REFLECTION_BOUNCES: u32 = 8;
+
+/// The ray-traced effects a frame renders, and their budgets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RaySettings {
+    pub sun_shadows: SunShadows,
+    /// The sun's angular diameter in degrees (the real sun's is about 0.53): the penumbrae of soft
+    /// shadows.
+    pub sun_angle_degrees: f32,
+    /// Rays per pixel towards the sun's disc with soft shadows, 1 to [`MAX_SHADOW_RAYS`].
+    pub shadow_rays: u32,
+    /// Reflection bounces traced from glossy surfaces, 0 (no reflections) to
+    /// [`MAX_REFLECTION_BOUNCES`]: each hit is shaded by the shading core and, if glossy itself,
+    /// reflects again.
+    pub reflection_bounces: u32,
+    /// Surfaces whose perceptual roughness is below this reflect (fading out over the last quarter).
+    pub reflection_roughness: f32,
+}
+
+impl Default for RaySettings {
+    fn default() -> Self {
+        Self { sun_shadows: SunShadows::Off, sun_angle_degrees: 0.53, shadow_rays: 4, reflection_bounces: 0, reflection_roughness: 0.3 }
+    }
+}
+
+/// A scene file's choices of ray-traced effects (`[rays]`), each taken unless the caller (the command
+/// line) makes its own.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RayHints {
+    pub sun_shadows: Option<SunShadows>,
+    pub sun_angle_degrees: Option<f32>,
+    pub shadow_rays: Option<u32>,
+    pub reflection_bounces: Option<u32>,
+    pub reflection_roughness: Option<f32>,
+}
+
+impl RayHints {
+    /// The hints over the defaults.
+    pub fn settings(&self) -> RaySettings {
+        let defaults = RaySettings::default();
+        RaySettings {
+            sun_shadows: self.sun_shadows.unwrap_or(defaults.sun_shadows),
+            sun_angle_degrees: self.sun_angle_degrees.unwrap_or(defaults.sun_angle_degrees),
+            shadow_rays: self.shadow_rays.unwrap_or(defaults.shadow_rays),
+            reflection_bounces: self.reflection_bounces.unwrap_or(defaults.reflection_bounces),
+            reflection_roughness: self.reflection_roughness.unwrap_or(defaults.reflection_roughness),
+        }
+    }
+}
+
+impl RaySettings {
+    /// Whether any effect traces rays, so the scene needs its ray hierarchy.
+    pub fn traces_rays(&self) -> bool {
+        self.sun_shadows != SunShadows::Off || self.reflection_bounces > 0
+    }
+
+    /// Checks every setting; messages name the command-line flag.
+    pub fn validate(&self) -> Result<()> {
+        let invalid = |m: String| Err(Error::InvalidConfig(m));
+        if !(self.sun_angle_degrees.is_finite() && (0.0..=90.0).contains(&self.sun_angle_degrees)) {
+            return invalid(format!("sun angle {}° must be between 0 and 90 degrees (--sun-angle)", self.sun_angle_degrees));
+        }
+        if !(1..=MAX_SHADOW_RAYS).contains(&self.shadow_rays) {
+            return invalid(format!("{} shadow rays per pixel: give 1 to {MAX_SHADOW_RAYS} (--shadow-rays)", self.shadow_rays));
+        }
+        if self.reflection_bounces > MAX_REFLECTION_BOUNCES {
+            return invalid(format!(
+                "{} reflection bounces: give 0 (no reflections) to {MAX_REFLECTION_BOUNCES} (--bounces)",
+                self.reflection_bounces
+            ));
+        }
+        if !(self.reflection_roughness.is_finite() && self.reflection_roughness > 0.0 && self.reflection_roughness <= 1.0) {
+            return invalid(format!(
+                "reflection roughness threshold {} must be above 0 and at most 1 (--reflection-roughness)",
+                self.reflection_roughness
+            ));
+        }
+        Ok(())
+    }
+
+    /// The frame uniforms' `ray_options` and `ray_settings` (`shading/types.wgsl`), for a camera
+    /// rendering `height` pixel rows.
+    pub fn uniforms(&self, camera: &crate::scene::Camera, height: u32) -> ([u32; 4], [f32; 4]) {
+        // A pixel's cone: its width at the camera (orthographic) and its spread angle (perspective).
+        let (spread, width) = match camera.projection {
+            crate::scene::Projection::Perspective { yfov, .. } => (2.0 * (yfov * 0.5).tan() / height as f32, 0.0),
+            crate::scene::Projection::Orthographic { ymag, .. } => (0.0, 2.0 * ymag / height as f32),
+        };
+        let options = [self.sun_shadows as u32, self.shadow_rays, self.reflection_bounces, 0];
+        (options, [(self.sun_angle_degrees * 0.5).to_radians(), self.reflection_roughness, spread, width])
+    }
+}
+
+/// Set in `RayTriangle::draw_offset` when the triangle's material is alpha-masked: a candidate hit
+/// is kept only where the material's alpha reaches its cutoff.
+pub const ALPHA_MASKED: u32 = 1 << 31;
+
+/// Most triangles a leaf of a BLAS holds: rays test a leaf's triangles one after the other.
+const BLAS_LEAF_SIZE: u32 = 4;
+
+/// One triangle as rays test it, in its mesh's space. Keep in sync with `RayTriangle` in
+/// `rays/ray_types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct RayTriangle {
+    pub v0: [f32; 3],
+    /// The triangle's primitive within its mesh (its draw is the instance's first draw plus this),
+    /// with [`ALPHA_MASKED`] set for alpha-masked materials.
+    pub draw_offset: u32,
+    /// v1 − v0.
+    pub e1: [f32; 3],
+    /// The triangle's index within its primitive: its indices start at the draw's
+    /// `first_index + 3 · triangle`.
+    pub triangle: u32,
+    /// v2 − v0.
+    pub e2: [f32; 3],
+    pub _pad: u32,
+}
+
+/// One mesh instance in the top level. Keep in sync with `RayInstance` in `rays/ray_types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct RayInstance {
+    /// Rows of the affine map from the world into the mesh's space, applied as
+    /// `vec4(p, 1.0) * local_from_world`. Rays keep their parameter: a direction is mapped, not
+    /// normalised, so hit distances compare across instances.
+    pub local_from_world: [[f32; 4]; 3],
+    /// The root of its mesh's BLAS in the node array.
+    pub blas_root: u32,
+    /// The scene instance's first draw (`gpu::scene::GpuDraw`): its primitives' draws follow in order.
+    pub first_draw: u32,
+    /// The scene instance it places (`Scene::instances`).
+    pub scene_instance: u32,
+    pub _pad: u32,
+}
+
+/// The scene's ray-tracing hierarchy as uploaded: the TLAS's nodes first (root at 0), then every
+/// BLAS; triangles in leaf order, mesh after mesh; instances in TLAS leaf order.
+#[derive(Clone, Debug, Default)]
+pub struct RayStructure {
+    pub nodes: Vec<BvhNode>,
+    pub triangles: Vec<RayTriangle>,
+    pub instances: Vec<RayInstance>,
+    /// Nodes of the top level, at the start of `nodes`.
+    pub tlas_node_count: usize,
+    /// CPU time of the BLAS builds and of the TLAS build, in milliseconds.
+    pub blas_build_ms: f64,
+    pub tlas_build_ms: f64,
+}
+
+/// A BLAS while the structure is assembled: its nodes (links local to it) and triangles.
+struct Blas {
+    bvh: Bvh,
+    triangles: Vec<RayTriangle>,
+}
+
+impl RayStructure {
+    /// Builds the BLAS of every instanced mesh and the TLAS over the instances, at the instances'
+    /// transforms. An instance whose transform cannot be inverted (a mesh flattened onto a plane or a
+    /// line) gets a BLAS of its own over its triangles in world space, placed by the identity.
+    /// Meshes without opaque or alpha-masked triangles are left out.
+    pub fn build(scene: &Scene) -> Result<Self> {
+        let start = std::time::Instant::now();
+        let invertible = |t: &Affine3A| {
+            let det = t.matrix3.determinant();
+            det.is_finite() && det.abs() > f32::MIN_POSITIVE
+        };
+        let transforms: Vec<Affine3A> = scene.instances.iter().map(|i| Affine3A::from_mat4(i.world_from_local)).collect();
+        let mut shared = vec![false; scene.meshes.len()];
+        for (instance, transform) in scene.instances.iter().zip(&transforms) {
+            shared[instance.mesh] |= invertible(transform);
+        }
+        // BLASes: one per mesh placed by an invertible transform, then one per singular instance.
+        let mut blases = Vec::new();
+        let mut mesh_blas = vec![None; scene.meshes.len()];
+        for (m, _) in shared.iter().enumerate().filter(|(_, &shared)| shared) {
+            if let Some(blas) = build_blas(scene, m, &Affine3A::IDENTITY)? {
+                mesh_blas[m] = Some(blases.len());
+                blases.push(blas);
+            }
+        }
+        let mut instance_blas = Vec::with_capacity(scene.instances.len());
+        for (instance, transform) in scene.instances.iter().zip(&transforms) {
+            if invertible(transform) {
+                instance_blas.push(mesh_blas[instance.mesh].map(|b| (b, transform.inverse())));
+            } else {
+                let blas = build_blas(scene, instance.mesh, transform)?;
+                instance_blas.push(blas.map(|blas| {
+                    blases.push(blas);
+                    (blases.len() - 1, Affine3A::IDENTITY)
+                }));
+            }
+        }
+        let blas_build_ms = start.elapsed().as_secs_f64() * 1e3;
+
+        let start = std::time::Instant::now();
+        // Each scene instance's draws start after the draws of the instances before it: one per
+        // primitive, in the order `GpuScene::upload` makes them.
+        let mut first_draws = Vec::with_capacity(scene.instances.len());
+        let mut draws = 0u32;
+        for instance in &scene.instances {
+            first_draws.push(draws);
+            draws += scene.meshes[instance.mesh].primitives.len() as u32;
+        }
+        let mut placed = Vec::new();
+        let mut boxes = Vec::new();
+        for (i, placement) in instance_blas.iter().enumerate() {
+            let Some((blas, local_from_world)) = *placement else { continue };
+            boxes.push(blases[blas].bvh.nodes[0].bounds().transformed(&local_from_world.inverse()));
+            placed.push((i, blas, local_from_world));
+        }
+        let tlas = Bvh::build_with_leaf_size(&boxes, 1)?;
+        let tlas_build_ms = start.elapsed().as_secs_f64() * 1e3;
+
+        // Lay out: the TLAS, then each BLAS; triangles BLAS after BLAS.
+        let mut nodes = tlas.nodes.clone();
+        let mut triangles = Vec::new();
+        let mut blas_roots = Vec::with_capacity(blases.len());
+        for blas in &blases {
+            blas_roots.push(nodes.len() as u32);
+            let (node_offset, triangle_offset) = (nodes.len() as u32, triangles.len() as u32);
+            nodes.extend(blas.bvh.nodes.iter().map(|n| n.offset(node_offset, triangle_offset)));
+            triangles.extend_from_slice(&blas.triangles);
+        }
+        if triangles.len() > crate::accel::bvh::MAX_PRIMITIVES {
+            return Err(Error::InvalidScene(format!(
+                "the scene has {} triangles to trace; the ray structure holds at most {}",
+                triangles.len(),
+                crate::accel::bvh::MAX_PRIMITIVES
+            )));
+        }
+        // TLAS leaves name their instance directly: instances are stored in leaf order.
+        let mut instances = Vec::with_capacity(placed.len());
+        for node in nodes[..tlas.nodes.len()].iter_mut().filter(|n| n.is_leaf()) {
+            let (scene_instance, blas, local_from_world) = placed[tlas.primitive_indices[node.leaf_first() as usize] as usize];
+            *node = BvhNode { entry: BvhNode::leaf_entry(instances.len() as u32, 1), ..*node };
+            instances.push(RayInstance {
+                local_from_world: crate::gpu::scene::affine_rows(&local_from_world),
+                blas_root: blas_roots[blas],
+                first_draw: first_draws[scene_instance],
+                scene_instance: scene_instance as u32,
+                _pad: 0,
+            });
+        }
+        Ok(Self { tlas_node_count: tlas.nodes.len(), nodes, triangles, instances, blas_build_ms, tlas_build_ms })
+    }
+
+    /// The BLAS of mesh instance `instance` (in `instances`) as a standalone BVH with its triangles'
+    /// boxes, for validation: links and leaf ranges moved back to start at 0.
+    pub fn blas_of(&self, instance: usize) -> (Bvh, Vec<Aabb>) {
+        let root = self.instances[instance].blas_root;
+        // A BLAS ends at its root's skip (END); its nodes are contiguous from the root, depth first.
+        let mut end = root as usize + 1;
+        let mut first_triangle = u32::MAX;
+        let mut last_triangle = 0;
+        let mut pending = 1usize;
+        let mut n = root as usize;
+        // Walk the subtree in layout order: each internal node adds one pending child.
+        while pending > 0 {
+            let node = &self.nodes[n];
+            pending -= 1;
+            if node.is_leaf() {
+                let range = node.leaf_range();
+                first_triangle = first_triangle.min(range.start as u32);
+                last_triangle = last_triangle.max(range.end as u32);
+            } else {
+                pending += 2;
+            }
+            n += 1;
+            end = n;
+        }
+        let node_shift = root.wrapping_neg();
+        let triangle_shift = first_triangle.wrapping_neg();
+        let nodes: Vec<BvhNode> = self.nodes[root as usize..end].iter().map(|n| n.offset(node_shift, triangle_shift)).collect();
+        let triangles = &self.triangles[first_triangle as usize..last_triangle as usize];
+        let boxes = triangles.iter().map(RayTriangle::bounds).collect();
+        (Bvh { nodes, primitive_indices: (0..triangles.len() as u32).collect() }, boxes)
+    }
+}
+
+impl RayTriangle {
+    /// The box around the triangle, in its mesh's space.
+    pub fn bounds(&self) -> Aabb {
+        let v0 = Vec3::from(self.v0);
+        let (v1, v2) = (v0 + Vec3::from(self.e1), v0 + Vec3::from(self.e2));
+        Aabb::new(v0.min(v1).min(v2), v0.max(v1).max(v2))
+    }
+}
+
+/// The BLAS over mesh `m`'s opaque and alpha-masked triangles under `transform`; `None` when it
+/// has none.
+fn build_blas(scene: &Scene, m: usize, transform: &Affine3A) -> Result<Option<Blas>> {
+    let mesh = &scene.meshes[m];
+    let mut triangles = Vec::new();
+    for (p, primitive) in mesh.primitives.iter().enumerate() {
+        let flags = match scene.materials[primitive.material].alpha_mode {
+            AlphaMode::Blend => continue,
+            AlphaMode::Mask { .. } => ALPHA_MASKED,
+            AlphaMode::Opaque => 0,
+        };
+        for (t, corners) in primitive.indices.chunks_exact(3).enumerate() {
+            let [v0, v1, v2] = [0, 1, 2].map(|k| transform.transform_point3(Vec3::from(primitive.vertices[corners[k] as usize].position)));
+            triangles.push(RayTriangle {
+                v0: v0.to_array(),
+                draw_offset: p as u32 | flags,
+                e1: (v1 - v0).to_array(),
+                triangle: t as u32,
+                e2: (v2 - v0).to_array(),
+                _pad: 0,
+            });
+        }
+    }
+    if triangles.is_empty() {
+        return Ok(None);
+    }
+    let boxes: Vec<Aabb> = triangles.iter().map(RayTriangle::bounds).collect();
+    let bvh = Bvh::build_with_leaf_size(&boxes, BLAS_LEAF_SIZE)
+        .map_err(|e| Error::InvalidScene(format!("mesh {m} ({}): cannot build its ray hierarchy: {e}", mesh.name)))?;
+    // Triangles in leaf order, so each leaf names its own contiguous range.
+    let triangles = bvh.primitive_indices.iter().map(|&i| triangles[i as usize]).collect();
+    Ok(Some(Blas { bvh: Bvh { primitive_indices: (0..boxes.len() as u32).collect(), ..bvh }, triangles }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::test_support::assets_dir;
+
+    /// Every BLAS and the TLAS of a structure pass the checks the GPU traversal relies on, and
+    /// together they hold every opaque and masked triangle of every instance.
+    fn check(scene: &Scene) {
+        let structure = RayStructure::build(scene).unwrap();
+        let mut world_boxes = Vec::new();
+        let mut triangles = 0;
+        for (i, instance) in structure.instances.iter().enumerate() {
+            let (blas, boxes) = structure.blas_of(i);
+            blas.validate(&boxes).unwrap_or_else(|e| panic!("BLAS of instance {i}: {e}"));
+            let rows = instance.local_from_world;
+            let local_from_world =
+                Affine3A::from_mat4(glam::Mat4::from_cols_array_2d(&[rows[0], rows[1], rows[2], [0.0, 0.0, 0.0, 1.0]]).transpose());
+            world_boxes.push(blas.nodes[0].bounds().transformed(&local_from_world.inverse()));
+            triangles += boxes.len();
+        }
+        let tlas = Bvh {
+            nodes: structure.nodes[..structure.tlas_node_count].to_vec(),
+            primitive_indices: (0..structure.instances.len() as u32).collect(),
+        };
+        tlas.validate(&world_boxes).unwrap();
+        let expected: usize = scene
+            .instances
+            .iter()
+            .flat_map(|i| &scene.meshes[i.mesh].primitives)
+            .filter(|p| scene.materials[p.material].alpha_mode != AlphaMode::Blend)
+            .map(|p| p.triangle_count())
+            .sum();
+        assert_eq!(triangles, expected);
+    }
+
+    #[test]
+    fn sponza_and_the_gas_station_have_valid_hierarchies_holding_every_triangle() {
+        for path in ["sponza/Sponza.gltf", "gas_station/GasStation.gltf"] {
+            check(&crate::scene::load_path(&assets_dir().join(path)).unwrap());
+        }
+    }
+
+    #[test]
+    fn a_scene_without_triangles_has_an_empty_hierarchy() {
+        let structure = RayStructure::build(&Scene::default()).unwrap();
+        assert!(structure.nodes.is_empty() && structure.instances.is_empty() && structure.triangles.is_empty());
+    }
+}

@@ -1,0 +1,162 @@
+// Ray traversal of the scene's two-level hierarchy (`rays/mod.rs`), in any stage: closest hit for
+// reflections, any hit for shadows. Like the point query (`accel/volume_query.wgsl`) it needs no
+// stack: every node says where to go if the ray meets its box (`entry`) and if not (`skip`), and a
+// top-level leaf moves the ray into its instance's mesh space until that BLAS ends (its last `skip`
+// is BVH_END), then resumes the top level. The ray's direction is mapped into mesh space without
+// normalising, so a hit's distance means the same in every instance and prunes them all.
+#include "shading/material.wgsl"
+
+const RAY_NO_HIT: u32 = 0xffffffffu;
+
+struct RayHit {
+    // Distance along the world ray's direction (in units of its length); t_max when nothing was hit.
+    t: f32,
+    // Index into `ray_triangles`; RAY_NO_HIT when nothing was hit.
+    triangle: u32,
+    // Index into `ray_instances`.
+    instance: u32,
+    // Barycentrics of v1 and v2.
+    b1: f32,
+    b2: f32,
+}
+
+// 1 / d with zero components turned into huge finite values of the right sign: slab tests then stay
+// free of 0 · ∞ = NaN for rays starting on a slab's plane.
+fn ray_inverse_direction(d: vec3<f32>) -> vec3<f32> {
+    let tiny = 1e-30;
+    let safe = select(d, select(vec3<f32>(tiny), vec3<f32>(-tiny), d < vec3<f32>(0.0)), abs(d) < vec3<f32>(tiny));
+    return 1.0 / safe;
+}
+
+// Whether the ray meets the node's box between 0 and `t_max`.
+fn ray_meets_box(node: BvhNode, origin: vec3<f32>, inverse_dir: vec3<f32>, t_max: f32) -> bool {
+    let t0 = (node.min - origin) * inverse_dir;
+    let t1 = (node.max - origin) * inverse_dir;
+    let near = min(t0, t1);
+    let far = max(t0, t1);
+    let enter = max(max(near.x, near.y), max(near.z, 0.0));
+    let exit = min(min(far.x, far.y), min(far.z, t_max));
+    return enter <= exit;
+}
+
+// Möller–Trumbore, both faces: (t, b1, b2) of the hit, or t = -1 when the ray misses the triangle
+// (or is parallel to its plane).
+fn ray_triangle(origin: vec3<f32>, dir: vec3<f32>, tri: RayTriangle) -> vec3<f32> {
+    let p = cross(dir, tri.e2);
+    let det = dot(tri.e1, p);
+    if det == 0.0 {
+        return vec3<f32>(-1.0, 0.0, 0.0);
+    }
+    let inverse_det = 1.0 / det;
+    let s = origin - tri.v0;
+    let b1 = dot(s, p) * inverse_det;
+    let q = cross(s, tri.e1);
+    let b2 = dot(dir, q) * inverse_det;
+    if b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0 {
+        return vec3<f32>(-1.0, 0.0, 0.0);
+    }
+    return vec3<f32>(dot(tri.e2, q) * inverse_det, b1, b2);
+}
+
+// The draw a triangle of an instance belongs to.
+fn ray_triangle_draw(instance: RayInstance, tri: RayTriangle) -> u32 {
+    return instance.first_draw + (tri.draw_offset & ~RAY_ALPHA_MASKED);
+}
+
+// Whether an alpha-masked triangle is solid at barycentrics (b1, b2): its material's alpha at the
+// finest mip, as the raster's alpha test sees it up close.
+fn ray_alpha_covers(instance: RayInstance, tri: RayTriangle, b1: f32, b2: f32) -> bool {
+    let draw = draws[ray_triangle_draw(instance, tri)];
+    let first = draw.first_index + tri.triangle * 3u;
+    let v0 = vertices[draw.base_vertex + indices[first]];
+    let v1 = vertices[draw.base_vertex + indices[first + 1u]];
+    let v2 = vertices[draw.base_vertex + indices[first + 2u]];
+    let uv = vec2<f32>(v0.u, v0.v) * (1.0 - b1 - b2) + vec2<f32>(v1.u, v1.v) * b1 + vec2<f32>(v2.u, v2.v) * b2;
+    let material = materials[draw.material];
+    return material_base_color(material, UvGradients(uv, vec2<f32>(0.0), vec2<f32>(0.0))).a >= material.alpha_cutoff;
+}
+
+// The nearest hit along origin + t · dir with 0 < t < t_max, or with `any_hit` the first hit found
+// (shadow rays need no more). Origins must be offset off the surface they leave (`ray_offset_origin`).
+fn trace_ray(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> RayHit {
+    var hit = RayHit(t_max, RAY_NO_HIT, 0u, 0.0, 0.0);
+    var o = origin;
+    var d = dir;
+    var inverse_dir = ray_inverse_direction(dir);
+    var in_blas = false;
+    var instance_index = 0u;
+    var instance: RayInstance;
+    var resume = BVH_END;
+    var node_index = 0u;
+    loop {
+        if node_index == BVH_END {
+            if !in_blas {
+                break;
+            }
+            // The instance's BLAS is done: back to the top level, in world space.
+            in_blas = false;
+            node_index = resume;
+            o = origin;
+            d = dir;
+            inverse_dir = ray_inverse_direction(dir);
+            continue;
+        }
+        let node = ray_nodes[node_index];
+        // A link to the node itself ends the walk: no valid tree has one, but lanes run on zeroed
+        // memory (lavapipe's fragment helpers) must not loop (see `volume_query.wgsl`).
+        let skip = select(node.skip, BVH_END, node.skip == node_index);
+        if !ray_meets_box(node, o, inverse_dir, hit.t) {
+            node_index = skip;
+            continue;
+        }
+        if (node.entry & BVH_LEAF) == 0u {
+            node_index = select(node.entry, BVH_END, node.entry == node_index);
+            continue;
+        }
+        let leaf = bvh_leaf_range(node.entry);
+        if !in_blas {
+            // A top-level leaf: one instance. Continue in its mesh's space.
+            instance_index = leaf.x;
+            instance = ray_instances[instance_index];
+            o = vec4<f32>(origin, 1.0) * instance.local_from_world;
+            d = vec4<f32>(dir, 0.0) * instance.local_from_world;
+            inverse_dir = ray_inverse_direction(d);
+            resume = skip;
+            in_blas = true;
+            node_index = instance.blas_root;
+            continue;
+        }
+        for (var k = leaf.x; k < leaf.y; k += 1u) {
+            let tri = ray_triangles[k];
+            let candidate = ray_triangle(o, d, tri);
+            if candidate.x > 0.0 && candidate.x < hit.t {
+                if (tri.draw_offset & RAY_ALPHA_MASKED) != 0u && !ray_alpha_covers(instance, tri, candidate.y, candidate.z) {
+                    continue;
+                }
+                hit = RayHit(candidate.x, k, instance_index, candidate.y, candidate.z);
+                if any_hit {
+                    return hit;
+                }
+            }
+        }
+        node_index = skip;
+    }
+    return hit;
+}
+
+// Whether anything lies on the segment from `origin` along `dir` before `t_max`.
+fn ray_occluded(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
+    return trace_ray(origin, dir, t_max, true).triangle != RAY_NO_HIT;
+}
+
+// A ray origin off the surface at `p` with geometric normal `n` (facing the side the ray leaves
+// from), far enough that the ray cannot hit the surface it starts on through rounding, yet close
+// enough to keep contact shadows: Wächter and Binder's integer-ulp offset ("A Fast and Robust Method
+// for Avoiding Self-Intersection", Ray Tracing Gems, 2019), plus `extra` metres along n for origins
+// known only to `extra`'s precision (a position rebuilt from depth).
+fn ray_offset_origin(p: vec3<f32>, n: vec3<f32>, extra: f32) -> vec3<f32> {
+    let offset_int = vec3<i32>(n * 256.0);
+    let p_int = bitcast<vec3<f32>>(bitcast<vec3<i32>>(p) + select(offset_int, -offset_int, p < vec3<f32>(0.0)));
+    let near_origin = abs(p) < vec3<f32>(1.0 / 32.0);
+    return select(p_int, p + n * (1.0 / 65536.0), near_origin) + n * extra;
+}
