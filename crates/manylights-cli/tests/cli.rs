@@ -351,3 +351,87 @@ fn every_method_renders_with_its_builds_timed() {
         assert!(err.contains("deferred decals") && err.contains("--pipeline deferred"), "{err}");
     }
 }
+
+#[test]
+fn ray_traced_effects_render_with_their_passes_timed() {
+    let dir = temp_dir("render_rays");
+    let json = dir.join("timings.json");
+    for pipeline in ["visbuffer", "deferred", "forward"] {
+        #[rustfmt::skip]
+        let out = render_to(&dir, &[
+            "--pipeline", pipeline, "--shadows", "soft", "--shadow-rays", "2", "--reflections", "--bounces", "2",
+            "--reflection-roughness", "0.6", "--timings-json", json.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{pipeline}: {}", String::from_utf8_lossy(&out.stderr));
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        for pass in ["ray_shadows", "shadow_filter"] {
+            assert!(report["passes"][pass]["median_ms"].as_f64().unwrap() > 0.0, "{pipeline}: no {pass} timing");
+        }
+        let rays = &report["rays"];
+        assert_eq!(
+            (rays["shadows"].as_str(), rays["shadow_rays"].as_u64(), rays["reflection_bounces"].as_u64()),
+            (Some("soft"), Some(2), Some(2))
+        );
+    }
+}
+
+#[test]
+fn bad_ray_options_are_refused() {
+    let small = ["--width", "16", "--height", "16"];
+    let run = |flags: &[&str]| failure(&[&["render"], flags, &small].concat());
+    let rays = run(&["--shadows", "soft", "--shadow-rays", "0"]);
+    assert!(rays.contains("0 shadow rays") && rays.contains("1 to 64") && rays.contains("--shadow-rays"), "{rays}");
+    let angle = run(&["--shadows", "soft", "--sun-angle", "-1"]);
+    assert!(angle.contains("sun angle -1") && angle.contains("--sun-angle"), "{angle}");
+    let nan = run(&["--sun-angle", "NaN"]);
+    assert!(nan.contains("sun angle NaN"), "{nan}");
+    let bounces = run(&["--reflections", "--bounces", "9"]);
+    assert!(bounces.contains("9 reflection bounces") && bounces.contains("--bounces"), "{bounces}");
+    let none = run(&["--reflections", "--bounces", "0"]);
+    assert!(none.contains("--bounces 0") && none.contains("leave out --reflections"), "{none}");
+    let without = run(&["--bounces", "2"]);
+    assert!(without.contains("--reflections"), "{without}");
+    let roughness = run(&["--reflections", "--reflection-roughness", "0"]);
+    assert!(roughness.contains("roughness threshold 0") && roughness.contains("--reflection-roughness"), "{roughness}");
+    let mode = run(&["--shadows", "ambient"]);
+    assert!(mode.contains("--shadows") && mode.contains("hard") && mode.contains("soft"), "{mode}");
+}
+
+/// A scene file's ray-traced effects apply unless flags override them; bad values name the key.
+#[test]
+fn scene_file_ray_settings_yield_to_flags_and_bad_ones_name_their_key() {
+    let dir = temp_dir("ray_scene");
+    let scene = dir.join("rays.toml");
+    let write =
+        |rays: &str| std::fs::write(&scene, format!("[sun]\ndirection = [0.3, -1.0, 0.2]\nilluminance = 2.0\n[rays]\n{rays}")).unwrap();
+    let json = dir.join("timings.json");
+    let render = |extra: &[&str]| {
+        let mut args = vec!["--scene", scene.to_str().unwrap(), "--timings-json", json.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let out = render_to(&dir, &args);
+        assert!(out.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&out.stderr));
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        report["rays"].clone()
+    };
+    write("shadows = 'soft'\nshadow_rays = 3\nreflections = 2\n");
+    let rays = render(&[]);
+    assert_eq!(
+        (rays["shadows"].as_str(), rays["shadow_rays"].as_u64(), rays["reflection_bounces"].as_u64()),
+        (Some("soft"), Some(3), Some(2))
+    );
+    let rays = render(&["--shadows", "hard", "--reflections", "--bounces", "1"]);
+    assert_eq!((rays["shadows"].as_str(), rays["reflection_bounces"].as_u64()), (Some("hard"), Some(1)));
+    for (bad, words) in [
+        ("shadow_rays = 65\n", ["rays", "65 shadow rays", "shadow_rays"]),
+        ("reflections = 10\n", ["rays", "10 reflection bounces", "reflections"]),
+        ("shadows = 'blurry'\n", ["rays", "blurry", "\"soft\""]),
+        ("sun_angle = 120.0\n", ["rays", "sun angle 120", "sun_angle"]),
+    ] {
+        write(bad);
+        let err = failure(&["render", "--scene", scene.to_str().unwrap(), "--width", "16", "--height", "16"]);
+        for word in words {
+            assert!(err.contains(word), "{bad}: {err}");
+        }
+        assert!(!err.contains("--"), "{bad}: a scene file's error names its key, not a flag: {err}");
+    }
+}

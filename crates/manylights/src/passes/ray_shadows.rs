@@ -7,8 +7,8 @@ use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::rays::SunShadows;
 use crate::Result;
 
-/// The sun's visibility per pixel, 0 to 1.
-pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+/// Per pixel, the fraction of the sun visible (0 to 1) and the mean distance to the blockers rays met.
+pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 pub struct RayShadows {
     pipeline: wgpu::ComputePipeline,

@@ -2,13 +2,15 @@
 // pixel), in compute, before shading, in every pipeline: each pixel's position comes from its depth,
 // its geometric normal from its neighbours' (`shading/depth_normal.wgsl`); rays towards the sun —
 // one to its centre (hard), or `frame.ray_options.y` to points of its disc (soft), which
-// `shadow_filter` then smooths — give the fraction of the sun the pixel sees. Sky pixels get 1.
+// `shadow_filter` then smooths — give the fraction of the sun the pixel sees (x), and the mean
+// distance to what blocked the rays (y, 0 when nothing did), from which the filter sizes the
+// penumbra. Sky pixels see the whole sun.
 #include "shading/scene_bindings.wgsl"
 #include "shading/depth_normal.wgsl"
 #include "rays/trace.wgsl"
 
 @group(1) @binding(0) var depth: texture_depth_2d;
-@group(1) @binding(1) var visibility_output: texture_storage_2d<r32float, write>;
+@group(1) @binding(1) var visibility_output: texture_storage_2d<rg32float, write>;
 
 const GOLDEN_RATIO_CONJUGATE: f32 = 0.6180339887;
 
@@ -56,19 +58,23 @@ fn ray_shadows(@builtin(global_invocation_id) id: vec3<u32>) {
     // The depth buffer holds the surface at the pixel's centre only to its rounding; a fraction of
     // the pixel's footprint along the normal clears it, and the tessellation of curved surfaces.
     let origin = ray_offset_origin(relative_position + frame.world_from_view[3].xyz, n, 0.5 * pixel_footprint(relative_position));
+    let soft = frame.ray_options.x == RAY_SHADOWS_SOFT;
+    let count = select(1u, frame.ray_options.y, soft);
+    let rotation = pixel_hash(id.xy);
     var visible = 0.0;
-    if frame.ray_options.x == RAY_SHADOWS_SOFT {
-        let count = frame.ray_options.y;
-        let rotation = pixel_hash(id.xy);
-        for (var k = 0u; k < count; k += 1u) {
-            let dir = sun_disc_direction(to_sun, frame.ray_settings.x, k, count, rotation);
-            if dot(dir, n) > 0.0 && !ray_occluded(origin, dir, 3.0e38) {
-                visible += 1.0;
-            }
+    var blocker_distance = 0.0;
+    for (var k = 0u; k < count; k += 1u) {
+        let dir = select(to_sun, sun_disc_direction(to_sun, frame.ray_settings.x, k, count, rotation), soft);
+        if dot(dir, n) <= 0.0 {
+            continue;
         }
-        visible /= f32(count);
-    } else if !ray_occluded(origin, to_sun, 3.0e38) {
-        visible = 1.0;
+        let hit = trace_ray(origin, dir, 3.0e38, true);
+        if hit.triangle == RAY_NO_HIT {
+            visible += 1.0;
+        } else {
+            blocker_distance += hit.t;
+        }
     }
-    textureStore(visibility_output, id.xy, vec4<f32>(visible));
+    let blocked = f32(count) - visible;
+    textureStore(visibility_output, id.xy, vec4<f32>(visible / f32(count), select(0.0, blocker_distance / blocked, blocked > 0.0), 0.0, 0.0));
 }

@@ -1,0 +1,185 @@
+//! Ray-traced reflections (`shading/reflections.wgsl`): a mirror floor shows a panel outside the view,
+//! with the decal and the light that reach the panel — through the acceleration structures (and brute
+//! force) in every pipeline, exactly as the panel's own shading predicts — and shows that clustered
+//! shading cannot light or decal such hit points: its lists cover the view frustum only.
+
+mod common;
+
+use common::*;
+use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
+use manylights::{
+    config::RenderConfig,
+    pipelines::{DecalMethod, LightMethod, PipelineKind},
+    rays::RaySettings,
+    renderer::Image,
+    scene::{Camera, Decal, Instance, Light, Material, Scene},
+};
+
+const WIDTH: u32 = 96;
+const HEIGHT: u32 = 54;
+const AMBIENT: f32 = 0.2;
+/// The panel: a quad facing +Z at z = PANEL_Z, x in [-4, 4], y in [3, 11] — above the view.
+const PANEL_Z: f32 = -6.0;
+/// The red decal's box on the panel: x in [-2, 2], y in [5, 9].
+const DECAL_CENTRE: Vec3 = Vec3::new(0.0, 7.0, PANEL_Z);
+
+/// A mirror floor (metallic, roughness 0, white: it reflects all it sees), the panel (white, fully
+/// rough) and the camera looking down at the floor, which hides the panel from it. Ambient light only,
+/// plus `lights` and `decals`.
+fn mirror_scene(lights: Vec<Light>, decals: Vec<Decal>) -> (Scene, Camera) {
+    let mirror = Material { base_color_factor: Vec4::ONE, metallic_factor: 1.0, roughness_factor: 0.0, ..Default::default() };
+    let panel = Material { base_color_factor: Vec4::ONE, metallic_factor: 0.0, roughness_factor: 1.0, ..Default::default() };
+    let red =
+        Material { base_color_factor: Vec4::new(1.0, 0.0, 0.0, 1.0), metallic_factor: 0.0, roughness_factor: 1.0, ..Default::default() };
+    let mut panel_mesh = quad_mesh();
+    panel_mesh.primitives[0].material = 1;
+    let scene = Scene {
+        meshes: vec![quad_mesh(), panel_mesh],
+        materials: vec![mirror, panel, red],
+        instances: vec![
+            Instance {
+                mesh: 0,
+                world_from_local: Mat4::from_scale_rotation_translation(
+                    Vec3::new(10.0, 10.0, 1.0),
+                    Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+                    Vec3::ZERO,
+                ),
+            },
+            Instance {
+                mesh: 1,
+                world_from_local: Mat4::from_scale_rotation_translation(
+                    Vec3::new(4.0, 4.0, 1.0),
+                    Quat::IDENTITY,
+                    Vec3::new(0.0, 7.0, PANEL_Z),
+                ),
+            },
+        ],
+        lights,
+        decals,
+        ambient: Vec3::splat(AMBIENT),
+        ..Default::default()
+    };
+    (scene, Camera::look_at("down", Vec3::new(0.0, 2.0, 4.0), Vec3::ZERO, 40f32.to_radians(), 0.1))
+}
+
+fn red_decal() -> Decal {
+    Decal {
+        world_from_decal: Affine3A::from_scale_rotation_translation(Vec3::new(4.0, 4.0, 1.0), Quat::IDENTITY, DECAL_CENTRE),
+        material: 2,
+        layer: 0,
+        weight: 1.0,
+    }
+}
+
+/// Where the mirror sends a pixel's camera ray: the point of the panel's plane it reaches, if any.
+fn reflected_panel_point(camera: &Camera, x: f32, y: f32) -> Option<Vec3> {
+    let aspect = WIDTH as f32 / HEIGHT as f32;
+    let tan_half = (20f32.to_radians()).tan();
+    let view = Vec3::new((x / WIDTH as f32 * 2.0 - 1.0) * tan_half * aspect, (1.0 - y / HEIGHT as f32 * 2.0) * tan_half, -1.0);
+    let dir = camera.world_from_view.transform_vector3(view).normalize();
+    let eye = camera.position();
+    let floor = eye + dir * (-eye.y / dir.y);
+    let mirrored = Vec3::new(dir.x, -dir.y, dir.z);
+    (mirrored.z < 0.0).then(|| floor + mirrored * ((PANEL_Z - floor.z) / mirrored.z))
+}
+
+/// What the mirror shows at a pixel, if every corner of the pixel agrees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Reflected {
+    Decal,
+    BarePanel,
+    Elsewhere,
+}
+
+fn reflected(camera: &Camera, x: u32, y: u32) -> Option<Reflected> {
+    let classify = |fx: f32, fy: f32| match reflected_panel_point(camera, fx, fy) {
+        Some(q) if (q.x.abs() <= 2.0) && (q.y - DECAL_CENTRE.y).abs() <= 2.0 => Reflected::Decal,
+        Some(q) if q.x.abs() <= 4.0 && (3.0..=11.0).contains(&q.y) => Reflected::BarePanel,
+        _ => Reflected::Elsewhere,
+    };
+    let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.5)].map(|(dx, dy)| classify(x as f32 + dx, y as f32 + dy));
+    corners.iter().all(|c| *c == corners[0]).then_some(corners[0])
+}
+
+fn render(scene: &Scene, camera: &Camera, pipeline: PipelineKind, lights: LightMethod, decals: DecalMethod) -> Image<[f32; 4]> {
+    let rays = RaySettings { reflection_bounces: 1, ..Default::default() };
+    render_with(scene, camera, RenderConfig { pipeline, decal_method: decals, rays, ..config(WIDTH, HEIGHT, lights) }).1
+}
+
+fn rgb(p: [f32; 4]) -> Vec3 {
+    Vec3::new(p[0], p[1], p[2])
+}
+
+#[test]
+fn a_mirror_shows_a_decal_outside_the_view_as_the_decal_colours_its_surface() {
+    let (scene, camera) = mirror_scene(Vec::new(), vec![red_decal()]);
+    // The mirror's own ambient term (metals keep half) plus the panel's radiance, all of it reflected.
+    let floor = Vec3::splat(0.5 * AMBIENT);
+    let expect_decal = floor + Vec3::new(AMBIENT, 0.0, 0.0);
+    let expect_bare = floor + Vec3::splat(AMBIENT);
+    for pipeline in PipelineKind::ALL {
+        let name = pipeline.name();
+        let bvh = render(&scene, &camera, pipeline, LightMethod::Off, DecalMethod::Bvh);
+        let brute = render(&scene, &camera, pipeline, LightMethod::Off, DecalMethod::Brute);
+        assert!(max_abs_difference(&bvh, &brute) < 1e-3, "{name}: bvh and brute-force decals differ in the reflection");
+        let clustered = render(&scene, &camera, pipeline, LightMethod::Off, DecalMethod::Clustered);
+        let (mut decal_pixels, mut bare_pixels) = (0, 0);
+        for y in 0..HEIGHT {
+            for x in 0..WIDTH {
+                let (expected, clustered_expected) = match reflected(&camera, x, y) {
+                    Some(Reflected::Decal) => {
+                        decal_pixels += 1;
+                        // The clustered lists hold no decal out there: the panel shows bare.
+                        (expect_decal, expect_bare)
+                    }
+                    Some(Reflected::BarePanel) => {
+                        bare_pixels += 1;
+                        (expect_bare, expect_bare)
+                    }
+                    _ => continue,
+                };
+                let got = rgb(pixel(&bvh, x, y));
+                assert!((got - expected).abs().max_element() < 1e-3, "{name}: pixel ({x}, {y}) reflects {got}, expected {expected}");
+                let got = rgb(pixel(&clustered, x, y));
+                assert!(
+                    (got - clustered_expected).abs().max_element() < 1e-3,
+                    "{name}: clustered pixel ({x}, {y}) reflects {got}, expected {clustered_expected}"
+                );
+            }
+        }
+        assert!(decal_pixels > 100 && bare_pixels > 100, "{name}: {decal_pixels} decal and {bare_pixels} bare panel pixels reflected");
+    }
+}
+
+#[test]
+fn a_mirror_shows_the_light_of_a_lamp_outside_the_view_which_clustered_lists_miss() {
+    // Its whole range lies above the view, as the panel does.
+    let lamp = point_light(Vec3::new(0.0, 8.0, PANEL_Z + 1.0), 10.0, 3.5);
+    let (lit, camera) = mirror_scene(vec![lamp], Vec::new());
+    let (dark, _) = mirror_scene(Vec::new(), Vec::new());
+    let pipeline = PipelineKind::Visbuffer;
+    let bvh = render(&lit, &camera, pipeline, LightMethod::Bvh, DecalMethod::Off);
+    let brute = render(&lit, &camera, pipeline, LightMethod::Brute, DecalMethod::Off);
+    let clustered = render(&lit, &camera, pipeline, LightMethod::Clustered, DecalMethod::Off);
+    let unlit = render(&dark, &camera, pipeline, LightMethod::Off, DecalMethod::Off);
+    assert!(max_abs_difference(&bvh, &brute) < 1e-3, "bvh and brute-force lights differ in the reflection");
+    let mut lamp_lit = 0;
+    for y in 0..HEIGHT {
+        for x in 0..WIDTH {
+            if reflected(&camera, x, y).is_none_or(|r| r == Reflected::Elsewhere) {
+                continue;
+            }
+            let (through_bvh, without) = (rgb(pixel(&bvh, x, y)), rgb(pixel(&unlit, x, y)));
+            if (through_bvh - without).min_element() > 0.05 {
+                lamp_lit += 1;
+            }
+            // Clustered shading reflects the panel as if the lamp were not there.
+            let through_clusters = rgb(pixel(&clustered, x, y));
+            assert!(
+                (through_clusters - without).abs().max_element() < 1e-3,
+                "pixel ({x}, {y}): clustered {through_clusters}, unlit {without}"
+            );
+        }
+    }
+    assert!(lamp_lit > 100, "only {lamp_lit} reflected panel pixels show the lamp's light");
+}
