@@ -11,6 +11,7 @@
 #   scripts/bench-device.sh sweeps       `manylights bench`: lights and decals from 1k to 1M (issue 5)
 #   scripts/bench-device.sh particles    moving particle lights through the 3D-texture grid (issue 6)
 #   scripts/bench-device.sh clipmap      1M particles: clipmap cascades against the grid over the scene (issue 6)
+#   scripts/bench-device.sh rays         ray-traced sun shadows and reflections on Sponza (issue 7)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -120,6 +121,32 @@ clipmap() {
     --voxel-sizes 1,0.5 --filters trilinear --samples 1 --cascades 0,2,4 --cascade-resolution 64 2>&1 | grep -v "^GPU"
 }
 
+# Ray-traced effects on Sponza at noon (the sun through the open roof), every pipeline: shadows hard
+# and soft, reflections below the default roughness threshold and on every surface (the worst case),
+# one and two bounces, and with the paper's 28k small lights, which reflections' hits are lit by.
+rays() {
+  local p
+  printf 'gltf = "sponza_lite/Sponza.gltf"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' >.bench/sun.toml
+  cp .bench/sun.toml .bench/sun_small_28000.toml
+  printf '[[scatter_lights]]\ncount = 28000\nseed = 1\nrange = [0.1, 0.3]\n' >>.bench/sun_small_28000.toml
+  local sun=.bench/sun.toml off="--light-method off --decal-method off"
+  for p in visbuffer deferred forward; do
+    run "rays_${p}_none" 200 --scene $sun --pipeline $p $off
+    run "rays_${p}_hard" 200 --scene $sun --pipeline $p $off --shadows hard
+    run "rays_${p}_hard_reflections" 200 --scene $sun --pipeline $p $off --shadows hard --reflections
+  done
+  run rays_visbuffer_soft4 200 --scene $sun $off --shadows soft --shadow-rays 4
+  run rays_visbuffer_soft16 200 --scene $sun $off --shadows soft --shadow-rays 16
+  run rays_visbuffer_reflections 200 --scene $sun $off --reflections
+  run rays_visbuffer_reflections_2 200 --scene $sun $off --reflections --bounces 2
+  run rays_visbuffer_reflections_all 200 --scene $sun $off --reflections --reflection-roughness 1
+  run rays_visbuffer_reflections_all_2 200 --scene $sun $off --reflections --reflection-roughness 1 --bounces 2
+  run rays_visbuffer_lights_none 200 --scene .bench/sun_small_28000.toml --light-method bvh --decal-method off
+  run rays_visbuffer_lights_hard_reflections 200 --scene .bench/sun_small_28000.toml --light-method bvh --decal-method off --shadows hard --reflections
+  run rays_visbuffer_lights_hard_reflections_all 200 --scene .bench/sun_small_28000.toml --light-method bvh --decal-method off --shadows hard \
+    --reflections --reflection-roughness 1
+}
+
 # Test binaries built with `cargo test --release --no-run`, run here against the GPU, each test in its
 # own process (after a dozen devices opened and closed in one process, the NVIDIA driver listed no
 # adapter to the next).
@@ -148,9 +175,10 @@ for set in "${@:-structures}"; do
     tests) tests ;;
     particles) particles ;;
     clipmap) clipmap ;;
+    rays) rays ;;
     table) bench table --sweeps none ;;
     sweeps) bench sweeps --scenes none ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles or clipmap)" >&2; exit 2 ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles, clipmap or rays)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

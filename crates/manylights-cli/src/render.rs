@@ -391,7 +391,11 @@ impl TimingReport {
             println!("{} particles, method {}{grid}", particles.count, config.particle_method.name());
         }
         let rays = &renderer.config.rays;
-        if rays.traces_rays() {
+        if let Some(built) = renderer.ray_structure {
+            println!(
+                "ray hierarchy: {} triangles in {} instances, {} nodes; CPU build: BLASes {:.1} ms, TLAS {:.3} ms",
+                built.triangles, built.instances, built.nodes, built.blas_build_ms, built.tlas_build_ms
+            );
             println!(
                 "sun shadows {}{}, reflections: {}",
                 rays.sun_shadows.name(),
@@ -440,7 +444,7 @@ impl TimingReport {
             "decal_method": renderer.config.decal_method.name(),
             "animated": is_animated(scene),
             "particles": particles_json(renderer, scene),
-            "rays": rays_json(&renderer.config.rays),
+            "rays": rays_json(renderer),
             "warmup_frames": args.warmup,
             "timed_frames": args.frames,
             "passes": passes,
@@ -471,15 +475,26 @@ fn particles_json(renderer: &Renderer, scene: &Scene) -> serde_json::Value {
     json
 }
 
-/// The ray-traced effects and their budgets.
-fn rays_json(rays: &RaySettings) -> serde_json::Value {
-    serde_json::json!({
+/// The ray-traced effects, their budgets, and the hierarchy built for them.
+fn rays_json(renderer: &Renderer) -> serde_json::Value {
+    let rays = &renderer.config.rays;
+    let mut json = serde_json::json!({
         "shadows": rays.sun_shadows.name(),
         "sun_angle_degrees": rays.sun_angle_degrees,
         "shadow_rays": rays.shadow_rays,
         "reflection_bounces": rays.reflection_bounces,
         "reflection_roughness": rays.reflection_roughness,
-    })
+    });
+    if let Some(built) = renderer.ray_structure {
+        json["hierarchy"] = serde_json::json!({
+            "triangles": built.triangles,
+            "instances": built.instances,
+            "nodes": built.nodes,
+            "blas_build_ms": built.blas_build_ms,
+            "tlas_build_ms": built.tlas_build_ms,
+        });
+    }
+    json
 }
 
 fn is_animated(scene: &Scene) -> bool {

@@ -9,7 +9,7 @@ use crate::{
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
     particles::{ParticleGrid, ParticleSystem, ParticleVolume},
     pipelines::{DecalMethod, FrameInputs, FramePipeline, LightMethod, ParticleMethod, ShadingMethods},
-    rays::RayStructure,
+    rays::{RayStructure, RayStructureStats},
     scene::{Aabb, Camera, Scene},
     Error, Result,
 };
@@ -27,6 +27,8 @@ pub struct Renderer {
     /// Present when the scene has particles and a particle method lights them.
     particles: Option<ParticleSystem>,
     timer: Option<GpuTimer>,
+    /// The scene's ray hierarchy, when the frame traces rays.
+    pub ray_structure: Option<RayStructureStats>,
     /// Scene time of the next frame, in seconds: where animated groups are.
     pub time: f32,
 }
@@ -100,15 +102,6 @@ impl Renderer {
         }
         // The triangles' hierarchy is built (on the CPU, once) only for frames that trace rays.
         let rays = config.rays.traces_rays().then(|| RayStructure::build(scene)).transpose()?;
-        if let Some(rays) = &rays {
-            log::info!(
-                "ray hierarchy: {} triangles, {} instances; BLAS build {:.1} ms, TLAS build {:.2} ms",
-                rays.triangles.len(),
-                rays.instances.len(),
-                rays.blas_build_ms,
-                rays.tlas_build_ms
-            );
-        }
         let gpu_scene = GpuScene::upload(
             &ctx,
             scene,
@@ -166,7 +159,8 @@ impl Renderer {
         )?;
         let timer = GpuTimer::new(&ctx);
         ctx.check_errors()?;
-        Ok(Self { ctx, scene: gpu_scene, config, pipeline, lights, decals, particles, timer, time: 0.0 })
+        let ray_structure = rays.as_ref().map(RayStructure::stats);
+        Ok(Self { ctx, scene: gpu_scene, config, pipeline, lights, decals, particles, timer, ray_structure, time: 0.0 })
     }
 
     /// Whether `render` returns per-pass GPU timings.

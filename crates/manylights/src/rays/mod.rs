@@ -201,6 +201,28 @@ pub struct RayStructure {
     pub tlas_build_ms: f64,
 }
 
+/// What was built for rays, and how long it took: for reports.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayStructureStats {
+    pub triangles: usize,
+    pub instances: usize,
+    pub nodes: usize,
+    pub blas_build_ms: f64,
+    pub tlas_build_ms: f64,
+}
+
+impl RayStructure {
+    pub fn stats(&self) -> RayStructureStats {
+        RayStructureStats {
+            triangles: self.triangles.len(),
+            instances: self.instances.len(),
+            nodes: self.nodes.len(),
+            blas_build_ms: self.blas_build_ms,
+            tlas_build_ms: self.tlas_build_ms,
+        }
+    }
+}
+
 /// A BLAS while the structure is assembled: its nodes (links local to it) and triangles.
 struct Blas {
     bvh: Bvh,

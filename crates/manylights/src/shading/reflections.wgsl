@@ -56,12 +56,17 @@ fn reflected_radiance(s: ShadingInput, geometric_normal: vec3<f32>, footprint: f
     var normal = geometric_normal;
     var width = footprint;
     var spread = frame.ray_settings.z;
+    // The first surface's position was rebuilt from a depth buffer or interpolated by the raster,
+    // which place it within a fraction of its pixel's footprint of the true surface: leave by half
+    // a footprint. Hits are computed from the ray itself, exact to rounding.
+    var clearance = 0.5 * footprint;
     for (var bounce = 0u; bounce < frame.ray_options.z; bounce += 1u) {
         if max(weight.x, max(weight.y, weight.z)) < 1e-4 {
             break;
         }
         let dir = mirror_direction(surface, normal);
-        let origin = ray_offset_origin(surface.position, normal, 0.0);
+        let origin = ray_offset_origin(surface.position, normal, clearance);
+        clearance = 0.0;
         // The cone widens faster off rough surfaces: their reflections are blurrier.
         spread += surface.roughness * surface.roughness;
         let hit = trace_ray(origin, dir, 3.0e38, false);
@@ -78,7 +83,7 @@ fn reflected_radiance(s: ShadingInput, geometric_normal: vec3<f32>, footprint: f
         let hit_surface = triangle_surface(draw, tri.triangle, origin, ray, Ray(across[0], dir), Ray(across[1], dir));
         let position = hit_surface.relative_position + origin;
         let hit_s = apply_decals(evaluate_material(materials[draw.material], hit_surface.frame, hit_surface.g, position, -dir), hit_surface.dp);
-        radiance += weight * shade(hit_s, sun_visibility_traced(position, hit_surface.geometric_normal));
+        radiance += weight * shade(hit_s, sun_visibility_traced(position, hit_surface.geometric_normal, 0.0));
         weight *= reflection_weight(hit_s);
         surface = hit_s;
         normal = hit_surface.geometric_normal;

@@ -4,8 +4,9 @@
 #include "rays/trace.wgsl"
 
 // One ray towards the sun's centre from `position`, off the surface along its geometric normal `n`
-// (on the side being lit); 0 where the surface faces away from the sun.
-fn sun_visibility_traced(position: vec3<f32>, n: vec3<f32>) -> f32 {
+// (on the side being lit) by `clearance` metres beyond rounding's reach (for positions known only
+// that well); 0 where the surface faces away from the sun.
+fn sun_visibility_traced(position: vec3<f32>, n: vec3<f32>, clearance: f32) -> f32 {
     if frame.ray_options.x == RAY_SHADOWS_OFF || frame.sun_direction.w == 0.0 {
         return 1.0;
     }
@@ -13,5 +14,5 @@ fn sun_visibility_traced(position: vec3<f32>, n: vec3<f32>) -> f32 {
     if dot(n, to_sun) <= 0.0 {
         return 0.0;
     }
-    return select(1.0, 0.0, ray_occluded(ray_offset_origin(position, n, 0.0), to_sun, 3.0e38));
+    return select(1.0, 0.0, ray_occluded(ray_offset_origin(position, n, clearance), to_sun, 3.0e38));
 }
