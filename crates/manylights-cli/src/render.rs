@@ -105,6 +105,10 @@ pub struct RenderArgs {
     /// Untimed frames before timing starts.
     #[arg(long, default_value_t = 0)]
     warmup: u32,
+    /// Scene time of the first frame, in seconds: where the glTF animation, spinning groups and
+    /// particles are (each frame adds 1/60 s).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    time: f32,
 }
 
 /// Ray-traced effects; each overrides the scene file's `[rays]`.
@@ -314,6 +318,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if (args.timings || args.timings_json.is_some()) && !renderer.has_timestamps() {
         bail!("--timings needs GPU timestamp queries, which this adapter lacks ({device}); run without --timings");
     }
+    if !args.time.is_finite() {
+        bail!("--time {} must be a finite number of seconds", args.time);
+    }
+    renderer.time = args.time;
     renderer.render_frames(&camera, args.warmup)?;
     let frames = renderer.render_frames(&camera, args.frames)?;
 
@@ -391,7 +399,7 @@ impl TimingReport {
             println!("{} particles, method {}{grid}", particles.count, config.particle_method.name());
         }
         let rays = &renderer.config.rays;
-        if let Some(built) = renderer.ray_structure {
+        if let Some(built) = renderer.ray_structure() {
             println!(
                 "ray hierarchy: {} triangles in {} instances, {} nodes; CPU build: BLASes {:.1} ms, TLAS {:.3} ms",
                 built.triangles, built.instances, built.nodes, built.blas_build_ms, built.tlas_build_ms
@@ -485,7 +493,7 @@ fn rays_json(renderer: &Renderer) -> serde_json::Value {
         "reflection_bounces": rays.reflection_bounces,
         "reflection_roughness": rays.reflection_roughness,
     });
-    if let Some(built) = renderer.ray_structure {
+    if let Some(built) = renderer.ray_structure() {
         json["hierarchy"] = serde_json::json!({
             "triangles": built.triangles,
             "instances": built.instances,

@@ -27,10 +27,21 @@ pub struct Renderer {
     /// Present when the scene has particles and a particle method lights them.
     particles: Option<ParticleSystem>,
     timer: Option<GpuTimer>,
-    /// The scene's ray hierarchy, when the frame traces rays.
-    pub ray_structure: Option<RayStructureStats>,
+    /// The scene's ray hierarchy, when the frame traces rays: its top level is rebuilt when
+    /// instances move.
+    rays: Option<RayStructure>,
+    /// What moves the scene's mesh instances, with every instance's transform and primitive count.
+    motion: Option<InstanceMotion>,
     /// Scene time of the next frame, in seconds: where animated groups are.
     pub time: f32,
+}
+
+/// The scene's node animation and what moving instances needs: each instance's current transform
+/// (for the rays' top level) and its primitive count (its draws).
+struct InstanceMotion {
+    animation: crate::scene::animation::Animation,
+    transforms: Vec<glam::Mat4>,
+    primitive_counts: Vec<usize>,
 }
 
 /// The anisotropy the samplers get. lavapipe (Mesa 22.3) takes seconds per pixel when decal textures
@@ -159,8 +170,32 @@ impl Renderer {
         )?;
         let timer = GpuTimer::new(&ctx);
         ctx.check_errors()?;
-        let ray_structure = rays.as_ref().map(RayStructure::stats);
-        Ok(Self { ctx, scene: gpu_scene, config, pipeline, lights, decals, particles, timer, ray_structure, time: 0.0 })
+        let motion = scene.animation.clone().map(|animation| InstanceMotion {
+            animation,
+            transforms: scene.instances.iter().map(|i| i.world_from_local).collect(),
+            primitive_counts: scene.instances.iter().map(|i| scene.meshes[i.mesh].primitives.len()).collect(),
+        });
+        Ok(Self { ctx, scene: gpu_scene, config, pipeline, lights, decals, particles, timer, rays, motion, time: 0.0 })
+    }
+
+    /// The ray hierarchy's sizes and CPU build times, when the frame traces rays.
+    pub fn ray_structure(&self) -> Option<RayStructureStats> {
+        self.rays.as_ref().map(RayStructure::stats)
+    }
+
+    /// Places animated instances where they are at `time`: their draws, and the rays' top level
+    /// rebuilt over every instance.
+    fn move_instances(&mut self, time: f32) -> Result<()> {
+        let Some(motion) = &mut self.motion else { return Ok(()) };
+        let moved = motion.animation.instance_transforms(time);
+        if let Some(rays) = &mut self.rays {
+            for &(instance, transform) in &moved {
+                motion.transforms[instance] = transform;
+            }
+            rays.place(&motion.transforms)?;
+        }
+        self.scene.move_instances(&self.ctx.queue, &moved, &motion.primitive_counts, self.rays.as_ref());
+        Ok(())
     }
 
     /// Whether `render` returns per-pass GPU timings.
@@ -220,6 +255,7 @@ impl Renderer {
             }
             // From here to the submit is the CPU's work for the frame (waits for the timer are before).
             let recording = std::time::Instant::now();
+            self.move_instances(self.time)?;
             // Particles first: as lights, they are the light structure's dynamic group.
             if let Some(particles) = &self.particles {
                 particles.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time, camera.position());

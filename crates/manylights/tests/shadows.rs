@@ -12,7 +12,10 @@ use manylights::{
     pipelines::{LightMethod, PipelineKind},
     rays::{RaySettings, SunShadows},
     renderer::Image,
-    scene::{AlphaMode, Camera, Instance, Material, Mesh, Primitive, Projection, Scene, Sun, Vertex},
+    scene::{
+        animation::{Animation, Channel, Interpolation, Node, Property},
+        AlphaMode, Camera, Instance, Material, Mesh, Primitive, Projection, Scene, Sun, Vertex,
+    },
 };
 
 const WIDTH: u32 = 128;
@@ -111,8 +114,13 @@ fn floor_point(x: f32, y: f32) -> Vec3 {
 
 /// Whether the segment from `p` towards the sun along `to_sun` meets the box (slab test).
 fn box_blocks(p: Vec3, to_sun: Vec3) -> bool {
+    box_moved_blocks(p, to_sun, Vec3::ZERO)
+}
+
+/// As [`box_blocks`], with the box moved by `offset`.
+fn box_moved_blocks(p: Vec3, to_sun: Vec3, offset: Vec3) -> bool {
     let inverse = to_sun.recip();
-    let (t0, t1) = ((BOX_MIN - p) * inverse, (BOX_MAX - p) * inverse);
+    let (t0, t1) = ((BOX_MIN + offset - p) * inverse, (BOX_MAX + offset - p) * inverse);
     let (near, far) = (t0.min(t1).max_element(), t0.max(t1).min_element());
     near.max(0.0) <= far
 }
@@ -129,9 +137,15 @@ enum Seen {
 }
 
 fn seen(x: u32, y: u32) -> Option<Seen> {
+    seen_with_box_at(x, y, Vec3::ZERO)
+}
+
+/// As [`seen`], with the box moved by `offset` (its shadow moves along; the pane stays).
+fn seen_with_box_at(x: u32, y: u32, offset: Vec3) -> Option<Seen> {
+    let box_blocks = |p: Vec3, to_sun: Vec3| box_moved_blocks(p, to_sun, offset);
     let classify = |fx: f32, fy: f32| {
         let p = floor_point(fx, fy);
-        if p.x.abs() <= BOX_MAX.x && p.z.abs() <= BOX_MAX.z {
+        if (p.x - offset.x).abs() <= BOX_MAX.x && (p.z - offset.z).abs() <= BOX_MAX.z {
             return Seen::BoxTop;
         }
         if p.x.abs() > 10.0 {
@@ -153,10 +167,36 @@ fn seen(x: u32, y: u32) -> Option<Seen> {
 /// The sun's angular diameter for soft shadows: penumbrae of 4 to 9 pixels here.
 const SOFT_SUN_DEGREES: f32 = 16.0;
 
-fn render(scene: &Scene, camera: &Camera, pipeline: PipelineKind, shadows: SunShadows) -> Image<[f32; 4]> {
+fn settings(pipeline: PipelineKind, shadows: SunShadows) -> RenderConfig {
     let rays = RaySettings { sun_shadows: shadows, sun_angle_degrees: SOFT_SUN_DEGREES, shadow_rays: 32, ..Default::default() };
-    let config = RenderConfig { pipeline, rays, ..config(WIDTH, HEIGHT, LightMethod::Off) };
-    render_with(scene, camera, config).1
+    RenderConfig { pipeline, rays, ..config(WIDTH, HEIGHT, LightMethod::Off) }
+}
+
+fn render(scene: &Scene, camera: &Camera, pipeline: PipelineKind, shadows: SunShadows) -> Image<[f32; 4]> {
+    render_with(scene, camera, settings(pipeline, shadows)).1
+}
+
+/// Checks a shadowed frame pixel by pixel against the same frame without shadows (`lit`) and
+/// without the sun (`dark`), for the box moved by `offset`; returns the shadowed and sunlit pixels
+/// checked.
+fn check_shadow(shadowed: &Image<[f32; 4]>, lit: &Image<[f32; 4]>, dark: &Image<[f32; 4]>, offset: Vec3, what: &str) -> (u32, u32) {
+    let (mut in_shadow, mut in_sun) = (0, 0);
+    for y in 0..HEIGHT {
+        for x in 0..WIDTH {
+            let Some(seen) = seen_with_box_at(x, y, offset).filter(|s| ![Seen::Mixed, Seen::Sky].contains(s)) else { continue };
+            let expected = if seen == (Seen::Surface { shadowed: true }) {
+                in_shadow += 1;
+                pixel(dark, x, y)
+            } else {
+                in_sun += 1;
+                pixel(lit, x, y)
+            };
+            let got = pixel(shadowed, x, y);
+            let error = (0..3).map(|c| (got[c] - expected[c]).abs()).fold(0.0, f32::max);
+            assert!(error <= 1e-5, "{what}: pixel ({x}, {y}) shows {seen:?}: {got:?}, expected {expected:?}");
+        }
+    }
+    (in_shadow, in_sun)
 }
 
 #[test]
@@ -168,25 +208,7 @@ fn a_floating_box_shadows_exactly_the_floor_and_pane_points_whose_sun_ray_it_blo
         let lit = render(&scene, &camera, pipeline, SunShadows::Off);
         let dark = render(&sunless, &camera, pipeline, SunShadows::Off);
         let shadowed = render(&scene, &camera, pipeline, SunShadows::Hard);
-        let (mut in_shadow, mut in_sun) = (0, 0);
-        for y in 0..HEIGHT {
-            for x in 0..WIDTH {
-                let Some(what) = seen(x, y).filter(|s| ![Seen::Mixed, Seen::Sky].contains(s)) else { continue };
-                let expected = match what {
-                    Seen::Surface { shadowed: true } => {
-                        in_shadow += 1;
-                        pixel(&dark, x, y)
-                    }
-                    Seen::Surface { shadowed: false } | Seen::BoxTop | Seen::Mixed | Seen::Sky => {
-                        in_sun += 1;
-                        pixel(&lit, x, y)
-                    }
-                };
-                let got = pixel(&shadowed, x, y);
-                let error = (0..3).map(|c| (got[c] - expected[c]).abs()).fold(0.0, f32::max);
-                assert!(error <= 1e-5, "{name}: pixel ({x}, {y}) shows {what:?}: {got:?}, expected {expected:?}");
-            }
-        }
+        let (in_shadow, in_sun) = check_shadow(&shadowed, &lit, &dark, Vec3::ZERO, name);
         // The shadow falls in view, beside plenty of sunlit floor.
         assert!(in_shadow > 150 && in_sun > 3000, "{name}: {in_shadow} shadowed and {in_sun} sunlit pixels");
     }
@@ -267,4 +289,70 @@ fn soft_shadows_follow_the_fraction_of_the_sun_each_point_sees() {
     );
     // 32 rays per pixel and the filter: the penumbra within 0.05 of the exact fraction on average.
     assert!(mean_error < 0.05, "penumbra pixels are off the sun's visible fraction by {mean_error} on average");
+}
+
+/// The box of [`shadow_scene`] flying along x at 60 m/s (one metre, six pixels, a frame), by a glTF
+/// style node animation.
+fn moving_box(scene: &mut Scene) {
+    let rest = scene.instances[1].world_from_local;
+    let centre = (BOX_MIN + BOX_MAX) * 0.5;
+    scene.animation = Some(Animation {
+        name: "fly".into(),
+        nodes: vec![Node { parent: None, rest }],
+        channels: vec![Channel {
+            node: 0,
+            property: Property::Translation,
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 0.1],
+            values: vec![(centre - Vec3::X * 3.0).extend(0.0), (centre + Vec3::X * 3.0).extend(0.0)],
+        }],
+        instances: vec![(1, 0)],
+        duration: 0.1,
+    });
+}
+
+/// Where the flying box is at `time`, as an offset from its rest place.
+fn box_offset(time: f32) -> Vec3 {
+    Vec3::X * (-3.0 + 60.0 * time)
+}
+
+#[test]
+fn every_frame_traces_the_top_level_of_its_own_time_while_the_occluder_moves() {
+    let (mut scene, camera) = shadow_scene(3.0);
+    let (mut sunless, _) = shadow_scene(0.0);
+    moving_box(&mut scene);
+    moving_box(&mut sunless);
+    let pipeline = PipelineKind::Visbuffer;
+    let [mut lit, mut dark, mut shadowed] = [
+        renderer(&scene, settings(pipeline, SunShadows::Off)),
+        renderer(&sunless, settings(pipeline, SunShadows::Off)),
+        renderer(&scene, settings(pipeline, SunShadows::Hard)),
+    ];
+    let mut shadow_columns = Vec::new();
+    for frame in 0..5 {
+        let time = shadowed.time;
+        let images = [&mut lit, &mut dark, &mut shadowed].map(|r| {
+            r.render(&camera).unwrap();
+            r.read_hdr().unwrap()
+        });
+        let what = format!("frame {frame} at {time} s");
+        let (in_shadow, in_sun) = check_shadow(&images[2], &images[0], &images[1], box_offset(time), &what);
+        assert!(in_shadow > 100 && in_sun > 3000, "{what}: {in_shadow} shadowed and {in_sun} sunlit pixels");
+        // Where the shadow is, on average: it must travel with the box.
+        let columns: Vec<u32> = (0..HEIGHT)
+            .flat_map(|y| (0..WIDTH).map(move |x| (x, y)))
+            .filter(|&(x, y)| seen_with_box_at(x, y, box_offset(time)) == Some(Seen::Surface { shadowed: true }))
+            .map(|(x, _)| x)
+            .collect();
+        shadow_columns.push(columns.iter().sum::<u32>() as f32 / columns.len() as f32);
+    }
+    assert!(shadow_columns.windows(2).all(|w| w[1] > w[0] + 4.0), "the shadow does not follow the box: {shadow_columns:?}");
+    // Frames submitted back to back, each placing the box and tracing it before the next: the last
+    // frame equals the one rendered alone at its time.
+    let mut batch = renderer(&scene, settings(pipeline, SunShadows::Hard));
+    batch.render_frames(&camera, 5).unwrap();
+    let mut single = renderer(&scene, settings(pipeline, SunShadows::Hard));
+    single.time = 4.0 * manylights::renderer::FRAME_INTERVAL;
+    single.render(&camera).unwrap();
+    assert_eq!(batch.read_hdr().unwrap().pixels, single.read_hdr().unwrap().pixels);
 }

@@ -13,7 +13,6 @@ use super::{
     FrameUniforms, GpuContext,
 };
 use crate::{
-    accel::{BvhNode, END},
     rays::RayStructure,
     scene::{AlphaMode, Decal, Light, LightKind, Material, Scene, TextureRef, Wrap},
     Error, Result,
@@ -171,6 +170,13 @@ pub struct GpuScene {
     pub triangle_count: u64,
     /// The scene's indices, also bound as storage: the raster pass draws indexed from it.
     pub index_buffer: wgpu::Buffer,
+    /// The draws as uploaded, and the first draw of each scene instance (its primitives' draws
+    /// follow): moving instances rewrites their draws (`move_instances`).
+    draws: Vec<GpuDraw>,
+    instance_first_draw: Vec<usize>,
+    draw_buffer: wgpu::Buffer,
+    ray_node_buffer: wgpu::Buffer,
+    ray_instance_buffer: wgpu::Buffer,
 }
 
 impl GpuScene {
@@ -234,15 +240,15 @@ impl GpuScene {
         }
 
         let mut draws = Vec::new();
+        let mut instance_first_draw = Vec::with_capacity(scene.instances.len());
         let mut draw_commands = Vec::new();
         let mut transparent_draw_commands = Vec::new();
         // Visibility ids number the drawn triangles from 0 (the background is told by depth).
         let mut next_visibility_id = 0u64;
         for instance in &scene.instances {
-            let normal_from_local = Mat3::from_mat4(instance.world_from_local).inverse().transpose();
-            let handedness = Mat3::from_mat4(instance.world_from_local).determinant().signum();
-            let normal_columns =
-                [normal_from_local.x_axis.extend(handedness), normal_from_local.y_axis.extend(0.0), normal_from_local.z_axis.extend(0.0)];
+            instance_first_draw.push(draws.len());
+            let (world_from_local, normal_from_local) = draw_transforms(&instance.world_from_local);
+            let handedness = normal_from_local[0][3];
             let mesh = &scene.meshes[instance.mesh];
             for (primitive, &(first_index, index_count, base_vertex)) in mesh.primitives.iter().zip(&primitive_ranges[instance.mesh]) {
                 let material = &scene.materials[primitive.material];
@@ -260,8 +266,8 @@ impl GpuScene {
                     },
                 });
                 draws.push(GpuDraw {
-                    world_from_local: instance.world_from_local.to_cols_array_2d(),
-                    normal_from_local: normal_columns.map(|c| c.to_array()),
+                    world_from_local,
+                    normal_from_local,
                     first_index,
                     first_visibility_id: next_visibility_id as u32,
                     base_vertex,
@@ -279,14 +285,14 @@ impl GpuScene {
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let vertex_buffer = storage_buffer(device, "vertices", &vertices, limit, wgpu::BufferUsages::empty())?;
         let index_buffer = storage_buffer(device, "indices", &indices, limit, wgpu::BufferUsages::INDEX)?;
-        let draw_buffer = storage_buffer(device, "draws", &draws, limit, wgpu::BufferUsages::empty())?;
+        let draw_buffer = storage_buffer(device, "draws", &draws, limit, wgpu::BufferUsages::COPY_DST)?;
         let material_buffer = storage_buffer(device, "materials", &materials, limit, wgpu::BufferUsages::empty())?;
-        // A ray entering node 0 of an empty hierarchy meets an empty box and ends.
-        let no_rays = RayStructure { nodes: vec![BvhNode { min: [1.0; 3], max: [-1.0; 3], entry: 0, skip: END }], ..Default::default() };
+        let no_rays = RayStructure::unused();
         let rays = rays.filter(|r| !r.nodes.is_empty()).unwrap_or(&no_rays);
-        let ray_node_buffer = storage_buffer(device, "ray hierarchy nodes", &rays.nodes, limit, wgpu::BufferUsages::empty())?;
+        // The top level and the instances are rewritten when instances move (`move_instances`).
+        let ray_node_buffer = storage_buffer(device, "ray hierarchy nodes", &rays.nodes, limit, wgpu::BufferUsages::COPY_DST)?;
         let ray_triangle_buffer = storage_buffer(device, "ray triangles", &rays.triangles, limit, wgpu::BufferUsages::empty())?;
-        let ray_instance_buffer = storage_buffer(device, "ray instances", &rays.instances, limit, wgpu::BufferUsages::empty())?;
+        let ray_instance_buffer = storage_buffer(device, "ray instances", &rays.instances, limit, wgpu::BufferUsages::COPY_DST)?;
         let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
             size: std::mem::size_of::<FrameUniforms>() as u64,
@@ -366,7 +372,44 @@ impl GpuScene {
             constants: SceneConstants { sun: scene.sun, ambient: scene.ambient, exposure: scene.exposure, bounds: scene.bounds() },
             triangle_count: scene.drawn_triangle_count() as u64,
             index_buffer,
+            draws,
+            instance_first_draw,
+            draw_buffer,
+            ray_node_buffer,
+            ray_instance_buffer,
         })
+    }
+
+    /// Moves scene instances: `moved` holds (instance, world from local), `primitive_counts` each
+    /// instance's primitive count (its draws). Rewrites their draws and, when the frame traces rays,
+    /// the rays' top level and instances from `rays` (already placed with the same transforms). The
+    /// writes land before the next submitted frame and after the ones already submitted, so every
+    /// frame draws and traces one consistent placement.
+    pub fn move_instances(
+        &mut self,
+        queue: &wgpu::Queue,
+        moved: &[(usize, glam::Mat4)],
+        primitive_counts: &[usize],
+        rays: Option<&RayStructure>,
+    ) {
+        let mut touched: Option<std::ops::Range<usize>> = None;
+        for &(instance, world_from_local) in moved {
+            let first = self.instance_first_draw[instance];
+            let draws = first..first + primitive_counts[instance];
+            let (world, normal) = draw_transforms(&world_from_local);
+            for draw in &mut self.draws[draws.clone()] {
+                (draw.world_from_local, draw.normal_from_local) = (world, normal);
+            }
+            touched = Some(touched.map_or(draws.clone(), |t| t.start.min(draws.start)..t.end.max(draws.end)));
+        }
+        if let Some(range) = touched.filter(|r| !r.is_empty()) {
+            let offset = (range.start * std::mem::size_of::<GpuDraw>()) as u64;
+            queue.write_buffer(&self.draw_buffer, offset, bytemuck::cast_slice(&self.draws[range]));
+        }
+        if let Some(rays) = rays.filter(|r| !r.instances.is_empty()) {
+            queue.write_buffer(&self.ray_node_buffer, 0, bytemuck::cast_slice(&rays.nodes[..rays.tlas_node_count]));
+            queue.write_buffer(&self.ray_instance_buffer, 0, bytemuck::cast_slice(&rays.instances));
+        }
     }
 
     /// Keep in sync with `shading/scene_bindings.wgsl`.
@@ -397,6 +440,15 @@ impl GpuScene {
     pub fn write_frame(&self, queue: &wgpu::Queue, uniforms: &FrameUniforms) {
         queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(uniforms));
     }
+}
+
+/// A draw's transforms as the shaders read them: world from local, and the inverse transpose of its
+/// upper 3×3 in columns, the first carrying the sign of the determinant in w.
+fn draw_transforms(world_from_local: &glam::Mat4) -> ([[f32; 4]; 4], [[f32; 4]; 3]) {
+    let normal_from_local = Mat3::from_mat4(*world_from_local).inverse().transpose();
+    let handedness = Mat3::from_mat4(*world_from_local).determinant().signum();
+    let columns = [normal_from_local.x_axis.extend(handedness), normal_from_local.y_axis.extend(0.0), normal_from_local.z_axis.extend(0.0)];
+    (world_from_local.to_cols_array_2d(), columns.map(|c| c.to_array()))
 }
 
 /// A read-only storage buffer, also usable as `usage`; empty arrays get one zeroed element because

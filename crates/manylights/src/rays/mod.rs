@@ -188,17 +188,30 @@ pub struct RayInstance {
 }
 
 /// The scene's ray-tracing hierarchy as uploaded: the TLAS's nodes first (root at 0), then every
-/// BLAS; triangles in leaf order, mesh after mesh; instances in TLAS leaf order.
+/// BLAS; triangles in leaf order, BLAS after BLAS; instances in TLAS leaf order.
 #[derive(Clone, Debug, Default)]
 pub struct RayStructure {
     pub nodes: Vec<BvhNode>,
     pub triangles: Vec<RayTriangle>,
     pub instances: Vec<RayInstance>,
-    /// Nodes of the top level, at the start of `nodes`.
+    /// Nodes of the top level, at the start of `nodes`: 2n − 1 for n instances, whatever their places.
     pub tlas_node_count: usize,
-    /// CPU time of the BLAS builds and of the TLAS build, in milliseconds.
+    /// CPU time of the BLAS builds and of the last TLAS build, in milliseconds.
     pub blas_build_ms: f64,
     pub tlas_build_ms: f64,
+    /// Every instance the top level places, in scene order.
+    placements: Vec<Placement>,
+}
+
+/// A mesh instance as the top level places it: its BLAS and that BLAS's box in its own space.
+#[derive(Clone, Copy, Debug)]
+struct Placement {
+    scene_instance: usize,
+    blas_root: u32,
+    bounds: Aabb,
+    /// Its triangles were built in world space (its transform was singular at load): it stays there.
+    baked: bool,
+    first_draw: u32,
 }
 
 /// What was built for rays, and how long it took: for reports.
@@ -211,6 +224,17 @@ pub struct RayStructureStats {
     pub tlas_build_ms: f64,
 }
 
+/// A BLAS while the structure is assembled: its nodes (links local to it) and triangles.
+struct Blas {
+    bvh: Bvh,
+    triangles: Vec<RayTriangle>,
+}
+
+fn invertible(t: &Affine3A) -> bool {
+    let det = t.matrix3.determinant();
+    det.is_finite() && det.abs() > f32::MIN_POSITIVE
+}
+
 impl RayStructure {
     pub fn stats(&self) -> RayStructureStats {
         RayStructureStats {
@@ -221,25 +245,13 @@ impl RayStructure {
             tlas_build_ms: self.tlas_build_ms,
         }
     }
-}
 
-/// A BLAS while the structure is assembled: its nodes (links local to it) and triangles.
-struct Blas {
-    bvh: Bvh,
-    triangles: Vec<RayTriangle>,
-}
-
-impl RayStructure {
     /// Builds the BLAS of every instanced mesh and the TLAS over the instances, at the instances'
     /// transforms. An instance whose transform cannot be inverted (a mesh flattened onto a plane or a
     /// line) gets a BLAS of its own over its triangles in world space, placed by the identity.
     /// Meshes without opaque or alpha-masked triangles are left out.
     pub fn build(scene: &Scene) -> Result<Self> {
         let start = std::time::Instant::now();
-        let invertible = |t: &Affine3A| {
-            let det = t.matrix3.determinant();
-            det.is_finite() && det.abs() > f32::MIN_POSITIVE
-        };
         let transforms: Vec<Affine3A> = scene.instances.iter().map(|i| Affine3A::from_mat4(i.world_from_local)).collect();
         let mut shared = vec![false; scene.meshes.len()];
         for (instance, transform) in scene.instances.iter().zip(&transforms) {
@@ -257,38 +269,22 @@ impl RayStructure {
         let mut instance_blas = Vec::with_capacity(scene.instances.len());
         for (instance, transform) in scene.instances.iter().zip(&transforms) {
             if invertible(transform) {
-                instance_blas.push(mesh_blas[instance.mesh].map(|b| (b, transform.inverse())));
+                instance_blas.push(mesh_blas[instance.mesh].map(|b| (b, false)));
             } else {
                 let blas = build_blas(scene, instance.mesh, transform)?;
                 instance_blas.push(blas.map(|blas| {
                     blases.push(blas);
-                    (blases.len() - 1, Affine3A::IDENTITY)
+                    (blases.len() - 1, true)
                 }));
             }
         }
         let blas_build_ms = start.elapsed().as_secs_f64() * 1e3;
 
-        let start = std::time::Instant::now();
-        // Each scene instance's draws start after the draws of the instances before it: one per
-        // primitive, in the order `GpuScene::upload` makes them.
-        let mut first_draws = Vec::with_capacity(scene.instances.len());
-        let mut draws = 0u32;
-        for instance in &scene.instances {
-            first_draws.push(draws);
-            draws += scene.meshes[instance.mesh].primitives.len() as u32;
-        }
-        let mut placed = Vec::new();
-        let mut boxes = Vec::new();
-        for (i, placement) in instance_blas.iter().enumerate() {
-            let Some((blas, local_from_world)) = *placement else { continue };
-            boxes.push(blases[blas].bvh.nodes[0].bounds().transformed(&local_from_world.inverse()));
-            placed.push((i, blas, local_from_world));
-        }
-        let tlas = Bvh::build_with_leaf_size(&boxes, 1)?;
-        let tlas_build_ms = start.elapsed().as_secs_f64() * 1e3;
-
-        // Lay out: the TLAS, then each BLAS; triangles BLAS after BLAS.
-        let mut nodes = tlas.nodes.clone();
+        // Lay out: room for the TLAS (2n − 1 nodes for n instances), then each BLAS; triangles BLAS
+        // after BLAS.
+        let placed = instance_blas.iter().filter(|b| b.is_some()).count();
+        let tlas_node_count = (2 * placed).saturating_sub(1);
+        let mut nodes = vec![BvhNode::default(); tlas_node_count];
         let mut triangles = Vec::new();
         let mut blas_roots = Vec::with_capacity(blases.len());
         for blas in &blases {
@@ -304,20 +300,67 @@ impl RayStructure {
                 crate::accel::bvh::MAX_PRIMITIVES
             )));
         }
+        // Each scene instance's draws start after the draws of the instances before it: one per
+        // primitive, in the order `GpuScene::upload` makes them.
+        let mut first_draw = 0u32;
+        let mut placements = Vec::with_capacity(placed);
+        for (i, (instance, blas)) in scene.instances.iter().zip(&instance_blas).enumerate() {
+            if let Some((b, baked)) = *blas {
+                let bounds = blases[b].bvh.nodes[0].bounds();
+                placements.push(Placement { scene_instance: i, blas_root: blas_roots[b], bounds, baked, first_draw });
+            }
+            first_draw += scene.meshes[instance.mesh].primitives.len() as u32;
+        }
+        let mut structure =
+            Self { nodes, triangles, instances: Vec::new(), tlas_node_count, blas_build_ms, tlas_build_ms: 0.0, placements };
+        structure.place(&scene.instances.iter().map(|i| i.world_from_local).collect::<Vec<_>>())?;
+        Ok(structure)
+    }
+
+    /// A hierarchy no ray enters: one node with an empty box, for frames that trace no rays (bindings
+    /// cannot be empty).
+    pub fn unused() -> Self {
+        Self { nodes: vec![BvhNode { min: [1.0; 3], max: [-1.0; 3], entry: 0, skip: crate::accel::END }], ..Default::default() }
+    }
+
+    /// Rebuilds the top level for the scene's instances at `transforms` (world from local, one per
+    /// scene instance): `nodes[..tlas_node_count]` and `instances` change, the BLASes stay. An
+    /// instance whose transform is singular now is placed where no ray meets it (a point box, and a
+    /// map sending every ray to a standstill); one baked in world space at load stays there.
+    pub fn place(&mut self, transforms: &[glam::Mat4]) -> Result<()> {
+        let start = std::time::Instant::now();
+        let mut boxes = Vec::with_capacity(self.placements.len());
+        let mut maps = Vec::with_capacity(self.placements.len());
+        for placement in &self.placements {
+            let world_from_local =
+                if placement.baked { Affine3A::IDENTITY } else { Affine3A::from_mat4(transforms[placement.scene_instance]) };
+            if invertible(&world_from_local) {
+                boxes.push(placement.bounds.transformed(&world_from_local));
+                maps.push(world_from_local.inverse());
+            } else {
+                boxes.push(Aabb::new(world_from_local.translation.into(), world_from_local.translation.into()));
+                maps.push(Affine3A::ZERO);
+            }
+        }
+        let tlas = Bvh::build_with_leaf_size(&boxes, 1)?;
+        debug_assert_eq!(tlas.nodes.len(), self.tlas_node_count);
+        self.nodes[..tlas.nodes.len()].copy_from_slice(&tlas.nodes);
         // TLAS leaves name their instance directly: instances are stored in leaf order.
-        let mut instances = Vec::with_capacity(placed.len());
-        for node in nodes[..tlas.nodes.len()].iter_mut().filter(|n| n.is_leaf()) {
-            let (scene_instance, blas, local_from_world) = placed[tlas.primitive_indices[node.leaf_first() as usize] as usize];
-            *node = BvhNode { entry: BvhNode::leaf_entry(instances.len() as u32, 1), ..*node };
-            instances.push(RayInstance {
-                local_from_world: crate::gpu::scene::affine_rows(&local_from_world),
-                blas_root: blas_roots[blas],
-                first_draw: first_draws[scene_instance],
-                scene_instance: scene_instance as u32,
+        self.instances.clear();
+        for node in self.nodes[..tlas.nodes.len()].iter_mut().filter(|n| n.is_leaf()) {
+            let p = tlas.primitive_indices[node.leaf_first() as usize] as usize;
+            let placement = &self.placements[p];
+            *node = BvhNode { entry: BvhNode::leaf_entry(self.instances.len() as u32, 1), ..*node };
+            self.instances.push(RayInstance {
+                local_from_world: crate::gpu::scene::affine_rows(&maps[p]),
+                blas_root: placement.blas_root,
+                first_draw: placement.first_draw,
+                scene_instance: placement.scene_instance as u32,
                 _pad: 0,
             });
         }
-        Ok(Self { tlas_node_count: tlas.nodes.len(), nodes, triangles, instances, blas_build_ms, tlas_build_ms })
+        self.tlas_build_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(())
     }
 
     /// The BLAS of mesh instance `instance` (in `instances`) as a standalone BVH with its triangles'
@@ -410,10 +453,12 @@ mod tests {
         for (i, instance) in structure.instances.iter().enumerate() {
             let (blas, boxes) = structure.blas_of(i);
             blas.validate(&boxes).unwrap_or_else(|e| panic!("BLAS of instance {i}: {e}"));
-            let rows = instance.local_from_world;
-            let local_from_world =
-                Affine3A::from_mat4(glam::Mat4::from_cols_array_2d(&[rows[0], rows[1], rows[2], [0.0, 0.0, 0.0, 1.0]]).transpose());
-            world_boxes.push(blas.nodes[0].bounds().transformed(&local_from_world.inverse()));
+            // The top level bounds each instance by its BLAS's box under the scene's transform (the
+            // identity for an instance built in world space).
+            let identity = instance.local_from_world == crate::gpu::scene::affine_rows(&Affine3A::IDENTITY);
+            let world_from_local = scene.instances[instance.scene_instance as usize].world_from_local;
+            let transform = if identity { Affine3A::IDENTITY } else { Affine3A::from_mat4(world_from_local) };
+            world_boxes.push(blas.nodes[0].bounds().transformed(&transform));
             triangles += boxes.len();
         }
         let tlas = Bvh {

@@ -4,11 +4,13 @@
 //! one [`Mesh`]. Triangle strips and fans become lists, missing normals become flat normals, missing
 //! tangents come from MikkTSpace, and every image is decoded to RGBA8 (in parallel: decoding dominates
 //! load time). Cameras and `KHR_lights_punctual` lights on nodes are placed with their node's world
-//! transform.
+//! transform. The first animation's node channels (translation, rotation, scale) become the scene's
+//! [`animation::Animation`] of the instances they move.
 
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use ::gltf::animation::util::ReadOutputs;
 use ::gltf::buffer;
 use ::gltf::khr_lights_punctual::Kind;
 use ::gltf::mesh::{Mode, Semantic};
@@ -16,8 +18,8 @@ use ::gltf::{Document, Node};
 use glam::{Mat4, Quat, Vec3, Vec4};
 
 use super::{
-    tangents, AlphaMode, Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Projection, Scene, Sun, Texture, TextureRef,
-    Vertex, Wrap, DEFAULT_LIGHT_CUTOFF,
+    animation, tangents, AlphaMode, Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Projection, Scene, Sun, Texture,
+    TextureRef, Vertex, Wrap, DEFAULT_LIGHT_CUTOFF,
 };
 use crate::{Error, Result};
 
@@ -232,25 +234,94 @@ fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Text
     }
     let mut scene = Scene { meshes, materials, textures, ..Scene::default() };
     match document.default_scene().or_else(|| document.scenes().next()) {
-        Some(root) => place_nodes(&mut scene, &root, document.nodes().len())?,
+        Some(root) => {
+            let hierarchy = place_nodes(&mut scene, &root, document.nodes().len())?;
+            scene.animation = node_animation(document, buffers, &hierarchy)?;
+        }
         None => log::warn!("the glTF file has no scene: nothing is placed"),
     }
     Ok(scene)
 }
 
-/// Walks the node hierarchy depth first, adding an instance, camera or light for each node that has one.
-fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Result<(), String> {
+/// The placed node hierarchy, for animation: nodes in the order visited (parents first), each
+/// glTF node's place in it, and the node each mesh instance was placed by.
+struct Hierarchy {
+    nodes: Vec<animation::Node>,
+    index_of: Vec<Option<usize>>,
+    instance_nodes: Vec<usize>,
+}
+
+/// The file's first animation, as the moving instances' node animation; `None` without animations
+/// or when none moves an instance. Morph-target weights are not supported and are skipped.
+fn node_animation(document: &Document, buffers: &[buffer::Data], hierarchy: &Hierarchy) -> Result<Option<animation::Animation>, String> {
+    let Some(source) = document.animations().next() else { return Ok(None) };
+    if document.animations().len() > 1 {
+        log::warn!("the glTF file has {} animations: only the first plays", document.animations().len());
+    }
+    let name = source.name().map_or_else(|| format!("animation {}", source.index()), str::to_owned);
+    let mut channels = Vec::new();
+    for channel in source.channels() {
+        // Channels of nodes outside the scene move nothing placed.
+        let Some(node) = hierarchy.index_of[channel.target().node().index()] else { continue };
+        let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let times: Vec<f32> =
+            reader.read_inputs().ok_or_else(|| format!("{name}: channel {} has no keyframe times", channel.index()))?.collect();
+        let to_vec4 = |v: [f32; 3]| Vec3::from(v).extend(0.0);
+        let (property, values): (_, Vec<Vec4>) = match reader.read_outputs() {
+            Some(ReadOutputs::Translations(values)) => (animation::Property::Translation, values.map(to_vec4).collect()),
+            Some(ReadOutputs::Scales(values)) => (animation::Property::Scale, values.map(to_vec4).collect()),
+            Some(ReadOutputs::Rotations(values)) => (animation::Property::Rotation, values.into_f32().map(Vec4::from).collect()),
+            Some(ReadOutputs::MorphTargetWeights(_)) => {
+                log::warn!("{name}: morph target weights are not supported; channel {} skipped", channel.index());
+                continue;
+            }
+            None => return Err(format!("{name}: channel {} has no keyframe values", channel.index())),
+        };
+        let interpolation = match channel.sampler().interpolation() {
+            ::gltf::animation::Interpolation::Step => animation::Interpolation::Step,
+            ::gltf::animation::Interpolation::Linear => animation::Interpolation::Linear,
+            ::gltf::animation::Interpolation::CubicSpline => animation::Interpolation::CubicSpline,
+        };
+        channels.push(animation::Channel { node, property, interpolation, times, values });
+    }
+    // An instance moves when its node or an ancestor is animated.
+    let mut moving = vec![false; hierarchy.nodes.len()];
+    for channel in &channels {
+        moving[channel.node] = true;
+    }
+    for (i, node) in hierarchy.nodes.iter().enumerate() {
+        moving[i] |= node.parent.is_some_and(|p| moving[p]);
+    }
+    let instances: Vec<(usize, usize)> = hierarchy.instance_nodes.iter().copied().enumerate().filter(|&(_, node)| moving[node]).collect();
+    if instances.is_empty() {
+        return Ok(None);
+    }
+    let duration = channels.iter().filter_map(|c| c.times.last().copied()).fold(0.0, f32::max);
+    let animation = animation::Animation { name, nodes: hierarchy.nodes.clone(), channels, instances, duration };
+    animation.validate(hierarchy.instance_nodes.len())?;
+    Ok(Some(animation))
+}
+
+/// Walks the node hierarchy depth first, adding an instance, camera or light for each node that has
+/// one; returns the hierarchy as placed, for animation.
+fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Result<Hierarchy, String> {
     let mut cameras = Vec::new();
-    let mut stack: Vec<(Node, Mat4, usize)> = root.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    let mut hierarchy = Hierarchy { nodes: Vec::new(), index_of: vec![None; node_count], instance_nodes: Vec::new() };
+    let mut stack: Vec<(Node, Mat4, usize, Option<usize>)> = root.nodes().map(|n| (n, Mat4::IDENTITY, 0, None)).collect();
     stack.reverse();
-    while let Some((node, parent, depth)) = stack.pop() {
+    while let Some((node, parent, depth, parent_index)) = stack.pop() {
         // Validation does not rule out cycles; a path longer than the node count must contain one.
         if depth > node_count {
             return Err(format!("node {} is its own ancestor: the node hierarchy has a cycle", node.index()));
         }
-        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        let index = hierarchy.nodes.len();
+        hierarchy.nodes.push(animation::Node { parent: parent_index, rest: local });
+        hierarchy.index_of[node.index()] = Some(index);
         if let Some(mesh) = node.mesh() {
             scene.instances.push(Instance { mesh: mesh.index(), world_from_local: world });
+            hierarchy.instance_nodes.push(index);
         }
         if let Some(camera) = node.camera() {
             cameras.push((camera.index(), place_camera(&camera, &node, world)));
@@ -259,13 +330,13 @@ fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Re
             place_light(scene, &light, world);
         }
         let first_child = stack.len();
-        stack.extend(node.children().map(|child| (child, world, depth + 1)));
+        stack.extend(node.children().map(|child| (child, world, depth + 1, Some(index))));
         stack[first_child..].reverse();
     }
     // Ordered like the file's `cameras` array, so "camera N" means the same thing in both.
     cameras.sort_by_key(|(index, _)| *index);
     scene.cameras = cameras.into_iter().map(|(_, camera)| camera).collect();
-    Ok(())
+    Ok(hierarchy)
 }
 
 fn place_camera(camera: &::gltf::Camera, node: &Node, world: Mat4) -> Camera {
@@ -509,6 +580,14 @@ mod tests {
         assert_eq!(scene.materials.len(), 95);
         assert_eq!(count_materials(&scene, |m| m.alpha_mode == AlphaMode::Blend), 2);
         assert_tangent_frames(&scene);
+        // Its animation poses parts of the station: eleven rotation channels of one keyframe each, so
+        // the pose holds at every time.
+        let animation = scene.animation.as_ref().expect("the gas station's animation");
+        assert_eq!(animation.channels.len(), 11);
+        assert!(animation.channels.iter().all(|c| c.property == animation::Property::Rotation && c.times.len() == 1));
+        assert!(!animation.instances.is_empty());
+        let (now, later) = (animation.instance_transforms(0.0), animation.instance_transforms(5.0));
+        assert!(now.iter().zip(&later).all(|(a, b)| a.0 == b.0 && a.1.abs_diff_eq(b.1, 1e-6) && a.1.is_finite()));
     }
 
     #[test]

@@ -6,6 +6,7 @@
 //! Conventions: right-handed, +Y up, metres; a camera looks down its local -Z (as in glTF).
 
 mod aabb;
+pub mod animation;
 pub mod camera;
 pub mod decal_textures;
 pub mod demo;
@@ -363,6 +364,8 @@ pub struct Scene {
     pub particles: Option<crate::particles::ParticleSettings>,
     /// The scene file's choice of ray-traced effects, for the renderer's caller to apply.
     pub ray_hints: crate::rays::RayHints,
+    /// Node animation moving mesh instances (glTF animations), if any.
+    pub animation: Option<animation::Animation>,
 }
 
 impl Default for Scene {
@@ -382,6 +385,7 @@ impl Default for Scene {
             exposure: 1.0,
             particles: None,
             ray_hints: crate::rays::RayHints::default(),
+            animation: None,
         }
     }
 }
@@ -435,6 +439,9 @@ impl Scene {
             if !inst.world_from_local.is_finite() {
                 return err(format!("instance {ii}: transform is NaN or infinite"));
             }
+        }
+        if let Some(animation) = &self.animation {
+            animation.validate(self.instances.len()).map_err(crate::Error::InvalidScene)?;
         }
         for (mi, m) in self.materials.iter().enumerate() {
             for t in [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture].into_iter().flatten() {
