@@ -136,11 +136,7 @@ enum Seen {
     Sky,
 }
 
-fn seen(x: u32, y: u32) -> Option<Seen> {
-    seen_with_box_at(x, y, Vec3::ZERO)
-}
-
-/// As [`seen`], with the box moved by `offset` (its shadow moves along; the pane stays).
+/// With the box moved by `offset` (its shadow moves along; the pane stays).
 fn seen_with_box_at(x: u32, y: u32, offset: Vec3) -> Option<Seen> {
     let box_blocks = |p: Vec3, to_sun: Vec3| box_moved_blocks(p, to_sun, offset);
     let classify = |fx: f32, fy: f32| {
