@@ -136,6 +136,11 @@ pub(crate) struct RayArgs {
     /// file's, or 0.3]
     #[arg(long, allow_negative_numbers = true)]
     reflection_roughness: Option<f32>,
+    /// Shadow rays each shading point may trace towards local lights that cast shadows (glTF and
+    /// scene-file lights; scattered ones do not), 0 to 64, in the order the light method finds them.
+    /// [default: the scene file's, or 0]
+    #[arg(long)]
+    light_shadow_rays: Option<u32>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -173,6 +178,7 @@ impl RayArgs {
             shadow_rays: self.shadow_rays.or(hints.shadow_rays).unwrap_or(defaults.shadow_rays),
             reflection_bounces,
             reflection_roughness: self.reflection_roughness.or(hints.reflection_roughness).unwrap_or(defaults.reflection_roughness),
+            light_shadow_rays: self.light_shadow_rays.or(hints.light_shadow_rays).unwrap_or(defaults.light_shadow_rays),
         })
     }
 }
@@ -405,13 +411,14 @@ impl TimingReport {
                 built.triangles, built.instances, built.nodes, built.blas_build_ms, built.tlas_build_ms
             );
             println!(
-                "sun shadows {}{}, reflections: {}",
+                "sun shadows {}{}, light shadow rays {}, reflections: {}",
                 rays.sun_shadows.name(),
                 if rays.sun_shadows == SunShadows::Soft {
                     format!(" ({} rays, sun {}°)", rays.shadow_rays, rays.sun_angle_degrees)
                 } else {
                     String::new()
                 },
+                rays.light_shadow_rays,
                 if rays.reflection_bounces > 0 {
                     format!("{} bounce(s) below roughness {}", rays.reflection_bounces, rays.reflection_roughness)
                 } else {
@@ -492,6 +499,7 @@ fn rays_json(renderer: &Renderer) -> serde_json::Value {
         "shadow_rays": rays.shadow_rays,
         "reflection_bounces": rays.reflection_bounces,
         "reflection_roughness": rays.reflection_roughness,
+        "light_shadow_rays": rays.light_shadow_rays,
     });
     if let Some(built) = renderer.ray_structure() {
         json["hierarchy"] = serde_json::json!({

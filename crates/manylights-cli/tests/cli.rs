@@ -360,7 +360,7 @@ fn ray_traced_effects_render_with_their_passes_timed() {
         #[rustfmt::skip]
         let out = render_to(&dir, &[
             "--pipeline", pipeline, "--shadows", "soft", "--shadow-rays", "2", "--reflections", "--bounces", "2",
-            "--reflection-roughness", "0.6", "--timings-json", json.to_str().unwrap(),
+            "--reflection-roughness", "0.6", "--light-shadow-rays", "2", "--timings-json", json.to_str().unwrap(),
         ]);
         assert!(out.status.success(), "{pipeline}: {}", String::from_utf8_lossy(&out.stderr));
         let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
@@ -372,6 +372,7 @@ fn ray_traced_effects_render_with_their_passes_timed() {
             (rays["shadows"].as_str(), rays["shadow_rays"].as_u64(), rays["reflection_bounces"].as_u64()),
             (Some("soft"), Some(2), Some(2))
         );
+        assert_eq!(rays["light_shadow_rays"].as_u64(), Some(2));
     }
 }
 
@@ -393,6 +394,8 @@ fn bad_ray_options_are_refused() {
     assert!(without.contains("--reflections"), "{without}");
     let roughness = run(&["--reflections", "--reflection-roughness", "0"]);
     assert!(roughness.contains("roughness threshold 0") && roughness.contains("--reflection-roughness"), "{roughness}");
+    let lamps = run(&["--light-shadow-rays", "65"]);
+    assert!(lamps.contains("65 shadow rays per point towards lights") && lamps.contains("--light-shadow-rays"), "{lamps}");
     let mode = run(&["--shadows", "ambient"]);
     assert!(mode.contains("--shadows") && mode.contains("hard") && mode.contains("soft"), "{mode}");
 }
@@ -426,6 +429,7 @@ fn scene_file_ray_settings_yield_to_flags_and_bad_ones_name_their_key() {
         ("reflections = 10\n", ["rays", "10 reflection bounces", "reflections"]),
         ("shadows = 'blurry'\n", ["rays", "blurry", "\"soft\""]),
         ("sun_angle = 120.0\n", ["rays", "sun angle 120", "sun_angle"]),
+        ("light_shadow_rays = 100\n", ["rays", "100 shadow rays per point", "light_shadow_rays"]),
     ] {
         write(bad);
         let err = failure(&["render", "--scene", scene.to_str().unwrap(), "--width", "16", "--height", "16"]);

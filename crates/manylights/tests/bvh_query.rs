@@ -29,6 +29,7 @@ fn random_lights(count: usize, rng: &mut rand_pcg::Pcg64) -> Vec<Light> {
                 intensity: 1.0,
                 // Mostly small volumes, a few huge ones that overlap everything.
                 range: if i % 97 == 0 { rng.random_range(10.0..30.0) } else { rng.random_range(0.2..3.0) },
+                cast_shadows: false,
             }
         })
         .collect()

@@ -70,6 +70,7 @@ fn random_spots(count: usize, seed: u64) -> Vec<Light> {
                 color: Vec3::new(rng.random(), rng.random(), rng.random()),
                 intensity: rng.random_range(1.0..8.0),
                 range: rng.random_range(0.5..6.0),
+                cast_shadows: false,
             }
         })
         .collect()

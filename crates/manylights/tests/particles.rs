@@ -318,6 +318,7 @@ fn point_light_wall() -> Image<[f32; 4]> {
         color: particle.color,
         intensity: 1.0,
         range: particle.radius,
+        cast_shadows: false,
     };
     let (scene, camera) = wall_scene(vec![light]);
     render_with(&scene, &camera, config(SIZE.0, SIZE.1, LightMethod::Brute)).1
@@ -413,7 +414,15 @@ fn particles_as_lights_equal_their_point_lights() {
     let lights: Vec<Light> = (0..settings.count)
         .map(|i| {
             let p = settings.particle_at(i, time);
-            Light { kind: LightKind::Point, position: p.position, direction: Vec3::NEG_Y, color: p.color, intensity: 1.0, range: p.radius }
+            Light {
+                kind: LightKind::Point,
+                position: p.position,
+                direction: Vec3::NEG_Y,
+                color: p.color,
+                intensity: 1.0,
+                range: p.radius,
+                cast_shadows: false,
+            }
         })
         .chain([scene_light])
         .collect();

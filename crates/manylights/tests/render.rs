@@ -110,6 +110,7 @@ fn spot_light_lights_only_inside_its_cone() {
         color: Vec3::ONE,
         intensity: 10.0,
         range: 10.0,
+        cast_shadows: false,
     };
     let (scene, camera) = wall_scene(vec![spot]);
     let (_, hdr) = render(&scene, &camera);

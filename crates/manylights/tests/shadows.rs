@@ -352,3 +352,75 @@ fn every_frame_traces_the_top_level_of_its_own_time_while_the_occluder_moves() {
     single.render(&camera).unwrap();
     assert_eq!(batch.read_hdr().unwrap().pixels, single.read_hdr().unwrap().pixels);
 }
+
+/// The wall of `common::wall_scene` lit by a lamp at (2, 0, 3) that casts shadows (if `casts`), with an
+/// opaque 1 m square at z = 1.5 centred before the wall: its shadow covers x in [-3, -1], y in
+/// [-1, 1] of the wall.
+fn lamp_and_blocker(casts: bool) -> (Scene, Camera) {
+    let lamp = manylights::scene::Light { cast_shadows: casts, ..point_light(Vec3::new(2.0, 0.0, 3.0), 10.0, 10.0) };
+    let (mut scene, camera) = wall_scene(vec![lamp]);
+    scene.meshes.push(quad_mesh());
+    scene.instances.push(Instance {
+        mesh: 1,
+        world_from_local: Mat4::from_scale_rotation_translation(Vec3::new(0.5, 0.5, 1.0), Quat::IDENTITY, Vec3::new(0.0, 0.0, 1.5)),
+    });
+    (scene, camera)
+}
+
+/// What the wall's pixel (x, y) of a `width`×`height` image shows, if its corners agree: `Some(true)`
+/// in the blocker's shadow, `Some(false)` lit; `None` on an edge or where the blocker hides the wall.
+fn wall_in_lamp_shadow(x: u32, y: u32, (width, height): (u32, u32)) -> Option<bool> {
+    let tan = 30f32.to_radians().tan();
+    let aspect = width as f32 / height as f32;
+    let classify = |fx: f32, fy: f32| {
+        let (nx, ny) = (fx / width as f32 * 2.0 - 1.0, 1.0 - fy / height as f32 * 2.0);
+        let wall = Vec3::new(nx * tan * aspect * 4.0, ny * tan * 4.0, 0.0);
+        // The blocker, seen from the camera at z = 4, hides the wall within 0.8 m of its centre.
+        if wall.x.abs() <= 0.8 + 1e-3 && wall.y.abs() <= 0.8 + 1e-3 {
+            return None;
+        }
+        Some((-3.0..=-1.0).contains(&wall.x) && (-1.0..=1.0).contains(&wall.y))
+    };
+    let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].map(|(dx, dy)| classify(x as f32 + dx, y as f32 + dy));
+    corners.iter().all(|c| *c == corners[0]).then_some(corners[0]).flatten()
+}
+
+#[test]
+fn lamps_that_cast_shadows_are_blocked_exactly_where_the_segment_to_them_is_in_every_method_and_pipeline() {
+    let size = (96, 54);
+    let config = |pipeline, lights, light_shadow_rays| RenderConfig {
+        pipeline,
+        rays: RaySettings { light_shadow_rays, ..Default::default() },
+        ..common::config(size.0, size.1, lights)
+    };
+    let (scene, camera) = lamp_and_blocker(true);
+    for pipeline in PipelineKind::ALL {
+        let unshadowed = render_with(&scene, &camera, config(pipeline, LightMethod::Brute, 0)).1;
+        for method in [LightMethod::Brute, LightMethod::Bvh, LightMethod::Clustered] {
+            let what = format!("{} {}", pipeline.name(), method.name());
+            let shadowed = render_with(&scene, &camera, config(pipeline, method, 1)).1;
+            let (mut dark, mut lit) = (0, 0);
+            for y in 0..size.1 {
+                for x in 0..size.0 {
+                    let Some(in_shadow) = wall_in_lamp_shadow(x, y, size) else { continue };
+                    let got = pixel(&shadowed, x, y);
+                    // No ambient: in the shadow the wall is black.
+                    let expected = if in_shadow { [0.0; 4] } else { pixel(&unshadowed, x, y) };
+                    let error = (0..3).map(|c| (got[c] - expected[c]).abs()).fold(0.0, f32::max);
+                    assert!(error <= 1e-4, "{what}: pixel ({x}, {y}) in shadow {in_shadow}: {got:?}, expected {expected:?}");
+                    if in_shadow {
+                        dark += 1;
+                    } else {
+                        lit += 1;
+                    }
+                }
+            }
+            assert!(dark > 200 && lit > 2000, "{what}: {dark} shadowed and {lit} lit pixels");
+        }
+    }
+    // A lamp that does not cast shadows, or a budget of none, lights the wall through the blocker.
+    let (unflagged, _) = lamp_and_blocker(false);
+    let reference = render_with(&scene, &camera, config(PipelineKind::Visbuffer, LightMethod::Bvh, 0)).1;
+    let through = render_with(&unflagged, &camera, config(PipelineKind::Visbuffer, LightMethod::Bvh, 4)).1;
+    assert_eq!(reference.pixels, through.pixels);
+}

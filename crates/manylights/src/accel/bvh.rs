@@ -717,6 +717,7 @@ pub(crate) mod tests {
                     color: Vec3::ONE,
                     intensity: 1.0,
                     range: rng.random_range(0.5..15.0),
+                    cast_shadows: false,
                 }
             })
             .collect();

@@ -434,6 +434,7 @@ mod tests {
                 intensity: 1.0,
                 kind,
                 direction: Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 1.0).normalize(),
+                cast_shadows: false,
             };
             let decal = Decal {
                 world_from_decal: Affine3A::from_scale_rotation_translation(

@@ -130,11 +130,12 @@ mod tests {
             color: Vec3::ONE,
             intensity: 1.0,
             range,
+            cast_shadows: false,
         }
     }
 
     fn point(position: Vec3, range: f32) -> Light {
-        Light { kind: LightKind::Point, position, direction: Vec3::NEG_Z, color: Vec3::ONE, intensity: 1.0, range }
+        Light { kind: LightKind::Point, position, direction: Vec3::NEG_Z, color: Vec3::ONE, intensity: 1.0, range, cast_shadows: false }
     }
 
     fn random_unit(rng: &mut Pcg64) -> Vec3 {

@@ -60,8 +60,13 @@ pub struct GpuLight {
     pub direction: [f32; 3],
     pub spot_scale: f32,
     pub spot_offset: f32,
-    pub _pad: [u32; 3],
+    /// LIGHT_CASTS_SHADOWS when it casts ray-traced shadows.
+    pub flags: u32,
+    pub _pad: [u32; 2],
 }
+
+/// Set in `GpuLight::flags` (`LIGHT_CASTS_SHADOWS` in `shading/types.wgsl`).
+pub const LIGHT_CASTS_SHADOWS: u32 = 1;
 
 impl From<&Light> for GpuLight {
     fn from(l: &Light) -> Self {
@@ -81,7 +86,8 @@ impl From<&Light> for GpuLight {
             direction: l.direction.normalize_or_zero().to_array(),
             spot_scale,
             spot_offset,
-            _pad: [0; 3],
+            flags: if l.cast_shadows { LIGHT_CASTS_SHADOWS } else { 0 },
+            _pad: [0; 2],
         }
     }
 }
@@ -580,7 +586,7 @@ mod tests {
                 normal_layer
             ]
         );
-        check!("Light", GpuLight, [position, range, radiant, kind, direction, spot_scale, spot_offset]);
+        check!("Light", GpuLight, [position, range, radiant, kind, direction, spot_scale, spot_offset, flags]);
         check!("Decal", GpuDecal, [decal_from_group, material, layer, weight]);
         check!("RayTriangle", crate::rays::RayTriangle, [v0, draw_offset, e1, triangle, e2]);
         check!("RayInstance", crate::rays::RayInstance, [local_from_world, blas_root, first_draw, scene_instance]);
@@ -620,6 +626,7 @@ mod tests {
             color: glam::Vec3::new(1.0, 0.5, 0.25),
             intensity: 4.0,
             range: 3.0,
+            cast_shadows: false,
         };
         let gpu = GpuLight::from(&spot);
         let attenuation = |angle: f32| (angle.cos() * gpu.spot_scale + gpu.spot_offset).clamp(0.0, 1.0);

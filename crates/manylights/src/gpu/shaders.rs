@@ -63,6 +63,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/sun_shadow.wgsl", include_str!("../shading/sun_shadow.wgsl")),
     ("shading/sun_shadow_mask.wgsl", include_str!("../shading/sun_shadow_mask.wgsl")),
     ("shading/reflections.wgsl", include_str!("../shading/reflections.wgsl")),
+    ("shading/light_shadows.wgsl", include_str!("../shading/light_shadows.wgsl")),
     ("shading/reflections_off.wgsl", include_str!("../shading/reflections_off.wgsl")),
     ("rays/ray_types.wgsl", include_str!("../rays/ray_types.wgsl")),
     ("rays/trace.wgsl", include_str!("../rays/trace.wgsl")),

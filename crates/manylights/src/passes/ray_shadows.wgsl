@@ -55,9 +55,8 @@ fn ray_shadows(@builtin(global_invocation_id) id: vec3<u32>) {
         textureStore(visibility_output, id.xy, vec4<f32>(0.0));
         return;
     }
-    // The depth buffer holds the surface at the pixel's centre only to its rounding; a fraction of
-    // the pixel's footprint along the normal clears it, and the tessellation of curved surfaces.
-    let origin = ray_offset_origin(relative_position + frame.world_from_view[3].xyz, n, 0.5 * pixel_footprint(relative_position));
+    // The depth buffer holds the surface at the pixel's centre only to its resolution.
+    let origin = ray_offset_origin(relative_position + frame.world_from_view[3].xyz, n, surface_clearance(relative_position));
     let soft = frame.ray_options.x == RAY_SHADOWS_SOFT;
     let count = select(1u, frame.ray_options.y, soft);
     let rotation = pixel_hash(id.xy);

@@ -13,8 +13,8 @@ fn transparent_shade(in: ForwardVertex, @builtin(front_facing) front_facing: boo
     let dp = PositionGradients(dpdx(in.relative_position), dpdy(in.relative_position));
     let s = apply_decals(fragment_surface(in, front_facing, g), dp);
     // No shadow mask holds a second surface per pixel: the sun's visibility is traced here, from the
-    // interpolated position, which the raster places within a fraction of a pixel's footprint.
-    let clearance = 0.5 * pixel_footprint(in.relative_position);
+    // interpolated position.
+    let clearance = surface_clearance(in.relative_position);
     let sun = sun_visibility_traced(s.position, fragment_geometric_normal(dp, s.view_dir), clearance);
     // The pipeline blends "over": radiance α + what lies behind (1 − α).
     return vec4<f32>(shade(s, sun), s.alpha);

@@ -68,11 +68,22 @@ pub struct RaySettings {
     pub reflection_bounces: u32,
     /// Surfaces whose perceptual roughness is below this reflect (fading out over the last quarter).
     pub reflection_roughness: f32,
+    /// Shadow rays each shading point may trace towards local lights that cast shadows
+    /// (`Light::cast_shadows`), 0 (none) to [`MAX_SHADOW_RAYS`]: lights beyond the budget, in the
+    /// order the light method enumerates them, light the point unshadowed.
+    pub light_shadow_rays: u32,
 }
 
 impl Default for RaySettings {
     fn default() -> Self {
-        Self { sun_shadows: SunShadows::Off, sun_angle_degrees: 0.53, shadow_rays: 4, reflection_bounces: 0, reflection_roughness: 0.3 }
+        Self {
+            sun_shadows: SunShadows::Off,
+            sun_angle_degrees: 0.53,
+            shadow_rays: 4,
+            reflection_bounces: 0,
+            reflection_roughness: 0.3,
+            light_shadow_rays: 0,
+        }
     }
 }
 
@@ -85,6 +96,7 @@ pub struct RayHints {
     pub shadow_rays: Option<u32>,
     pub reflection_bounces: Option<u32>,
     pub reflection_roughness: Option<f32>,
+    pub light_shadow_rays: Option<u32>,
 }
 
 impl RayHints {
@@ -97,6 +109,7 @@ impl RayHints {
             shadow_rays: self.shadow_rays.unwrap_or(defaults.shadow_rays),
             reflection_bounces: self.reflection_bounces.unwrap_or(defaults.reflection_bounces),
             reflection_roughness: self.reflection_roughness.unwrap_or(defaults.reflection_roughness),
+            light_shadow_rays: self.light_shadow_rays.unwrap_or(defaults.light_shadow_rays),
         }
     }
 }
@@ -104,7 +117,7 @@ impl RayHints {
 impl RaySettings {
     /// Whether any effect traces rays, so the scene needs its ray hierarchy.
     pub fn traces_rays(&self) -> bool {
-        self.sun_shadows != SunShadows::Off || self.reflection_bounces > 0
+        self.sun_shadows != SunShadows::Off || self.reflection_bounces > 0 || self.light_shadow_rays > 0
     }
 
     /// Checks every setting; messages name the command-line flag.
@@ -115,6 +128,12 @@ impl RaySettings {
         }
         if !(1..=MAX_SHADOW_RAYS).contains(&self.shadow_rays) {
             return invalid(format!("{} shadow rays per pixel: give 1 to {MAX_SHADOW_RAYS} (--shadow-rays)", self.shadow_rays));
+        }
+        if self.light_shadow_rays > MAX_SHADOW_RAYS {
+            return invalid(format!(
+                "{} shadow rays per point towards lights: give 0 (none) to {MAX_SHADOW_RAYS} (--light-shadow-rays)",
+                self.light_shadow_rays
+            ));
         }
         if self.reflection_bounces > MAX_REFLECTION_BOUNCES {
             return invalid(format!(
@@ -139,7 +158,7 @@ impl RaySettings {
             crate::scene::Projection::Perspective { yfov, .. } => (2.0 * (yfov * 0.5).tan() / height as f32, 0.0),
             crate::scene::Projection::Orthographic { ymag, .. } => (0.0, 2.0 * ymag / height as f32),
         };
-        let options = [self.sun_shadows as u32, self.shadow_rays, self.reflection_bounces, 0];
+        let options = [self.sun_shadows as u32, self.shadow_rays, self.reflection_bounces, self.light_shadow_rays];
         (options, [(self.sun_angle_degrees * 0.5).to_radians(), self.reflection_roughness, spread, width])
     }
 }

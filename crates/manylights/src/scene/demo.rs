@@ -118,6 +118,7 @@ fn lights() -> Vec<Light> {
         color: Vec3::from(color),
         intensity,
         range,
+        cast_shadows: true,
     };
     let spot = |position: Vec3, target: Vec3, cone_degrees: (f32, f32), color: [f32; 3], intensity, range| Light {
         kind: LightKind::Spot { inner_cone_angle: cone_degrees.0.to_radians(), outer_cone_angle: cone_degrees.1.to_radians() },
@@ -126,6 +127,7 @@ fn lights() -> Vec<Light> {
         color: Vec3::from(color),
         intensity,
         range,
+        cast_shadows: true,
     };
     vec![
         point([-2.0, 1.6, -4.4], [1.0, 0.55, 0.2], 3.5, 7.0),

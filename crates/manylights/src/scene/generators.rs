@@ -71,6 +71,8 @@ pub fn scatter_lights(scene: &Scene, params: &ScatterLights) -> Result<Vec<Light
                 color: saturated_color(rng.random()),
                 intensity,
                 range: light_range,
+                // Thousands of small lights: no shadow rays.
+                cast_shadows: false,
             }
         })
         .collect();

@@ -383,7 +383,7 @@ fn place_light(scene: &mut Scene, light: &::gltf::khr_lights_punctual::Light, wo
         log::warn!("light {}: no intensity and no range, skipped", light.index());
         return;
     }
-    scene.lights.push(Light { kind, position: world.transform_point3(Vec3::ZERO), direction, color, intensity, range });
+    scene.lights.push(Light { kind, position: world.transform_point3(Vec3::ZERO), direction, color, intensity, range, cast_shadows: true });
 }
 
 fn material(m: &::gltf::Material) -> Material {

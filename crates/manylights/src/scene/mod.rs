@@ -174,6 +174,9 @@ pub struct Light {
     pub intensity: f32,
     /// Distance where the glTF window function reaches zero.
     pub range: f32,
+    /// Whether shading traces a shadow ray towards it (within the frame's per-point budget,
+    /// `rays::RaySettings::light_shadow_rays`).
+    pub cast_shadows: bool,
 }
 
 impl Light {

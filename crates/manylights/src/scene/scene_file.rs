@@ -34,6 +34,7 @@
 //! direction = [0.0, -1.0, 0.0]    # spot only, required
 //! inner_cone_degrees = 20.0       # spot only, default 0
 //! outer_cone_degrees = 30.0       # spot only, default 45
+//! cast_shadows = true     # traces shadow rays towards it (within [rays] light_shadow_rays); default true
 //!
 //! [[scatter_lights]]      # point lights scattered over the surfaces (generators::ScatterLights)
 //! count = 256             # required
@@ -87,6 +88,7 @@
 //! shadow_rays = 4         # rays per pixel towards the sun's disc (soft shadows), 1 to 64; default 4
 //! reflections = 1         # reflection bounces on glossy surfaces, 0 (none) to 8; default 0
 //! reflection_roughness = 0.3      # surfaces below this perceptual roughness reflect; default 0.3
+//! light_shadow_rays = 4   # shadow rays per shading point towards lights that cast shadows; default 0
 //!
 //! [animate]               # group all lights and decals into spinning groups (generators::group_for_animation)
 //! groups = 16             # default 16
@@ -159,6 +161,7 @@ struct RaysSpec {
     shadow_rays: Option<u32>,
     reflections: Option<u32>,
     reflection_roughness: Option<f32>,
+    light_shadow_rays: Option<u32>,
 }
 
 impl RaysSpec {
@@ -178,6 +181,7 @@ impl RaysSpec {
             shadow_rays: self.shadow_rays,
             reflection_bounces: self.reflections,
             reflection_roughness: self.reflection_roughness,
+            light_shadow_rays: self.light_shadow_rays,
         };
         // The command line's flag names mean nothing in a scene file: say which key is wrong.
         hints.settings().validate().map_err(|e| {
@@ -187,6 +191,7 @@ impl RaysSpec {
                 ("--shadow-rays", "shadow_rays"),
                 ("--bounces", "reflections"),
                 ("--reflection-roughness", "reflection_roughness"),
+                ("--light-shadow-rays", "light_shadow_rays"),
             ];
             keys.iter().fold(message, |m, (flag, key)| m.replace(flag, key))
         })?;
@@ -234,6 +239,7 @@ struct LightSpec {
     direction: Option<[f32; 3]>,
     inner_cone_degrees: Option<f32>,
     outer_cone_degrees: Option<f32>,
+    cast_shadows: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -493,6 +499,7 @@ impl LightSpec {
             color,
             intensity: self.intensity,
             range: self.range.unwrap_or_else(|| Light::range_from_cutoff(self.intensity, color, DEFAULT_LIGHT_CUTOFF)),
+            cast_shadows: self.cast_shadows.unwrap_or(true),
         })
     }
 }

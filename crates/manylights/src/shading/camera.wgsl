@@ -28,6 +28,17 @@ fn depth_relative_position(pixel: vec2<f32>, depth: f32) -> vec3<f32> {
     return world_from_view * (view.xyz / view.w);
 }
 
+// How far a pixel's position, rebuilt from the depth buffer or interpolated by the raster, may lie off
+// its surface: the depth buffer's resolution along the view ray — for reverse-Z perspective
+// projections d² / near times its relative precision, 2⁻²² covering rasterisers' interpolation, four
+// times over; for orthographic ones a few millionths of the distance. Rays leaving the point start
+// that far off the surface (`ray_offset_origin`): farther would move contact shadows.
+fn surface_clearance(relative_position: vec3<f32>) -> f32 {
+    let d = length(relative_position);
+    let near = frame.cluster_depth.z;
+    return select(4e-6 * d, 4.0 * d * d / near * 2.4e-7, frame.ray_settings.z > 0.0 && near > 0.0);
+}
+
 // The width of a pixel's cone at a point (relative to the camera): how far apart neighbouring
 // pixels' rays are there. Rays leaving the surface start their cones with it.
 fn pixel_footprint(relative_position: vec3<f32>) -> f32 {

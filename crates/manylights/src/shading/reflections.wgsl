@@ -56,10 +56,9 @@ fn reflected_radiance(s: ShadingInput, geometric_normal: vec3<f32>, footprint: f
     var normal = geometric_normal;
     var width = footprint;
     var spread = frame.ray_settings.z;
-    // The first surface's position was rebuilt from a depth buffer or interpolated by the raster,
-    // which place it within a fraction of its pixel's footprint of the true surface: leave by half
-    // a footprint. Hits are computed from the ray itself, exact to rounding.
-    var clearance = 0.5 * footprint;
+    // The first surface's position was rebuilt from a depth buffer or interpolated by the raster; hits
+    // are computed from the ray itself, exact to rounding.
+    var clearance = surface_clearance(surface.position - frame.world_from_view[3].xyz);
     for (var bounce = 0u; bounce < frame.ray_options.z; bounce += 1u) {
         if max(weight.x, max(weight.y, weight.z)) < 1e-4 {
             break;

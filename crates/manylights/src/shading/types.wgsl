@@ -65,10 +65,14 @@ struct Light {
     // Spot cone as glTF's scale/offset: attenuation = saturate(cos θ · scale + offset)².
     spot_scale: f32,
     spot_offset: f32,
+    // LIGHT_CASTS_SHADOWS when shading traces shadow rays towards it.
+    flags: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
 }
+
+// Keep in sync with `gpu::scene::LIGHT_CASTS_SHADOWS`.
+const LIGHT_CASTS_SHADOWS: u32 = 1u;
 
 // A decal (`scene::Decal`): projects its material onto surfaces inside the unit box [-0.5, 0.5]³ of
 // decal space, along -Z.
@@ -120,7 +124,8 @@ struct FrameUniforms {
     // Per cascade, finest first: xyz its corner, w its voxel edge.
     particle_cascades: array<vec4<f32>, 8>,
     // Ray-traced effects (`rays/`): x the sun's shadows (RAY_SHADOWS_*), y rays per pixel towards the
-    // sun's disc (soft shadows), z reflection bounces (0: none).
+    // sun's disc (soft shadows), z reflection bounces (0: none), w shadow rays towards local lights
+    // per shading point (0: none).
     ray_options: vec4<u32>,
     // x: the sun's angular radius (radians); y: surfaces below this perceptual roughness reflect;
     // z: the angle between neighbouring pixels' rays (perspective); w: a pixel's width at the camera

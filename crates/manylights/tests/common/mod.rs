@@ -102,7 +102,7 @@ pub fn wall_scene(lights: Vec<Light>) -> (Scene, Camera) {
 }
 
 pub fn point_light(position: Vec3, intensity: f32, range: f32) -> Light {
-    Light { kind: LightKind::Point, position, direction: Vec3::NEG_Z, color: Vec3::ONE, intensity, range }
+    Light { kind: LightKind::Point, position, direction: Vec3::NEG_Z, color: Vec3::ONE, intensity, range, cast_shadows: false }
 }
 
 pub fn pixel<T: Copy>(image: &Image<T>, x: u32, y: u32) -> T {

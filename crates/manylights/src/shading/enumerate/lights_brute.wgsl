@@ -3,9 +3,11 @@
 // `shade_local_lights` with this shape.
 #include "shading/light_bindings.wgsl"
 #include "shading/lights.wgsl"
+#include "shading/light_shadows.wgsl"
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
+    var shadow_rays = frame.ray_options.w;
     for (var i = 0u; i < frame.light_instance_count; i += 1u) {
         let instance = light_instances[i];
         let local = shading_input_in_group(s, instance);
@@ -16,7 +18,11 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             let to_light = lights[k].position - local.position;
             let range = lights[k].range;
             if dot(to_light, to_light) < range * range {
-                radiance += light_contribution(lights[k], local) * falloff;
+                let light = lights[k];
+                let contribution = light_contribution(light, local);
+                if any(contribution > vec3<f32>(0.0)) {
+                    radiance += contribution * falloff * light_visibility(light, instance, s, &shadow_rays);
+                }
             }
         }
     }

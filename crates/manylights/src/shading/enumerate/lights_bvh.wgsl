@@ -4,9 +4,11 @@
 #include "shading/light_bindings.wgsl"
 #include "shading/lights.wgsl"
 #include "accel/volume_query.wgsl" with VOLUMES=light
+#include "shading/light_shadows.wgsl"
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
+    var shadow_rays = frame.ray_options.w;
     // The surface in the space of the instance being visited (`shading_input_in_group`).
     var local = s;
     var falloff = 1.0;
@@ -19,7 +21,11 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             falloff = 1.0 / (light_query_instance.scale * light_query_instance.scale);
         }
         for (var k = leaf.x; k < leaf.y; k += 1u) {
-            radiance += light_contribution(lights[light_primitives[k]], local) * falloff;
+            let light = lights[light_primitives[k]];
+            let contribution = light_contribution(light, local);
+            if any(contribution > vec3<f32>(0.0)) {
+                radiance += contribution * falloff * light_visibility(light, light_query_instance, s, &shadow_rays);
+            }
         }
     }
     return radiance;

@@ -6,22 +6,29 @@
 #include "shading/light_bindings.wgsl"
 #include "shading/lights.wgsl"
 #include "accel/cluster_grid.wgsl"
+#include "shading/light_shadows.wgsl"
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
     var local = s;
     var falloff = 1.0;
     var entered = 0xffffffffu;
+    var instance: VolumeInstance;
+    var shadow_rays = frame.ray_options.w;
     let range = light_cluster_ranges[cluster_of(s.position)];
     for (var i = range.x; i < range.x + range.y; i += 1u) {
         let entry = light_cluster_entries[i];
         if entry.x != entered {
             entered = entry.x;
-            let instance = light_instances[entry.x];
+            instance = light_instances[entry.x];
             local = shading_input_in_group(s, instance);
             falloff = 1.0 / (instance.scale * instance.scale);
         }
-        radiance += light_contribution(lights[entry.y], local) * falloff;
+        let light = lights[entry.y];
+        let contribution = light_contribution(light, local);
+        if any(contribution > vec3<f32>(0.0)) {
+            radiance += contribution * falloff * light_visibility(light, instance, s, &shadow_rays);
+        }
     }
     return radiance;
 }

@@ -1,0 +1,23 @@
+// Ray-traced shadows of local lights flagged to cast them (`Light::flags`, LIGHT_CASTS_SHADOWS): one
+// ray from the shading point to the light, within the point's budget of `frame.ray_options.w` rays —
+// lights the light method enumerates after the budget is spent light the point unshadowed. Every
+// light enumeration module calls it for each light that lights the point, so every method, pipeline
+// and reflection hit is shadowed alike.
+#include "shading/light_bindings.wgsl"
+#include "shading/camera.wgsl"
+#include "rays/trace.wgsl"
+
+// 0 when something lies between the point and the light (stored in its group's space, placed by
+// `instance`), else 1. `budget` counts the point's remaining shadow rays down.
+fn light_visibility(light: Light, instance: VolumeInstance, s: ShadingInput, budget: ptr<function, u32>) -> f32 {
+    if (light.flags & LIGHT_CASTS_SHADOWS) == 0u || *budget == 0u {
+        return 1.0;
+    }
+    *budget -= 1u;
+    // The light lights the point, so it is on the side its shading normal faces.
+    let clearance = surface_clearance(s.position - frame.world_from_view[3].xyz);
+    let origin = ray_offset_origin(s.position, s.normal, clearance);
+    // The segment to the light, short of it by a hair: t runs from 0 at the origin to 1 at the light.
+    let to_light = instance_point_to_world(instance, light.position) - origin;
+    return select(1.0, 0.0, ray_occluded(origin, to_light, 0.9999));
+}
