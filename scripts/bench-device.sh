@@ -141,6 +141,18 @@ rays() {
   run rays_visbuffer_reflections_2 200 --scene $sun $off --reflections --bounces 2
   run rays_visbuffer_reflections_all 200 --scene $sun $off --reflections --reflection-roughness 1
   run rays_visbuffer_reflections_all_2 200 --scene $sun $off --reflections --reflection-roughness 1 --bounces 2
+  # 32 lamps that cast shadows along the atrium (range 6 m), with 1 and 4 shadow rays per point.
+  cp .bench/sun.toml .bench/sun_lamps.toml
+  local i
+  for i in $(seq 0 31); do
+    printf '[[lights]]\ntype = "point"\nposition = [%s, %s, %s]\nintensity = 4.0\nrange = 6.0\n' \
+      "$(( (i % 8) * 3 - 11 )).0" "$(( 1 + (i / 8) % 2 * 5 )).5" "$(( (i / 16) * 6 - 3 )).0" >>.bench/sun_lamps.toml
+  done
+  run rays_visbuffer_lamps_none 200 --scene .bench/sun_lamps.toml --light-method bvh --decal-method off
+  run rays_visbuffer_lamps_shadows1 200 --scene .bench/sun_lamps.toml --light-method bvh --decal-method off --light-shadow-rays 1
+  run rays_visbuffer_lamps_shadows4 200 --scene .bench/sun_lamps.toml --light-method bvh --decal-method off --light-shadow-rays 4
+  run rays_visbuffer_lamps_all 200 --scene .bench/sun_lamps.toml --light-method bvh --decal-method off --light-shadow-rays 4 \
+    --shadows hard --reflections
   run rays_visbuffer_lights_none 200 --scene .bench/sun_small_28000.toml --light-method bvh --decal-method off
   run rays_visbuffer_lights_hard_reflections 200 --scene .bench/sun_small_28000.toml --light-method bvh --decal-method off --shadows hard --reflections
   run rays_visbuffer_lights_hard_reflections_all 200 --scene .bench/sun_small_28000.toml --light-method bvh --decal-method off --shadows hard \
