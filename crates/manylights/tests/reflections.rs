@@ -1,5 +1,5 @@
 //! Ray-traced reflections (`shading/reflections.wgsl`): a mirror floor shows a panel outside the view,
-//! with the decal and the light that reach the panel — through the acceleration structures (and brute
+//! with the decal, the light and the particle light that reach the panel — through the acceleration structures (and brute
 //! force) in every pipeline, exactly as the panel's own shading predicts — and shows that clustered
 //! shading cannot light or decal such hit points: its lists cover the view frustum only.
 
@@ -9,7 +9,8 @@ use common::*;
 use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
 use manylights::{
     config::RenderConfig,
-    pipelines::{DecalMethod, LightMethod, PipelineKind},
+    particles::ParticleSettings,
+    pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
     rays::RaySettings,
     renderer::Image,
     scene::{Camera, Decal, Instance, Light, Material, Scene},
@@ -182,4 +183,60 @@ fn a_mirror_shows_the_light_of_a_lamp_outside_the_view_which_clustered_lists_mis
         }
     }
     assert!(lamp_lit > 100, "only {lamp_lit} reflected panel pixels show the lamp's light");
+}
+
+/// One particle light that stays where it is launched, 1 m in front of the panel (above the view).
+fn particle_by_the_panel() -> ParticleSettings {
+    ParticleSettings {
+        count: 1,
+        seed: 3,
+        emitters: vec![(Vec3::new(0.5, 7.0, PANEL_Z + 1.0), 0.0)],
+        gravity: 0.0,
+        swirl: 0.0,
+        radius: (3.0, 3.0),
+        intensity: 2.0,
+        ..ParticleSettings::default()
+    }
+}
+
+/// Particle lights reach reflections' hit points too: exactly, as point lights in the lights' BVH
+/// (equal to the same point light), and through the 3D-texture grid, close to it.
+#[test]
+fn a_mirror_shows_particle_lights_outside_the_view() {
+    let settings = particle_by_the_panel();
+    let particle = settings.particle_at(0, 0.0);
+    let as_light = Light { color: particle.color, intensity: 1.0, ..point_light(particle.position, 1.0, particle.radius) };
+    let (mut scene, camera) = mirror_scene(Vec::new(), Vec::new());
+    scene.particles = Some(settings);
+    let (lamp_scene, _) = mirror_scene(vec![as_light], Vec::new());
+    let (unlit_scene, _) = mirror_scene(Vec::new(), Vec::new());
+    let reflect = |scene: &Scene, lights, particles, voxel| {
+        let rays = RaySettings { reflection_bounces: 1, ..Default::default() };
+        let config = RenderConfig {
+            decal_method: DecalMethod::Off,
+            particle_method: particles,
+            particle_voxel_size: voxel,
+            rays,
+            ..config(WIDTH, HEIGHT, lights)
+        };
+        render_with(scene, &camera, config).1
+    };
+    let exact = reflect(&scene, LightMethod::Bvh, ParticleMethod::Bvh, 1.0);
+    let lamp = reflect(&lamp_scene, LightMethod::Brute, ParticleMethod::Off, 1.0);
+    let grid = reflect(&scene, LightMethod::Off, ParticleMethod::Grid, 0.25);
+    let unlit = reflect(&unlit_scene, LightMethod::Off, ParticleMethod::Off, 1.0);
+    assert!(max_abs_difference(&exact, &lamp) < 1e-3, "the exact particle differs from its point light in the reflection");
+    // Over the reflected panel, the grid's light (0.25 m voxels) is the point light's within 10 %.
+    let (mut exact_light, mut grid_light) = (0.0, 0.0);
+    for y in 0..HEIGHT {
+        for x in 0..WIDTH {
+            if reflected(&camera, x, y).is_some_and(|r| r != Reflected::Elsewhere) {
+                exact_light += luminance(pixel(&lamp, x, y)) - luminance(pixel(&unlit, x, y));
+                grid_light += luminance(pixel(&grid, x, y)) - luminance(pixel(&unlit, x, y));
+            }
+        }
+    }
+    assert!(exact_light > 1.0, "the particle's light barely reaches the reflected panel: {exact_light}");
+    let ratio = grid_light / exact_light;
+    assert!((ratio - 1.0).abs() < 0.1, "the grid reflects {ratio} times the particle's exact light");
 }
