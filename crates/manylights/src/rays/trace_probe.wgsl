@@ -1,5 +1,5 @@
-// Test probe of the ray traversal: for each ray, the closest hit (or, flagged, whether anything is
-// hit before t_max), through the same `trace_ray` the passes use. Rays are (origin, t_max) and
+// Test probe of the ray traversal: for each ray, the closest hit (`trace_closest`) or, flagged, whether
+// anything is hit before t_max (`trace_ray` for any hit), through the functions the passes use. Rays are (origin, t_max) and
 // (direction, any-hit flag); results are (t, triangle, instance, b1) and b2.
 #include "shading/scene_bindings.wgsl"
 #include "rays/trace.wgsl"
@@ -15,7 +15,12 @@ fn trace_probe(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let origin = probe_rays[2u * id.x];
     let dir = probe_rays[2u * id.x + 1u];
-    let hit = trace_ray(origin.xyz, dir.xyz, origin.w, dir.w != 0.0);
+    var hit: RayHit;
+    if dir.w != 0.0 {
+        hit = trace_ray(origin.xyz, dir.xyz, origin.w, true);
+    } else {
+        hit = trace_closest(origin.xyz, dir.xyz, origin.w);
+    }
     probe_hits[2u * id.x] = vec4<f32>(hit.t, bitcast<f32>(hit.triangle), bitcast<f32>(hit.instance), hit.b1);
     probe_hits[2u * id.x + 1u] = vec4<f32>(hit.b2, 0.0, 0.0, 0.0);
 }

@@ -68,7 +68,7 @@ fn reflected_radiance(s: ShadingInput, geometric_normal: vec3<f32>, footprint: f
         clearance = 0.0;
         // The cone widens faster off rough surfaces: their reflections are blurrier.
         spread += surface.roughness * surface.roughness;
-        let hit = trace_ray(origin, dir, 3.0e38, false);
+        let hit = trace_closest(origin, dir, 3.0e38);
         if hit.triangle == RAY_NO_HIT {
             radiance += weight * sky_radiance(dir);
             break;
