@@ -107,14 +107,12 @@ pub fn shading_mask_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu:
 }
 
 fn mask(device: &wgpu::Device, label: &str, width: u32, height: u32) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: MASK_FORMAT,
-        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    })
+    crate::pipelines::target(
+        device,
+        label,
+        width,
+        height,
+        MASK_FORMAT,
+        wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+    )
 }

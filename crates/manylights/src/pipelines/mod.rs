@@ -139,7 +139,8 @@ impl FrameTargets {
     }
 }
 
-fn target(
+/// A 2D image a frame writes and reads, of one mip level and sample.
+pub(crate) fn target(
     device: &wgpu::Device,
     label: &str,
     width: u32,

@@ -28,15 +28,33 @@ fn ray_inverse_direction(d: vec3<f32>) -> vec3<f32> {
     return 1.0 / safe;
 }
 
-// Whether the ray meets the node's box between 0 and `t_max`.
-fn ray_meets_box(node: BvhNode, origin: vec3<f32>, inverse_dir: vec3<f32>, t_max: f32) -> bool {
+// Where the ray enters the node's box between 0 and `t_max`, or -1 if it misses it.
+fn ray_box_entry(node: BvhNode, origin: vec3<f32>, inverse_dir: vec3<f32>, t_max: f32) -> f32 {
     let t0 = (node.min - origin) * inverse_dir;
     let t1 = (node.max - origin) * inverse_dir;
     let near = min(t0, t1);
     let far = max(t0, t1);
     let enter = max(max(near.x, near.y), max(near.z, 0.0));
     let exit = min(min(far.x, far.y), min(far.z, t_max));
-    return enter <= exit;
+    return select(-1.0, enter, enter <= exit);
+}
+
+// A ray in the space of the level being walked: the world's in the top level, an instance's mesh
+// space in its BLAS.
+struct RaySpace {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    inverse_dir: vec3<f32>,
+}
+
+fn ray_space(origin: vec3<f32>, dir: vec3<f32>) -> RaySpace {
+    return RaySpace(origin, dir, ray_inverse_direction(dir));
+}
+
+// The world ray in an instance's mesh space. The direction is mapped, not normalised: hit distances
+// mean the same in every instance.
+fn ray_space_of(instance: RayInstance, origin: vec3<f32>, dir: vec3<f32>) -> RaySpace {
+    return ray_space(vec4<f32>(origin, 1.0) * instance.local_from_world, vec4<f32>(dir, 0.0) * instance.local_from_world);
 }
 
 // Möller–Trumbore, both faces: (t, b1, b2) of the hit, or t = -1 when the ray misses the triangle
@@ -76,13 +94,31 @@ fn ray_alpha_covers(instance: RayInstance, tri: RayTriangle, b1: f32, b2: f32) -
     return material_base_color(material, UvGradients(uv, vec2<f32>(0.0), vec2<f32>(0.0))).a >= material.alpha_cutoff;
 }
 
+// `hit` updated with the triangles of a BLAS leaf (the range [x, y) of `ray_triangles`) that the ray
+// meets before it, alpha masks applied; with `any_hit`, the first such triangle.
+fn ray_hit_leaf(leaf: vec2<u32>, ray: RaySpace, instance: RayInstance, instance_index: u32, hit: RayHit, any_hit: bool) -> RayHit {
+    var nearest = hit;
+    for (var k = leaf.x; k < leaf.y; k += 1u) {
+        let tri = ray_triangles[k];
+        let candidate = ray_triangle(ray.origin, ray.dir, tri);
+        if candidate.x > 0.0 && candidate.x < nearest.t {
+            if (tri.draw_offset & RAY_ALPHA_MASKED) != 0u && !ray_alpha_covers(instance, tri, candidate.y, candidate.z) {
+                continue;
+            }
+            nearest = RayHit(candidate.x, k, instance_index, candidate.y, candidate.z);
+            if any_hit {
+                break;
+            }
+        }
+    }
+    return nearest;
+}
+
 // The nearest hit along origin + t · dir with 0 < t < t_max, or with `any_hit` the first hit found
 // (shadow rays need no more). Origins must be offset off the surface they leave (`ray_offset_origin`).
 fn trace_ray(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> RayHit {
     var hit = RayHit(t_max, RAY_NO_HIT, 0u, 0.0, 0.0);
-    var o = origin;
-    var d = dir;
-    var inverse_dir = ray_inverse_direction(dir);
+    var ray = ray_space(origin, dir);
     var in_blas = false;
     var instance_index = 0u;
     var instance: RayInstance;
@@ -96,16 +132,14 @@ fn trace_ray(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> Ra
             // The instance's BLAS is done: back to the top level, in world space.
             in_blas = false;
             node_index = resume;
-            o = origin;
-            d = dir;
-            inverse_dir = ray_inverse_direction(dir);
+            ray = ray_space(origin, dir);
             continue;
         }
         let node = ray_nodes[node_index];
         // A link to the node itself ends the walk: no valid tree has one, but lanes run on zeroed
         // memory (lavapipe's fragment helpers) must not loop (see `volume_query.wgsl`).
         let skip = select(node.skip, BVH_END, node.skip == node_index);
-        if !ray_meets_box(node, o, inverse_dir, hit.t) {
+        if ray_box_entry(node, ray.origin, ray.inverse_dir, hit.t) < 0.0 {
             node_index = skip;
             continue;
         }
@@ -118,26 +152,15 @@ fn trace_ray(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> Ra
             // A top-level leaf: one instance. Continue in its mesh's space.
             instance_index = leaf.x;
             instance = ray_instances[instance_index];
-            o = vec4<f32>(origin, 1.0) * instance.local_from_world;
-            d = vec4<f32>(dir, 0.0) * instance.local_from_world;
-            inverse_dir = ray_inverse_direction(d);
+            ray = ray_space_of(instance, origin, dir);
             resume = skip;
             in_blas = true;
             node_index = instance.blas_root;
             continue;
         }
-        for (var k = leaf.x; k < leaf.y; k += 1u) {
-            let tri = ray_triangles[k];
-            let candidate = ray_triangle(o, d, tri);
-            if candidate.x > 0.0 && candidate.x < hit.t {
-                if (tri.draw_offset & RAY_ALPHA_MASKED) != 0u && !ray_alpha_covers(instance, tri, candidate.y, candidate.z) {
-                    continue;
-                }
-                hit = RayHit(candidate.x, k, instance_index, candidate.y, candidate.z);
-                if any_hit {
-                    return hit;
-                }
-            }
+        hit = ray_hit_leaf(leaf, ray, instance, instance_index, hit, any_hit);
+        if any_hit && hit.triangle != RAY_NO_HIT {
+            return hit;
         }
         node_index = skip;
     }
@@ -153,17 +176,6 @@ fn ray_occluded(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
 // the top level and of one BLAS together (the CPU builder bounds each tree's depth by 48: 94 at most).
 const RAY_STACK_SIZE: u32 = 96u;
 
-// Where the ray enters the node's box between 0 and `t_max`, or -1 if it misses it.
-fn ray_box_entry(node: BvhNode, origin: vec3<f32>, inverse_dir: vec3<f32>, t_max: f32) -> f32 {
-    let t0 = (node.min - origin) * inverse_dir;
-    let t1 = (node.max - origin) * inverse_dir;
-    let near = min(t0, t1);
-    let far = max(t0, t1);
-    let enter = max(max(near.x, near.y), max(near.z, 0.0));
-    let exit = min(min(far.x, far.y), min(far.z, t_max));
-    return select(-1.0, enter, enter <= exit);
-}
-
 // The nearest hit along origin + t · dir with 0 < t < t_max, as `trace_ray(…, false)` finds it, but
 // visiting the nearer child of each node first and keeping the farther on a stack with the distance
 // where the ray enters it: once a hit is nearer than that, the subtree is skipped unvisited. The
@@ -174,25 +186,21 @@ fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> RayHit {
     var stack_nodes: array<u32, RAY_STACK_SIZE>;
     var stack_entry: array<f32, RAY_STACK_SIZE>;
     var depth = 0u;
-    var o = origin;
-    var d = dir;
-    var inverse_dir = ray_inverse_direction(dir);
+    var ray = ray_space(origin, dir);
     var in_blas = false;
     // The stack depth at which the current BLAS began: popping below it leaves the instance.
     var blas_base = 0u;
     var instance_index = 0u;
     var instance: RayInstance;
     // The node to visit, its box known to be met; BVH_END when the next one comes off the stack.
-    var node_index = select(BVH_END, 0u, ray_box_entry(ray_nodes[0], o, inverse_dir, hit.t) >= 0.0);
+    var node_index = select(BVH_END, 0u, ray_box_entry(ray_nodes[0], ray.origin, ray.inverse_dir, hit.t) >= 0.0);
     loop {
         if node_index == BVH_END {
             // Pop the nearest pending subtree the ray still enters before the hit found.
             loop {
                 if in_blas && depth == blas_base {
                     in_blas = false;
-                    o = origin;
-                    d = dir;
-                    inverse_dir = ray_inverse_direction(dir);
+                    ray = ray_space(origin, dir);
                 }
                 if depth == 0u {
                     break;
@@ -215,26 +223,15 @@ fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> RayHit {
                 // A top-level leaf: one instance. Continue in its mesh's space, at its BLAS's root.
                 instance_index = leaf.x;
                 instance = ray_instances[instance_index];
-                o = vec4<f32>(origin, 1.0) * instance.local_from_world;
-                d = vec4<f32>(dir, 0.0) * instance.local_from_world;
-                inverse_dir = ray_inverse_direction(d);
+                ray = ray_space_of(instance, origin, dir);
                 in_blas = true;
                 blas_base = depth;
-                if ray_box_entry(ray_nodes[instance.blas_root], o, inverse_dir, hit.t) >= 0.0 {
+                if ray_box_entry(ray_nodes[instance.blas_root], ray.origin, ray.inverse_dir, hit.t) >= 0.0 {
                     node_index = instance.blas_root;
                 }
                 continue;
             }
-            for (var k = leaf.x; k < leaf.y; k += 1u) {
-                let tri = ray_triangles[k];
-                let candidate = ray_triangle(o, d, tri);
-                if candidate.x > 0.0 && candidate.x < hit.t {
-                    if (tri.draw_offset & RAY_ALPHA_MASKED) != 0u && !ray_alpha_covers(instance, tri, candidate.y, candidate.z) {
-                        continue;
-                    }
-                    hit = RayHit(candidate.x, k, instance_index, candidate.y, candidate.z);
-                }
-            }
+            hit = ray_hit_leaf(leaf, ray, instance, instance_index, hit, false);
             continue;
         }
         // Both children: the first is `entry`, the second the first's `skip`.
@@ -246,8 +243,8 @@ fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> RayHit {
         if first_index == node_index || second_index == node_index {
             break;
         }
-        let first_entry = ray_box_entry(first, o, inverse_dir, hit.t);
-        let second_entry = ray_box_entry(ray_nodes[second_index], o, inverse_dir, hit.t);
+        let first_entry = ray_box_entry(first, ray.origin, ray.inverse_dir, hit.t);
+        let second_entry = ray_box_entry(ray_nodes[second_index], ray.origin, ray.inverse_dir, hit.t);
         if first_entry >= 0.0 && second_entry >= 0.0 {
             let first_nearer = first_entry <= second_entry;
             node_index = select(second_index, first_index, first_nearer);
