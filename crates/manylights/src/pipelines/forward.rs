@@ -9,7 +9,7 @@
 //! GpuScene ─▶ depth_prepass ─▶ depth (cleared to 0)
 //!                                   │
 //!                                   ▼
-//!             ray_shadows (+ shadow_filter), with sun shadows ─▶ sun visibility (R32Float)
+//!             ray_shadows (+ shadow_filter), with sun shadows ─▶ sun visibility and blocker distance (Rg32Float)
 //!                                   │
 //!                                   ▼
 //!             forward_shade (EQUAL depth; material, decals, lights; then sky) ─▶ hdr (Rgba32Float)

@@ -7,7 +7,7 @@
 //! GpuScene ─▶ visbuffer_raster ─▶ visibility (R32Uint, not cleared) + depth (cleared to 0)
 //!                                   │
 //!                                   ▼
-//!             ray_shadows (+ shadow_filter), with sun shadows ─▶ sun visibility (R32Float)
+//!             ray_shadows (+ shadow_filter), with sun shadows ─▶ sun visibility and blocker distance (Rg32Float)
 //!                                   │
 //!                                   ▼
 //!             visbuffer_shade (material, decals, lights; reflections) ─▶ hdr (Rgba32Float)
