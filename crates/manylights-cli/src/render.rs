@@ -11,6 +11,7 @@ use manylights::{
     image_io,
     particles::ParticleFilter,
     pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
+    post::{AutoExposure, Bloom, DepthOfField, MotionBlur, PostSettings},
     rays::{RaySettings, SunShadows, MAX_REFLECTION_BOUNCES},
     renderer::{FrameTiming, Renderer},
     scene::{Camera, Scene},
@@ -79,6 +80,8 @@ pub struct RenderArgs {
     particle_cascade_resolution: Option<u32>,
     #[command(flatten)]
     rays: RayArgs,
+    #[command(flatten)]
+    post: PostArgs,
     #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
     tonemap: TonemapArg,
     /// Largest texture size kept on the GPU (larger images are downsampled).
@@ -109,6 +112,82 @@ pub struct RenderArgs {
     /// particles are (each frame adds 1/60 s).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     time: f32,
+}
+
+/// Post effects after shading, each off unless asked for; tonemapping is `--tonemap`.
+#[derive(Args)]
+pub(crate) struct PostArgs {
+    /// Measure the exposure from each frame's luminance histogram instead of using the scene's.
+    #[arg(long)]
+    auto_exposure: bool,
+    /// Stops brighter (+) or darker (−) than auto exposure's middle grey. [default: 0]
+    #[arg(long, requires = "auto_exposure", allow_negative_numbers = true)]
+    exposure_compensation: Option<f32>,
+    /// How fast auto exposure follows the image, per second (the first frame takes it at once).
+    /// [default: 3]
+    #[arg(long, requires = "auto_exposure", allow_negative_numbers = true)]
+    exposure_adaptation: Option<f32>,
+    /// Bloom: the image blurred over a chain of half-resolution levels, blended over it.
+    #[arg(long)]
+    bloom: bool,
+    /// Bloom's share of the image, above 0 and at most 1. [default: 0.05]
+    #[arg(long, requires = "bloom", allow_negative_numbers = true)]
+    bloom_intensity: Option<f32>,
+    /// Depth of field of a thin lens with the camera's field of view on a 24 mm-high sensor.
+    #[arg(long)]
+    depth_of_field: bool,
+    /// Distance in focus, in metres. [default: what the image's centre shows]
+    #[arg(long, requires = "depth_of_field", allow_negative_numbers = true)]
+    focus_distance: Option<f32>,
+    /// The lens's f-number: lower is shallower. [default: 2.8]
+    #[arg(long, requires = "depth_of_field", allow_negative_numbers = true)]
+    f_number: Option<f32>,
+    /// Largest circle of confusion's radius, in pixels. [default: 16]
+    #[arg(long, requires = "depth_of_field", allow_negative_numbers = true)]
+    max_coc: Option<f32>,
+    /// Motion blur from per-pixel velocities: the camera's motion between frames and animated
+    /// instances' (glTF animation) over the frame interval.
+    #[arg(long)]
+    motion_blur: bool,
+    /// Shutter time as a fraction of the frame interval (0.5: a 180° shutter). [default: 0.5]
+    #[arg(long, requires = "motion_blur", allow_negative_numbers = true)]
+    shutter: Option<f32>,
+    /// Samples per pixel along the blur, 1 to 64. [default: 16]
+    #[arg(long, requires = "motion_blur")]
+    motion_blur_samples: Option<u32>,
+    /// Longest blur, in pixels. [default: 32]
+    #[arg(long, requires = "motion_blur", allow_negative_numbers = true)]
+    max_motion_blur: Option<f32>,
+    /// Natural vignetting: 0 none, 1 the cos⁴ falloff of a real lens.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    vignette: f32,
+}
+
+impl PostArgs {
+    pub(crate) fn settings(&self) -> PostSettings {
+        let auto = AutoExposure::default();
+        let bloom = Bloom::default();
+        let dof = DepthOfField::default();
+        let blur = MotionBlur::default();
+        PostSettings {
+            auto_exposure: self.auto_exposure.then(|| AutoExposure {
+                compensation_ev: self.exposure_compensation.unwrap_or(auto.compensation_ev),
+                adaptation_speed: self.exposure_adaptation.unwrap_or(auto.adaptation_speed),
+            }),
+            bloom: self.bloom.then(|| Bloom { intensity: self.bloom_intensity.unwrap_or(bloom.intensity) }),
+            depth_of_field: self.depth_of_field.then(|| DepthOfField {
+                focus_distance: self.focus_distance,
+                f_number: self.f_number.unwrap_or(dof.f_number),
+                max_radius: self.max_coc.unwrap_or(dof.max_radius),
+            }),
+            motion_blur: self.motion_blur.then(|| MotionBlur {
+                shutter: self.shutter.unwrap_or(blur.shutter),
+                samples: self.motion_blur_samples.unwrap_or(blur.samples),
+                max_length: self.max_motion_blur.unwrap_or(blur.max_length),
+            }),
+            vignette: self.vignette,
+        }
+    }
 }
 
 /// Ray-traced effects; each overrides the scene file's `[rays]`.
@@ -316,6 +395,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         max_texture_size: args.texture_size,
         anisotropy: args.anisotropy,
         rays: args.rays.settings(&scene)?,
+        post: args.post.settings(),
     };
 
     let ctx = GpuContext::new()?;

@@ -5,6 +5,7 @@ use crate::{
     gpu::GpuContext,
     particles::{ParticleFilter, MAX_PARTICLE_SAMPLES},
     pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
+    post::PostSettings,
     rays::RaySettings,
     Error, Result,
 };
@@ -50,6 +51,8 @@ pub struct RenderConfig {
     pub anisotropy: u16,
     /// Ray-traced effects: sun shadows and reflections, and their budgets (`rays/`).
     pub rays: RaySettings,
+    /// Post effects after shading: exposure, bloom, depth of field, motion blur, vignette (`post/`).
+    pub post: PostSettings,
 }
 
 impl Default for RenderConfig {
@@ -72,6 +75,7 @@ impl Default for RenderConfig {
             max_texture_size: 1024,
             anisotropy: 8,
             rays: RaySettings::default(),
+            post: PostSettings::default(),
         }
     }
 }
@@ -129,6 +133,7 @@ impl RenderConfig {
             crate::particles::check_clipmap(self.particle_cascade_resolution, self.particle_cascades)?;
         }
         self.rays.validate()?;
+        self.post.validate()?;
         if !(1..=16).contains(&self.anisotropy) {
             return Err(Error::InvalidConfig(format!("anisotropy {} must be between 1 and 16", self.anisotropy)));
         }

@@ -12,6 +12,7 @@ pub mod image_io;
 pub mod particles;
 pub mod passes;
 pub mod pipelines;
+pub mod post;
 pub mod rays;
 pub mod renderer;
 pub mod scene;

@@ -8,7 +8,8 @@ use crate::{
     config::RenderConfig,
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
     particles::{ParticleGrid, ParticleSystem, ParticleVolume},
-    pipelines::{DecalMethod, FrameInputs, FramePipeline, LightMethod, ParticleMethod, ShadingMethods},
+    pipelines::{DecalMethod, FrameInputs, FramePipeline, FrameSetup, LightMethod, ParticleMethod, ShadingMethods},
+    post::PostFrame,
     rays::{RayStructure, RayStructureStats},
     scene::{Aabb, Camera, Scene},
     Error, Result,
@@ -34,6 +35,8 @@ pub struct Renderer {
     motion: Option<InstanceMotion>,
     /// Scene time of the next frame, in seconds: where animated groups are.
     pub time: f32,
+    /// The camera of the last frame rendered, for motion blur's velocities; `None` before the first.
+    previous_camera: Option<Camera>,
 }
 
 /// The scene's node animation and what moving instances needs: each instance's current transform
@@ -83,6 +86,8 @@ pub struct Image<T> {
 impl Renderer {
     pub fn new(ctx: GpuContext, scene: &Scene, config: RenderConfig) -> Result<Self> {
         config.validate(&ctx)?;
+        // Before anything is built from it (the ray hierarchy, the light and decal structures).
+        scene.validate()?;
         let particle_settings = scene.particles.as_ref().filter(|s| s.count > 0);
         let grid_particles = match particle_settings {
             Some(settings) if config.particle_method == ParticleMethod::Grid => {
@@ -160,14 +165,14 @@ impl Renderer {
             particles: config.particle_method,
             reflections: config.rays.reflection_bounces > 0,
         };
-        let pipeline = FramePipeline::new(
-            &ctx,
-            &gpu_scene,
-            config.pipeline,
-            (methods, config.rays.sun_shadows),
-            (&lights, &decals),
-            (config.width, config.height),
-        )?;
+        let setup = FrameSetup {
+            methods,
+            shadows: config.rays.sun_shadows,
+            post: config.post,
+            structures: (&lights, &decals),
+            size: (config.width, config.height),
+        };
+        let pipeline = FramePipeline::new(&ctx, &gpu_scene, config.pipeline, setup)?;
         let timer = GpuTimer::new(&ctx);
         ctx.check_errors()?;
         let motion = scene.animation.clone().map(|animation| InstanceMotion {
@@ -175,7 +180,20 @@ impl Renderer {
             transforms: scene.instances.iter().map(|i| i.world_from_local).collect(),
             primitive_counts: scene.instances.iter().map(|i| scene.meshes[i.mesh].primitives.len()).collect(),
         });
-        Ok(Self { ctx, scene: gpu_scene, config, pipeline, lights, decals, particles, timer, rays, motion, time: 0.0 })
+        Ok(Self {
+            ctx,
+            scene: gpu_scene,
+            config,
+            pipeline,
+            lights,
+            decals,
+            particles,
+            timer,
+            rays,
+            motion,
+            time: 0.0,
+            previous_camera: None,
+        })
     }
 
     /// The ray hierarchy's sizes and CPU build times, when the frame traces rays.
@@ -184,17 +202,21 @@ impl Renderer {
     }
 
     /// Places animated instances where they are at `time`: their draws, and the rays' top level
-    /// rebuilt over every instance.
+    /// rebuilt over every instance; with motion blur, also where they were a frame interval before.
     fn move_instances(&mut self, time: f32) -> Result<()> {
         let Some(motion) = &mut self.motion else { return Ok(()) };
         let moved = motion.animation.instance_transforms(time);
+        let previous = match self.config.post.motion_blur {
+            Some(_) => motion.animation.instance_transforms(time - FRAME_INTERVAL),
+            None => Vec::new(),
+        };
         if let Some(rays) = &mut self.rays {
             for &(instance, transform) in &moved {
                 motion.transforms[instance] = transform;
             }
             rays.place(&motion.transforms)?;
         }
-        self.scene.move_instances(&self.ctx.queue, &moved, &motion.primitive_counts, self.rays.as_ref());
+        self.scene.move_instances(&self.ctx.queue, &moved, &previous, &motion.primitive_counts, self.rays.as_ref());
         Ok(())
     }
 
@@ -217,6 +239,9 @@ impl Renderer {
     /// again from the same time, so every returned frame is complete.
     pub fn render_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<FrameTiming>> {
         let start = self.time;
+        if !start.is_finite() {
+            return Err(Error::InvalidConfig(format!("scene time {start} s is not a finite number of seconds")));
+        }
         loop {
             let timings = self.submit_frames(camera, count)?;
             // Both are asked: each grows its own lists.
@@ -256,6 +281,14 @@ impl Renderer {
             // From here to the submit is the CPU's work for the frame (waits for the timer are before).
             let recording = std::time::Instant::now();
             self.move_instances(self.time)?;
+            let post = PostFrame {
+                camera,
+                previous_camera: self.previous_camera.as_ref().unwrap_or(camera),
+                size: (self.config.width, self.config.height),
+                interval: self.previous_camera.is_some().then_some(FRAME_INTERVAL),
+            };
+            self.pipeline.post().write_uniforms(&self.ctx.queue, post)?;
+            self.previous_camera = Some(camera.clone());
             // Particles first: as lights, they are the light structure's dynamic group.
             if let Some(particles) = &self.particles {
                 particles.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time, camera.position());

@@ -13,7 +13,7 @@ use manylights::{
     rays::{RaySettings, SunShadows},
     renderer::Image,
     scene::{
-        animation::{Animation, Channel, Interpolation, Node, Property},
+        animation::{Animation, Channel, Interpolation, Node, Property, Trs},
         AlphaMode, Camera, Instance, Material, Mesh, Primitive, Projection, Scene, Sun, Vertex,
     },
 };
@@ -290,11 +290,11 @@ fn soft_shadows_follow_the_fraction_of_the_sun_each_point_sees() {
 /// The box of [`shadow_scene`] flying along x at 60 m/s (one metre, six pixels, a frame), by a glTF
 /// style node animation.
 fn moving_box(scene: &mut Scene) {
-    let rest = scene.instances[1].world_from_local;
+    let (scale, rotation, translation) = scene.instances[1].world_from_local.to_scale_rotation_translation();
     let centre = (BOX_MIN + BOX_MAX) * 0.5;
     scene.animation = Some(Animation {
         name: "fly".into(),
-        nodes: vec![Node { parent: None, rest }],
+        nodes: vec![Node::from_trs(None, Trs { translation, rotation, scale })],
         channels: vec![Channel {
             node: 0,
             property: Property::Translation,
@@ -332,6 +332,10 @@ fn every_frame_traces_the_top_level_of_its_own_time_while_the_occluder_moves() {
             r.read_hdr().unwrap()
         });
         let what = format!("frame {frame} at {time} s");
+        // The box's draw (the scene's second) is ordered front to back by where it is now.
+        let command = shadowed.scene.draw_commands.iter().find(|c| c.draw_index == 1).unwrap();
+        let centre = (BOX_MIN + BOX_MAX) * 0.5 + box_offset(time);
+        assert!(command.center.distance(centre) < 1e-4, "{what}: the box's draw is at {}, the box at {centre}", command.center);
         let (in_shadow, in_sun) = check_shadow(&images[2], &images[0], &images[1], box_offset(time), &what);
         assert!(in_shadow > 100 && in_sun > 3000, "{what}: {in_shadow} shadowed and {in_sun} sunlit pixels");
         // Where the shadow is, on average: it must travel with the box.

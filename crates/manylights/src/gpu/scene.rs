@@ -160,8 +160,10 @@ pub struct DrawCommand {
     pub index_count: u32,
     pub base_vertex: u32,
     pub state: RasterState,
-    /// World-space centre of the primitive's bounds, for front-to-back ordering.
+    /// World-space centre of the primitive's bounds, for front-to-back ordering, and the same in
+    /// the mesh's space, to place it again when its instance moves.
     pub center: glam::Vec3,
+    pub local_center: glam::Vec3,
 }
 
 pub struct GpuScene {
@@ -181,6 +183,10 @@ pub struct GpuScene {
     draws: Vec<GpuDraw>,
     instance_first_draw: Vec<usize>,
     draw_buffer: wgpu::Buffer,
+    /// Each draw's transform (world from local) a frame interval before the current one, for motion
+    /// blur's velocity (`post/velocity.rs`), and which draws belong to animated instances.
+    pub previous_transforms: wgpu::Buffer,
+    moving_draws: Vec<bool>,
     ray_node_buffer: wgpu::Buffer,
     ray_instance_buffer: wgpu::Buffer,
 }
@@ -193,6 +199,12 @@ impl GpuScene {
         let mut order: Vec<&DrawCommand> = self.draw_commands.iter().collect();
         order.sort_by(|a, b| a.state.cmp(&b.state).then(a.center.distance_squared(eye).total_cmp(&b.center.distance_squared(eye))));
         order
+    }
+
+    /// The opaque draws of animated instances, in `draw_order`: the only ones whose velocity differs
+    /// from the camera's.
+    pub fn moving_draw_order(&self, eye: glam::Vec3) -> Vec<&DrawCommand> {
+        self.draw_order(eye).into_iter().filter(|c| self.moving_draws[c.draw_index as usize]).collect()
     }
 
     /// The alpha-blended draws back to front from `eye` (by the centres of their bounds), so each
@@ -265,6 +277,7 @@ impl GpuScene {
                     index_count,
                     base_vertex,
                     center: instance.world_from_local.transform_point3(primitive_center(primitive)),
+                    local_center: primitive_center(primitive),
                     state: RasterState {
                         alpha_mask: matches!(material.alpha_mode, AlphaMode::Mask { .. }),
                         double_sided: material.double_sided,
@@ -292,6 +305,13 @@ impl GpuScene {
         let vertex_buffer = storage_buffer(device, "vertices", &vertices, limit, wgpu::BufferUsages::empty())?;
         let index_buffer = storage_buffer(device, "indices", &indices, limit, wgpu::BufferUsages::INDEX)?;
         let draw_buffer = storage_buffer(device, "draws", &draws, limit, wgpu::BufferUsages::COPY_DST)?;
+        let transforms: Vec<[[f32; 4]; 4]> = draws.iter().map(|d| d.world_from_local).collect();
+        let previous_transforms = storage_buffer(device, "previous draw transforms", &transforms, limit, wgpu::BufferUsages::COPY_DST)?;
+        let mut moving_draws = vec![false; draws.len()];
+        for &(instance, _) in scene.animation.iter().flat_map(|a| &a.instances) {
+            let first = instance_first_draw[instance];
+            moving_draws[first..first + scene.meshes[scene.instances[instance].mesh].primitives.len()].fill(true);
+        }
         let material_buffer = storage_buffer(device, "materials", &materials, limit, wgpu::BufferUsages::empty())?;
         let no_rays = RayStructure::unused();
         let rays = rays.filter(|r| !r.nodes.is_empty()).unwrap_or(&no_rays);
@@ -381,13 +401,18 @@ impl GpuScene {
             draws,
             instance_first_draw,
             draw_buffer,
+            previous_transforms,
+            moving_draws,
             ray_node_buffer,
             ray_instance_buffer,
         })
     }
 
-    /// Moves scene instances: `moved` holds (instance, world from local), `primitive_counts` each
-    /// instance's primitive count (its draws). Rewrites their draws and, when the frame traces rays,
+    /// Moves scene instances: `moved` holds (instance, world from local), `previous` the same
+    /// instances' transforms a frame interval earlier (for motion blur; empty when no pass reads them),
+    /// `primitive_counts` each instance's primitive count (its draws). Rewrites their draws, previous
+    /// transforms, their commands' centres (draw order) and mirroring (winding) and, when the frame
+    /// traces rays,
     /// the rays' top level and instances from `rays` (already placed with the same transforms). The
     /// writes land before the next submitted frame and after the ones already submitted, so every
     /// frame draws and traces one consistent placement.
@@ -395,18 +420,33 @@ impl GpuScene {
         &mut self,
         queue: &wgpu::Queue,
         moved: &[(usize, glam::Mat4)],
+        previous: &[(usize, glam::Mat4)],
         primitive_counts: &[usize],
         rays: Option<&RayStructure>,
     ) {
+        for &(instance, world_from_local) in previous {
+            let first = self.instance_first_draw[instance];
+            let transforms = vec![world_from_local.to_cols_array_2d(); primitive_counts[instance]];
+            let offset = (first * std::mem::size_of::<[[f32; 4]; 4]>()) as u64;
+            queue.write_buffer(&self.previous_transforms, offset, bytemuck::cast_slice(&transforms));
+        }
         let mut touched: Option<std::ops::Range<usize>> = None;
+        let mut draw_placements = std::collections::HashMap::new();
         for &(instance, world_from_local) in moved {
             let first = self.instance_first_draw[instance];
             let draws = first..first + primitive_counts[instance];
             let (world, normal) = draw_transforms(&world_from_local);
-            for draw in &mut self.draws[draws.clone()] {
+            for (index, draw) in self.draws[draws.clone()].iter_mut().enumerate() {
                 (draw.world_from_local, draw.normal_from_local) = (world, normal);
+                draw_placements.insert((first + index) as u32, world_from_local);
             }
             touched = Some(touched.map_or(draws.clone(), |t| t.start.min(draws.start)..t.end.max(draws.end)));
+        }
+        for command in self.draw_commands.iter_mut().chain(&mut self.transparent_draw_commands) {
+            if let Some(world_from_local) = draw_placements.get(&command.draw_index) {
+                command.center = world_from_local.transform_point3(command.local_center);
+                command.state.mirrored = world_from_local.determinant() < 0.0;
+            }
         }
         if let Some(range) = touched.filter(|r| !r.is_empty()) {
             let offset = (range.start * std::mem::size_of::<GpuDraw>()) as u64;

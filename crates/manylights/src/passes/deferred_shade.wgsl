@@ -44,13 +44,18 @@ fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     s.roughness = rm.x;
     s.metallic = rm.y;
     s.emissive = textureLoad(emission, id.xy, 0).rgb;
+    // Rays leave along the geometric normal, rebuilt from depth only for frames that trace from here.
+    s.ray_normal = s.normal;
+    if frame.ray_options.z > 0u || frame.ray_options.w > 0u {
+        s.ray_normal = depth_geometric_normal(depth, id.xy, relative_position, z);
+    }
+    s.ray_clearance = surface_clearance(relative_position);
 
     let dp = gbuffer_position_gradients(pixel, relative_position, s.normal);
     let decaled = apply_decals(s, dp);
     var radiance = shade(decaled, sun_visibility(id.xy));
     if frame.ray_options.z > 0u {
-        let geometric_normal = depth_geometric_normal(depth, id.xy, relative_position, z);
-        radiance += reflected_radiance(decaled, geometric_normal, pixel_footprint(relative_position));
+        radiance += reflected_radiance(decaled, s.ray_normal, pixel_footprint(relative_position));
     }
     textureStore(hdr_output, id.xy, vec4<f32>(radiance, 1.0));
 }

@@ -13,10 +13,10 @@
 @group(1) @binding(0) var sun_shadow_mask: texture_2d<f32>;
 
 fn forward_radiance(in: ForwardVertex, front_facing: bool, g: UvGradients, dp: PositionGradients) -> vec3<f32> {
-    let s = apply_decals(fragment_surface(in, front_facing, g), dp);
+    let s = apply_decals(fragment_shading_surface(in, front_facing, g, dp), dp);
     var radiance = shade(s, sun_visibility(vec2<u32>(in.clip_position.xy)));
     if frame.ray_options.z > 0u {
-        radiance += reflected_radiance(s, fragment_geometric_normal(dp, s.view_dir), pixel_footprint(in.relative_position));
+        radiance += reflected_radiance(s, s.ray_normal, pixel_footprint(in.relative_position));
     }
     return radiance;
 }

@@ -18,7 +18,6 @@ pub mod forward_shade;
 pub mod gbuffer_raster;
 pub mod ray_shadows;
 pub mod shadow_filter;
-pub mod tonemap;
 pub mod transparent_shade;
 pub mod visbuffer_raster;
 pub mod visbuffer_shade;

@@ -4,7 +4,7 @@
 // one to its centre (hard), or `frame.ray_options.y` to points of its disc (soft), which
 // `shadow_filter` then smooths — give the fraction of the sun the pixel sees (x), and the mean
 // distance to what blocked the rays (y, 0 when nothing did), from which the filter sizes the
-// penumbra. Sky pixels see the whole sun.
+// penumbra. Sky pixels see the whole sun, blocked at no distance.
 #include "shading/scene_bindings.wgsl"
 #include "shading/depth_normal.wgsl"
 #include "rays/trace.wgsl"
@@ -44,7 +44,7 @@ fn ray_shadows(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let z = textureLoad(depth, id.xy, 0);
     if z == 0.0 || frame.sun_direction.w == 0.0 {
-        textureStore(visibility_output, id.xy, vec4<f32>(1.0));
+        textureStore(visibility_output, id.xy, vec4<f32>(1.0, 0.0, 0.0, 0.0));
         return;
     }
     let relative_position = depth_relative_position(vec2<f32>(id.xy) + 0.5, z);
@@ -61,19 +61,22 @@ fn ray_shadows(@builtin(global_invocation_id) id: vec3<u32>) {
     let count = select(1u, frame.ray_options.y, soft);
     let rotation = pixel_hash(id.xy);
     var visible = 0.0;
+    // Directions below the surface's horizon are blocked by the surface itself: they darken the pixel
+    // but are no blocker at a distance, so only traced hits size the penumbra.
+    var hits = 0.0;
     var blocker_distance = 0.0;
     for (var k = 0u; k < count; k += 1u) {
         let dir = select(to_sun, sun_disc_direction(to_sun, frame.ray_settings.x, k, count, rotation), soft);
         if dot(dir, n) <= 0.0 {
             continue;
         }
-        let hit = trace_ray(origin, dir, 3.0e38, true);
+        let hit = trace_any_hit(origin, dir, 3.0e38);
         if hit.triangle == RAY_NO_HIT {
             visible += 1.0;
         } else {
+            hits += 1.0;
             blocker_distance += hit.t;
         }
     }
-    let blocked = f32(count) - visible;
-    textureStore(visibility_output, id.xy, vec4<f32>(visible / f32(count), select(0.0, blocker_distance / blocked, blocked > 0.0), 0.0, 0.0));
+    textureStore(visibility_output, id.xy, vec4<f32>(visible / f32(count), select(0.0, blocker_distance / hits, hits > 0.0), 0.0, 0.0));
 }

@@ -55,6 +55,15 @@ fn fragment_surface(in: ForwardVertex, front_facing: bool, g: UvGradients) -> Sh
     return evaluate_material(materials[draw.material], surface, g, position, view_dir);
 }
 
+// The fragment's surface for shading passes, which trace rays from it: with its triangle's normal and
+// the raster's interpolation error as where rays leave.
+fn fragment_shading_surface(in: ForwardVertex, front_facing: bool, g: UvGradients, dp: PositionGradients) -> ShadingInput {
+    var s = fragment_surface(in, front_facing, g);
+    s.ray_normal = fragment_geometric_normal(dp, s.view_dir);
+    s.ray_clearance = surface_clearance(in.relative_position);
+    return s;
+}
+
 // Whether an alpha-masked fragment covers its pixel (derivatives taken before any discard).
 fn forward_alpha_covers(in: ForwardVertex, g: UvGradients) -> bool {
     let material = materials[draws[in.draw_index].material];

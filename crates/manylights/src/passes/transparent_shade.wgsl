@@ -11,11 +11,10 @@
 fn transparent_shade(in: ForwardVertex, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
     let g = UvGradients(in.uv, dpdx(in.uv), dpdy(in.uv));
     let dp = PositionGradients(dpdx(in.relative_position), dpdy(in.relative_position));
-    let s = apply_decals(fragment_surface(in, front_facing, g), dp);
+    let s = apply_decals(fragment_shading_surface(in, front_facing, g, dp), dp);
     // No shadow mask holds a second surface per pixel: the sun's visibility is traced here, from the
     // interpolated position.
-    let clearance = surface_clearance(in.relative_position);
-    let sun = sun_visibility_traced(s.position, fragment_geometric_normal(dp, s.view_dir), clearance);
+    let sun = sun_visibility_traced(s.position, s.ray_normal, s.ray_clearance);
     // The pipeline blends "over": radiance α + what lies behind (1 − α).
     return vec4<f32>(shade(s, sun), s.alpha);
 }

@@ -17,7 +17,7 @@
 //!             transparent_shade (BLEND draws, back to front, fragments) ─▶ blended over hdr
 //!                                   │
 //!                                   ▼
-//!             tonemap ─▶ ldr (Rgba8Unorm, sRGB-encoded)
+//!             post chain (depth of field, motion blur, exposure, bloom; tonemap) ─▶ ldr (Rgba8Unorm, sRGB-encoded)
 //! ```
 
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
@@ -26,9 +26,9 @@ use crate::passes::{
     deferred_shade::DeferredShade,
     gbuffer_raster::{GBufferRaster, GBUFFER_FORMATS},
     ray_shadows::RayShadows,
-    tonemap::Tonemap,
     transparent_shade::TransparentShade,
 };
+use crate::post::PostChain;
 use crate::{
     pipelines::{DecalMethod, FrameInputs, FrameSetup, FrameTargets},
     Result,
@@ -47,12 +47,13 @@ pub struct DeferredPipeline {
     shade: DeferredShade,
     /// Present when the scene has transparent draws.
     transparent: Option<TransparentShade>,
-    tonemap: Tonemap,
+    /// Depth of field, motion blur, exposure, bloom, vignette and tonemapping (`post/`).
+    pub post: PostChain,
 }
 
 impl DeferredPipeline {
     pub fn new(ctx: &GpuContext, scene: &GpuScene, setup: FrameSetup) -> Result<Self> {
-        let FrameSetup { methods, shadows, structures, size: (width, height) } = setup;
+        let FrameSetup { methods, post, structures, size: (width, height), .. } = setup;
         let targets = FrameTargets::new(&ctx.device, width, height);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         use wgpu::TextureUsages as U;
@@ -68,7 +69,7 @@ impl DeferredPipeline {
             )
         });
         let gbuffer = textures.each_ref().map(view);
-        let (depth_view, hdr_view, ldr_view) = (view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
+        let (depth_view, hdr_view) = (view(&targets.depth), view(&targets.hdr));
         let decals = match methods.decals {
             DecalMethod::DeferredDecals => {
                 let copy =
@@ -77,14 +78,14 @@ impl DeferredPipeline {
             }
             _ => None,
         };
-        let shadows = shadows.map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
+        let shadows = setup.traced_shadows().map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
         Ok(Self {
             raster: GBufferRaster::new(ctx, scene)?,
             decals,
             shade: DeferredShade::new(ctx, scene, methods, structures, shadows.as_ref(), (&depth_view, &gbuffer), &hdr_view)?,
             shadows,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
-            tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
+            post: PostChain::new(ctx, scene, post, (&targets.depth, &targets.hdr, &targets.ldr))?,
             targets,
             gbuffer,
             depth_view,
@@ -107,6 +108,6 @@ impl DeferredPipeline {
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
         }
-        self.tonemap.record(encoder, timer, width, height);
+        self.post.record(encoder, timer, inputs.scene, inputs.eye);
     }
 }

@@ -18,14 +18,14 @@
 //!             transparent_shade (BLEND draws, back to front) ─▶ blended over hdr
 //!                                   │
 //!                                   ▼
-//!             tonemap ─▶ ldr (Rgba8Unorm, sRGB-encoded)
+//!             post chain (depth of field, motion blur, exposure, bloom; tonemap) ─▶ ldr (Rgba8Unorm, sRGB-encoded)
 //! ```
 
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
-    depth_prepass::DepthPrepass, forward_shade::ForwardShade, ray_shadows::RayShadows, tonemap::Tonemap,
-    transparent_shade::TransparentShade,
+    depth_prepass::DepthPrepass, forward_shade::ForwardShade, ray_shadows::RayShadows, transparent_shade::TransparentShade,
 };
+use crate::post::PostChain;
 use crate::{
     pipelines::{FrameInputs, FrameSetup, FrameTargets},
     Result,
@@ -41,22 +41,23 @@ pub struct ForwardPipeline {
     shade: ForwardShade,
     /// Present when the scene has transparent draws.
     transparent: Option<TransparentShade>,
-    tonemap: Tonemap,
+    /// Depth of field, motion blur, exposure, bloom, vignette and tonemapping (`post/`).
+    pub post: PostChain,
 }
 
 impl ForwardPipeline {
     pub fn new(ctx: &GpuContext, scene: &GpuScene, setup: FrameSetup) -> Result<Self> {
-        let FrameSetup { methods, shadows, structures, size: (width, height) } = setup;
+        let FrameSetup { methods, post, structures, size: (width, height), .. } = setup;
         let targets = FrameTargets::new(&ctx.device, width, height);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let (depth_view, hdr_view, ldr_view) = (view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
-        let shadows = shadows.map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
+        let (depth_view, hdr_view) = (view(&targets.depth), view(&targets.hdr));
+        let shadows = setup.traced_shadows().map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
         Ok(Self {
             prepass: DepthPrepass::new(ctx, scene)?,
             shade: ForwardShade::new(ctx, scene, methods, structures, shadows.as_ref())?,
             shadows,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
-            tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
+            post: PostChain::new(ctx, scene, post, (&targets.depth, &targets.hdr, &targets.ldr))?,
             targets,
             depth_view,
             hdr_view,
@@ -73,6 +74,6 @@ impl ForwardPipeline {
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
         }
-        self.tonemap.record(encoder, timer, self.targets.width, self.targets.height);
+        self.post.record(encoder, timer, inputs.scene, inputs.eye);
     }
 }

@@ -14,7 +14,8 @@ pub use visbuffer::VisbufferPipeline;
 
 use crate::accel::VolumeStructure;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
-use crate::passes::{tonemap::LDR_FORMAT, visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
+use crate::passes::{visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
+use crate::post::{tonemap::LDR_FORMAT, PostChain, PostSettings};
 use crate::rays::SunShadows;
 use crate::Result;
 
@@ -50,20 +51,7 @@ pub enum FramePipeline {
 }
 
 impl FramePipeline {
-    /// `shadows` is how the sun's shadows are traced (`passes::ray_shadows`), in every pipeline.
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        kind: PipelineKind,
-        (methods, shadows): (ShadingMethods, SunShadows),
-        structures: (&VolumeStructure, &VolumeStructure),
-        (width, height): (u32, u32),
-    ) -> Result<Self> {
-        let shadows = match shadows {
-            SunShadows::Off => None,
-            mode => Some(mode),
-        };
-        let setup = FrameSetup { methods, shadows, structures, size: (width, height) };
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, kind: PipelineKind, setup: FrameSetup) -> Result<Self> {
         Ok(match kind {
             PipelineKind::Visbuffer => Self::Visbuffer(Box::new(VisbufferPipeline::new(ctx, scene, setup)?)),
             PipelineKind::Deferred => Self::Deferred(Box::new(DeferredPipeline::new(ctx, scene, setup)?)),
@@ -87,16 +75,34 @@ impl FramePipeline {
             Self::Forward(p) => &p.targets,
         }
     }
+
+    /// The post chain every pipeline ends with.
+    pub fn post(&self) -> &PostChain {
+        match self {
+            Self::Visbuffer(p) => &p.post,
+            Self::Deferred(p) => &p.post,
+            Self::Forward(p) => &p.post,
+        }
+    }
 }
 
 /// What every pipeline is built for: the shading core's methods, how the sun's shadows are traced
-/// (`None`: not at all), the light and decal structures, the image size.
+/// (`passes::ray_shadows`; `Off`: not at all), the post effects (`post/`), the light and decal
+/// structures, the image size.
 #[derive(Clone, Copy)]
 pub struct FrameSetup<'a> {
     pub methods: ShadingMethods,
-    pub shadows: Option<SunShadows>,
+    pub shadows: SunShadows,
+    pub post: PostSettings,
     pub structures: (&'a VolumeStructure, &'a VolumeStructure),
     pub size: (u32, u32),
+}
+
+impl FrameSetup<'_> {
+    /// The sun's shadow mode when it traces shadows.
+    pub fn traced_shadows(&self) -> Option<SunShadows> {
+        (self.shadows != SunShadows::Off).then_some(self.shadows)
+    }
 }
 
 /// What a frame reads besides its pipeline's own images: the scene, the light and decal structures

@@ -16,17 +16,17 @@
 //!             transparent_shade (BLEND draws, back to front, fragments) ─▶ blended over hdr
 //!                                   │
 //!                                   ▼
-//!             tonemap ─▶ ldr (Rgba8Unorm, sRGB-encoded)
+//!             post chain (depth of field, motion blur, exposure, bloom; tonemap) ─▶ ldr (Rgba8Unorm, sRGB-encoded)
 //! ```
 
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
     ray_shadows::RayShadows,
-    tonemap::Tonemap,
     transparent_shade::TransparentShade,
     visbuffer_raster::{VisbufferRaster, VISIBILITY_FORMAT},
     visbuffer_shade::VisbufferShade,
 };
+use crate::post::PostChain;
 use crate::{
     pipelines::{FrameInputs, FrameSetup, FrameTargets},
     Result,
@@ -43,25 +43,25 @@ pub struct VisbufferPipeline {
     shade: VisbufferShade,
     /// Present when the scene has transparent draws.
     transparent: Option<TransparentShade>,
-    tonemap: Tonemap,
+    /// Depth of field, motion blur, exposure, bloom, vignette and tonemapping (`post/`).
+    pub post: PostChain,
 }
 
 impl VisbufferPipeline {
     pub fn new(ctx: &GpuContext, scene: &GpuScene, setup: FrameSetup) -> Result<Self> {
-        let FrameSetup { methods, shadows, structures, size: (width, height) } = setup;
+        let FrameSetup { methods, post, structures, size: (width, height), .. } = setup;
         let targets = FrameTargets::new(&ctx.device, width, height);
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
         let visibility = super::target(&ctx.device, "visibility", width, height, VISIBILITY_FORMAT, usage);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let (visibility_view, depth_view, hdr_view, ldr_view) =
-            (view(&visibility), view(&targets.depth), view(&targets.hdr), view(&targets.ldr));
-        let shadows = shadows.map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
+        let (visibility_view, depth_view, hdr_view) = (view(&visibility), view(&targets.depth), view(&targets.hdr));
+        let shadows = setup.traced_shadows().map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
         Ok(Self {
             raster: VisbufferRaster::new(ctx, scene)?,
             shade: VisbufferShade::new(ctx, scene, methods, structures, shadows.as_ref(), (&visibility_view, &depth_view, &hdr_view))?,
             shadows,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
-            tonemap: Tonemap::new(ctx, scene, &hdr_view, &ldr_view)?,
+            post: PostChain::new(ctx, scene, post, (&targets.depth, &targets.hdr, &targets.ldr))?,
             targets,
             visibility_view,
             depth_view,
@@ -80,6 +80,6 @@ impl VisbufferPipeline {
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
         }
-        self.tonemap.record(encoder, timer, width, height);
+        self.post.record(encoder, timer, inputs.scene, inputs.eye);
     }
 }

@@ -266,15 +266,21 @@ impl RayStructure {
     }
 
     /// Builds the BLAS of every instanced mesh and the TLAS over the instances, at the instances'
-    /// transforms. An instance whose transform cannot be inverted (a mesh flattened onto a plane or a
-    /// line) gets a BLAS of its own over its triangles in world space, placed by the identity.
+    /// transforms. A still instance whose transform cannot be inverted (a mesh flattened onto a plane
+    /// or a line) gets a BLAS of its own over its triangles in world space, placed by the identity;
+    /// animated instances always use their mesh's, since they may unfold later.
     /// Meshes without opaque or alpha-masked triangles are left out.
     pub fn build(scene: &Scene) -> Result<Self> {
         let start = std::time::Instant::now();
-        let transforms: Vec<Affine3A> = scene.instances.iter().map(|i| Affine3A::from_mat4(i.world_from_local)).collect();
+        let mut animated = vec![false; scene.instances.len()];
+        for &(instance, _) in scene.animation.iter().flat_map(|a| &a.instances) {
+            animated[instance] = true;
+        }
+        let in_mesh_space: Vec<bool> =
+            scene.instances.iter().zip(&animated).map(|(i, &a)| a || invertible(&Affine3A::from_mat4(i.world_from_local))).collect();
         let mut shared = vec![false; scene.meshes.len()];
-        for (instance, transform) in scene.instances.iter().zip(&transforms) {
-            shared[instance.mesh] |= invertible(transform);
+        for (instance, &mesh_space) in scene.instances.iter().zip(&in_mesh_space) {
+            shared[instance.mesh] |= mesh_space;
         }
         // BLASes: one per mesh placed by an invertible transform, then one per singular instance.
         let mut blases = Vec::new();
@@ -286,11 +292,11 @@ impl RayStructure {
             }
         }
         let mut instance_blas = Vec::with_capacity(scene.instances.len());
-        for (instance, transform) in scene.instances.iter().zip(&transforms) {
-            if invertible(transform) {
+        for (instance, &mesh_space) in scene.instances.iter().zip(&in_mesh_space) {
+            if mesh_space {
                 instance_blas.push(mesh_blas[instance.mesh].map(|b| (b, false)));
             } else {
-                let blas = build_blas(scene, instance.mesh, transform)?;
+                let blas = build_blas(scene, instance.mesh, &Affine3A::from_mat4(instance.world_from_local))?;
                 instance_blas.push(blas.map(|blas| {
                     blases.push(blas);
                     (blases.len() - 1, true)
@@ -336,10 +342,13 @@ impl RayStructure {
         Ok(structure)
     }
 
-    /// A hierarchy no ray enters: one node with an empty box, for frames that trace no rays (bindings
-    /// cannot be empty).
+    /// A hierarchy in which no ray hits anything, for frames that trace no rays (bindings cannot be
+    /// empty): one leaf, at the origin, of the zeroed instance the upload pads empty arrays with; its
+    /// zero map stops every ray at the origin, where the root (also its BLAS) holds the zeroed
+    /// triangle, which has no area. A walk through it ends after that one test.
     pub fn unused() -> Self {
-        Self { nodes: vec![BvhNode { min: [1.0; 3], max: [-1.0; 3], entry: 0, skip: crate::accel::END }], ..Default::default() }
+        let leaf = BvhNode { min: [0.0; 3], max: [0.0; 3], entry: BvhNode::leaf_entry(0, 1), skip: crate::accel::END };
+        Self { nodes: vec![leaf], ..Default::default() }
     }
 
     /// Rebuilds the top level for the scene's instances at `transforms` (world from local, one per

@@ -1,6 +1,6 @@
 // Ray traversal of the scene's two-level hierarchy (`rays/mod.rs`), in any stage: closest hit for
 // reflections, any hit for shadows. Like the point query (`accel/volume_query.wgsl`) it needs no
-// stack: every node says where to go if the ray meets its box (`entry`) and if not (`skip`), and a
+// stack for any hit: every node says where to go if the ray meets its box (`entry`) and if not (`skip`), and a
 // top-level leaf moves the ray into its instance's mesh space until that BLAS ends (its last `skip`
 // is BVH_END), then resumes the top level. The ray's direction is mapped into mesh space without
 // normalising, so a hit's distance means the same in every instance and prunes them all.
@@ -114,9 +114,10 @@ fn ray_hit_leaf(leaf: vec2<u32>, ray: RaySpace, instance: RayInstance, instance_
     return nearest;
 }
 
-// The nearest hit along origin + t · dir with 0 < t < t_max, or with `any_hit` the first hit found
-// (shadow rays need no more). Origins must be offset off the surface they leave (`ray_offset_origin`).
-fn trace_ray(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> RayHit {
+// The first hit found along origin + t · dir with 0 < t < t_max, in stored order: shadow rays need no
+// more (closest hits: `trace_closest`). Origins must be offset off the surface they leave
+// (`ray_offset_origin`).
+fn trace_any_hit(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> RayHit {
     var hit = RayHit(t_max, RAY_NO_HIT, 0u, 0.0, 0.0);
     var ray = ray_space(origin, dir);
     var in_blas = false;
@@ -158,8 +159,8 @@ fn trace_ray(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> Ra
             node_index = instance.blas_root;
             continue;
         }
-        hit = ray_hit_leaf(leaf, ray, instance, instance_index, hit, any_hit);
-        if any_hit && hit.triangle != RAY_NO_HIT {
+        hit = ray_hit_leaf(leaf, ray, instance, instance_index, hit, true);
+        if hit.triangle != RAY_NO_HIT {
             return hit;
         }
         node_index = skip;
@@ -169,15 +170,14 @@ fn trace_ray(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> Ra
 
 // Whether anything lies on the segment from `origin` along `dir` before `t_max`.
 fn ray_occluded(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
-    return trace_ray(origin, dir, t_max, true).triangle != RAY_NO_HIT;
+    return trace_any_hit(origin, dir, t_max).triangle != RAY_NO_HIT;
 }
 
 // Entries of the closest-hit traversal's stack: far children still to visit, at most one per level of
 // the top level and of one BLAS together (the CPU builder bounds each tree's depth by 48: 94 at most).
 const RAY_STACK_SIZE: u32 = 96u;
 
-// The nearest hit along origin + t · dir with 0 < t < t_max, as `trace_ray(…, false)` finds it, but
-// visiting the nearer child of each node first and keeping the farther on a stack with the distance
+// The nearest hit along origin + t · dir with 0 < t < t_max, visiting the nearer child of each node first and keeping the farther on a stack with the distance
 // where the ray enters it: once a hit is nearer than that, the subtree is skipped unvisited. The
 // stackless walk must visit children in their stored order; for closest hits that visits far more
 // nodes (BENCHMARKS.md).
@@ -239,7 +239,7 @@ fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> RayHit {
         let first = ray_nodes[first_index];
         let second_index = first.skip;
         // A link back to the node ends the walk: lanes run on zeroed memory must not loop (see
-        // `trace_ray`).
+        // `trace_any_hit`).
         if first_index == node_index || second_index == node_index {
             break;
         }

@@ -1,5 +1,5 @@
 // Test probe of the ray traversal: for each ray, the closest hit (`trace_closest`) or, flagged, whether
-// anything is hit before t_max (`trace_ray` for any hit), through the functions the passes use. Rays are (origin, t_max) and
+// anything is hit before t_max (`trace_any_hit`), through the functions the passes use. Rays are (origin, t_max) and
 // (direction, any-hit flag); results are (t, triangle, instance, b1) and b2.
 #include "shading/scene_bindings.wgsl"
 #include "rays/trace.wgsl"
@@ -17,7 +17,7 @@ fn trace_probe(@builtin(global_invocation_id) id: vec3<u32>) {
     let dir = probe_rays[2u * id.x + 1u];
     var hit: RayHit;
     if dir.w != 0.0 {
-        hit = trace_ray(origin.xyz, dir.xyz, origin.w, true);
+        hit = trace_any_hit(origin.xyz, dir.xyz, origin.w);
     } else {
         hit = trace_closest(origin.xyz, dir.xyz, origin.w);
     }

@@ -38,12 +38,35 @@ pub struct Channel {
 }
 
 /// A node of the hierarchy: its parent (earlier in the list) and its transform relative to it at
-/// rest. Channels replace the translation, rotation or scale of its decomposition (glTF requires
-/// animated nodes to be given as those).
+/// rest, as a matrix and as the translation, rotation and scale that channels replace. glTF requires
+/// animated nodes to be given as those, so they are kept as given: a scale of 0 at rest (a part that
+/// grows in) cannot be recovered from its matrix.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Node {
     pub parent: Option<usize>,
     pub rest: Mat4,
+    pub rest_trs: Trs,
+}
+
+/// A transform as translation, rotation and scale, applied scale first.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trs {
+    pub translation: Vec3,
+    pub rotation: Quat,
+    pub scale: Vec3,
+}
+
+impl Trs {
+    pub fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    }
+}
+
+impl Node {
+    /// A node given by its translation, rotation and scale.
+    pub fn from_trs(parent: Option<usize>, trs: Trs) -> Self {
+        Self { parent, rest: trs.matrix(), rest_trs: trs }
+    }
 }
 
 /// A scene's node animation. Nodes are listed parents first; only instances under an animated node
@@ -60,14 +83,15 @@ pub struct Animation {
 }
 
 impl Channel {
-    /// The channel's value at `time` (clamped to its keyframes).
+    /// The channel's value at `time` (clamped to its keyframes; a time that is not a number gives the
+    /// first keyframe's value).
     pub fn sample(&self, time: f32) -> Vec4 {
         let keys = &self.times;
         let value = |k: usize| match self.interpolation {
             Interpolation::CubicSpline => self.values[3 * k + 1],
             _ => self.values[k],
         };
-        if keys.len() == 1 || time <= keys[0] {
+        if keys.len() == 1 || time <= keys[0] || time.is_nan() {
             return value(0);
         }
         let last = keys.len() - 1;
@@ -99,27 +123,24 @@ impl Channel {
 }
 
 impl Animation {
-    /// The transform of every moving instance at `time` seconds (looping), as (instance, world from
-    /// local).
+    /// The transform of every moving instance at `time` seconds (looping; a time that is not finite
+    /// is the start), as (instance, world from local).
     pub fn instance_transforms(&self, time: f32) -> Vec<(usize, Mat4)> {
-        let t = if self.duration > 0.0 { time.rem_euclid(self.duration) } else { 0.0 };
+        let t = if self.duration > 0.0 && time.is_finite() { time.rem_euclid(self.duration) } else { 0.0 };
         let mut locals: Vec<Mat4> = self.nodes.iter().map(|n| n.rest).collect();
-        let mut animated: Vec<Option<(Vec3, Quat, Vec3)>> = vec![None; self.nodes.len()];
+        let mut animated: Vec<Option<Trs>> = vec![None; self.nodes.len()];
         for channel in &self.channels {
             let v = channel.sample(t);
-            let (scale, rotation, translation) = animated[channel.node].get_or_insert_with(|| {
-                let (s, r, t) = self.nodes[channel.node].rest.to_scale_rotation_translation();
-                (s, r, t)
-            });
+            let trs = animated[channel.node].get_or_insert(self.nodes[channel.node].rest_trs);
             match channel.property {
-                Property::Translation => *translation = v.truncate(),
-                Property::Rotation => *rotation = Quat::from_vec4(v).normalize(),
-                Property::Scale => *scale = v.truncate(),
+                Property::Translation => trs.translation = v.truncate(),
+                Property::Rotation => trs.rotation = Quat::from_vec4(v).normalize(),
+                Property::Scale => trs.scale = v.truncate(),
             }
         }
         for (local, trs) in locals.iter_mut().zip(&animated) {
-            if let Some((scale, rotation, translation)) = *trs {
-                *local = Mat4::from_scale_rotation_translation(scale, rotation, translation);
+            if let Some(trs) = trs {
+                *local = trs.matrix();
             }
         }
         let mut world: Vec<Mat4> = Vec::with_capacity(self.nodes.len());
@@ -135,7 +156,8 @@ impl Animation {
             if node.parent.is_some_and(|p| p >= i) {
                 return Err(format!("animation node {i}: its parent must come before it"));
             }
-            if !node.rest.is_finite() {
+            let trs = &node.rest_trs;
+            if !(node.rest.is_finite() && trs.translation.is_finite() && trs.rotation.is_finite() && trs.scale.is_finite()) {
                 return Err(format!("animation node {i}: its transform is NaN or infinite"));
             }
         }
@@ -156,6 +178,11 @@ impl Animation {
             }
             if !channel.values.iter().all(|v| v.is_finite()) {
                 return Err(format!("animation channel {c}: a keyframe value is NaN or infinite"));
+            }
+            // Tangents of cubic splines may be zero; rotation values may not.
+            let value_keys = channel.values.iter().skip(per_key / 3).step_by(per_key);
+            if channel.property == Property::Rotation && value_keys.clone().any(|q| q.length_squared() < 1e-12) {
+                return Err(format!("animation channel {c}: a rotation keyframe is a zero-length quaternion, which is no rotation"));
             }
         }
         if let Some(&(instance, node)) = self.instances.iter().find(|&&(i, n)| i >= instance_count || n >= self.nodes.len()) {
@@ -202,7 +229,7 @@ mod tests {
 
     #[test]
     fn instances_follow_their_node_and_its_parents_and_the_animation_loops() {
-        let node = |parent, translation| Node { parent, rest: Mat4::from_translation(translation) };
+        let node = |parent, translation| Node::from_trs(parent, Trs { translation, rotation: Quat::IDENTITY, scale: Vec3::ONE });
         let animation = Animation {
             name: "test".into(),
             nodes: vec![node(None, Vec3::ZERO), node(Some(0), Vec3::new(1.0, 0.0, 0.0))],
@@ -228,5 +255,45 @@ mod tests {
         assert!(bad.validate(4).unwrap_err().contains("instance 9"));
         let backwards = Animation { nodes: vec![node(Some(1), Vec3::ZERO), node(None, Vec3::ZERO)], ..animation };
         assert!(backwards.validate(4).unwrap_err().contains("parent"));
+    }
+
+    #[test]
+    fn a_node_flat_at_rest_grows_and_bad_times_and_keys_are_handled() {
+        // Scale 0 at rest: its matrix has no rotation to recover, so the channel starts from the
+        // node's own decomposition.
+        let rotation = Quat::from_rotation_z(0.5);
+        let rest = Trs { translation: Vec3::new(1.0, 2.0, 3.0), rotation, scale: Vec3::ZERO };
+        let grow = Channel {
+            node: 0,
+            property: Property::Scale,
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 1.0],
+            values: vec![Vec4::ZERO, Vec4::new(2.0, 2.0, 2.0, 0.0)],
+        };
+        let animation = Animation {
+            name: "grow".into(),
+            nodes: vec![Node::from_trs(None, rest)],
+            channels: vec![grow],
+            instances: vec![(0, 0)],
+            duration: 1.0,
+        };
+        animation.validate(1).unwrap();
+        let world = animation.instance_transforms(0.5)[0].1;
+        let expected = Trs { scale: Vec3::ONE, ..rest }.matrix();
+        assert!(world.abs_diff_eq(expected, 1e-6), "{world} != {expected}");
+        // Times that are not finite sample the start instead of panicking.
+        for time in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            assert!(animation.instance_transforms(time)[0].1.is_finite());
+            assert!(animation.channels[0].sample(time).is_finite());
+        }
+        let zero_rotation = Channel {
+            node: 0,
+            property: Property::Rotation,
+            interpolation: Interpolation::Step,
+            times: vec![0.0],
+            values: vec![Vec4::ZERO],
+        };
+        let bad = Animation { channels: vec![zero_rotation], ..animation };
+        assert!(bad.validate(1).unwrap_err().contains("zero-length quaternion"));
     }
 }

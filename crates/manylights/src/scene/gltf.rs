@@ -317,7 +317,10 @@ fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Re
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
         let world = parent * local;
         let index = hierarchy.nodes.len();
-        hierarchy.nodes.push(animation::Node { parent: parent_index, rest: local });
+        // Animated nodes are given as translation, rotation and scale (glTF requires it): kept exactly.
+        let (translation, rotation, scale) = node.transform().decomposed();
+        let rest_trs = animation::Trs { translation: translation.into(), rotation: Quat::from_array(rotation), scale: scale.into() };
+        hierarchy.nodes.push(animation::Node { parent: parent_index, rest: local, rest_trs });
         hierarchy.index_of[node.index()] = Some(index);
         if let Some(mesh) = node.mesh() {
             scene.instances.push(Instance { mesh: mesh.index(), world_from_local: world });

@@ -4,7 +4,6 @@
 // light enumeration module calls it for each light that lights the point, so every method, pipeline
 // and reflection hit is shadowed alike.
 #include "shading/light_bindings.wgsl"
-#include "shading/camera.wgsl"
 #include "rays/trace.wgsl"
 
 // 0 when something lies between the point and the light (stored in its group's space, placed by
@@ -14,9 +13,7 @@ fn light_visibility(light: Light, instance: VolumeInstance, s: ShadingInput, bud
         return 1.0;
     }
     *budget -= 1u;
-    // The light lights the point, so it is on the side its shading normal faces.
-    let clearance = surface_clearance(s.position - frame.world_from_view[3].xyz);
-    let origin = ray_offset_origin(s.position, s.normal, clearance);
+    let origin = ray_offset_origin(s.position, s.ray_normal, s.ray_clearance);
     // The segment to the light, short of it by a hair: t runs from 0 at the origin to 1 at the light.
     let to_light = instance_point_to_world(instance, light.position) - origin;
     return select(1.0, 0.0, ray_occluded(origin, to_light, 0.9999));

@@ -104,5 +104,8 @@ fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, 
         normal = material_mapped_normal(material, g, surface.normal, t, b);
     }
     s.normal = normal;
+    // Callers that know the triangle's own normal or an uncertain position set these.
+    s.ray_normal = surface.normal;
+    s.ray_clearance = 0.0;
     return s;
 }

@@ -58,7 +58,7 @@ fn reflected_radiance(s: ShadingInput, geometric_normal: vec3<f32>, footprint: f
     var spread = frame.ray_settings.z;
     // The first surface's position was rebuilt from a depth buffer or interpolated by the raster; hits
     // are computed from the ray itself, exact to rounding.
-    var clearance = surface_clearance(surface.position - frame.world_from_view[3].xyz);
+    var clearance = s.ray_clearance;
     for (var bounce = 0u; bounce < frame.ray_options.z; bounce += 1u) {
         if max(weight.x, max(weight.y, weight.z)) < 1e-4 {
             break;
@@ -81,7 +81,9 @@ fn reflected_radiance(s: ShadingInput, geometric_normal: vec3<f32>, footprint: f
         let ray = Ray(vec3<f32>(0.0), dir);
         let hit_surface = triangle_surface(draw, tri.triangle, origin, ray, Ray(across[0], dir), Ray(across[1], dir));
         let position = hit_surface.relative_position + origin;
-        let hit_s = apply_decals(evaluate_material(materials[draw.material], hit_surface.frame, hit_surface.g, position, -dir), hit_surface.dp);
+        var hit_material = evaluate_material(materials[draw.material], hit_surface.frame, hit_surface.g, position, -dir);
+        hit_material.ray_normal = hit_surface.geometric_normal;
+        let hit_s = apply_decals(hit_material, hit_surface.dp);
         radiance += weight * shade(hit_s, sun_visibility_traced(position, hit_surface.geometric_normal, 0.0));
         weight *= reflection_weight(hit_s);
         surface = hit_s;

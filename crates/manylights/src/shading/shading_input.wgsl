@@ -13,6 +13,11 @@ struct ShadingInput {
     // Perceptual roughness (alpha = roughness²).
     roughness: f32,
     emissive: vec3<f32>,
+    // Where rays leave the surface (shadow rays towards local lights): its geometric normal on the
+    // viewer's side, and how far off the surface `position` may lie — `surface_clearance` for a
+    // position rebuilt from depth or interpolated by the raster, 0 at a ray's hit, which is exact.
+    ray_normal: vec3<f32>,
+    ray_clearance: f32,
 }
 
 // World-space change of the shading position from one pixel to the next in x and y (or, at a ray's

@@ -10,6 +10,7 @@ use manylights::{
     gpu::GpuContext,
     particles::ParticleFilter,
     pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
+    post::PostSettings,
     rays::RaySettings,
     renderer::{Image, Renderer},
     scene::{Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Vertex},
@@ -38,6 +39,7 @@ pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfi
         max_texture_size: 256,
         anisotropy: 1,
         rays: RaySettings::default(),
+        post: PostSettings::default(),
     }
 }
 

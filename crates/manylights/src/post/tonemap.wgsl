@@ -1,9 +1,18 @@
-// Exposure, tonemapping (ACES fit or AgX) and sRGB encoding of the HDR image into an 8-bit image.
-#include "shading/types.wgsl"
+// The chain's last pass: exposure (fixed, or measured by `exposure.wgsl`), bloom blended over the
+// image, vignetting, tonemapping (ACES fit or AgX) and sRGB encoding into the 8-bit image.
+#include "shading/scene_bindings.wgsl"
+#include "post/post_types.wgsl"
 
-@group(0) @binding(0) var<uniform> frame: FrameUniforms;
-@group(0) @binding(1) var hdr_input: texture_2d<f32>;
-@group(0) @binding(2) var ldr_output: texture_storage_2d<rgba8unorm, write>;
+@group(1) @binding(0) var<uniform> post: PostUniforms;
+@group(1) @binding(1) var color_input: texture_2d<f32>;
+// The top bloom level (half resolution), or any texture when `BLOOM` is off.
+@group(1) @binding(2) var bloom: texture_2d<f32>;
+// x: log2 of the measured exposure, used when `AUTO_EXPOSURE` is set.
+@group(1) @binding(3) var<storage, read> exposure_state: vec4<f32>;
+@group(1) @binding(4) var ldr_output: texture_storage_2d<rgba8unorm, write>;
+
+override BLOOM: bool = false;
+override AUTO_EXPOSURE: bool = false;
 
 // Stephen Hill's fit of the ACES RRT + ODT (sRGB primaries in and out).
 fn tonemap_aces(color: vec3<f32>) -> vec3<f32> {
@@ -57,12 +66,46 @@ fn linear_to_srgb(c: vec3<f32>) -> vec3<f32> {
     return select(high, low, c <= vec3<f32>(0.0031308));
 }
 
+// `bloom` at a full-resolution pixel, bilinearly, its texels loaded by hand as the bloom chain does.
+fn bloom_at(pixel: vec2<f32>) -> vec3<f32> {
+    let size = vec2<i32>(textureDimensions(bloom));
+    let q = pixel * vec2<f32>(size) * frame.viewport.zw - 0.5;
+    let base_texel = vec2<i32>(floor(q));
+    let f = q - floor(q);
+    let t00 = textureLoad(bloom, clamp(base_texel, vec2<i32>(0), size - 1), 0).rgb;
+    let t10 = textureLoad(bloom, clamp(base_texel + vec2<i32>(1, 0), vec2<i32>(0), size - 1), 0).rgb;
+    let t01 = textureLoad(bloom, clamp(base_texel + vec2<i32>(0, 1), vec2<i32>(0), size - 1), 0).rgb;
+    let t11 = textureLoad(bloom, clamp(base_texel + vec2<i32>(1, 1), vec2<i32>(0), size - 1), 0).rgb;
+    return mix(mix(t00, t10, f.x), mix(t01, t11, f.x), f.y);
+}
+
+// Natural vignetting: a lens passes cos⁴ θ of the light arriving θ off its axis; `strength` blends
+// from none (0) to all of it (1). Orthographic cameras (parallel rays) have none.
+fn vignette(pixel: vec2<f32>, strength: f32) -> f32 {
+    let forward = -normalize(frame.world_from_view[2].xyz);
+    let cos_theta = saturate(dot(camera_ray(pixel).dir, forward));
+    let cos2 = cos_theta * cos_theta;
+    return mix(1.0, cos2 * cos2, strength);
+}
+
 @compute @workgroup_size(8, 8)
 fn tonemap(@builtin(global_invocation_id) id: vec3<u32>) {
     if any(id.xy >= vec2<u32>(frame.viewport.xy)) {
         return;
     }
-    let hdr = textureLoad(hdr_input, id.xy, 0).rgb * frame.exposure;
+    let pixel = vec2<f32>(id.xy) + 0.5;
+    var hdr = textureLoad(color_input, id.xy, 0).rgb;
+    if BLOOM {
+        hdr = mix(hdr, bloom_at(pixel) * post.bloom.y, post.bloom.x);
+    }
+    var exposure = frame.exposure;
+    if AUTO_EXPOSURE {
+        exposure = exp2(exposure_state.x);
+    }
+    hdr *= exposure;
+    if post.exposure.w > 0.0 {
+        hdr *= vignette(pixel, post.exposure.w);
+    }
     var mapped: vec3<f32>;
     switch frame.tonemapper {
         case TONEMAP_AGX: {

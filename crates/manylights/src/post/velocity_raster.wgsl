@@ -1,0 +1,34 @@
+// The moving instances' velocity (see `velocity.wgsl`): each vertex through its draw's current and
+// previous transform (`GpuScene::previous_transforms`) and the previous camera; depth-tested against
+// the frame's depth so only the surfaces it holds are written.
+#include "shading/scene_bindings.wgsl"
+#include "post/post_types.wgsl"
+
+@group(1) @binding(0) var<uniform> post: PostUniforms;
+@group(1) @binding(1) var<storage, read> previous_world_from_local: array<mat4x4<f32>>;
+
+struct VelocityVertex {
+    @builtin(position) @invariant clip_position: vec4<f32>,
+    @location(0) previous_clip: vec4<f32>,
+}
+
+@vertex
+fn velocity_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) draw_index: u32) -> VelocityVertex {
+    // An indexed draw's vertex_index already includes the draw's base vertex.
+    let position = vec4<f32>(vertices[vertex_index].position, 1.0);
+    var out: VelocityVertex;
+    out.clip_position = frame.clip_from_world * (draws[draw_index].world_from_local * position);
+    let previous_world = previous_world_from_local[draw_index] * position;
+    out.previous_clip = post.previous_clip_from_relative * vec4<f32>(previous_world.xyz - frame.world_from_view[3].xyz, 1.0);
+    return out;
+}
+
+@fragment
+fn velocity_raster(in: VelocityVertex) -> @location(0) vec4<f32> {
+    // Both ends of a vertex's path are interpolated linearly in clip space; divided here, per pixel.
+    var moved = vec2<f32>(0.0);
+    if in.previous_clip.w > 1e-20 {
+        moved = in.clip_position.xy - clip_to_pixel(in.previous_clip);
+    }
+    return vec4<f32>(moved, 0.0, 0.0);
+}
