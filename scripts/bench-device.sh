@@ -12,6 +12,7 @@
 #   scripts/bench-device.sh particles    moving particle lights through the 3D-texture grid (issue 6)
 #   scripts/bench-device.sh clipmap      1M particles: clipmap cascades against the grid over the scene (issue 6)
 #   scripts/bench-device.sh rays         ray-traced sun shadows and reflections on Sponza (issue 7)
+#   scripts/bench-device.sh post         the post chain's effects, alone and together, on Sponza (issue 7)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -159,6 +160,22 @@ rays() {
     --reflections --reflection-roughness 1
 }
 
+# Each post effect alone and all together, over the sunlit Sponza with hard shadows; motion blur with
+# a still camera (every pixel's blur is zero: the gather is skipped) and with the camera moving at
+# 2 m/s (every pixel gathers).
+post() {
+  printf 'gltf = "sponza_lite/Sponza.gltf"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' >.bench/sun.toml
+  local sun=".bench/sun.toml --light-method off --decal-method off --shadows hard"
+  run post_none 200 --scene $sun
+  run post_auto_exposure 200 --scene $sun --auto-exposure
+  run post_bloom 200 --scene $sun --bloom
+  run post_depth_of_field 200 --scene $sun --depth-of-field
+  run post_motion_blur_still 200 --scene $sun --motion-blur
+  run post_motion_blur_moving 200 --scene $sun --motion-blur --camera-velocity 2,0,0
+  run post_vignette 200 --scene $sun --vignette 1
+  run post_all_moving 200 --scene $sun --auto-exposure --bloom --depth-of-field --motion-blur --vignette 1 --camera-velocity 2,0,0
+}
+
 # Test binaries built with `cargo test --release --no-run`, run here against the GPU, each test in its
 # own process (after a dozen devices opened and closed in one process, the NVIDIA driver listed no
 # adapter to the next).
@@ -188,9 +205,10 @@ for set in "${@:-structures}"; do
     particles) particles ;;
     clipmap) clipmap ;;
     rays) rays ;;
+    post) post ;;
     table) bench table --sweeps none ;;
     sweeps) bench sweeps --scenes none ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles, clipmap or rays)" >&2; exit 2 ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles, clipmap, rays or post)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

@@ -112,6 +112,10 @@ pub struct RenderArgs {
     /// particles are (each frame adds 1/60 s).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     time: f32,
+    /// Moves the camera at this velocity, in metres per second (x,y,z), from frame to frame: motion
+    /// blur's camera motion. Each frame is then submitted and waited for on its own.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_name = "X,Y,Z")]
+    camera_velocity: Option<Vec<f32>>,
 }
 
 /// Post effects after shading, each off unless asked for; tonemapping is `--tonemap`.
@@ -408,8 +412,31 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         bail!("--time {} must be a finite number of seconds", args.time);
     }
     renderer.time = args.time;
-    renderer.render_frames(&camera, args.warmup)?;
-    let frames = renderer.render_frames(&camera, args.frames)?;
+    let frames = match &args.camera_velocity {
+        None => {
+            renderer.render_frames(&camera, args.warmup)?;
+            renderer.render_frames(&camera, args.frames)?
+        }
+        Some(velocity) => {
+            let &[x, y, z] = &velocity[..] else {
+                bail!("--camera-velocity takes three numbers, x,y,z in metres per second; got {}", velocity.len());
+            };
+            let velocity = glam::Vec3::new(x, y, z);
+            if !velocity.is_finite() {
+                bail!("--camera-velocity {velocity} must be finite metres per second");
+            }
+            let mut frames = Vec::with_capacity(args.frames as usize);
+            for frame in 0..args.warmup + args.frames {
+                let offset = velocity * (frame as f32 * manylights::renderer::FRAME_INTERVAL);
+                let moved = Camera { world_from_view: glam::Mat4::from_translation(offset) * camera.world_from_view, ..camera.clone() };
+                let timing = renderer.render_frames(&moved, 1)?;
+                if frame >= args.warmup {
+                    frames.extend(timing);
+                }
+            }
+            frames
+        }
+    };
 
     image_io::save_png(&args.output, &renderer.read_ldr()?)?;
     if let Some(exr) = &args.exr {
@@ -540,6 +567,7 @@ impl TimingReport {
             "animated": is_animated(scene),
             "particles": particles_json(renderer, scene),
             "rays": rays_json(renderer),
+            "post": post_json(&renderer.config.post, args.camera_velocity.as_deref()),
             "warmup_frames": args.warmup,
             "timed_frames": args.frames,
             "passes": passes,
@@ -547,6 +575,29 @@ impl TimingReport {
             "cpu_frame": pass(&self.samples.cpu_frame),
         })
     }
+}
+
+/// The post effects that ran, each null when off, and the camera's velocity.
+fn post_json(post: &PostSettings, camera_velocity: Option<&[f32]>) -> serde_json::Value {
+    serde_json::json!({
+        "auto_exposure": post.auto_exposure.map(|a| serde_json::json!({
+            "compensation_ev": a.compensation_ev,
+            "adaptation_speed": a.adaptation_speed,
+        })),
+        "bloom": post.bloom.map(|b| serde_json::json!({ "intensity": b.intensity })),
+        "depth_of_field": post.depth_of_field.map(|d| serde_json::json!({
+            "focus_distance": d.focus_distance,
+            "f_number": d.f_number,
+            "max_radius": d.max_radius,
+        })),
+        "motion_blur": post.motion_blur.map(|m| serde_json::json!({
+            "shutter": m.shutter,
+            "samples": m.samples,
+            "max_length": m.max_length,
+        })),
+        "vignette": post.vignette,
+        "camera_velocity": camera_velocity,
+    })
 }
 
 /// The particles and how they were rendered; null without particles.

@@ -400,6 +400,45 @@ fn bad_ray_options_are_refused() {
     assert!(mode.contains("--shadows") && mode.contains("hard") && mode.contains("soft"), "{mode}");
 }
 
+#[test]
+fn post_effects_render_with_their_passes_timed_and_bad_ones_name_their_flag() {
+    let dir = temp_dir("render_post");
+    let json = dir.join("timings.json");
+    #[rustfmt::skip]
+    let out = render_to(&dir, &[
+        "--auto-exposure", "--exposure-compensation", "0.5", "--bloom", "--bloom-intensity", "0.2", "--depth-of-field",
+        "--f-number", "1.4", "--motion-blur", "--shutter", "1", "--camera-velocity", "5,0,0", "--frames", "2",
+        "--vignette", "0.5", "--timings-json", json.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    #[rustfmt::skip]
+    let passes = [
+        "depth_of_field_tiles", "depth_of_field", "velocity", "motion_blur_tiles", "motion_blur", "exposure_histogram",
+        "exposure_average", "bloom", "tonemap",
+    ];
+    for pass in passes {
+        assert!(report["passes"][pass]["median_ms"].as_f64().unwrap() > 0.0, "no {pass} timing");
+    }
+    let post = &report["post"];
+    assert_eq!(post["bloom"]["intensity"].as_f64(), Some(0.2f32 as f64));
+    assert_eq!(post["motion_blur"]["shutter"].as_f64(), Some(1.0));
+    assert_eq!(post["camera_velocity"][0].as_f64(), Some(5.0));
+
+    let small = ["--width", "16", "--height", "16"];
+    let run = |flags: &[&str]| failure(&[&["render"], flags, &small].concat());
+    let vignette = run(&["--vignette", "2"]);
+    assert!(vignette.contains("vignette strength 2") && vignette.contains("--vignette"), "{vignette}");
+    let without = run(&["--bloom-intensity", "0.5"]);
+    assert!(without.contains("--bloom"), "{without}");
+    let samples = run(&["--motion-blur", "--motion-blur-samples", "0"]);
+    assert!(samples.contains("0 motion blur samples") && samples.contains("--motion-blur-samples"), "{samples}");
+    let focus = run(&["--depth-of-field", "--focus-distance", "-2"]);
+    assert!(focus.contains("focus distance -2") && focus.contains("--focus-distance"), "{focus}");
+    let velocity = run(&["--camera-velocity", "1,2"]);
+    assert!(velocity.contains("three numbers"), "{velocity}");
+}
+
 /// A scene file's ray-traced effects apply unless flags override them; bad values name the key.
 #[test]
 fn scene_file_ray_settings_yield_to_flags_and_bad_ones_name_their_key() {
