@@ -8,9 +8,10 @@ use crate::{
     config::RenderConfig,
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
     particles::{ParticleGrid, ParticleSystem, ParticleVolume},
+    passes::deform::Deform,
     pipelines::{DecalMethod, FrameInputs, FramePipeline, FrameSetup, LightMethod, ParticleMethod, ShadingMethods},
     post::PostFrame,
-    rays::{RayStructure, RayStructureStats},
+    rays::{refit::BlasRefit, RayStructure, RayStructureStats},
     scene::{Aabb, Camera, Scene},
     Error, Result,
 };
@@ -33,16 +34,26 @@ pub struct Renderer {
     rays: Option<RayStructure>,
     /// What moves the scene's mesh instances, with every instance's transform and primitive count.
     motion: Option<InstanceMotion>,
+    /// Deformed meshes' vertices, and their BLASes' refit when the frame traces rays.
+    deform: Option<Deform>,
+    refit: Option<BlasRefit>,
     /// Scene time of the next frame, in seconds: where animated groups are.
     pub time: f32,
+    /// Frames rendered so far: a deformed mesh's BLAS copy is the frame's parity.
+    frame_index: u64,
     /// The camera of the last frame rendered, for motion blur's velocities; `None` before the first.
     previous_camera: Option<Camera>,
+    /// Test mode: after every frame, read the ray hierarchy back and check that the frame traced
+    /// complete deformed BLASes of its own time (`check_ray_hierarchy`). Each frame then waits for
+    /// the GPU.
+    pub validate_ray_hierarchy: bool,
 }
 
-/// The scene's node animation and what moving instances needs: each instance's current transform
-/// (for the rays' top level) and its primitive count (its draws).
+/// What moves or changes the scene's instances every frame: the node animation, if any, and the
+/// deformed meshes' alternating BLAS copies; each instance's current transform (for the rays' top
+/// level) and its primitive count (its draws).
 struct InstanceMotion {
-    animation: crate::scene::animation::Animation,
+    animation: Option<crate::scene::animation::Animation>,
     transforms: Vec<glam::Mat4>,
     primitive_counts: Vec<usize>,
 }
@@ -175,11 +186,16 @@ impl Renderer {
         let pipeline = FramePipeline::new(&ctx, &gpu_scene, config.pipeline, setup)?;
         let timer = GpuTimer::new(&ctx);
         ctx.check_errors()?;
-        let motion = scene.animation.clone().map(|animation| InstanceMotion {
-            animation,
+        let motion = (scene.animation.is_some() || !scene.deformers.is_empty()).then(|| InstanceMotion {
+            animation: scene.animation.clone(),
             transforms: scene.instances.iter().map(|i| i.world_from_local).collect(),
             primitive_counts: scene.instances.iter().map(|i| scene.meshes[i.mesh].primitives.len()).collect(),
         });
+        let deform = Deform::new(&ctx, scene, &gpu_scene)?;
+        let refit = match &rays {
+            Some(rays) => BlasRefit::new(&ctx, scene, &gpu_scene, rays)?,
+            None => None,
+        };
         Ok(Self {
             ctx,
             scene: gpu_scene,
@@ -191,8 +207,12 @@ impl Renderer {
             timer,
             rays,
             motion,
+            deform,
+            refit,
             time: 0.0,
+            frame_index: 0,
             previous_camera: None,
+            validate_ray_hierarchy: false,
         })
     }
 
@@ -202,19 +222,25 @@ impl Renderer {
     }
 
     /// Places animated instances where they are at `time`: their draws, and the rays' top level
-    /// rebuilt over every instance; with motion blur, also where they were a frame interval before.
-    fn move_instances(&mut self, time: f32) -> Result<()> {
+    /// rebuilt over every instance, deformed meshes' instances on the BLAS copy of the frame's
+    /// `parity`; with motion blur, also where animated instances were a frame interval before.
+    fn move_instances(&mut self, time: f32, parity: usize) -> Result<()> {
         let Some(motion) = &mut self.motion else { return Ok(()) };
-        let moved = motion.animation.instance_transforms(time);
-        let previous = match self.config.post.motion_blur {
-            Some(_) => motion.animation.instance_transforms(time - FRAME_INTERVAL),
-            None => Vec::new(),
+        let (moved, previous) = match &motion.animation {
+            Some(animation) => {
+                let previous = match self.config.post.motion_blur {
+                    Some(_) => animation.instance_transforms(time - FRAME_INTERVAL),
+                    None => Vec::new(),
+                };
+                (animation.instance_transforms(time), previous)
+            }
+            None => (Vec::new(), Vec::new()),
         };
         if let Some(rays) = &mut self.rays {
             for &(instance, transform) in &moved {
                 motion.transforms[instance] = transform;
             }
-            rays.place(&motion.transforms)?;
+            rays.place(&motion.transforms, parity)?;
         }
         self.scene.move_instances(&self.ctx.queue, &moved, &previous, &motion.primitive_counts, self.rays.as_ref());
         Ok(())
@@ -280,7 +306,16 @@ impl Renderer {
             }
             // From here to the submit is the CPU's work for the frame (waits for the timer are before).
             let recording = std::time::Instant::now();
-            self.move_instances(self.time)?;
+            let parity = (self.frame_index % 2) as usize;
+            self.move_instances(self.time, parity)?;
+            // Deformed meshes first: every pass after draws or traces them.
+            if let Some(deform) = &mut self.deform {
+                deform.write_time(&self.ctx.queue, self.time);
+                deform.record(&mut encoder, self.timer.as_mut());
+            }
+            if let Some(refit) = &self.refit {
+                refit.record(&mut encoder, self.timer.as_mut(), parity);
+            }
             let post = PostFrame {
                 camera,
                 previous_camera: self.previous_camera.as_ref().unwrap_or(camera),
@@ -304,7 +339,11 @@ impl Renderer {
             }
             self.ctx.queue.submit([encoder.finish()]);
             cpu_ms.push(recording.elapsed().as_secs_f64() * 1e3);
+            if self.validate_ray_hierarchy {
+                self.check_ray_hierarchy(parity, self.time)?;
+            }
             self.time += FRAME_INTERVAL;
+            self.frame_index += 1;
         }
         match &mut self.timer {
             Some(timer) => timings.extend(timer.read(&self.ctx)?),
@@ -313,6 +352,54 @@ impl Renderer {
         self.ctx.check_errors()?;
         timings.resize_with(cpu_ms.len(), PassTimings::default);
         Ok(timings.into_iter().zip(cpu_ms).map(|(passes, cpu_ms)| FrameTiming { passes, cpu_ms }).collect())
+    }
+
+    /// Test mode's check after a frame of `parity` at `time` (`validate_ray_hierarchy`): reads the ray
+    /// hierarchy back and checks that the frame's top level placed every deformed mesh's instances on
+    /// copy `parity`, that this copy's triangles are the mesh deformed to `time` (the CPU twin,
+    /// `scene::deform`) and that each of its nodes bounds its children or triangles. A frame that
+    /// traced a half-built or stale copy fails it.
+    pub fn check_ray_hierarchy(&self, parity: usize, time: f32) -> Result<()> {
+        let Some(rays) = &self.rays else { return Ok(()) };
+        if rays.deformed.is_empty() {
+            return Ok(());
+        }
+        let nodes: Vec<crate::accel::BvhNode> = readback::read_buffer(&self.ctx, &self.scene.ray_node_buffer)?;
+        let triangles: Vec<crate::rays::RayTriangle> = readback::read_buffer(&self.ctx, &self.scene.ray_triangle_buffer)?;
+        let instances: Vec<crate::rays::RayInstance> = readback::read_buffer(&self.ctx, &self.scene.ray_instance_buffer)?;
+        let fail = |m: String| Err(Error::Gpu(format!("ray hierarchy of the frame at {time} s: {m}")));
+        for deformed in &rays.deformed {
+            let root = deformed.roots[parity];
+            let other = deformed.roots[1 - parity];
+            if instances.iter().any(|i| i.blas_root == other) || !instances.iter().any(|i| i.blas_root == root) {
+                return fail(format!("mesh {}'s instances are not on copy {parity}", deformed.mesh));
+            }
+            let expected = deformed.deformed_triangles(time);
+            let got = &triangles[deformed.triangles[parity].start as usize..deformed.triangles[parity].end as usize];
+            let scale = (deformed.bounds.max - deformed.bounds.min).length().max(1e-6);
+            for (k, (g, e)) in got.iter().zip(&expected).enumerate() {
+                let error = [(g.v0, e.v0), (g.e1, e.e1), (g.e2, e.e2)]
+                    .iter()
+                    .map(|(a, b)| (glam::Vec3::from(*a) - glam::Vec3::from(*b)).length())
+                    .fold(0.0, f32::max);
+                if error > 1e-4 * scale {
+                    return fail(format!("mesh {} triangle {k} is off its deformation at this time by {error}", deformed.mesh));
+                }
+            }
+            for &n in &deformed.refit_order[parity] {
+                let node = &nodes[n as usize];
+                let inner = if node.is_leaf() {
+                    node.leaf_range().map(|k| triangles[k].bounds()).fold(Aabb::EMPTY, Aabb::union)
+                } else {
+                    let first = &nodes[node.entry as usize];
+                    first.bounds().union(nodes[first.skip as usize].bounds())
+                };
+                if !node.bounds().contains_box(&inner) {
+                    return fail(format!("mesh {} node {n} does not bound its contents", deformed.mesh));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Entries the clustered lists of lights and of decals hold now, for the methods that use them.

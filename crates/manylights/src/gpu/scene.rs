@@ -183,12 +183,19 @@ pub struct GpuScene {
     draws: Vec<GpuDraw>,
     instance_first_draw: Vec<usize>,
     draw_buffer: wgpu::Buffer,
+    /// Every primitive's vertices, and the scene's ray hierarchy (`rays::RayStructure`): nodes,
+    /// triangles, instances. Deformed meshes rewrite the first two on the GPU.
+    pub vertex_buffer: wgpu::Buffer,
+    pub ray_node_buffer: wgpu::Buffer,
+    pub ray_triangle_buffer: wgpu::Buffer,
+    pub ray_instance_buffer: wgpu::Buffer,
+    /// Each mesh's primitives' (first index, index count, base vertex) in the index and vertex
+    /// buffers.
+    pub primitive_ranges: Vec<Vec<(u32, u32, u32)>>,
     /// Each draw's transform (world from local) a frame interval before the current one, for motion
     /// blur's velocity (`post/velocity.rs`), and which draws belong to animated instances.
     pub previous_transforms: wgpu::Buffer,
     moving_draws: Vec<bool>,
-    ray_node_buffer: wgpu::Buffer,
-    ray_instance_buffer: wgpu::Buffer,
 }
 
 impl GpuScene {
@@ -302,6 +309,7 @@ impl GpuScene {
         }
 
         let limit = ctx.limits.max_storage_buffer_binding_size;
+        // Deformed meshes' vertices are rewritten on the GPU every frame (`passes/deform.rs`).
         let vertex_buffer = storage_buffer(device, "vertices", &vertices, limit, wgpu::BufferUsages::empty())?;
         let index_buffer = storage_buffer(device, "indices", &indices, limit, wgpu::BufferUsages::INDEX)?;
         let draw_buffer = storage_buffer(device, "draws", &draws, limit, wgpu::BufferUsages::COPY_DST)?;
@@ -316,9 +324,11 @@ impl GpuScene {
         let no_rays = RayStructure::unused();
         let rays = rays.filter(|r| !r.nodes.is_empty()).unwrap_or(&no_rays);
         // The top level and the instances are rewritten when instances move (`move_instances`).
-        let ray_node_buffer = storage_buffer(device, "ray hierarchy nodes", &rays.nodes, limit, wgpu::BufferUsages::COPY_DST)?;
-        let ray_triangle_buffer = storage_buffer(device, "ray triangles", &rays.triangles, limit, wgpu::BufferUsages::empty())?;
-        let ray_instance_buffer = storage_buffer(device, "ray instances", &rays.instances, limit, wgpu::BufferUsages::COPY_DST)?;
+        // Deformed meshes' BLASes are refitted on the GPU (`rays/refit.rs`); tests read them back.
+        let copy = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+        let ray_node_buffer = storage_buffer(device, "ray hierarchy nodes", &rays.nodes, limit, copy)?;
+        let ray_triangle_buffer = storage_buffer(device, "ray triangles", &rays.triangles, limit, copy)?;
+        let ray_instance_buffer = storage_buffer(device, "ray instances", &rays.instances, limit, copy)?;
         let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
             size: std::mem::size_of::<FrameUniforms>() as u64,
@@ -403,8 +413,11 @@ impl GpuScene {
             draw_buffer,
             previous_transforms,
             moving_draws,
+            vertex_buffer,
             ray_node_buffer,
+            ray_triangle_buffer,
             ray_instance_buffer,
+            primitive_ranges,
         })
     }
 

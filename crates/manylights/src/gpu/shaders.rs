@@ -42,6 +42,8 @@ const SOURCES: &[(&str, &str)] = &[
     ("accel/volume_query_probe.wgsl", include_str!("../accel/volume_query_probe.wgsl")),
     ("passes/visbuffer_raster.wgsl", include_str!("../passes/visbuffer_raster.wgsl")),
     ("passes/visbuffer_shade.wgsl", include_str!("../passes/visbuffer_shade.wgsl")),
+    ("passes/deform.wgsl", include_str!("../passes/deform.wgsl")),
+    ("rays/refit.wgsl", include_str!("../rays/refit.wgsl")),
     ("post/post_types.wgsl", include_str!("../post/post_types.wgsl")),
     ("post/velocity.wgsl", include_str!("../post/velocity.wgsl")),
     ("post/velocity_raster.wgsl", include_str!("../post/velocity_raster.wgsl")),
@@ -193,6 +195,8 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
     let mut shaders = vec![
         ShaderDesc::new("passes/visbuffer_raster_indexed.wgsl"),
         ShaderDesc::new("passes/visbuffer_raster_pulled.wgsl"),
+        ShaderDesc::new("passes/deform.wgsl"),
+        ShaderDesc::new("rays/refit.wgsl"),
         ShaderDesc::new("post/velocity.wgsl"),
         ShaderDesc::new("post/velocity_raster.wgsl"),
         ShaderDesc::new("post/depth_of_field.wgsl"),

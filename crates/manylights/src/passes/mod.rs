@@ -13,6 +13,7 @@ use crate::pipelines::ShadingMethods;
 
 pub mod deferred_decals;
 pub mod deferred_shade;
+pub mod deform;
 pub mod depth_prepass;
 pub mod forward_shade;
 pub mod gbuffer_raster;

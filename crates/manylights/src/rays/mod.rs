@@ -15,6 +15,8 @@
 //! triangles and instances directly, without an index array. Alpha-blended (glTF `BLEND`)
 //! primitives are left out: rays see opaque and alpha-masked surfaces.
 
+pub mod refit;
+
 use glam::{Affine3A, Vec3};
 
 use crate::{
@@ -220,6 +222,43 @@ pub struct RayStructure {
     pub tlas_build_ms: f64,
     /// Every instance the top level places, in scene order.
     placements: Vec<Placement>,
+    /// The BLASes of deformed meshes (`scene::deform`), each stored twice and refitted on the GPU.
+    pub deformed: Vec<DeformedBlas>,
+}
+
+/// A deformed mesh's BLAS, stored twice: a frame refits one copy on the GPU (`rays/refit.rs`) and
+/// its top level places the mesh's instances on that copy, while the frame before may still be tracing
+/// the other — so no frame traces a hierarchy while it is rebuilt. Frames alternate copies.
+#[derive(Clone, Debug)]
+pub struct DeformedBlas {
+    pub mesh: usize,
+    pub wave: crate::scene::deform::Wave,
+    /// Each copy's root node and range of triangles.
+    pub roots: [u32; 2],
+    pub triangles: [std::ops::Range<u32>; 2],
+    /// Each copy's nodes, deepest first, and where each depth's nodes start and end in that order:
+    /// the refit visits a depth's nodes at once, after their children.
+    pub refit_order: [Vec<u32>; 2],
+    pub refit_levels: Vec<std::ops::Range<u32>>,
+    /// The mesh's box at rest grown by the wave's amplitude: it holds every deformation, so the top
+    /// level can be built on the CPU before the GPU refits.
+    pub bounds: Aabb,
+    /// Each stored triangle's corners at rest, position and normal, in the copies' order: the CPU
+    /// reference the refit is checked against (`deformed_triangles`).
+    pub rest_corners: Vec<[(Vec3, Vec3); 3]>,
+}
+
+impl DeformedBlas {
+    /// The mesh's triangles deformed to `time` on the CPU, as the refit must have stored them.
+    pub fn deformed_triangles(&self, time: f32) -> Vec<RayTriangle> {
+        self.rest_corners
+            .iter()
+            .map(|corners| {
+                let [v0, v1, v2] = corners.map(|(p, n)| self.wave.displace(p, n, time).0);
+                RayTriangle { v0: v0.to_array(), draw_offset: 0, e1: (v1 - v0).to_array(), triangle: 0, e2: (v2 - v0).to_array(), _pad: 0 }
+            })
+            .collect()
+    }
 }
 
 /// A mesh instance as the top level places it: its BLAS and that BLAS's box in its own space.
@@ -231,6 +270,8 @@ struct Placement {
     /// Its triangles were built in world space (its transform was singular at load): it stays there.
     baked: bool,
     first_draw: u32,
+    /// Its mesh is deformed: `RayStructure::deformed`'s entry, whose copies it is placed on.
+    deformed: Option<usize>,
 }
 
 /// What was built for rays, and how long it took: for reports.
@@ -276,6 +317,14 @@ impl RayStructure {
         for &(instance, _) in scene.animation.iter().flat_map(|a| &a.instances) {
             animated[instance] = true;
         }
+        // Deformed meshes are refitted in their own space, and their instances placed on them.
+        let mut deformer_of = vec![None; scene.meshes.len()];
+        for deformer in &scene.deformers {
+            deformer_of[deformer.mesh] = Some(deformer.wave);
+        }
+        for (instance, mesh) in scene.instances.iter().map(|i| i.mesh).enumerate() {
+            animated[instance] |= deformer_of[mesh].is_some();
+        }
         let in_mesh_space: Vec<bool> =
             scene.instances.iter().zip(&animated).map(|(i, &a)| a || invertible(&Affine3A::from_mat4(i.world_from_local))).collect();
         let mut shared = vec![false; scene.meshes.len()];
@@ -285,9 +334,15 @@ impl RayStructure {
         // BLASes: one per mesh placed by an invertible transform, then one per singular instance.
         let mut blases = Vec::new();
         let mut mesh_blas = vec![None; scene.meshes.len()];
+        // A deformed mesh's BLAS twice in a row (`DeformedBlas`).
+        let mut deformed_blas = Vec::new();
         for (m, _) in shared.iter().enumerate().filter(|(_, &shared)| shared) {
             if let Some(blas) = build_blas(scene, m, &Affine3A::IDENTITY)? {
                 mesh_blas[m] = Some(blases.len());
+                if let Some(wave) = deformer_of[m] {
+                    deformed_blas.push((m, wave, blases.len()));
+                    blases.push(Blas { bvh: blas.bvh.clone(), triangles: blas.triangles.clone() });
+                }
                 blases.push(blas);
             }
         }
@@ -312,12 +367,46 @@ impl RayStructure {
         let mut nodes = vec![BvhNode::default(); tlas_node_count];
         let mut triangles = Vec::new();
         let mut blas_roots = Vec::with_capacity(blases.len());
+        let mut blas_triangles = Vec::with_capacity(blases.len());
         for blas in &blases {
             blas_roots.push(nodes.len() as u32);
             let (node_offset, triangle_offset) = (nodes.len() as u32, triangles.len() as u32);
             nodes.extend(blas.bvh.nodes.iter().map(|n| n.offset(node_offset, triangle_offset)));
             triangles.extend_from_slice(&blas.triangles);
+            blas_triangles.push(triangle_offset..triangles.len() as u32);
         }
+        let deformed: Vec<DeformedBlas> = deformed_blas
+            .iter()
+            .map(|&(mesh, wave, b)| {
+                let roots = [blas_roots[b], blas_roots[b + 1]];
+                let (order, levels) = refit_order(&nodes, roots[0]);
+                let shift = roots[1] - roots[0];
+                let bounds = blases[b].bvh.nodes[0].bounds();
+                let grow = Vec3::splat(wave.amplitude);
+                let rest_corners = blases[b]
+                    .triangles
+                    .iter()
+                    .map(|t| {
+                        let primitive = &scene.meshes[mesh].primitives[(t.draw_offset & !ALPHA_MASKED) as usize];
+                        let first = 3 * t.triangle as usize;
+                        [0, 1, 2].map(|k| {
+                            let v = &primitive.vertices[primitive.indices[first + k] as usize];
+                            (Vec3::from(v.position), Vec3::from(v.normal))
+                        })
+                    })
+                    .collect();
+                DeformedBlas {
+                    rest_corners,
+                    mesh,
+                    wave,
+                    roots,
+                    triangles: [blas_triangles[b].clone(), blas_triangles[b + 1].clone()],
+                    refit_order: [order.clone(), order.iter().map(|n| n + shift).collect()],
+                    refit_levels: levels,
+                    bounds: Aabb::new(bounds.min - grow, bounds.max + grow),
+                }
+            })
+            .collect();
         if triangles.len() > crate::accel::bvh::MAX_PRIMITIVES {
             return Err(Error::InvalidScene(format!(
                 "the scene has {} triangles to trace; the ray structure holds at most {}",
@@ -331,14 +420,22 @@ impl RayStructure {
         let mut placements = Vec::with_capacity(placed);
         for (i, (instance, blas)) in scene.instances.iter().zip(&instance_blas).enumerate() {
             if let Some((b, baked)) = *blas {
-                let bounds = blases[b].bvh.nodes[0].bounds();
-                placements.push(Placement { scene_instance: i, blas_root: blas_roots[b], bounds, baked, first_draw });
+                let deformed_index = deformed.iter().position(|d| d.mesh == instance.mesh && !baked);
+                let bounds = deformed_index.map_or_else(|| blases[b].bvh.nodes[0].bounds(), |d| deformed[d].bounds);
+                placements.push(Placement {
+                    scene_instance: i,
+                    blas_root: blas_roots[b],
+                    bounds,
+                    baked,
+                    first_draw,
+                    deformed: deformed_index,
+                });
             }
             first_draw += scene.meshes[instance.mesh].primitives.len() as u32;
         }
         let mut structure =
-            Self { nodes, triangles, instances: Vec::new(), tlas_node_count, blas_build_ms, tlas_build_ms: 0.0, placements };
-        structure.place(&scene.instances.iter().map(|i| i.world_from_local).collect::<Vec<_>>())?;
+            Self { nodes, triangles, instances: Vec::new(), tlas_node_count, blas_build_ms, tlas_build_ms: 0.0, placements, deformed };
+        structure.place(&scene.instances.iter().map(|i| i.world_from_local).collect::<Vec<_>>(), 0)?;
         Ok(structure)
     }
 
@@ -352,10 +449,11 @@ impl RayStructure {
     }
 
     /// Rebuilds the top level for the scene's instances at `transforms` (world from local, one per
-    /// scene instance): `nodes[..tlas_node_count]` and `instances` change, the BLASes stay. An
-    /// instance whose transform is singular now is placed where no ray meets it (a point box, and a
-    /// map sending every ray to a standstill); one baked in world space at load stays there.
-    pub fn place(&mut self, transforms: &[glam::Mat4]) -> Result<()> {
+    /// scene instance), deformed meshes' instances on their copy `parity` (0 or 1):
+    /// `nodes[..tlas_node_count]` and `instances` change, the BLASes stay. An instance whose transform
+    /// is singular now is placed where no ray meets it (a point box, and a map sending every ray to a
+    /// standstill); one baked in world space at load stays there.
+    pub fn place(&mut self, transforms: &[glam::Mat4], parity: usize) -> Result<()> {
         let start = std::time::Instant::now();
         let mut boxes = Vec::with_capacity(self.placements.len());
         let mut maps = Vec::with_capacity(self.placements.len());
@@ -381,7 +479,7 @@ impl RayStructure {
             *node = BvhNode { entry: BvhNode::leaf_entry(self.instances.len() as u32, 1), ..*node };
             self.instances.push(RayInstance {
                 local_from_world: crate::gpu::scene::affine_rows(&maps[p]),
-                blas_root: placement.blas_root,
+                blas_root: placement.deformed.map_or(placement.blas_root, |d| self.deformed[d].roots[parity]),
                 first_draw: placement.first_draw,
                 scene_instance: placement.scene_instance as u32,
                 _pad: 0,
@@ -422,6 +520,33 @@ impl RayStructure {
         let boxes = triangles.iter().map(RayTriangle::bounds).collect();
         (Bvh { nodes, primitive_indices: (0..triangles.len() as u32).collect() }, boxes)
     }
+}
+
+/// The nodes of the tree at `root` (in `nodes`, links absolute), deepest first, and the range of each
+/// depth's nodes in that order: children always come before their parents.
+fn refit_order(nodes: &[BvhNode], root: u32) -> (Vec<u32>, Vec<std::ops::Range<u32>>) {
+    let mut by_depth: Vec<Vec<u32>> = Vec::new();
+    let mut stack = vec![(root, 0usize)];
+    while let Some((n, depth)) = stack.pop() {
+        if by_depth.len() <= depth {
+            by_depth.resize_with(depth + 1, Vec::new);
+        }
+        by_depth[depth].push(n);
+        let node = &nodes[n as usize];
+        if !node.is_leaf() {
+            let first = node.entry;
+            stack.push((first, depth + 1));
+            stack.push((nodes[first as usize].skip, depth + 1));
+        }
+    }
+    let mut order = Vec::new();
+    let mut levels = Vec::new();
+    for level in by_depth.iter().rev() {
+        let start = order.len() as u32;
+        order.extend_from_slice(level);
+        levels.push(start..order.len() as u32);
+    }
+    (order, levels)
 }
 
 impl RayTriangle {
@@ -509,6 +634,40 @@ mod tests {
         for path in ["sponza/Sponza.gltf", "gas_station/GasStation.gltf"] {
             check(&crate::scene::load_path(&assets_dir().join(path)).unwrap());
         }
+    }
+
+    #[test]
+    fn a_deformed_mesh_has_two_identical_copies_refitted_children_before_parents() {
+        let mut scene = crate::scene::load_path(&assets_dir().join("duck/Duck.glb")).unwrap();
+        let wave = crate::scene::deform::Wave { amplitude: 3.0, wavelength: 50.0, speed: 1.0, direction: Vec3::X };
+        scene.deformers.push(crate::scene::deform::Deformer { mesh: 0, wave });
+        let structure = RayStructure::build(&scene).unwrap();
+        let [deformed] = &structure.deformed[..] else { panic!() };
+        let [a, b] = deformed.roots.map(|r| r as usize);
+        let node_count = deformed.refit_order[0].len();
+        let shift = |n: &BvhNode, by: u32| n.offset(by, deformed.triangles[1].start - deformed.triangles[0].start);
+        for k in 0..node_count {
+            assert_eq!(shift(&structure.nodes[a + k], (b - a) as u32), structure.nodes[b + k], "node {k} of the copies");
+        }
+        let (t0, t1) = (&deformed.triangles[0], &deformed.triangles[1]);
+        assert_eq!(structure.triangles[t0.start as usize..t0.end as usize], structure.triangles[t1.start as usize..t1.end as usize]);
+        // Every node of a copy once, each after its children.
+        for order in &deformed.refit_order {
+            let mut seen = std::collections::HashSet::new();
+            for &n in order {
+                let node = &structure.nodes[n as usize];
+                if !node.is_leaf() {
+                    let first = node.entry;
+                    assert!(seen.contains(&first) && seen.contains(&structure.nodes[first as usize].skip), "node {n} before its children");
+                }
+                assert!(seen.insert(n));
+            }
+            assert_eq!(seen.len(), node_count);
+        }
+        // The top level's box for it holds the mesh however the wave moves it.
+        let rest = structure.blas_of(0).0.nodes[0].bounds();
+        assert_eq!(deformed.bounds.min, rest.min - Vec3::splat(3.0));
+        assert_eq!(deformed.deformed_triangles(0.7).len(), (t0.end - t0.start) as usize);
     }
 
     #[test]

@@ -9,6 +9,7 @@ mod aabb;
 pub mod animation;
 pub mod camera;
 pub mod decal_textures;
+pub mod deform;
 pub mod demo;
 pub mod generators;
 pub mod gltf;
@@ -369,6 +370,8 @@ pub struct Scene {
     pub ray_hints: crate::rays::RayHints,
     /// Node animation moving mesh instances (glTF animations), if any.
     pub animation: Option<animation::Animation>,
+    /// Meshes deformed every frame (`deform`), at most one deformer per mesh.
+    pub deformers: Vec<deform::Deformer>,
 }
 
 impl Default for Scene {
@@ -389,6 +392,7 @@ impl Default for Scene {
             particles: None,
             ray_hints: crate::rays::RayHints::default(),
             animation: None,
+            deformers: Vec::new(),
         }
     }
 }
@@ -445,6 +449,15 @@ impl Scene {
         }
         if let Some(animation) = &self.animation {
             animation.validate(self.instances.len()).map_err(crate::Error::InvalidScene)?;
+        }
+        for (i, d) in self.deformers.iter().enumerate() {
+            if d.mesh >= self.meshes.len() {
+                return err(format!("deformer {i}: mesh {} does not exist", d.mesh));
+            }
+            if self.deformers[..i].iter().any(|other| other.mesh == d.mesh) {
+                return err(format!("deformer {i}: mesh {} ({}) has a deformer already", d.mesh, self.meshes[d.mesh].name));
+            }
+            d.wave.validate().map_err(|m| crate::Error::InvalidScene(format!("deformer {i} ({}): {m}", self.meshes[d.mesh].name)))?;
         }
         for (mi, m) in self.materials.iter().enumerate() {
             for t in [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture].into_iter().flatten() {

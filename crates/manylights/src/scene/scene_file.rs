@@ -90,6 +90,13 @@
 //! reflection_roughness = 0.3      # surfaces below this perceptual roughness reflect; default 0.3
 //! light_shadow_rays = 4   # shadow rays per shading point towards lights that cast shadows; default 0
 //!
+//! [[deform]]              # a travelling wave deforming every mesh of a name (scene::deform::Wave)
+//! mesh = "Curtain"        # required: the glTF mesh name
+//! amplitude = 0.05        # required: metres along the vertex normals
+//! wavelength = 1.0        # required: metres
+//! speed = 0.5             # metres per second the crests travel; default 0
+//! direction = [1.0, 0.0, 0.0]     # in the mesh's space; default [1, 0, 0]
+//!
 //! [animate]               # group all lights and decals into spinning groups (generators::group_for_animation)
 //! groups = 16             # default 16
 //! seed = 1                # default 1
@@ -150,7 +157,42 @@ struct SceneFile {
     large_decals: Vec<LargeDecalsSpec>,
     particles: Option<ParticlesSpec>,
     rays: Option<RaysSpec>,
+    #[serde(default)]
+    deform: Vec<DeformSpec>,
     animate: Option<AnimateSpec>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DeformSpec {
+    mesh: String,
+    amplitude: f32,
+    wavelength: f32,
+    #[serde(default)]
+    speed: f32,
+    direction: Option<[f32; 3]>,
+}
+
+impl DeformSpec {
+    fn apply(&self, scene: &mut Scene) -> Result<(), String> {
+        let direction = Vec3::from(self.direction.unwrap_or([1.0, 0.0, 0.0]));
+        if !(direction.is_finite() && direction.length() > 0.0) {
+            return Err(format!("direction {direction} must be finite and non-zero"));
+        }
+        let wave = super::deform::Wave {
+            amplitude: self.amplitude,
+            wavelength: self.wavelength,
+            speed: self.speed,
+            direction: direction.normalize(),
+        };
+        wave.validate()?;
+        let meshes: Vec<usize> = (0..scene.meshes.len()).filter(|&m| scene.meshes[m].name == self.mesh).collect();
+        if meshes.is_empty() {
+            return Err(format!("no mesh is named \"{}\"", self.mesh));
+        }
+        scene.deformers.extend(meshes.into_iter().map(|mesh| super::deform::Deformer { mesh, wave }));
+        Ok(())
+    }
 }
 
 #[derive(Debug, Deserialize)]
@@ -410,6 +452,9 @@ impl SceneFile {
         if let Some(rays) = &self.rays {
             scene.ray_hints = rays.to_hints().map_err(|m| format!("rays: {m}"))?;
         }
+        for (i, spec) in self.deform.iter().enumerate() {
+            spec.apply(scene).map_err(|m| format!("deform {i}: {m}"))?;
+        }
         if let Some(animate) = &self.animate {
             let groups = animate.groups.unwrap_or(generators::DEFAULT_ANIMATION_GROUPS);
             generators::group_for_animation(scene, groups, animate.seed.unwrap_or(1))
@@ -649,6 +694,26 @@ mod tests {
             Err(Error::SceneFile { reason, .. }) => reason,
             other => panic!("expected a scene-file error, got {other:?}"),
         }
+    }
+
+    #[test]
+    fn deform_waves_every_mesh_of_its_name_and_bad_ones_are_named() {
+        let gltf = assets_dir().join("box/Box.gltf");
+        let file = |extra: &str| {
+            format!("gltf = {:?}\n[[deform]]\nmesh = \"Mesh\"\namplitude = 0.1\nwavelength = 2.0\n{extra}", gltf.to_str().unwrap())
+        };
+        let scene = load_text("deform", &file("speed = 0.5\ndirection = [0.0, 2.0, 0.0]\n")).unwrap();
+        let [deformer] = scene.deformers[..] else { panic!("{:?}", scene.deformers) };
+        assert_eq!(scene.meshes[deformer.mesh].name, "Mesh");
+        assert_eq!((deformer.wave.amplitude, deformer.wave.wavelength, deformer.wave.speed), (0.1, 2.0, 0.5));
+        assert_eq!(deformer.wave.direction, Vec3::Y, "directions are normalised");
+        let unknown = reason(load_text("deform_unknown", &file("").replace("\"Mesh\"", "\"Flag\"")));
+        assert!(unknown.contains("deform 0") && unknown.contains("no mesh is named \"Flag\""), "{unknown}");
+        let flat = reason(load_text("deform_wavelength", &file("").replace("wavelength = 2.0", "wavelength = 0.0")));
+        assert!(flat.contains("deform 0") && flat.contains("wavelength 0"), "{flat}");
+        let twice =
+            reason(load_text("deform_twice", &format!("{}[[deform]]\nmesh = \"Mesh\"\namplitude = 0.1\nwavelength = 1.0\n", file(""))));
+        assert!(twice.contains("has a deformer already"), "{twice}");
     }
 
     #[test]

@@ -1,0 +1,79 @@
+//! Deforming meshes: a procedural travelling wave that moves a mesh's vertices along their normals
+//! every frame (curtains, flags, water), evaluated on the GPU (`rays/deform.wgsl`) for the raster and
+//! the rays alike; the rays' hierarchy of a deformed mesh is refitted on the GPU every frame
+//! (`rays/refit.rs`). This CPU twin is the tests' reference.
+
+use glam::Vec3;
+
+/// A sine wave travelling along `direction` (mesh space): each vertex moves along its normal by
+/// `amplitude · sin(2π (p · direction − speed · t) / wavelength)`, and its normal tilts with the
+/// wave's slope.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wave {
+    pub amplitude: f32,
+    pub wavelength: f32,
+    /// Metres per second the crests travel.
+    pub speed: f32,
+    /// Unit direction of travel, in the mesh's space.
+    pub direction: Vec3,
+}
+
+/// A mesh (index into `Scene::meshes`) deformed by a wave: every instance of it deforms alike.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Deformer {
+    pub mesh: usize,
+    pub wave: Wave,
+}
+
+impl Wave {
+    /// A vertex at rest (`position`, unit `normal`) moved to `time`: its position and normal.
+    pub fn displace(&self, position: Vec3, normal: Vec3, time: f32) -> (Vec3, Vec3) {
+        let k = std::f32::consts::TAU / self.wavelength;
+        let phase = k * (position.dot(self.direction) - self.speed * time);
+        let moved = position + normal * (self.amplitude * phase.sin());
+        // The surface's slope along the direction of travel, within the tangent plane.
+        let along = self.direction - normal * normal.dot(self.direction);
+        let tilted = (normal - along * (self.amplitude * k * phase.cos())).normalize_or(normal);
+        (moved, tilted)
+    }
+
+    /// Checks the numbers; the message names the bad one.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.amplitude.is_finite() && self.amplitude >= 0.0) {
+            return Err(format!("wave amplitude {} must be a finite length ≥ 0", self.amplitude));
+        }
+        if !(self.wavelength.is_finite() && self.wavelength > 0.0) {
+            return Err(format!("wavelength {} must be a finite length > 0", self.wavelength));
+        }
+        if !self.speed.is_finite() {
+            return Err(format!("wave speed {} must be finite", self.speed));
+        }
+        if !(self.direction.is_finite() && (self.direction.length() - 1.0).abs() < 1e-3) {
+            return Err(format!("wave direction {} must be a unit vector", self.direction));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_wave_moves_vertices_along_their_normals_and_tilts_them_with_its_slope() {
+        let wave = Wave { amplitude: 0.1, wavelength: 2.0, speed: 1.0, direction: Vec3::X };
+        // A quarter wavelength ahead of the crest's start at t = 0: the crest itself.
+        let (p, n) = wave.displace(Vec3::new(0.5, 0.0, 0.0), Vec3::Y, 0.0);
+        assert!((p - Vec3::new(0.5, 0.1, 0.0)).length() < 1e-6 && (n - Vec3::Y).length() < 1e-6);
+        // Where it crosses zero rising, the slope tilts the normal back against the travel.
+        let (p, n) = wave.displace(Vec3::ZERO, Vec3::Y, 0.0);
+        let slope = 0.1 * std::f32::consts::PI;
+        assert!(p.length() < 1e-6);
+        assert!((n - Vec3::new(-slope, 1.0, 0.0).normalize()).length() < 1e-6, "{n}");
+        // Half a second later the crest has travelled half a metre.
+        let (p, _) = wave.displace(Vec3::new(1.0, 0.0, 0.0), Vec3::Y, 0.5);
+        assert!((p.y - 0.1).abs() < 1e-6);
+        assert!(Wave { wavelength: 0.0, ..wave }.validate().unwrap_err().contains("wavelength"));
+        assert!(Wave { direction: Vec3::ZERO, ..wave }.validate().unwrap_err().contains("direction"));
+    }
+}
