@@ -13,6 +13,7 @@
 #   scripts/bench-device.sh clipmap      1M particles: clipmap cascades against the grid over the scene (issue 6)
 #   scripts/bench-device.sh rays         ray-traced sun shadows and reflections on Sponza (issue 7)
 #   scripts/bench-device.sh post         the post chain's effects, alone and together, on Sponza (issue 7)
+#   scripts/bench-device.sh deform       Sponza's curtains waving: GPU deformation and BLAS refit (issue 7)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -171,9 +172,24 @@ post() {
   run post_bloom 200 --scene $sun --bloom
   run post_depth_of_field 200 --scene $sun --depth-of-field
   run post_motion_blur_still 200 --scene $sun --motion-blur
-  run post_motion_blur_moving 200 --scene $sun --motion-blur --camera-velocity 2,0,0
+  # The camera moves 1.5 m/s along x: 10 + 60 frames keep it inside the atrium.
+  WARMUP=10 run post_motion_blur_moving 60 --scene $sun --motion-blur --camera-velocity 1.5,0,0
   run post_vignette 200 --scene $sun --vignette 1
-  run post_all_moving 200 --scene $sun --auto-exposure --bloom --depth-of-field --motion-blur --vignette 1 --camera-velocity 2,0,0
+  WARMUP=10 run post_all_moving 60 --scene $sun --auto-exposure --bloom --depth-of-field --motion-blur --vignette 1 \
+    --camera-velocity 1.5,0,0
+}
+
+# Sponza's curtains (6 meshes, 28,416 triangles, their BLASes stored twice) waving: vertices moved and BLASes refitted
+# on the GPU every frame; with hard sun shadows and reflections tracing them.
+deform() {
+  printf 'gltf = "sponza_lite/Sponza.gltf"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' >.bench/sun.toml
+  for mesh in Curtain Curtain2; do
+    printf '[[deform]]\nmesh = "%s"\namplitude = 0.08\nwavelength = 1.5\nspeed = 0.8\ndirection = [0.0, 1.0, 0.0]\n' $mesh
+  done | cat .bench/sun.toml - >.bench/curtains.toml
+  local off="--light-method off --decal-method off"
+  run deform_still 200 --scene .bench/sun.toml $off --shadows hard --reflections
+  run deform_curtains 200 --scene .bench/curtains.toml $off --shadows hard --reflections
+  run deform_curtains_no_rays 200 --scene .bench/curtains.toml $off
 }
 
 # Test binaries built with `cargo test --release --no-run`, run here against the GPU, each test in its
@@ -206,9 +222,10 @@ for set in "${@:-structures}"; do
     clipmap) clipmap ;;
     rays) rays ;;
     post) post ;;
+    deform) deform ;;
     table) bench table --sweeps none ;;
     sweeps) bench sweeps --scenes none ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles, clipmap, rays or post)" >&2; exit 2 ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles, clipmap, rays, post or deform)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

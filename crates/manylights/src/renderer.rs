@@ -193,7 +193,7 @@ impl Renderer {
         });
         let deform = Deform::new(&ctx, scene, &gpu_scene)?;
         let refit = match &rays {
-            Some(rays) => BlasRefit::new(&ctx, scene, &gpu_scene, rays)?,
+            Some(rays) => BlasRefit::new(&ctx, &gpu_scene, rays)?,
             None => None,
         };
         Ok(Self {

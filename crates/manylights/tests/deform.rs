@@ -89,7 +89,13 @@ fn config(pipeline: PipelineKind) -> RenderConfig {
 
 #[test]
 fn every_frame_traces_a_complete_refit_of_its_own_time_from_the_copy_of_its_parity() {
-    let (scene, camera) = waving_sheet();
+    let (mut scene, camera) = waving_sheet();
+    // A second, finer sheet with a wave of its own beside the first: the refit takes both in each
+    // dispatch, each with its own primitives.
+    scene.meshes.push(grid_mesh(48));
+    scene.instances.push(Instance { mesh: 2, world_from_local: Mat4::from_translation(Vec3::new(-2.5, 1.0, -0.5)) });
+    let slow = Wave { amplitude: 0.1, wavelength: 0.7, speed: -0.4, direction: Vec3::new(0.6, 0.8, 0.0) };
+    scene.deformers.push(Deformer { mesh: 2, wave: slow });
     let mut renderer = renderer(&scene, config(PipelineKind::Visbuffer));
     renderer.validate_ray_hierarchy = true;
     // Frames submitted back to back, then one by one: each checked right after it.

@@ -236,10 +236,8 @@ pub struct DeformedBlas {
     /// Each copy's root node and range of triangles.
     pub roots: [u32; 2],
     pub triangles: [std::ops::Range<u32>; 2],
-    /// Each copy's nodes, deepest first, and where each depth's nodes start and end in that order:
-    /// the refit visits a depth's nodes at once, after their children.
+    /// Each copy's nodes, children before parents (deepest first).
     pub refit_order: [Vec<u32>; 2],
-    pub refit_levels: Vec<std::ops::Range<u32>>,
     /// The mesh's box at rest grown by the wave's amplitude: it holds every deformation, so the top
     /// level can be built on the CPU before the GPU refits.
     pub bounds: Aabb,
@@ -334,18 +332,33 @@ impl RayStructure {
         // BLASes: one per mesh placed by an invertible transform, then one per singular instance.
         let mut blases = Vec::new();
         let mut mesh_blas = vec![None; scene.meshes.len()];
-        // A deformed mesh's BLAS twice in a row (`DeformedBlas`).
+        // Deformed meshes' BLASes twice (`DeformedBlas`): every first copy, then every second, so each
+        // copy's triangles are one range the refit covers in one dispatch.
         let mut deformed_blas = Vec::new();
         for (m, _) in shared.iter().enumerate().filter(|(_, &shared)| shared) {
             if let Some(blas) = build_blas(scene, m, &Affine3A::IDENTITY)? {
-                mesh_blas[m] = Some(blases.len());
-                if let Some(wave) = deformer_of[m] {
-                    deformed_blas.push((m, wave, blases.len()));
-                    blases.push(Blas { bvh: blas.bvh.clone(), triangles: blas.triangles.clone() });
+                match deformer_of[m] {
+                    Some(wave) => deformed_blas.push((m, wave, blas)),
+                    None => {
+                        mesh_blas[m] = Some(blases.len());
+                        blases.push(blas);
+                    }
                 }
-                blases.push(blas);
             }
         }
+        let first_copies = blases.len();
+        for (m, _, blas) in &deformed_blas {
+            mesh_blas[*m] = Some(blases.len());
+            blases.push(Blas { bvh: blas.bvh.clone(), triangles: blas.triangles.clone() });
+        }
+        let deformed_blas: Vec<_> = deformed_blas
+            .into_iter()
+            .enumerate()
+            .map(|(i, (m, wave, blas))| {
+                blases.push(blas);
+                (m, wave, first_copies + i, blases.len() - 1)
+            })
+            .collect();
         let mut instance_blas = Vec::with_capacity(scene.instances.len());
         for (instance, &mesh_space) in scene.instances.iter().zip(&in_mesh_space) {
             if mesh_space {
@@ -377,9 +390,9 @@ impl RayStructure {
         }
         let deformed: Vec<DeformedBlas> = deformed_blas
             .iter()
-            .map(|&(mesh, wave, b)| {
-                let roots = [blas_roots[b], blas_roots[b + 1]];
-                let (order, levels) = refit_order(&nodes, roots[0]);
+            .map(|&(mesh, wave, b, second)| {
+                let roots = [blas_roots[b], blas_roots[second]];
+                let order = refit_order(&nodes, roots[0]);
                 let shift = roots[1] - roots[0];
                 let bounds = blases[b].bvh.nodes[0].bounds();
                 let grow = Vec3::splat(wave.amplitude);
@@ -400,9 +413,8 @@ impl RayStructure {
                     mesh,
                     wave,
                     roots,
-                    triangles: [blas_triangles[b].clone(), blas_triangles[b + 1].clone()],
+                    triangles: [blas_triangles[b].clone(), blas_triangles[second].clone()],
                     refit_order: [order.clone(), order.iter().map(|n| n + shift).collect()],
-                    refit_levels: levels,
                     bounds: Aabb::new(bounds.min - grow, bounds.max + grow),
                 }
             })
@@ -522,9 +534,9 @@ impl RayStructure {
     }
 }
 
-/// The nodes of the tree at `root` (in `nodes`, links absolute), deepest first, and the range of each
-/// depth's nodes in that order: children always come before their parents.
-fn refit_order(nodes: &[BvhNode], root: u32) -> (Vec<u32>, Vec<std::ops::Range<u32>>) {
+/// The nodes of the tree at `root` (in `nodes`, links absolute), deepest first: children always come
+/// before their parents.
+fn refit_order(nodes: &[BvhNode], root: u32) -> Vec<u32> {
     let mut by_depth: Vec<Vec<u32>> = Vec::new();
     let mut stack = vec![(root, 0usize)];
     while let Some((n, depth)) = stack.pop() {
@@ -539,14 +551,7 @@ fn refit_order(nodes: &[BvhNode], root: u32) -> (Vec<u32>, Vec<std::ops::Range<u
             stack.push((nodes[first as usize].skip, depth + 1));
         }
     }
-    let mut order = Vec::new();
-    let mut levels = Vec::new();
-    for level in by_depth.iter().rev() {
-        let start = order.len() as u32;
-        order.extend_from_slice(level);
-        levels.push(start..order.len() as u32);
-    }
-    (order, levels)
+    by_depth.into_iter().rev().flatten().collect()
 }
 
 impl RayTriangle {

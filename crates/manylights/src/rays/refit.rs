@@ -1,10 +1,11 @@
 //! The GPU refit of deformed meshes' BLASes (`refit.wgsl`), every frame, into the copy the frame
-//! traces (`RayStructure::deformed`): its triangles from the deformed vertices, then its nodes depth
-//! by depth, deepest first, all in one compute pass timed as `blas_refit`.
+//! traces (`RayStructure::deformed`): every deformed mesh's triangles from the deformed vertices in
+//! one dispatch, then their nodes by height (leaves first; a node's height is one more than its
+//! taller child's), one dispatch per height for all meshes together, in one compute pass timed as
+//! `blas_refit`. Batching the meshes keeps the dispatches (each a barrier) to about a tree's height.
 
 use super::RayStructure;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
-use crate::scene::Scene;
 use crate::Result;
 
 /// Keep in sync with `RefitStep` in `refit.wgsl`.
@@ -13,8 +14,8 @@ use crate::Result;
 struct RefitStep {
     first: u32,
     count: u32,
-    table: u32,
-    _pad0: u32,
+    meshes: u32,
+    mesh_count: u32,
 }
 
 /// Steps sit 256 bytes apart in their uniform buffer: wgpu's alignment for dynamic offsets.
@@ -38,41 +39,69 @@ pub struct BlasRefit {
 impl BlasRefit {
     /// The refit of `rays`' deformed BLASes (bound through `gpu_scene`'s buffers); `None` when none is
     /// deformed.
-    pub fn new(ctx: &GpuContext, scene: &Scene, gpu_scene: &GpuScene, rays: &RayStructure) -> Result<Option<Self>> {
+    pub fn new(ctx: &GpuContext, gpu_scene: &GpuScene, rays: &RayStructure) -> Result<Option<Self>> {
         if rays.deformed.is_empty() {
             return Ok(None);
         }
         let device = &ctx.device;
         let mut steps = Vec::new();
         let mut primitives: Vec<[u32; 2]> = Vec::new();
+        // Per copy, each deformed mesh's triangle range and primitive table: (start, end, table, 0).
+        let mut meshes: Vec<[u32; 4]> = Vec::new();
         let mut order: Vec<u32> = Vec::new();
         let mut dispatches = [Vec::new(), Vec::new()];
-        let max_groups = ctx.limits.max_compute_workgroups_per_dimension;
-        for deformed in &rays.deformed {
-            let table = primitives.len() as u32;
-            primitives
-                .extend(gpu_scene.primitive_ranges[deformed.mesh].iter().map(|&(first_index, _, base_vertex)| [first_index, base_vertex]));
-            for (copy, copy_dispatches) in dispatches.iter_mut().enumerate() {
-                let triangles = &deformed.triangles[copy];
-                let mut push = |step: RefitStep, nodes: bool| {
-                    copy_dispatches.push(Dispatch { nodes, slot: steps.len() as u32, count: step.count });
-                    steps.push(step);
-                };
-                push(RefitStep { first: triangles.start, count: triangles.len() as u32, table, _pad0: 0 }, false);
-                let order_start = order.len() as u32;
-                order.extend_from_slice(&deformed.refit_order[copy]);
-                for level in &deformed.refit_levels {
-                    push(RefitStep { first: order_start + level.start, count: level.len() as u32, table, _pad0: 0 }, true);
+        let max_invocations = u64::from(ctx.limits.max_compute_workgroups_per_dimension) * 64;
+        let tables: Vec<u32> = rays
+            .deformed
+            .iter()
+            .map(|deformed| {
+                let table = primitives.len() as u32;
+                primitives.extend(
+                    gpu_scene.primitive_ranges[deformed.mesh].iter().map(|&(first_index, _, base_vertex)| [first_index, base_vertex]),
+                );
+                table
+            })
+            .collect();
+        for (copy, copy_dispatches) in dispatches.iter_mut().enumerate() {
+            let mut push = |step: RefitStep, nodes: bool| {
+                copy_dispatches.push(Dispatch { nodes, slot: steps.len() as u32, count: step.count });
+                steps.push(step);
+            };
+            let first_mesh = meshes.len() as u32;
+            meshes.extend(rays.deformed.iter().zip(&tables).map(|(d, &table)| [d.triangles[copy].start, d.triangles[copy].end, table, 0]));
+            let start = rays.deformed.iter().map(|d| d.triangles[copy].start).min().unwrap_or(0);
+            let end = rays.deformed.iter().map(|d| d.triangles[copy].end).max().unwrap_or(0);
+            if u64::from(end - start) > max_invocations {
+                return Err(crate::Error::InvalidScene(format!(
+                    "the deformed meshes have {} triangles, over the {max_invocations} this GPU refits in one dispatch; deform fewer or smaller meshes",
+                    end - start
+                )));
+            }
+            let mesh_count = rays.deformed.len() as u32;
+            push(RefitStep { first: start, count: end - start, meshes: first_mesh, mesh_count }, false);
+            // Heights: children come before parents in each copy's order.
+            let mut by_height: Vec<Vec<u32>> = Vec::new();
+            for deformed in &rays.deformed {
+                let mut height: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
+                for &n in &deformed.refit_order[copy] {
+                    let node = &rays.nodes[n as usize];
+                    let h = if node.is_leaf() {
+                        0
+                    } else {
+                        let first = node.entry;
+                        1 + height[&first].max(height[&rays.nodes[first as usize].skip])
+                    };
+                    height.insert(n, h);
+                    if by_height.len() <= h {
+                        by_height.resize_with(h + 1, Vec::new);
+                    }
+                    by_height[h].push(n);
                 }
             }
-            let largest = deformed.triangles[0].len() as u32;
-            if largest.div_ceil(64) > max_groups {
-                return Err(crate::Error::InvalidScene(format!(
-                    "deformed mesh {} ({}) has {largest} triangles, over the {} this GPU refits in one dispatch; deform a smaller mesh",
-                    deformed.mesh,
-                    scene.meshes[deformed.mesh].name,
-                    u64::from(max_groups) * 64
-                )));
+            for level in &by_height {
+                let first = order.len() as u32;
+                order.extend_from_slice(level);
+                push(RefitStep { first, count: level.len() as u32, meshes: first_mesh, mesh_count }, true);
             }
         }
         let mut step_bytes = vec![0u8; steps.len() * STEP_STRIDE as usize];
@@ -86,6 +115,7 @@ impl BlasRefit {
         let step_buffer = init("refit steps", &step_bytes, wgpu::BufferUsages::UNIFORM);
         let primitive_buffer = init("refit primitives", bytemuck::cast_slice(&primitives), wgpu::BufferUsages::STORAGE);
         let order_buffer = init("refit order", bytemuck::cast_slice(&order), wgpu::BufferUsages::STORAGE);
+        let mesh_buffer = init("refit meshes", bytemuck::cast_slice(&meshes), wgpu::BufferUsages::STORAGE);
 
         let c = wgpu::ShaderStages::COMPUTE;
         let step_size = wgpu::BufferSize::new(std::mem::size_of::<RefitStep>() as u64);
@@ -110,6 +140,7 @@ impl BlasRefit {
                 bindings::storage_read(4, c),
                 bindings::storage_read_write(5, c),
                 bindings::storage_read_write(6, c),
+                bindings::storage_read(7, c),
             ],
         );
         let shader = ShaderDesc::new("rays/refit.wgsl");
@@ -127,6 +158,7 @@ impl BlasRefit {
                 order_buffer.as_entire_binding(),
                 gpu_scene.ray_node_buffer.as_entire_binding(),
                 gpu_scene.ray_triangle_buffer.as_entire_binding(),
+                mesh_buffer.as_entire_binding(),
             ],
         );
         Ok(Some(Self { triangles_pipeline, nodes_pipeline, bind_group, dispatches }))

@@ -1,18 +1,19 @@
 // Refit of a deformed mesh's BLAS (`rays/refit.rs`) after `passes/deform.wgsl` moved its vertices:
 // `refit_triangles` rebuilds each stored triangle (corner and edges) from the vertex buffer, then
-// `refit_nodes` runs once per depth of the tree, deepest first, each node's box the union of its
-// triangles' (a leaf) or of its two children's, which the dispatch before wrote. The tree's shape stays
-// what the SAH builder made at rest: a refit, not a rebuild.
+// `refit_nodes` runs once per height of the trees, leaves first, each node's box the union of its
+// triangles' (a leaf) or of its two children's, which an earlier dispatch wrote. Every deformed mesh
+// of the frame's copy goes through each dispatch together. The trees' shape stays what the SAH builder
+// made at rest: a refit, not a rebuild.
 #include "shading/types.wgsl"
 #include "rays/ray_types.wgsl"
 
-// One dispatch's work: `count` triangles from `first` (with the mesh's primitives from `table`), or
-// `count` nodes named by `order` from `first`.
+// One dispatch's work: `count` triangles from `first`, or `count` nodes named by `order` from `first`;
+// the copy's `mesh_count` deformed meshes from `meshes` in `deformed_meshes`.
 struct RefitStep {
     first: u32,
     count: u32,
-    table: u32,
-    _pad0: u32,
+    meshes: u32,
+    mesh_count: u32,
 }
 
 @group(0) @binding(0) var<uniform> step: RefitStep;
@@ -23,6 +24,8 @@ struct RefitStep {
 @group(0) @binding(4) var<storage, read> order: array<u32>;
 @group(0) @binding(5) var<storage, read_write> nodes: array<BvhNode>;
 @group(0) @binding(6) var<storage, read_write> triangles: array<RayTriangle>;
+// Per deformed mesh and copy: its triangles [x, y) and its first primitive in `primitives` (z).
+@group(0) @binding(7) var<storage, read> deformed_meshes: array<vec4<u32>>;
 
 @compute @workgroup_size(64)
 fn refit_triangles(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -30,8 +33,19 @@ fn refit_triangles(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let k = step.first + id.x;
+    // The mesh whose copy holds the triangle; the range may span others' triangles, left alone.
+    var table = 0xffffffffu;
+    for (var m = step.meshes; m < step.meshes + step.mesh_count; m += 1u) {
+        let mesh = deformed_meshes[m];
+        if k >= mesh.x && k < mesh.y {
+            table = mesh.z;
+        }
+    }
+    if table == 0xffffffffu {
+        return;
+    }
     var tri = triangles[k];
-    let primitive = primitives[step.table + (tri.draw_offset & ~RAY_ALPHA_MASKED)];
+    let primitive = primitives[table + (tri.draw_offset & ~RAY_ALPHA_MASKED)];
     let first = primitive.x + 3u * tri.triangle;
     let v0 = vertices[primitive.y + indices[first]].position;
     let v1 = vertices[primitive.y + indices[first + 1u]].position;

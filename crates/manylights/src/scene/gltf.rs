@@ -233,6 +233,14 @@ fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Text
         materials.push(Material::default());
     }
     let mut scene = Scene { meshes, materials, textures, ..Scene::default() };
+    // Skinned meshes draw in their bind pose: no joint transforms are applied (deforming meshes are
+    // procedural waves, `scene::deform`).
+    if document.skins().len() > 0 {
+        log::warn!(
+            "the glTF file has {} skin(s): skinning is not supported, skinned meshes are drawn in their bind pose",
+            document.skins().len()
+        );
+    }
     match document.default_scene().or_else(|| document.scenes().next()) {
         Some(root) => {
             let hierarchy = place_nodes(&mut scene, &root, document.nodes().len())?;
