@@ -4,6 +4,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 MANYLIGHTS_NEED_LAVAPIPE=1 scripts/ensure-vulkan.sh
+# The viewer's test opens a window under Xvfb.
+scripts/ensure-xvfb.sh
 export WGPU_ADAPTER_NAME="${WGPU_ADAPTER_NAME:-llvmpipe}"
 # Mesa's window-system probing warns without it; headless rendering does not need it.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"

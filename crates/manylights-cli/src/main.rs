@@ -6,6 +6,7 @@ mod particle_error;
 mod render;
 mod scene_args;
 mod timing;
+mod view;
 
 use std::process::ExitCode;
 
@@ -32,6 +33,9 @@ enum Command {
     /// List GPU adapters, the one manylights would choose, its driver and the features it uses; then
     /// what the scene (with the same scene options as `render`) holds.
     Info(scene_args::SceneArgs),
+    /// Open a window on a scene: fly through it (WASD, Q/E, right mouse button to look), switch
+    /// pipeline, methods, ray-traced and post effects live, and watch per-pass GPU timings.
+    View(view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +46,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(&args),
         Command::Info(args) => info::run(&args),
         Command::ParticleError(args) => particle_error::run(&args),
+        Command::View(args) => view::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -439,6 +439,45 @@ fn post_effects_render_with_their_passes_timed_and_bad_ones_name_their_flag() {
     assert!(velocity.contains("three numbers"), "{velocity}");
 }
 
+/// The viewer under Xvfb (`scripts/ensure-xvfb.sh` installs it): a scripted run opens the window,
+/// renders frames, switches the light method and the pipeline between them, writes a screenshot of
+/// the last frame that is not blank, and exits 0.
+#[test]
+fn the_viewer_runs_a_scripted_session_under_xvfb_and_writes_a_screenshot() {
+    let dir = temp_dir("view");
+    let screenshot = dir.join("view.png");
+    let _ = std::fs::remove_file(&screenshot);
+    #[rustfmt::skip]
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 800x600x24", env!("CARGO_BIN_EXE_manylights"), "view", "--width", "560", "--height", "240",
+               "--frames", "6", "--set", "2:light-method=clustered", "--set", "4:pipeline=deferred", "--set", "4:bloom=on",
+               "--screenshot", screenshot.to_str().unwrap()])
+        .output()
+        .expect("xvfb-run (install Xvfb: scripts/ensure-xvfb.sh)");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "the viewer failed: {stderr}");
+    let image = image::open(&screenshot).expect("the screenshot").into_rgba8();
+    // The image beside the panel: the window's width less the panel's 270 points.
+    assert_eq!((image.width(), image.height()), (290, 240));
+    let distinct: std::collections::HashSet<[u8; 4]> = image.pixels().map(|p| p.0).collect();
+    assert!(distinct.len() > 500, "the screenshot looks blank: {} distinct colours", distinct.len());
+}
+
+#[test]
+fn the_viewer_without_a_display_says_how_to_get_one() {
+    let out = Command::new(env!("CARGO_BIN_EXE_manylights"))
+        .args(["view", "--frames", "1"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && out.status.code() != Some(101), "{stderr}");
+    assert!(stderr.contains("DISPLAY") && stderr.contains("xvfb-run"), "{stderr}");
+    let bad = failure(&["view", "--set", "3:light-method=magic"]);
+    assert!(bad.contains("light-method=magic") && bad.contains("clustered"), "{bad}");
+}
+
 /// A scene file's ray-traced effects apply unless flags override them; bad values name the key.
 #[test]
 fn scene_file_ray_settings_yield_to_flags_and_bad_ones_name_their_key() {

@@ -407,6 +407,12 @@ impl Renderer {
         (self.lights.cluster_capacity(), self.decals.cluster_capacity())
     }
 
+    /// The image the last frame ends in, on the GPU: RGBA8 holding sRGB-encoded values (the viewer
+    /// shows it).
+    pub fn output(&self) -> &wgpu::Texture {
+        &self.pipeline.targets().ldr
+    }
+
     /// The last frame after tonemapping: RGBA8, sRGB-encoded.
     pub fn read_ldr(&self) -> Result<Image<[u8; 4]>> {
         let bytes = readback::read_texture(&self.ctx, &self.pipeline.targets().ldr, 4)?;

@@ -41,8 +41,9 @@ pub struct AdapterSummary {
 }
 
 /// Vulkan, Metal and DX12 unless WGPU_BACKEND says otherwise: the GL backend lacks what the renderer
-/// needs, and probing it prints driver noise on headless machines.
-fn instance() -> wgpu::Instance {
+/// needs, and probing it prints driver noise on headless machines. A window (the viewer) creates its
+/// surface on this instance too: Vulkan, Metal and DX12 need no display handle up front.
+pub fn instance() -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
     desc.backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY);
     wgpu::Instance::new(desc)
@@ -92,12 +93,22 @@ impl GpuContext {
     /// Like [`GpuContext::new`], but never requests `withheld`: tests use it to run the paths taken on
     /// devices that lack a feature.
     pub fn without(withheld: wgpu::Features) -> Result<Self> {
-        let adapters = pollster::block_on(instance().enumerate_adapters(wgpu::Backends::all()));
+        Self::choose(&instance(), None, withheld)
+    }
+
+    /// Like [`GpuContext::new`], among the adapters of `instance` that can present to `surface`.
+    pub fn for_surface(instance: &wgpu::Instance, surface: &wgpu::Surface<'_>) -> Result<Self> {
+        Self::choose(instance, Some(surface), wgpu::Features::empty())
+    }
+
+    fn choose(instance: &wgpu::Instance, surface: Option<&wgpu::Surface<'_>>, withheld: wgpu::Features) -> Result<Self> {
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
         let seen: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
         let filter = name_filter();
         let adapter = adapters
             .into_iter()
             .filter(|a| unusable_reason(a).is_ok())
+            .filter(|a| surface.is_none_or(|s| a.is_surface_supported(s)))
             .filter(|a| filter.as_ref().is_none_or(|f| a.get_info().name.to_lowercase().contains(f)))
             .max_by_key(|a| preference(&a.get_info()))
             .ok_or_else(|| Error::NoAdapter {

@@ -140,7 +140,8 @@ impl FrameTargets {
                 HDR_FORMAT,
                 U::STORAGE_BINDING | U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
             ),
-            ldr: target(device, "ldr", width, height, LDR_FORMAT, U::STORAGE_BINDING | U::COPY_SRC),
+            // Sampled by the viewer to show it.
+            ldr: target(device, "ldr", width, height, LDR_FORMAT, U::STORAGE_BINDING | U::COPY_SRC | U::TEXTURE_BINDING),
         }
     }
 }

@@ -1,0 +1,677 @@
+//! `manylights view`: a window showing the renderer's image beside an egui panel that switches
+//! pipeline, methods, ray-traced effects and post effects live and shows per-pass GPU timings with a
+//! rolling graph of the frame time. WASD (Q/E down/up, Shift faster) and the mouse with the right
+//! button held fly the camera; the scene's cameras are a click away; F12 writes a screenshot; Esc
+//! quits. `--frames N --screenshot FILE` (and `--set FRAME:KEY=VALUE` switches) script a run.
+//!
+//! The renderer draws into its own image at the size of the area beside the panel (it is rebuilt when
+//! that size or a switch changes); egui shows that image as a texture and draws the panel over the
+//! window's surface (egui-winit for input, egui-wgpu for drawing, both on the renderer's device).
+
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use anyhow::{bail, Context};
+use clap::Args;
+use glam::{Mat4, Vec3};
+use manylights::{
+    config::RenderConfig,
+    gpu::{context::instance, GpuContext, PassTimings},
+    image_io,
+    pipelines::{DecalMethod, LightMethod, PipelineKind},
+    post::{AutoExposure, Bloom, DepthOfField, MotionBlur},
+    rays::SunShadows,
+    renderer::Renderer,
+    scene::{Camera, Projection, Scene},
+};
+use winit::{
+    application::ApplicationHandler,
+    event::{DeviceEvent, ElementState, MouseButton, WindowEvent},
+    event_loop::{ActiveEventLoop, EventLoop},
+    keyboard::{KeyCode, PhysicalKey},
+    window::{Window, WindowId},
+};
+
+use crate::scene_args::SceneArgs;
+
+#[derive(Args)]
+pub struct ViewArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Window size in pixels (the panel takes part of it).
+    #[arg(long, default_value_t = 1280)]
+    width: u32,
+    #[arg(long, default_value_t = 720)]
+    height: u32,
+    /// Camera index in the scene to start from (glTF cameras, or the scene file's first).
+    #[arg(long)]
+    camera: Option<usize>,
+    /// Quit after this many frames (for scripted runs), writing --screenshot if given.
+    #[arg(long)]
+    frames: Option<u64>,
+    /// With --frames: the last frame's image (without the panel), as a PNG.
+    #[arg(long, requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// A switch at a frame, as the panel would make it: FRAME:KEY=VALUE, KEY one of pipeline,
+    /// light-method, decal-method, shadows, reflections, bloom, depth-of-field, motion-blur,
+    /// auto-exposure (on/off) or vignette (0 to 1). Repeatable.
+    #[arg(long = "set", value_name = "FRAME:KEY=VALUE")]
+    sets: Vec<String>,
+}
+
+/// What the panel switches: everything that needs the renderer rebuilt.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Switches {
+    pipeline: PipelineKind,
+    light_method: LightMethod,
+    decal_method: DecalMethod,
+    shadows: SunShadows,
+    reflections: bool,
+    bloom: bool,
+    depth_of_field: bool,
+    motion_blur: bool,
+    auto_exposure: bool,
+    vignette: f32,
+}
+
+impl Default for Switches {
+    fn default() -> Self {
+        Self {
+            pipeline: PipelineKind::Visbuffer,
+            light_method: LightMethod::Bvh,
+            decal_method: DecalMethod::Bvh,
+            shadows: SunShadows::Off,
+            reflections: false,
+            bloom: false,
+            depth_of_field: false,
+            motion_blur: false,
+            auto_exposure: false,
+            vignette: 0.0,
+        }
+    }
+}
+
+const LIGHT_METHODS: [LightMethod; 4] = LightMethod::ALL;
+const DECAL_METHODS: [DecalMethod; 5] =
+    [DecalMethod::Off, DecalMethod::Brute, DecalMethod::Bvh, DecalMethod::Clustered, DecalMethod::DeferredDecals];
+
+impl Switches {
+    fn config(&self, (width, height): (u32, u32)) -> RenderConfig {
+        let mut config = RenderConfig {
+            width,
+            height,
+            pipeline: self.pipeline,
+            light_method: self.light_method,
+            decal_method: self.decal_method,
+            ..RenderConfig::default()
+        };
+        config.rays.sun_shadows = self.shadows;
+        config.rays.reflection_bounces = u32::from(self.reflections);
+        config.post.bloom = self.bloom.then(Bloom::default);
+        config.post.depth_of_field = self.depth_of_field.then(DepthOfField::default);
+        config.post.motion_blur = self.motion_blur.then(MotionBlur::default);
+        config.post.auto_exposure = self.auto_exposure.then(AutoExposure::default);
+        config.post.vignette = self.vignette;
+        config
+    }
+
+    /// Applies `key=value` (a `--set`); the message names what is wrong.
+    fn set(&mut self, key: &str, value: &str) -> anyhow::Result<()> {
+        let on = || match value {
+            "on" | "true" | "1" => Ok(true),
+            "off" | "false" | "0" => Ok(false),
+            _ => bail!("{key}={value}: give on or off"),
+        };
+        match key {
+            "pipeline" => {
+                self.pipeline = *PipelineKind::ALL
+                    .iter()
+                    .find(|p| p.name() == value)
+                    .with_context(|| format!("pipeline={value}: give visbuffer, deferred or forward"))?
+            }
+            "light-method" => {
+                self.light_method = *LIGHT_METHODS
+                    .iter()
+                    .find(|m| m.name() == value)
+                    .with_context(|| format!("light-method={value}: give off, brute, bvh or clustered"))?
+            }
+            "decal-method" => {
+                self.decal_method = *DECAL_METHODS
+                    .iter()
+                    .find(|m| m.name() == value)
+                    .with_context(|| format!("decal-method={value}: give off, brute, bvh, clustered or deferred-decals"))?
+            }
+            "shadows" => {
+                self.shadows =
+                    *SunShadows::ALL.iter().find(|s| s.name() == value).with_context(|| format!("shadows={value}: give off, hard or soft"))?
+            }
+            "reflections" => self.reflections = on()?,
+            "bloom" => self.bloom = on()?,
+            "depth-of-field" => self.depth_of_field = on()?,
+            "motion-blur" => self.motion_blur = on()?,
+            "auto-exposure" => self.auto_exposure = on()?,
+            "vignette" => {
+                self.vignette = value.parse().ok().filter(|v: &f32| (0.0..=1.0).contains(v)).with_context(|| format!("vignette={value}: give 0 to 1"))?
+            }
+            _ => bail!(
+                "unknown switch {key}: give pipeline, light-method, decal-method, shadows, reflections, bloom, depth-of-field, motion-blur, auto-exposure or vignette"
+            ),
+        }
+        Ok(())
+    }
+}
+
+/// A `--set FRAME:KEY=VALUE`.
+struct ScriptedSet {
+    frame: u64,
+    key: String,
+    value: String,
+}
+
+fn parse_set(text: &str) -> anyhow::Result<ScriptedSet> {
+    let parsed = text.split_once(':').and_then(|(frame, rest)| Some((frame.parse().ok()?, rest.split_once('=')?)));
+    let Some((frame, (key, value))) = parsed else { bail!("--set {text}: write FRAME:KEY=VALUE, e.g. 5:light-method=clustered") };
+    // Checked now, so a bad switch fails before a window opens.
+    Switches::default().set(key, value)?;
+    Ok(ScriptedSet { frame, key: key.into(), value: value.into() })
+}
+
+/// A free-flying camera: position, yaw about +Y and pitch, with the scene camera's lens.
+struct FlyCamera {
+    position: Vec3,
+    yaw: f32,
+    pitch: f32,
+    projection: Projection,
+}
+
+impl FlyCamera {
+    fn from_camera(camera: &Camera) -> Self {
+        let forward = -camera.world_from_view.z_axis.truncate().normalize();
+        Self {
+            position: camera.position(),
+            yaw: forward.x.atan2(-forward.z),
+            pitch: forward.y.clamp(-1.0, 1.0).asin(),
+            projection: camera.projection,
+        }
+    }
+
+    fn camera(&self) -> Camera {
+        let rotation = glam::Quat::from_rotation_y(-self.yaw) * glam::Quat::from_rotation_x(self.pitch);
+        Camera {
+            name: "fly".into(),
+            world_from_view: Mat4::from_rotation_translation(rotation, self.position),
+            projection: self.projection,
+        }
+    }
+}
+
+/// Points the panel is wide.
+const PANEL_WIDTH: f32 = 270.0;
+/// Frames the rolling graph of frame times holds.
+const GRAPH_FRAMES: usize = 240;
+
+struct Gpu {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    surface_config: wgpu::SurfaceConfiguration,
+    ctx: GpuContext,
+    egui_state: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+    renderer: Option<Renderer>,
+    /// The renderer's image as egui sees it, and the size it was made at.
+    image: Option<(egui::TextureId, (u32, u32))>,
+}
+
+struct App {
+    args: ViewArgs,
+    scene: Scene,
+    fly: FlyCamera,
+    switches: Switches,
+    scripted: Vec<ScriptedSet>,
+    gpu: Option<Gpu>,
+    /// Keys held down, and whether the right mouse button is.
+    keys: std::collections::HashSet<KeyCode>,
+    looking: bool,
+    frame: u64,
+    last_frame: std::time::Instant,
+    timings: PassTimings,
+    history: VecDeque<f64>,
+    /// A switch the renderer refused (shown in the panel), and the last screenshot written.
+    message: Option<String>,
+    screenshots: u32,
+    /// Set when the viewer must stop: `Err` ends the program with that error.
+    result: Option<anyhow::Result<()>>,
+}
+
+pub fn run(args: ViewArgs) -> anyhow::Result<()> {
+    let scripted = args.sets.iter().map(|s| parse_set(s)).collect::<anyhow::Result<Vec<_>>>()?;
+    if cfg!(target_os = "linux") && std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
+        bail!(
+            "the viewer needs a display, and neither DISPLAY nor WAYLAND_DISPLAY is set; run it in a desktop session, \
+             or headless under Xvfb (xvfb-run -a manylights view …), or use `manylights render` for images without a window"
+        );
+    }
+    let scene = args.scene.load()?;
+    let camera = crate::render::choose_camera(&scene, args.camera)?;
+    let event_loop =
+        EventLoop::new().context("cannot open a window: the display refused the connection (check DISPLAY or WAYLAND_DISPLAY)")?;
+    let mut app = App {
+        fly: FlyCamera::from_camera(&camera),
+        args,
+        scene,
+        switches: Switches::default(),
+        scripted,
+        gpu: None,
+        keys: Default::default(),
+        looking: false,
+        frame: 0,
+        last_frame: std::time::Instant::now(),
+        timings: Vec::new(),
+        history: VecDeque::new(),
+        message: None,
+        screenshots: 0,
+        result: None,
+    };
+    event_loop.run_app(&mut app).context("the window's event loop failed")?;
+    app.result.unwrap_or(Ok(()))
+}
+
+impl App {
+    fn stop(&mut self, event_loop: &ActiveEventLoop, result: anyhow::Result<()>) {
+        self.result.get_or_insert(result);
+        event_loop.exit();
+    }
+
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<Gpu> {
+        let attributes = Window::default_attributes()
+            .with_title("manylights")
+            .with_inner_size(winit::dpi::PhysicalSize::new(self.args.width.max(320), self.args.height.max(200)));
+        let window = Arc::new(event_loop.create_window(attributes).context("cannot create the window")?);
+        let instance = instance();
+        let surface = instance.create_surface(window.clone()).context("cannot draw into the window (no Vulkan, Metal or DX12 surface)")?;
+        let ctx = GpuContext::for_surface(&instance, &surface)?;
+        let size = window.inner_size();
+        let caps = surface.get_capabilities(&ctx.adapter);
+        // egui draws in gamma space into a plain (non-sRGB) format, and the renderer's image holds
+        // sRGB-encoded values already.
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| !f.is_srgb())
+            .or(caps.formats.first().copied())
+            .context("the window's surface offers no format")?;
+        let surface_config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode: wgpu::PresentMode::AutoVsync,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes[0],
+            view_formats: vec![],
+            color_space: wgpu::SurfaceColorSpace::Auto,
+        };
+        surface.configure(&ctx.device, &surface_config);
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(egui_ctx, egui::ViewportId::ROOT, &window, Some(window.scale_factor() as f32), None, None);
+        let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, format, egui_wgpu::RendererOptions::default());
+        Ok(Gpu { window, surface, surface_config, ctx, egui_state, egui_renderer, renderer: None, image: None })
+    }
+
+    /// The renderer's image size: the window beside the panel, in pixels.
+    fn image_size(gpu: &Gpu) -> (u32, u32) {
+        let scale = gpu.window.scale_factor() as f32;
+        let panel = (PANEL_WIDTH * scale).ceil() as u32;
+        (gpu.surface_config.width.saturating_sub(panel).max(16), gpu.surface_config.height.max(16))
+    }
+
+    /// Rebuilds the renderer for the current switches and image size; a refused combination keeps the
+    /// previous renderer and says why in the panel.
+    fn rebuild(&mut self) {
+        let Some(gpu) = &mut self.gpu else { return };
+        let size = Self::image_size(gpu);
+        match Renderer::new(gpu.ctx.clone(), &self.scene, self.switches.config(size)) {
+            Ok(mut renderer) => {
+                renderer.time = gpu.renderer.as_ref().map_or(0.0, |r| r.time);
+                let view = renderer.output().create_view(&Default::default());
+                let id = match gpu.image {
+                    Some((id, _)) => {
+                        gpu.egui_renderer.update_egui_texture_from_wgpu_texture(&gpu.ctx.device, &view, wgpu::FilterMode::Linear, id);
+                        id
+                    }
+                    None => gpu.egui_renderer.register_native_texture(&gpu.ctx.device, &view, wgpu::FilterMode::Linear),
+                };
+                gpu.image = Some((id, size));
+                gpu.renderer = Some(renderer);
+                self.message = None;
+            }
+            Err(e) => self.message = Some(format!("not switched: {e}")),
+        }
+    }
+
+    fn move_camera(&mut self, dt: f32) {
+        let speed = if self.keys.contains(&KeyCode::ShiftLeft) { 12.0 } else { 3.0 } * dt;
+        let camera = self.fly.camera();
+        let forward = -camera.world_from_view.z_axis.truncate();
+        let right = camera.world_from_view.x_axis.truncate();
+        let mut step = Vec3::ZERO;
+        for (key, direction) in [
+            (KeyCode::KeyW, forward),
+            (KeyCode::KeyS, -forward),
+            (KeyCode::KeyD, right),
+            (KeyCode::KeyA, -right),
+            (KeyCode::KeyE, Vec3::Y),
+            (KeyCode::KeyQ, -Vec3::Y),
+        ] {
+            if self.keys.contains(&key) {
+                step += direction;
+            }
+        }
+        self.fly.position += step.normalize_or_zero() * speed;
+    }
+
+    fn screenshot(&mut self, path: &std::path::Path) -> anyhow::Result<()> {
+        let renderer = self.gpu.as_ref().and_then(|g| g.renderer.as_ref()).context("no frame has been rendered yet")?;
+        image_io::save_png(path, &renderer.read_ldr()?)?;
+        self.message = Some(format!("wrote {}", path.display()));
+        println!("wrote {}", path.display());
+        Ok(())
+    }
+
+    /// One frame: scripted switches, the camera, the scene's frame, the panel, presenting.
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        let due: Vec<(String, String)> =
+            self.scripted.iter().filter(|s| s.frame == self.frame).map(|s| (s.key.clone(), s.value.clone())).collect();
+        let before = self.switches;
+        for (key, value) in due {
+            self.switches.set(&key, &value)?;
+        }
+        let Some(gpu) = &self.gpu else { return Ok(()) };
+        let stale = gpu.renderer.is_none() || gpu.image.is_some_and(|(_, size)| size != Self::image_size(gpu)) || before != self.switches;
+        if stale {
+            self.rebuild();
+        }
+        let now = std::time::Instant::now();
+        let dt = (now - self.last_frame).as_secs_f32().min(0.1);
+        self.last_frame = now;
+        self.move_camera(dt);
+        let camera = self.fly.camera();
+        let gpu = self.gpu.as_mut().context("the window is gone")?;
+        if let Some(renderer) = &mut gpu.renderer {
+            self.timings = renderer.render(&camera)?;
+            let total: f64 = self.timings.iter().map(|(_, ms)| ms).sum();
+            self.history.push_back(total);
+            if self.history.len() > GRAPH_FRAMES {
+                self.history.pop_front();
+            }
+        }
+
+        let raw_input = gpu.egui_state.take_egui_input(&gpu.window);
+        let egui_ctx = gpu.egui_state.egui_ctx().clone();
+        let mut switches = self.switches;
+        let mut jump = None;
+        let mut want_screenshot = false;
+        let image = gpu.image;
+        let mut output = egui_ctx.run_ui(raw_input, |ui| {
+            egui::Panel::left("controls").exact_size(PANEL_WIDTH).show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    panel(
+                        ui,
+                        &mut switches,
+                        &self.scene,
+                        &mut jump,
+                        &mut want_screenshot,
+                        &self.timings,
+                        &self.history,
+                        self.message.as_deref(),
+                    );
+                });
+            });
+            egui::CentralPanel::no_frame().show(ui, |ui| {
+                if let Some((id, (w, h))) = image {
+                    let scale = ui.ctx().pixels_per_point();
+                    ui.image(egui::load::SizedTexture::new(id, egui::vec2(w as f32 / scale, h as f32 / scale)));
+                }
+            });
+        });
+        gpu.egui_state.handle_platform_output(&gpu.window, output.platform_output);
+        let paint_jobs = egui_ctx.tessellate(output.shapes, output.pixels_per_point);
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [gpu.surface_config.width, gpu.surface_config.height],
+            pixels_per_point: output.pixels_per_point,
+        };
+        // Font atlas and other egui textures: uploaded before painting, freed after.
+        let textures = std::mem::take(&mut output.textures_delta);
+        for (id, deltas) in &textures.set {
+            for delta in deltas {
+                gpu.egui_renderer.update_texture(&gpu.ctx.device, &gpu.ctx.queue, *id, delta);
+            }
+        }
+        let frame = match gpu.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(frame) => frame,
+            wgpu::CurrentSurfaceTexture::Suboptimal(frame) => {
+                gpu.surface.configure(&gpu.ctx.device, &gpu.surface_config);
+                frame
+            }
+            // Resized: reconfigure and draw the next frame.
+            wgpu::CurrentSurfaceTexture::Outdated => {
+                gpu.surface.configure(&gpu.ctx.device, &gpu.surface_config);
+                return Ok(());
+            }
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => return Ok(()),
+            other => bail!("cannot draw into the window: its surface is {other:?}"),
+        };
+        let target = frame.texture.create_view(&Default::default());
+        let mut encoder = gpu.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("viewer") });
+        let mut commands = gpu.egui_renderer.update_buffers(&gpu.ctx.device, &gpu.ctx.queue, &mut encoder, &paint_jobs, &screen);
+        {
+            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("viewer egui"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &target,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            gpu.egui_renderer.render(&mut pass.forget_lifetime(), &paint_jobs, &screen);
+        }
+        commands.push(encoder.finish());
+        gpu.ctx.queue.submit(commands);
+        gpu.ctx.queue.present(frame);
+        for id in &textures.free {
+            gpu.egui_renderer.free_texture(id);
+        }
+        let mut textures = textures;
+        textures.clear();
+        gpu.ctx.check_errors()?;
+
+        self.switches = switches;
+        if let Some(camera) = jump.and_then(|i| self.scene.cameras.get(i)) {
+            self.fly = FlyCamera::from_camera(camera);
+        }
+        if want_screenshot {
+            self.screenshots += 1;
+            let path = PathBuf::from(format!("manylights-screenshot-{}.png", self.screenshots));
+            self.screenshot(&path)?;
+        }
+        self.frame += 1;
+        if self.args.frames.is_some_and(|n| self.frame >= n) {
+            if let Some(path) = self.args.screenshot.clone() {
+                self.screenshot(&path)?;
+            }
+            self.stop(event_loop, Ok(()));
+        }
+        Ok(())
+    }
+}
+
+/// The panel: switches, cameras, timings and the frame-time graph.
+#[allow(clippy::too_many_arguments)]
+fn panel(
+    ui: &mut egui::Ui,
+    switches: &mut Switches,
+    scene: &Scene,
+    jump: &mut Option<usize>,
+    screenshot: &mut bool,
+    timings: &PassTimings,
+    history: &VecDeque<f64>,
+    message: Option<&str>,
+) {
+    ui.heading("manylights");
+    egui::ComboBox::from_label("pipeline").selected_text(switches.pipeline.name()).show_ui(ui, |ui| {
+        for p in PipelineKind::ALL {
+            ui.selectable_value(&mut switches.pipeline, p, p.name());
+        }
+    });
+    egui::ComboBox::from_label("lights").selected_text(switches.light_method.name()).show_ui(ui, |ui| {
+        for m in LIGHT_METHODS {
+            ui.selectable_value(&mut switches.light_method, m, m.name());
+        }
+    });
+    egui::ComboBox::from_label("decals").selected_text(switches.decal_method.name()).show_ui(ui, |ui| {
+        for m in DECAL_METHODS {
+            ui.selectable_value(&mut switches.decal_method, m, m.name());
+        }
+    });
+    egui::ComboBox::from_label("sun shadows").selected_text(switches.shadows.name()).show_ui(ui, |ui| {
+        for s in SunShadows::ALL {
+            ui.selectable_value(&mut switches.shadows, s, s.name());
+        }
+    });
+    ui.checkbox(&mut switches.reflections, "reflections");
+    ui.separator();
+    ui.checkbox(&mut switches.auto_exposure, "auto exposure");
+    ui.checkbox(&mut switches.bloom, "bloom");
+    ui.checkbox(&mut switches.depth_of_field, "depth of field");
+    ui.checkbox(&mut switches.motion_blur, "motion blur");
+    ui.add(egui::Slider::new(&mut switches.vignette, 0.0..=1.0).text("vignette"));
+    if !scene.cameras.is_empty() {
+        ui.separator();
+        ui.label("cameras");
+        for (i, camera) in scene.cameras.iter().enumerate() {
+            if ui.button(format!("{i}: {}", camera.name)).clicked() {
+                *jump = Some(i);
+            }
+        }
+    }
+    ui.separator();
+    if ui.button("screenshot (F12)").clicked() {
+        *screenshot = true;
+    }
+    if let Some(message) = message {
+        ui.label(message);
+    }
+    ui.separator();
+    let total: f64 = timings.iter().map(|(_, ms)| ms).sum();
+    ui.label(format!("GPU frame {total:.3} ms"));
+    egui::Grid::new("timings").striped(true).show(ui, |ui| {
+        for (pass, ms) in timings {
+            ui.label(*pass);
+            ui.label(format!("{ms:.3}"));
+            ui.end_row();
+        }
+    });
+    frame_graph(ui, history);
+}
+
+/// The last frames' GPU times as a line, scaled to the largest.
+fn frame_graph(ui: &mut egui::Ui, history: &VecDeque<f64>) {
+    let (response, painter) = ui.allocate_painter(egui::vec2(ui.available_width(), 60.0), egui::Sense::hover());
+    let rect = response.rect;
+    painter.rect_stroke(rect, 0.0, egui::Stroke::new(1.0, egui::Color32::DARK_GRAY), egui::StrokeKind::Inside);
+    let largest = history.iter().copied().fold(1e-6, f64::max);
+    let points: Vec<egui::Pos2> = history
+        .iter()
+        .enumerate()
+        .map(|(i, ms)| {
+            let x = rect.left() + rect.width() * i as f32 / (GRAPH_FRAMES - 1) as f32;
+            egui::pos2(x, rect.bottom() - rect.height() * (*ms / largest) as f32)
+        })
+        .collect();
+    painter.add(egui::Shape::line(points, egui::Stroke::new(1.5, egui::Color32::LIGHT_GREEN)));
+    painter.text(rect.left_top(), egui::Align2::LEFT_TOP, format!("{largest:.2} ms"), egui::FontId::monospace(10.0), egui::Color32::GRAY);
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.gpu.is_some() {
+            return;
+        }
+        match self.open(event_loop) {
+            Ok(gpu) => {
+                self.gpu = Some(gpu);
+                self.rebuild();
+                if let Some(message) = self.message.take() {
+                    // The first renderer must exist: its error is the program's.
+                    self.stop(event_loop, Err(anyhow::anyhow!(message)));
+                }
+            }
+            Err(e) => self.stop(event_loop, Err(e)),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(gpu) = &mut self.gpu else { return };
+        let consumed = gpu.egui_state.on_window_event(&gpu.window, &event).consumed;
+        match event {
+            WindowEvent::CloseRequested => self.stop(event_loop, Ok(())),
+            WindowEvent::Resized(size) => {
+                gpu.surface_config.width = size.width.max(1);
+                gpu.surface_config.height = size.height.max(1);
+                gpu.surface.configure(&gpu.ctx.device, &gpu.surface_config);
+            }
+            WindowEvent::KeyboardInput { event, .. } if !consumed => {
+                if let PhysicalKey::Code(code) = event.physical_key {
+                    match event.state {
+                        ElementState::Pressed => {
+                            self.keys.insert(code);
+                            match code {
+                                KeyCode::Escape => self.stop(event_loop, Ok(())),
+                                KeyCode::F12 => {
+                                    self.screenshots += 1;
+                                    let path = PathBuf::from(format!("manylights-screenshot-{}.png", self.screenshots));
+                                    if let Err(e) = self.screenshot(&path) {
+                                        self.message = Some(format!("screenshot failed: {e:#}"));
+                                    }
+                                }
+                                _ => {}
+                            }
+                        }
+                        ElementState::Released => {
+                            self.keys.remove(&code);
+                        }
+                    }
+                }
+            }
+            WindowEvent::MouseInput { button: MouseButton::Right, state, .. } => self.looking = state == ElementState::Pressed,
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = self.redraw(event_loop) {
+                    self.stop(event_loop, Err(e));
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn device_event(&mut self, _event_loop: &ActiveEventLoop, _id: winit::event::DeviceId, event: DeviceEvent) {
+        if let DeviceEvent::MouseMotion { delta } = event {
+            if self.looking {
+                self.fly.yaw += delta.0 as f32 * 0.003;
+                self.fly.pitch = (self.fly.pitch - delta.1 as f32 * 0.003).clamp(-1.5, 1.5);
+            }
+        }
+    }
+
+    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+        if let Some(gpu) = &self.gpu {
+            gpu.window.request_redraw();
+        }
+    }
+}

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Makes sure the viewer's test can open a window on a machine without a display: Xvfb (a virtual X
+# server, run through xvfb-run) and the X11 client libraries winit loads at run time.
+set -euo pipefail
+
+have_libs() {
+  for lib in libxkbcommon-x11.so.0 libXcursor.so.1 libX11-xcb.so.1 libXi.so.6 libXrandr.so.2; do
+    compgen -G "/usr/lib/*/$lib" >/dev/null || compgen -G "/usr/lib*/$lib" >/dev/null || return 1
+  done
+}
+
+if command -v xvfb-run >/dev/null && command -v xauth >/dev/null && have_libs; then
+  exit 0
+fi
+if ! command -v apt-get >/dev/null; then
+  echo "error: the viewer's test needs Xvfb (xvfb-run, xauth) and the X11 libraries winit loads; install them" \
+       "with your package manager (Debian: xvfb xauth libxkbcommon-x11-0 libxcursor1 libx11-xcb1 libxi6 libxrandr2)" >&2
+  exit 1
+fi
+sudo=""
+if [ "$(id -u)" != 0 ]; then
+  command -v sudo >/dev/null || { echo "error: need root or sudo to install xvfb" >&2; exit 1; }
+  sudo="sudo"
+fi
+echo "Installing Xvfb and the X11 libraries the viewer loads..." >&2
+$sudo apt-get update -qq
+$sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq xvfb xauth libxkbcommon-x11-0 libxcursor1 libx11-xcb1 libxi6 libxrandr2 >/dev/null
