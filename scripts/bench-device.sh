@@ -163,7 +163,7 @@ rays() {
 
 # Each post effect alone and all together, over the sunlit Sponza with hard shadows; motion blur with
 # a still camera (every pixel's blur is zero: the gather is skipped) and with the camera moving at
-# 2 m/s (every pixel gathers).
+# 1.5 m/s (every pixel gathers).
 post() {
   printf 'gltf = "sponza_lite/Sponza.gltf"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' >.bench/sun.toml
   local sun=".bench/sun.toml --light-method off --decal-method off --shadows hard"

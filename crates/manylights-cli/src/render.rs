@@ -146,7 +146,7 @@ pub(crate) struct PostArgs {
     /// The lens's f-number: lower is shallower. [default: 2.8]
     #[arg(long, requires = "depth_of_field", allow_negative_numbers = true)]
     f_number: Option<f32>,
-    /// Largest circle of confusion's radius, in pixels. [default: 16]
+    /// Largest circle of confusion's radius, in pixels, 1 to 16. [default: 16]
     #[arg(long, requires = "depth_of_field", allow_negative_numbers = true)]
     max_coc: Option<f32>,
     /// Motion blur from per-pixel velocities: the camera's motion between frames and animated
@@ -159,7 +159,7 @@ pub(crate) struct PostArgs {
     /// Samples per pixel along the blur, 1 to 64. [default: 16]
     #[arg(long, requires = "motion_blur")]
     motion_blur_samples: Option<u32>,
-    /// Longest blur, in pixels. [default: 32]
+    /// Longest blur, in pixels, 1 to 32. [default: 32]
     #[arg(long, requires = "motion_blur", allow_negative_numbers = true)]
     max_motion_blur: Option<f32>,
     /// Natural vignetting: 0 none, 1 the cos⁴ falloff of a real lens.

@@ -228,11 +228,15 @@ impl Renderer {
         let Some(motion) = &mut self.motion else { return Ok(()) };
         let (moved, previous) = match &motion.animation {
             Some(animation) => {
-                let previous = match self.config.post.motion_blur {
+                let moved = animation.instance_transforms(time);
+                let previous = match self.pipeline.post().settings.motion_blur {
+                    // On the frame where a looping animation starts over, the pose a frame earlier is
+                    // the clip's end: no motion is the honest velocity.
+                    Some(_) if animation.loops_between(time - FRAME_INTERVAL, time) => moved.clone(),
                     Some(_) => animation.instance_transforms(time - FRAME_INTERVAL),
                     None => Vec::new(),
                 };
-                (animation.instance_transforms(time), previous)
+                (moved, previous)
             }
             None => (Vec::new(), Vec::new()),
         };
@@ -268,6 +272,12 @@ impl Renderer {
         if !start.is_finite() {
             return Err(Error::InvalidConfig(format!("scene time {start} s is not a finite number of seconds")));
         }
+        // Settings the camera cannot serve (depth of field through an orthographic lens) fail here,
+        // before anything of a frame is recorded.
+        self.pipeline.post().check_camera(camera, (self.config.width, self.config.height))?;
+        // What a frame carries over to the next, restored when the frames are rendered again.
+        let (start_frame, start_camera) = (self.frame_index, self.previous_camera.clone());
+        self.pipeline.post().save_state(&self.ctx);
         loop {
             let timings = self.submit_frames(camera, count)?;
             // Both are asked: each grows its own lists.
@@ -277,6 +287,9 @@ impl Renderer {
                 return Ok(timings);
             }
             self.time = start;
+            self.frame_index = start_frame;
+            self.previous_camera = start_camera.clone();
+            self.pipeline.post().restore_state(&self.ctx);
         }
     }
 
@@ -376,14 +389,15 @@ impl Renderer {
             }
             let expected = deformed.deformed_triangles(time);
             let got = &triangles[deformed.triangles[parity].start as usize..deformed.triangles[parity].end as usize];
+            if got.len() != expected.len() {
+                return fail(format!("mesh {} has {} triangles stored, {} expected", deformed.mesh, got.len(), expected.len()));
+            }
             let scale = (deformed.bounds.max - deformed.bounds.min).length().max(1e-6);
             for (k, (g, e)) in got.iter().zip(&expected).enumerate() {
-                let error = [(g.v0, e.v0), (g.e1, e.e1), (g.e2, e.e2)]
-                    .iter()
-                    .map(|(a, b)| (glam::Vec3::from(*a) - glam::Vec3::from(*b)).length())
-                    .fold(0.0, f32::max);
-                if error > 1e-4 * scale {
-                    return fail(format!("mesh {} triangle {k} is off its deformation at this time by {error}", deformed.mesh));
+                let errors = [(g.v0, e.v0), (g.e1, e.e1), (g.e2, e.e2)].map(|(a, b)| (glam::Vec3::from(a) - glam::Vec3::from(b)).length());
+                // Written so that NaN fails too.
+                if !errors.iter().all(|&error| error <= 1e-4 * scale) {
+                    return fail(format!("mesh {} triangle {k} is off its deformation at this time by {errors:?}", deformed.mesh));
                 }
             }
             for &n in &deformed.refit_order[parity] {
@@ -394,9 +408,14 @@ impl Renderer {
                     let first = &nodes[node.entry as usize];
                     first.bounds().union(nodes[first.skip as usize].bounds())
                 };
-                if !node.bounds().contains_box(&inner) {
+                let bounds = node.bounds();
+                if !(bounds.min.is_finite() && bounds.max.is_finite() && bounds.contains_box(&inner)) {
                     return fail(format!("mesh {} node {n} does not bound its contents", deformed.mesh));
                 }
+            }
+            // The top level's box for the mesh, built on the CPU before the refit, must hold it.
+            if !deformed.bounds.contains_box(&nodes[root as usize].bounds()) {
+                return fail(format!("mesh {} outgrew the box the top level gives it", deformed.mesh));
             }
         }
         Ok(())

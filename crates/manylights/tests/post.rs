@@ -265,7 +265,7 @@ fn motion_blur_smears_along_the_cameras_motion_and_leaves_a_still_image_exact() 
     // A 12×12-pixel square at the centre.
     let half = 6.0 * METRES_PER_PIXEL;
     let (scene, camera) = quads(&[(Vec3::ZERO, (half, half), 1.0)]);
-    let blur = PostSettings { motion_blur: Some(MotionBlur { shutter: 1.0, samples: 32, max_length: 64.0 }), ..Default::default() };
+    let blur = PostSettings { motion_blur: Some(MotionBlur { shutter: 1.0, samples: 32, max_length: 32.0 }), ..Default::default() };
     let still = render_ldr(&scene, &camera, PostSettings::default());
     assert_eq!(render_ldr(&scene, &camera, blur).pixels, still.pixels, "nothing moved: nothing may blur");
 
@@ -325,7 +325,7 @@ fn motion_blur_smears_animated_instances_by_their_own_motion_and_not_still_ones_
         r.read_ldr().unwrap()
     };
     let sharp = at(PostSettings::default());
-    let blurred = at(PostSettings { motion_blur: Some(MotionBlur { shutter: 1.0, samples: 32, max_length: 64.0 }), ..Default::default() });
+    let blurred = at(PostSettings { motion_blur: Some(MotionBlur { shutter: 1.0, samples: 32, max_length: 32.0 }), ..Default::default() });
     let y = 72;
     let flying: Vec<u32> = lit_columns(&sharp, y).into_iter().filter(|&x| x < 128).collect();
     let (first, last) = (flying[0], *flying.last().unwrap());

@@ -63,6 +63,13 @@ impl Deform {
                 }
             })
             .collect();
+        let max_invocations = u64::from(ctx.limits.max_compute_workgroups_per_dimension) * 64;
+        if let Some(job) = jobs.iter().zip(&scene.deformers).find(|(job, _)| u64::from(job.vertex_count) > max_invocations) {
+            return Err(crate::Error::InvalidScene(format!(
+                "deformed mesh {} ({}) has {} vertices, over the {max_invocations} this GPU deforms in one dispatch; deform a smaller mesh",
+                job.1.mesh, scene.meshes[job.1.mesh].name, job.0.vertex_count
+            )));
+        }
         let rest_buffer = wgpu::util::DeviceExt::create_buffer_init(
             device,
             &wgpu::util::BufferInitDescriptor {

@@ -29,6 +29,12 @@ fn bilinear(texture: texture_2d<f32>, p: vec2<f32>) -> vec3<f32> {
     return mix(mix(t00, t10, f.x), mix(t01, t11, f.x), f.y);
 }
 
+// The levels are 16-bit floats and filled before exposure: radiance above their largest finite value
+// (a sharp sun highlight) would store infinity, and infinity times a zero filter weight is NaN.
+fn half_float_range(c: vec3<f32>) -> vec3<f32> {
+    return clamp(c, vec3<f32>(0.0), vec3<f32>(65504.0));
+}
+
 fn karis_weight(c: vec3<f32>) -> f32 {
     return 1.0 / (1.0 + dot(c, vec3<f32>(0.2126, 0.7152, 0.0722)));
 }
@@ -75,7 +81,7 @@ fn bloom_downsample(@builtin(global_invocation_id) id: vec3<u32>) {
         sum += boxes[n] * w;
         weight_sum += w;
     }
-    textureStore(output, id.xy, vec4<f32>(sum / weight_sum, 1.0));
+    textureStore(output, id.xy, vec4<f32>(half_float_range(sum / weight_sum), 1.0));
 }
 
 @compute @workgroup_size(8, 8)
@@ -93,5 +99,5 @@ fn bloom_upsample(@builtin(global_invocation_id) id: vec3<u32>) {
             tent += bilinear(source, c + vec2<f32>(f32(dx), f32(dy)) * scale) * w;
         }
     }
-    textureStore(output, id.xy, vec4<f32>(textureLoad(base, id.xy, 0).rgb + tent, 1.0));
+    textureStore(output, id.xy, vec4<f32>(half_float_range(textureLoad(base, id.xy, 0).rgb + tent), 1.0));
 }

@@ -31,9 +31,12 @@ pub const POST_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// Edge of the tiles depth of field and motion blur find their reach over (`POST_TILE` in WGSL).
 const TILE: u32 = 16;
 
-/// Most samples per pixel of motion blur, longest blur and largest circle of confusion, in pixels.
+/// Most samples per pixel of motion blur; the largest circle of confusion's radius and the longest
+/// motion blur, in pixels: the gathers search the 3×3 tiles around a pixel, so nothing beyond a tile
+/// (depth of field's radius) or two (motion blur's ±½ length) could reach it.
 pub const MAX_MOTION_BLUR_SAMPLES: u32 = 64;
-pub const MAX_BLUR_PIXELS: f32 = 128.0;
+pub const MAX_COC_RADIUS: f32 = TILE as f32;
+pub const MAX_MOTION_BLUR_LENGTH: f32 = 2.0 * TILE as f32;
 /// Sensor height of the thin lens depth of field models: 35 mm film's 24 mm, so f-numbers and focus
 /// behave as on a full-frame camera with the view's field of view.
 pub const SENSOR_HEIGHT: f32 = 0.024;
@@ -149,9 +152,9 @@ impl PostSettings {
             if !in_range(dof.f_number, 0.1, 1000.0) {
                 return invalid(format!("f-number {} must be between 0.1 and 1000 (--f-number)", dof.f_number));
             }
-            if !in_range(dof.max_radius, 1.0, MAX_BLUR_PIXELS) {
+            if !in_range(dof.max_radius, 1.0, MAX_COC_RADIUS) {
                 return invalid(format!(
-                    "largest circle of confusion {} px must be between 1 and {MAX_BLUR_PIXELS} pixels (--max-coc)",
+                    "largest circle of confusion {} px must be between 1 and {MAX_COC_RADIUS} pixels in radius (--max-coc)",
                     dof.max_radius
                 ));
             }
@@ -166,9 +169,9 @@ impl PostSettings {
                     blur.samples
                 ));
             }
-            if !in_range(blur.max_length, 1.0, MAX_BLUR_PIXELS) {
+            if !in_range(blur.max_length, 1.0, MAX_MOTION_BLUR_LENGTH) {
                 return invalid(format!(
-                    "longest motion blur {} px must be between 1 and {MAX_BLUR_PIXELS} pixels (--max-motion-blur)",
+                    "longest motion blur {} px must be between 1 and {MAX_MOTION_BLUR_LENGTH} pixels (--max-motion-blur)",
                     blur.max_length
                 ));
             }
@@ -231,6 +234,12 @@ impl PostUniforms {
                 // confusion's diameter on the sensor is f²/N · |1/S − 1/d| · S/(S − f), in pixels here
                 // (the shader applies the last factor, since S may be measured on the GPU).
                 let focal_length = SENSOR_HEIGHT * 0.5 / (yfov * 0.5).tan();
+                if let Some(focus) = dof.focus_distance.filter(|&focus| focus <= focal_length) {
+                    return Err(Error::InvalidConfig(format!(
+                        "focus distance {focus} m is within the lens's focal length ({focal_length:.4} m for camera \"{}\"'s field of view); focus farther (--focus-distance)",
+                        frame.camera.name
+                    )));
+                }
                 let pixels_per_dioptre = focal_length * focal_length / dof.f_number / SENSOR_HEIGHT * height as f32;
                 [dof.focus_distance.unwrap_or(0.0), pixels_per_dioptre, dof.max_radius, focal_length]
             }
@@ -273,6 +282,10 @@ fn post_image(device: &wgpu::Device, label: &str, (width, height): (u32, u32)) -
 pub struct PostChain {
     pub settings: PostSettings,
     uniforms: wgpu::Buffer,
+    /// Auto exposure's state, which frames carry over, and a copy to restore it from when frames are
+    /// rendered again (`Renderer::render_frames`).
+    exposure_state: wgpu::Buffer,
+    exposure_saved: wgpu::Buffer,
     size: (u32, u32),
     depth: wgpu::TextureView,
     depth_of_field: Option<depth_of_field::DepthOfFieldPass>,
@@ -301,12 +314,15 @@ impl PostChain {
             mapped_at_creation: false,
         });
         // The measured exposure: log2 of it, and whether it was measured (zeroed: not yet).
-        let exposure_state = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("exposure state"),
-            size: 16,
-            usage: wgpu::BufferUsages::STORAGE,
-            mapped_at_creation: false,
-        });
+        let state_buffer = |label| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: 16,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let (exposure_state, exposure_saved) = (state_buffer("exposure state"), state_buffer("exposure state saved"));
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let depth_view = view(depth);
         let mut current = view(hdr);
@@ -356,7 +372,43 @@ impl PostChain {
                 ldr: &view(ldr),
             },
         )?;
-        Ok(Self { settings, uniforms, size, depth: depth_view, depth_of_field, motion_blur, exposure, bloom, tonemap })
+        Ok(Self {
+            settings,
+            uniforms,
+            exposure_state,
+            exposure_saved,
+            size,
+            depth: depth_view,
+            depth_of_field,
+            motion_blur,
+            exposure,
+            bloom,
+            tonemap,
+        })
+    }
+
+    /// Whether `camera` can render these settings at `size` (depth of field needs a perspective lens
+    /// whose focal length is shorter than the focus distance).
+    pub fn check_camera(&self, camera: &Camera, size: (u32, u32)) -> Result<()> {
+        let frame = PostFrame { camera, previous_camera: camera, size, interval: None };
+        PostUniforms::new(&self.settings, frame, 1).map(|_| ())
+    }
+
+    /// Copies what frames carry over (the measured exposure) aside, for `restore_state`.
+    pub fn save_state(&self, ctx: &GpuContext) {
+        self.copy_state(ctx, &self.exposure_state, &self.exposure_saved);
+    }
+
+    pub fn restore_state(&self, ctx: &GpuContext) {
+        self.copy_state(ctx, &self.exposure_saved, &self.exposure_state);
+    }
+
+    fn copy_state(&self, ctx: &GpuContext, from: &wgpu::Buffer, to: &wgpu::Buffer) {
+        if self.exposure.is_some() {
+            let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("post state") });
+            encoder.copy_buffer_to_buffer(from, 0, to, 0, 16);
+            ctx.queue.submit([encoder.finish()]);
+        }
     }
 
     /// Writes the chain's constants for the next frame submitted.

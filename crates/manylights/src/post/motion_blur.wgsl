@@ -87,11 +87,13 @@ fn motion_blur(@builtin(global_invocation_id) id: vec3<u32>) {
         textureStore(color_output, id.xy, center_color);
         return;
     }
-    let center_blur = length(pixel_blur(id.xy));
+    // A point blurred by b smears over b/2 to each side of where it is: cones and cylinders use that
+    // half length (McGuire's velocities are half the motion).
+    let center_blur = 0.5 * length(pixel_blur(id.xy));
     let center_distance = post_distance(depth, id.xy);
     let samples = u32(post.motion_blur.y);
-    // The pixel's own weight: a pixel blurred over n pixels shows itself over 1/n of them.
-    var weight_sum = 1.0 / max(center_blur, 1.0);
+    // The pixel's own weight: a pixel smeared over a reach of r shows itself over 1/r of it.
+    var weight_sum = 1.0 / max(center_blur, 0.5);
     var sum = center_color.rgb * weight_sum;
     // Samples spread evenly over [−½, ½] of the longest blur, shifted per pixel to trade banding for
     // noise.
@@ -103,7 +105,7 @@ fn motion_blur(@builtin(global_invocation_id) id: vec3<u32>) {
         let p = vec2<u32>(clamp(pixel + offset, vec2<f32>(0.0), vec2<f32>(size) - 0.5));
         let distance = length(offset);
         let sample_distance = post_distance(depth, p);
-        let sample_blur = length(pixel_blur(p));
+        let sample_blur = 0.5 * length(pixel_blur(p));
         let front = in_front(sample_distance, center_distance);
         let back = in_front(center_distance, sample_distance);
         let w = front * cone(distance, sample_blur) + back * cone(distance, center_blur)

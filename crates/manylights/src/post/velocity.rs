@@ -81,7 +81,7 @@ impl Velocity {
                     multisample: Default::default(),
                     fragment: Some(wgpu::FragmentState {
                         module: &module,
-                        entry_point: Some("velocity_raster"),
+                        entry_point: Some(if state.alpha_mask { "velocity_raster_masked" } else { "velocity_raster" }),
                         compilation_options: Default::default(),
                         targets: &[Some(VELOCITY_FORMAT.into())],
                     }),

@@ -1,7 +1,9 @@
 // The moving instances' velocity (see `velocity.wgsl`): each vertex through its draw's current and
 // previous transform (`GpuScene::previous_transforms`) and the previous camera; depth-tested against
-// the frame's depth so only the surfaces it holds are written.
+// the frame's depth so only the surfaces it holds are written, alpha-masked materials' holes
+// discarded as the raster did.
 #include "shading/scene_bindings.wgsl"
+#include "shading/material.wgsl"
 #include "post/post_types.wgsl"
 
 @group(1) @binding(0) var<uniform> post: PostUniforms;
@@ -10,25 +12,44 @@
 struct VelocityVertex {
     @builtin(position) @invariant clip_position: vec4<f32>,
     @location(0) previous_clip: vec4<f32>,
+    @location(1) @interpolate(flat) draw_index: u32,
+    @location(2) uv: vec2<f32>,
 }
 
 @vertex
 fn velocity_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) draw_index: u32) -> VelocityVertex {
     // An indexed draw's vertex_index already includes the draw's base vertex.
-    let position = vec4<f32>(vertices[vertex_index].position, 1.0);
+    let vertex = vertices[vertex_index];
+    let position = vec4<f32>(vertex.position, 1.0);
     var out: VelocityVertex;
+    out.draw_index = draw_index;
+    out.uv = vec2<f32>(vertex.u, vertex.v);
     out.clip_position = frame.clip_from_world * (draws[draw_index].world_from_local * position);
     let previous_world = previous_world_from_local[draw_index] * position;
     out.previous_clip = post.previous_clip_from_relative * vec4<f32>(previous_world.xyz - frame.world_from_view[3].xyz, 1.0);
     return out;
 }
 
-@fragment
-fn velocity_raster(in: VelocityVertex) -> @location(0) vec4<f32> {
-    // Both ends of a vertex's path are interpolated linearly in clip space; divided here, per pixel.
+// Pixels moved: both ends of a vertex's path are interpolated linearly in clip space, divided here.
+fn moved_since_previous(in: VelocityVertex) -> vec4<f32> {
     var moved = vec2<f32>(0.0);
     if in.previous_clip.w > 1e-20 {
         moved = in.clip_position.xy - clip_to_pixel(in.previous_clip);
     }
     return vec4<f32>(moved, 0.0, 0.0);
+}
+
+@fragment
+fn velocity_raster(in: VelocityVertex) -> @location(0) vec4<f32> {
+    return moved_since_previous(in);
+}
+
+@fragment
+fn velocity_raster_masked(in: VelocityVertex) -> @location(0) vec4<f32> {
+    let material = materials[draws[in.draw_index].material];
+    let g = UvGradients(in.uv, dpdx(in.uv), dpdy(in.uv));
+    if material_base_color(material, g).a < material.alpha_cutoff {
+        discard;
+    }
+    return moved_since_previous(in);
 }

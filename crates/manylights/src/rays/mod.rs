@@ -226,9 +226,12 @@ pub struct RayStructure {
     pub deformed: Vec<DeformedBlas>,
 }
 
-/// A deformed mesh's BLAS, stored twice: a frame refits one copy on the GPU (`rays/refit.rs`) and
-/// its top level places the mesh's instances on that copy, while the frame before may still be tracing
-/// the other — so no frame traces a hierarchy while it is rebuilt. Frames alternate copies.
+/// A deformed mesh's BLAS, stored twice: a frame refits one copy on the GPU (`rays/refit.rs`) before
+/// its passes trace it, and its top level places the mesh's instances on that copy; the next frame
+/// refits the other. So a frame's refit never writes the hierarchy an earlier frame traces — on one
+/// wgpu queue, which runs submissions in order, that holds anyway; it is what lets a frame's build
+/// overlap the previous frame's tracing where a GPU runs them concurrently, and it keeps each frame's
+/// hierarchy intact after the frame for test mode's check (`Renderer::check_ray_hierarchy`).
 #[derive(Clone, Debug)]
 pub struct DeformedBlas {
     pub mesh: usize,

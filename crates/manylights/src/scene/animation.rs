@@ -150,6 +150,12 @@ impl Animation {
         self.instances.iter().map(|&(instance, node)| (instance, world[node])).collect()
     }
 
+    /// Whether the loop starts over after `earlier` and by `later` (seconds): poses across it are not a
+    /// motion.
+    pub fn loops_between(&self, earlier: f32, later: f32) -> bool {
+        self.duration > 0.0 && (earlier / self.duration).floor() != (later / self.duration).floor()
+    }
+
     /// Checks indices and numbers; the message names the bad channel or node.
     pub fn validate(&self, instance_count: usize) -> Result<(), String> {
         for (i, node) in self.nodes.iter().enumerate() {

@@ -1,5 +1,5 @@
 //! Deforming meshes: a procedural travelling wave that moves a mesh's vertices along their normals
-//! every frame (curtains, flags, water), evaluated on the GPU (`rays/deform.wgsl`) for the raster and
+//! every frame (curtains, flags, water), evaluated on the GPU (`passes/deform.wgsl`) for the raster and
 //! the rays alike; the rays' hierarchy of a deformed mesh is refitted on the GPU every frame
 //! (`rays/refit.rs`). This CPU twin is the tests' reference.
 
