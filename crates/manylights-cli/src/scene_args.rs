@@ -8,7 +8,7 @@ use manylights::scene::{
     Groups, Scene,
 };
 
-#[derive(Args)]
+#[derive(Args, Clone)]
 pub struct SceneArgs {
     /// `demo` (built in), or a .gltf, .glb or .toml scene file.
     #[arg(long, default_value = "demo")]

@@ -19,7 +19,7 @@ use manylights::{
     config::RenderConfig,
     gpu::{context::instance, GpuContext, PassTimings},
     image_io,
-    pipelines::{DecalMethod, LightMethod, PipelineKind},
+    pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
     post::{AutoExposure, Bloom, DepthOfField, MotionBlur},
     rays::SunShadows,
     renderer::Renderer,
@@ -54,8 +54,9 @@ pub struct ViewArgs {
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
     /// A switch at a frame, as the panel would make it: FRAME:KEY=VALUE, KEY one of pipeline,
-    /// light-method, decal-method, shadows, reflections, bloom, depth-of-field, motion-blur,
-    /// auto-exposure (on/off) or vignette (0 to 1). Repeatable.
+    /// light-method, decal-method, particle-method, shadows, reflections, bloom, depth-of-field,
+    /// motion-blur, auto-exposure (on/off), vignette (0 to 1), or the scattered lights, decals or
+    /// particles (a count: the scene is generated again). Repeatable.
     #[arg(long = "set", value_name = "FRAME:KEY=VALUE")]
     sets: Vec<String>,
 }
@@ -66,6 +67,7 @@ struct Switches {
     pipeline: PipelineKind,
     light_method: LightMethod,
     decal_method: DecalMethod,
+    particle_method: ParticleMethod,
     shadows: SunShadows,
     reflections: bool,
     bloom: bool,
@@ -81,6 +83,7 @@ impl Default for Switches {
             pipeline: PipelineKind::Visbuffer,
             light_method: LightMethod::Bvh,
             decal_method: DecalMethod::Bvh,
+            particle_method: ParticleMethod::Grid,
             shadows: SunShadows::Off,
             reflections: false,
             bloom: false,
@@ -104,6 +107,7 @@ impl Switches {
             pipeline: self.pipeline,
             light_method: self.light_method,
             decal_method: self.decal_method,
+            particle_method: self.particle_method,
             ..RenderConfig::default()
         };
         config.rays.sun_shadows = self.shadows;
@@ -142,9 +146,17 @@ impl Switches {
                     .find(|m| m.name() == value)
                     .with_context(|| format!("decal-method={value}: give off, brute, bvh, clustered or deferred-decals"))?
             }
+            "particle-method" => {
+                self.particle_method = *ParticleMethod::ALL
+                    .iter()
+                    .find(|m| m.name() == value)
+                    .with_context(|| format!("particle-method={value}: give off, grid or bvh"))?
+            }
             "shadows" => {
-                self.shadows =
-                    *SunShadows::ALL.iter().find(|s| s.name() == value).with_context(|| format!("shadows={value}: give off, hard or soft"))?
+                self.shadows = *SunShadows::ALL
+                    .iter()
+                    .find(|s| s.name() == value)
+                    .with_context(|| format!("shadows={value}: give off, hard or soft"))?
             }
             "reflections" => self.reflections = on()?,
             "bloom" => self.bloom = on()?,
@@ -152,14 +164,50 @@ impl Switches {
             "motion-blur" => self.motion_blur = on()?,
             "auto-exposure" => self.auto_exposure = on()?,
             "vignette" => {
-                self.vignette = value.parse().ok().filter(|v: &f32| (0.0..=1.0).contains(v)).with_context(|| format!("vignette={value}: give 0 to 1"))?
+                self.vignette = value
+                    .parse()
+                    .ok()
+                    .filter(|v: &f32| (0.0..=1.0).contains(v))
+                    .with_context(|| format!("vignette={value}: give 0 to 1"))?
             }
             _ => bail!(
-                "unknown switch {key}: give pipeline, light-method, decal-method, shadows, reflections, bloom, depth-of-field, motion-blur, auto-exposure or vignette"
+                "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, shadows, reflections, bloom, \
+                 depth-of-field, motion-blur, auto-exposure, vignette, lights, decals or particles"
             ),
         }
         Ok(())
     }
+}
+
+/// The scattered lights, decals and particles the scene is generated with (`SceneArgs`): changing
+/// them generates the scene again.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Counts {
+    lights: u32,
+    decals: u32,
+    particles: u32,
+}
+
+impl Counts {
+    /// Applies `key=value` when it is a count; `Ok(false)` when the key is not one.
+    fn set(&mut self, key: &str, value: &str) -> anyhow::Result<bool> {
+        let count = || value.parse::<u32>().with_context(|| format!("{key}={value}: give a count"));
+        match key {
+            "lights" => self.lights = count()?,
+            "decals" => self.decals = count()?,
+            "particles" => self.particles = count()?,
+            _ => return Ok(false),
+        }
+        Ok(true)
+    }
+}
+
+/// Applies a `--set` or panel switch to whichever it belongs to.
+fn apply(switches: &mut Switches, counts: &mut Counts, key: &str, value: &str) -> anyhow::Result<()> {
+    if !counts.set(key, value)? {
+        switches.set(key, value)?;
+    }
+    Ok(())
 }
 
 /// A `--set FRAME:KEY=VALUE`.
@@ -173,7 +221,7 @@ fn parse_set(text: &str) -> anyhow::Result<ScriptedSet> {
     let parsed = text.split_once(':').and_then(|(frame, rest)| Some((frame.parse().ok()?, rest.split_once('=')?)));
     let Some((frame, (key, value))) = parsed else { bail!("--set {text}: write FRAME:KEY=VALUE, e.g. 5:light-method=clustered") };
     // Checked now, so a bad switch fails before a window opens.
-    Switches::default().set(key, value)?;
+    apply(&mut Switches::default(), &mut Counts { lights: 0, decals: 0, particles: 0 }, key, value)?;
     Ok(ScriptedSet { frame, key: key.into(), value: value.into() })
 }
 
@@ -226,6 +274,10 @@ struct Gpu {
 struct App {
     args: ViewArgs,
     scene: Scene,
+    /// The counts the scene was generated with, those asked for, and those being edited in the panel.
+    counts: Counts,
+    wanted_counts: Counts,
+    edited_counts: Counts,
     fly: FlyCamera,
     switches: Switches,
     scripted: Vec<ScriptedSet>,
@@ -254,12 +306,16 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     }
     let scene = args.scene.load()?;
     let camera = crate::render::choose_camera(&scene, args.camera)?;
+    let counts = Counts { lights: args.scene.lights, decals: args.scene.decals, particles: args.scene.particles };
     let event_loop =
         EventLoop::new().context("cannot open a window: the display refused the connection (check DISPLAY or WAYLAND_DISPLAY)")?;
     let mut app = App {
         fly: FlyCamera::from_camera(&camera),
         args,
         scene,
+        counts,
+        wanted_counts: counts,
+        edited_counts: counts,
         switches: Switches::default(),
         scripted,
         gpu: None,
@@ -351,6 +407,25 @@ impl App {
         }
     }
 
+    /// Generates the scene again with the counts the panel asks for; a refused count keeps the scene
+    /// and says why.
+    fn regenerate_scene(&mut self) {
+        let Counts { lights, decals, particles } = self.wanted_counts;
+        let args = SceneArgs { lights, decals, particles, ..self.args.scene.clone() };
+        match args.load() {
+            Ok(scene) => {
+                self.scene = scene;
+                self.message = None;
+            }
+            Err(e) => {
+                self.message = Some(format!("not generated: {e:#}"));
+                self.wanted_counts = self.counts;
+                return;
+            }
+        }
+        self.counts = self.wanted_counts;
+    }
+
     fn move_camera(&mut self, dt: f32) {
         let speed = if self.keys.contains(&KeyCode::ShiftLeft) { 12.0 } else { 3.0 } * dt;
         let camera = self.fly.camera();
@@ -386,10 +461,18 @@ impl App {
             self.scripted.iter().filter(|s| s.frame == self.frame).map(|s| (s.key.clone(), s.value.clone())).collect();
         let before = self.switches;
         for (key, value) in due {
-            self.switches.set(&key, &value)?;
+            apply(&mut self.switches, &mut self.wanted_counts, &key, &value)?;
+        }
+        let regenerate = self.wanted_counts != self.counts;
+        if regenerate {
+            self.regenerate_scene();
+            self.edited_counts = self.counts;
         }
         let Some(gpu) = &self.gpu else { return Ok(()) };
-        let stale = gpu.renderer.is_none() || gpu.image.is_some_and(|(_, size)| size != Self::image_size(gpu)) || before != self.switches;
+        let stale = gpu.renderer.is_none()
+            || gpu.image.is_some_and(|(_, size)| size != Self::image_size(gpu))
+            || before != self.switches
+            || regenerate;
         if stale {
             self.rebuild();
         }
@@ -411,22 +494,15 @@ impl App {
         let raw_input = gpu.egui_state.take_egui_input(&gpu.window);
         let egui_ctx = gpu.egui_state.egui_ctx().clone();
         let mut switches = self.switches;
+        let mut counts = self.wanted_counts;
         let mut jump = None;
         let mut want_screenshot = false;
         let image = gpu.image;
         let mut output = egui_ctx.run_ui(raw_input, |ui| {
             egui::Panel::left("controls").exact_size(PANEL_WIDTH).show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
-                    panel(
-                        ui,
-                        &mut switches,
-                        &self.scene,
-                        &mut jump,
-                        &mut want_screenshot,
-                        &self.timings,
-                        &self.history,
-                        self.message.as_deref(),
-                    );
+                    let state = (&mut switches, (&mut self.edited_counts, &mut counts));
+                    panel(ui, state, &self.scene, &mut jump, &mut want_screenshot, (&self.timings, &self.history), self.message.as_deref());
                 });
             });
             egui::CentralPanel::no_frame().show(ui, |ui| {
@@ -493,6 +569,7 @@ impl App {
         gpu.ctx.check_errors()?;
 
         self.switches = switches;
+        self.wanted_counts = counts;
         if let Some(camera) = jump.and_then(|i| self.scene.cameras.get(i)) {
             self.fly = FlyCamera::from_camera(camera);
         }
@@ -512,16 +589,14 @@ impl App {
     }
 }
 
-/// The panel: switches, cameras, timings and the frame-time graph.
-#[allow(clippy::too_many_arguments)]
+/// The panel: switches, counts, cameras, timings and the frame-time graph.
 fn panel(
     ui: &mut egui::Ui,
-    switches: &mut Switches,
+    (switches, (edited, counts)): (&mut Switches, (&mut Counts, &mut Counts)),
     scene: &Scene,
     jump: &mut Option<usize>,
     screenshot: &mut bool,
-    timings: &PassTimings,
-    history: &VecDeque<f64>,
+    (timings, history): (&PassTimings, &VecDeque<f64>),
     message: Option<&str>,
 ) {
     ui.heading("manylights");
@@ -540,6 +615,11 @@ fn panel(
             ui.selectable_value(&mut switches.decal_method, m, m.name());
         }
     });
+    egui::ComboBox::from_label("particles").selected_text(switches.particle_method.name()).show_ui(ui, |ui| {
+        for m in ParticleMethod::ALL {
+            ui.selectable_value(&mut switches.particle_method, m, m.name());
+        }
+    });
     egui::ComboBox::from_label("sun shadows").selected_text(switches.shadows.name()).show_ui(ui, |ui| {
         for s in SunShadows::ALL {
             ui.selectable_value(&mut switches.shadows, s, s.name());
@@ -552,6 +632,16 @@ fn panel(
     ui.checkbox(&mut switches.depth_of_field, "depth of field");
     ui.checkbox(&mut switches.motion_blur, "motion blur");
     ui.add(egui::Slider::new(&mut switches.vignette, 0.0..=1.0).text("vignette"));
+    ui.separator();
+    // Counts take effect when the drag ends: every change generates the scene again.
+    let mut released = false;
+    for (label, value) in [("scattered lights", &mut edited.lights), ("decals", &mut edited.decals), ("particles", &mut edited.particles)] {
+        let response = ui.add(egui::DragValue::new(value).range(0..=1 << 20).speed(64.0).prefix(format!("{label}: ")));
+        released |= response.drag_stopped() || response.lost_focus();
+    }
+    if released {
+        *counts = *edited;
+    }
     if !scene.cameras.is_empty() {
         ui.separator();
         ui.label("cameras");

@@ -440,8 +440,9 @@ fn post_effects_render_with_their_passes_timed_and_bad_ones_name_their_flag() {
 }
 
 /// The viewer under Xvfb (`scripts/ensure-xvfb.sh` installs it): a scripted run opens the window,
-/// renders frames, switches the light method and the pipeline between them, writes a screenshot of
-/// the last frame that is not blank, and exits 0.
+/// renders frames, switches the light method, the scattered lights' count (the scene generated
+/// again) and the pipeline between them, writes a screenshot of the last frame that is not blank,
+/// and exits 0.
 #[test]
 fn the_viewer_runs_a_scripted_session_under_xvfb_and_writes_a_screenshot() {
     let dir = temp_dir("view");
@@ -450,7 +451,8 @@ fn the_viewer_runs_a_scripted_session_under_xvfb_and_writes_a_screenshot() {
     #[rustfmt::skip]
     let out = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 800x600x24", env!("CARGO_BIN_EXE_manylights"), "view", "--width", "560", "--height", "240",
-               "--frames", "6", "--set", "2:light-method=clustered", "--set", "4:pipeline=deferred", "--set", "4:bloom=on",
+               "--frames", "6", "--set", "2:light-method=clustered", "--set", "3:lights=40", "--set", "4:pipeline=deferred",
+               "--set", "4:bloom=on",
                "--screenshot", screenshot.to_str().unwrap()])
         .output()
         .expect("xvfb-run (install Xvfb: scripts/ensure-xvfb.sh)");
