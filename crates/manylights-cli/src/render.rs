@@ -6,7 +6,7 @@ use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use manylights::{
     accel::BvhBuild,
-    config::{RenderConfig, Tonemapper},
+    config::{DebugView, RenderConfig, Tonemapper},
     gpu::GpuContext,
     image_io,
     particles::ParticleFilter,
@@ -84,6 +84,11 @@ pub struct RenderArgs {
     post: PostArgs,
     #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
     tonemap: TonemapArg,
+    /// Show, instead of radiance, a heat map of the lights reaching each point, of the light method's
+    /// work (BVH nodes visited, cluster occupancy, lights tested) or of the decals covering it, or
+    /// the particle lights' radiance alone.
+    #[arg(long, value_enum, default_value_t = DebugViewArg::Off)]
+    debug_view: DebugViewArg,
     /// Largest texture size kept on the GPU (larger images are downsampled).
     #[arg(long, default_value_t = 1024)]
     texture_size: u32,
@@ -224,6 +229,27 @@ pub(crate) struct RayArgs {
     /// [default: the scene file's, or 0]
     #[arg(long)]
     light_shadow_rays: Option<u32>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum DebugViewArg {
+    Off,
+    LightsReaching,
+    LightWork,
+    DecalsCovering,
+    ParticleLight,
+}
+
+impl From<DebugViewArg> for DebugView {
+    fn from(arg: DebugViewArg) -> Self {
+        match arg {
+            DebugViewArg::Off => DebugView::Off,
+            DebugViewArg::LightsReaching => DebugView::LightsReaching,
+            DebugViewArg::LightWork => DebugView::LightWork,
+            DebugViewArg::DecalsCovering => DebugView::DecalsCovering,
+            DebugViewArg::ParticleLight => DebugView::ParticleLight,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -400,6 +426,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         anisotropy: args.anisotropy,
         rays: args.rays.settings(&scene)?,
         post: args.post.settings(),
+        debug_view: args.debug_view.into(),
     };
 
     let ctx = GpuContext::new()?;

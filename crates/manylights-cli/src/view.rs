@@ -16,7 +16,7 @@ use anyhow::{bail, Context};
 use clap::Args;
 use glam::{Mat4, Vec3};
 use manylights::{
-    config::RenderConfig,
+    config::{DebugView, RenderConfig},
     gpu::{context::instance, GpuContext, PassTimings},
     image_io,
     pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
@@ -68,6 +68,7 @@ struct Switches {
     light_method: LightMethod,
     decal_method: DecalMethod,
     particle_method: ParticleMethod,
+    debug_view: DebugView,
     shadows: SunShadows,
     reflections: bool,
     bloom: bool,
@@ -84,6 +85,7 @@ impl Default for Switches {
             light_method: LightMethod::Bvh,
             decal_method: DecalMethod::Bvh,
             particle_method: ParticleMethod::Grid,
+            debug_view: DebugView::Off,
             shadows: SunShadows::Off,
             reflections: false,
             bloom: false,
@@ -108,6 +110,7 @@ impl Switches {
             light_method: self.light_method,
             decal_method: self.decal_method,
             particle_method: self.particle_method,
+            debug_view: self.debug_view,
             ..RenderConfig::default()
         };
         config.rays.sun_shadows = self.shadows;
@@ -152,6 +155,11 @@ impl Switches {
                     .find(|m| m.name() == value)
                     .with_context(|| format!("particle-method={value}: give off, grid or bvh"))?
             }
+            "debug-view" => {
+                self.debug_view = *DebugView::ALL.iter().find(|v| v.name() == value).with_context(|| {
+                    format!("debug-view={value}: give off, lights-reaching, light-work, decals-covering or particle-light")
+                })?
+            }
             "shadows" => {
                 self.shadows = *SunShadows::ALL
                     .iter()
@@ -171,7 +179,7 @@ impl Switches {
                     .with_context(|| format!("vignette={value}: give 0 to 1"))?
             }
             _ => bail!(
-                "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, shadows, reflections, bloom, \
+                "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, debug-view, shadows, reflections, bloom, \
                  depth-of-field, motion-blur, auto-exposure, vignette, lights, decals or particles"
             ),
         }
@@ -618,6 +626,11 @@ fn panel(
     egui::ComboBox::from_label("particles").selected_text(switches.particle_method.name()).show_ui(ui, |ui| {
         for m in ParticleMethod::ALL {
             ui.selectable_value(&mut switches.particle_method, m, m.name());
+        }
+    });
+    egui::ComboBox::from_label("debug view").selected_text(switches.debug_view.name()).show_ui(ui, |ui| {
+        for v in DebugView::ALL {
+            ui.selectable_value(&mut switches.debug_view, v, v.name());
         }
     });
     egui::ComboBox::from_label("sun shadows").selected_text(switches.shadows.name()).show_ui(ui, |ui| {

@@ -20,6 +20,65 @@ pub enum Tonemapper {
     None = 2,
 }
 
+/// What a frame shows instead of its radiance, for looking inside the methods (the viewer's debug
+/// views). Keep the discriminants in sync with `DEBUG_VIEW_*` in `shading/debug_view.wgsl`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum DebugView {
+    #[default]
+    Off = 0,
+    /// Lights reaching each point, as a heat map up to 16.
+    LightsReaching = 1,
+    /// The light method's work at each point: BVH nodes visited, the froxel's list length (cluster
+    /// occupancy) or lights tested, up to 128.
+    LightWork = 2,
+    /// Decals covering each point, up to 16.
+    DecalsCovering = 3,
+    /// The particle lights' radiance alone (exposed and tonemapped as usual).
+    ParticleLight = 4,
+}
+
+impl DebugView {
+    pub const ALL: [DebugView; 5] =
+        [DebugView::Off, DebugView::LightsReaching, DebugView::LightWork, DebugView::DecalsCovering, DebugView::ParticleLight];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            DebugView::Off => "off",
+            DebugView::LightsReaching => "lights-reaching",
+            DebugView::LightWork => "light-work",
+            DebugView::DecalsCovering => "decals-covering",
+            DebugView::ParticleLight => "particle-light",
+        }
+    }
+
+    /// The count a heat map tops out at; 0 for views that are not heat maps.
+    pub fn scale(self) -> u32 {
+        match self {
+            DebugView::LightsReaching | DebugView::DecalsCovering => 16,
+            DebugView::LightWork => 128,
+            DebugView::Off | DebugView::ParticleLight => 0,
+        }
+    }
+
+    /// The frame uniforms' `debug_view`.
+    pub fn uniform(self) -> [u32; 4] {
+        [self as u32, self.scale(), 0, 0]
+    }
+}
+
+/// The heat map of `count` out of `scale` as the shaders draw it (`heat_map` in
+/// `shading/debug_view.wgsl`): black for none, then blue, cyan, green, yellow, red.
+pub fn heat_map(count: u32, scale: u32) -> [f32; 3] {
+    if count == 0 {
+        return [0.0; 3];
+    }
+    let stops = [[0.0, 0.0, 1.0], [0.0, 1.0, 1.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [1.0, 0.0, 0.0]];
+    let t = (count as f32 / scale.max(1) as f32).clamp(0.0, 1.0) * 4.0;
+    let i = (t as usize).min(3);
+    let f = t - i as f32;
+    std::array::from_fn(|c| stops[i][c] + (stops[i + 1][c] - stops[i][c]) * f)
+}
+
 #[derive(Clone, Debug)]
 pub struct RenderConfig {
     pub width: u32,
@@ -53,6 +112,8 @@ pub struct RenderConfig {
     pub rays: RaySettings,
     /// Post effects after shading: exposure, bloom, depth of field, motion blur, vignette (`post/`).
     pub post: PostSettings,
+    /// What the frame shows instead of its radiance (`Off`: its radiance).
+    pub debug_view: DebugView,
 }
 
 impl Default for RenderConfig {
@@ -76,6 +137,7 @@ impl Default for RenderConfig {
             anisotropy: 8,
             rays: RaySettings::default(),
             post: PostSettings::default(),
+            debug_view: DebugView::Off,
         }
     }
 }

@@ -28,6 +28,8 @@ var<private> VOLUMES_query_node: u32;
 var<private> VOLUMES_query_stop: u32;
 var<private> VOLUMES_query_resume: u32;
 var<private> VOLUMES_query_in_group: bool;
+// Nodes the query has visited (tested against the point): the debug view of the method's work.
+var<private> VOLUMES_query_visits: u32;
 
 // Starts a point query (world space), replacing any in flight; with no instances it finds nothing.
 // With one instance the top level is a single leaf: the query enters its group at once, saving the
@@ -37,6 +39,7 @@ fn VOLUMES_query_begin(point: vec3<f32>, instance_count: u32) {
     VOLUMES_query_point = point;
     VOLUMES_query_node = select(BVH_END, 0u, instance_count > 0u);
     VOLUMES_query_in_group = false;
+    VOLUMES_query_visits = 0u;
     if instance_count == 1u {
         VOLUMES_query_node = BVH_END;
         VOLUMES_query_enter(0u);
@@ -76,6 +79,7 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
             continue;
         }
         let node = VOLUMES_nodes[VOLUMES_query_node];
+        VOLUMES_query_visits += 1u;
         // A link back to the node itself ends the query. No valid tree has one, but lavapipe's
         // fragment shaders run lanes outside the triangle (helpers) with storage loads masked to
         // zero: node 0 reads as a box at the origin linking to node 0, and a lane looping there until

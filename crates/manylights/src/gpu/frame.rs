@@ -40,6 +40,8 @@ pub struct FrameUniforms {
     /// threshold, a pixel's spread angle and its width at the camera.
     pub ray_options: [u32; 4],
     pub ray_settings: [f32; 4],
+    /// The debug view (`config::DebugView`) and the count its heat map tops out at; zero: none.
+    pub debug_view: [u32; 4],
 }
 
 /// What a frame needs of the scene besides its buffers, kept by `GpuScene` from the CPU scene.
@@ -82,6 +84,7 @@ impl FrameUniforms {
             particle_cascades: [[0.0; 4]; crate::particles::MAX_PARTICLE_CASCADES as usize],
             ray_options: [0; 4],
             ray_settings: [0.0; 4],
+            debug_view: [0; 4],
         }
     }
 }

@@ -665,7 +665,8 @@ mod tests {
                 particle_texture_unscale,
                 particle_cascades,
                 ray_options,
-                ray_settings
+                ray_settings,
+                debug_view
             ]
         );
     }

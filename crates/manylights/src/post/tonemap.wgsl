@@ -95,6 +95,11 @@ fn tonemap(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let pixel = vec2<f32>(id.xy) + 0.5;
     var hdr = textureLoad(color_input, id.xy, 0).rgb;
+    // A heat-map debug view (`shading/debug_view.wgsl`) is shown as it is: no exposure or curve.
+    if frame.debug_view.x != 0u && frame.debug_view.y != 0u {
+        textureStore(ldr_output, id.xy, vec4<f32>(linear_to_srgb(saturate(hdr)), 1.0));
+        return;
+    }
     if BLOOM {
         hdr = mix(hdr, bloom_at(pixel) * post.bloom.y, post.bloom.x);
     }

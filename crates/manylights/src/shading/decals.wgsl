@@ -10,6 +10,7 @@
 #include "shading/shading_input.wgsl"
 #include "shading/material.wgsl"
 #include "accel/bvh_types.wgsl"
+#include "shading/debug_view.wgsl"
 
 const DECAL_LAYERS: u32 = 4u;
 // Decals fade out as the surface turns edge-on to the projector: fully applied from this cosine up.
@@ -34,6 +35,7 @@ var<private> decal_layers_touched: u32;
 
 fn decal_blend_begin() {
     decal_layers_touched = 0u;
+    debug_decals_covering = 0u;
 }
 
 // Adds one decal if the point (`local`, in the decal's group space) is inside its box. `s` is the
@@ -61,6 +63,7 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, s:
     if alpha <= 0.0 {
         return;
     }
+    debug_decals_covering += 1u;
     let aw = alpha * decal.weight;
     let roughness_metallic = material_roughness_metallic(material, g);
     let layer = min(decal.layer, DECAL_LAYERS - 1u);

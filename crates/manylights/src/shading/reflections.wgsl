@@ -50,6 +50,10 @@ fn mirror_direction(s: ShadingInput, geometric_normal: vec3<f32>) -> vec3<f32> {
 
 // Radiance reflected by `s` towards its viewer, `footprint` the width of its pixel's cone there.
 fn reflected_radiance(s: ShadingInput, geometric_normal: vec3<f32>, footprint: f32) -> vec3<f32> {
+    // A debug view shows the surface's own counts, not its reflections'.
+    if frame.debug_view.x != DEBUG_VIEW_OFF {
+        return vec3<f32>(0.0);
+    }
     var weight = reflection_weight(s);
     var radiance = vec3<f32>(0.0);
     var surface = s;

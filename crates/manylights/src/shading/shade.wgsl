@@ -9,6 +9,7 @@
 #include "$LIGHT_ENUMERATION"
 #include "$DECAL_ENUMERATION"
 #include "$PARTICLE_LIGHTING"
+#include "shading/debug_view.wgsl"
 
 // Outgoing radiance towards the viewer; `sun_visibility` is the fraction of the sun the point sees
 // (`shading/sun_shadow*.wgsl`).
@@ -21,8 +22,25 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
         radiance += frame.sun_radiance.rgb * sun_visibility * brdf_times_cosine(s, -frame.sun_direction.xyz);
     }
     radiance += shade_local_lights(s);
-    radiance += shade_particle_lights(s);
-    return radiance;
+    let particles = shade_particle_lights(s);
+    radiance += particles;
+    switch frame.debug_view.x {
+        case DEBUG_VIEW_LIGHTS_REACHING: {
+            return heat_map(debug_lights_reaching, frame.debug_view.y);
+        }
+        case DEBUG_VIEW_LIGHT_WORK: {
+            return heat_map(debug_light_work, frame.debug_view.y);
+        }
+        case DEBUG_VIEW_DECALS_COVERING: {
+            return heat_map(debug_decals_covering, frame.debug_view.y);
+        }
+        case DEBUG_VIEW_PARTICLE_LIGHT: {
+            return particles;
+        }
+        default: {
+            return radiance;
+        }
+    }
 }
 
 // Radiance seen where no geometry was drawn: a simple sky from the ambient colour.

@@ -131,6 +131,9 @@ struct FrameUniforms {
     // z: the angle between neighbouring pixels' rays (perspective); w: a pixel's width at the camera
     // (orthographic). A pixel's footprint at distance d is w + d · z.
     ray_settings: vec4<f32>,
+    // x: the debug view (`shading/debug_view.wgsl`, DEBUG_VIEW_*; 0: none), y: the count its heat map
+    // tops out at.
+    debug_view: vec4<u32>,
 }
 
 // Keep in sync with `SunShadows` in `rays/mod.rs`.

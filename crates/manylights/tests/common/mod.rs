@@ -40,6 +40,7 @@ pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfi
         anisotropy: 1,
         rays: RaySettings::default(),
         post: PostSettings::default(),
+        debug_view: Default::default(),
     }
 }
 

@@ -4,10 +4,13 @@
 #include "shading/light_bindings.wgsl"
 #include "shading/lights.wgsl"
 #include "shading/light_shadows.wgsl"
+#include "shading/debug_view.wgsl"
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
     var shadow_rays = frame.ray_options.w;
+    debug_lights_reaching = 0u;
+    debug_light_work = 0u;
     for (var i = 0u; i < frame.light_instance_count; i += 1u) {
         let instance = light_instances[i];
         let local = shading_input_in_group(s, instance);
@@ -15,12 +18,14 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
         for (var k = instance.first_item; k < instance.first_item + instance.item_count; k += 1u) {
             // Most lights are out of range: test with the struct's first 16 bytes (position and
             // range) before loading the rest.
+            debug_light_work += 1u;
             let to_light = lights[k].position - local.position;
             let range = lights[k].range;
             if dot(to_light, to_light) < range * range {
                 let light = lights[k];
                 let contribution = light_contribution(light, local);
                 if any(contribution > vec3<f32>(0.0)) {
+                    debug_lights_reaching += 1u;
                     radiance += contribution * falloff * light_visibility(light, instance, s, &shadow_rays);
                 }
             }

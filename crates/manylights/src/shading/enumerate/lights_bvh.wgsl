@@ -5,6 +5,7 @@
 #include "shading/lights.wgsl"
 #include "accel/volume_query.wgsl" with VOLUMES=light
 #include "shading/light_shadows.wgsl"
+#include "shading/debug_view.wgsl"
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
@@ -13,6 +14,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var local = s;
     var falloff = 1.0;
     var entered = 0xffffffffu;
+    debug_lights_reaching = 0u;
     light_query_begin(s.position, frame.light_instance_count);
     for (var leaf = light_query_next_leaf(); leaf.x < leaf.y; leaf = light_query_next_leaf()) {
         if light_query_instance_index != entered {
@@ -24,9 +26,11 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             let light = lights[light_primitives[k]];
             let contribution = light_contribution(light, local);
             if any(contribution > vec3<f32>(0.0)) {
+                debug_lights_reaching += 1u;
                 radiance += contribution * falloff * light_visibility(light, light_query_instance, s, &shadow_rays);
             }
         }
     }
+    debug_light_work = light_query_visits;
     return radiance;
 }

@@ -7,6 +7,7 @@
 #include "shading/lights.wgsl"
 #include "accel/cluster_grid.wgsl"
 #include "shading/light_shadows.wgsl"
+#include "shading/debug_view.wgsl"
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
@@ -16,6 +17,8 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var instance: VolumeInstance;
     var shadow_rays = frame.ray_options.w;
     let range = light_cluster_ranges[cluster_of(s.position)];
+    debug_lights_reaching = 0u;
+    debug_light_work = range.y;
     for (var i = range.x; i < range.x + range.y; i += 1u) {
         let entry = light_cluster_entries[i];
         if entry.x != entered {
@@ -27,6 +30,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
         let light = lights[entry.y];
         let contribution = light_contribution(light, local);
         if any(contribution > vec3<f32>(0.0)) {
+            debug_lights_reaching += 1u;
             radiance += contribution * falloff * light_visibility(light, instance, s, &shadow_rays);
         }
     }

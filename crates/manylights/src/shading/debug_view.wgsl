@@ -1,0 +1,35 @@
+// Debug views (`config::DebugView`, `frame.debug_view`): instead of its radiance, a pixel shows what
+// shading counted there as a heat map from black (none) through blue, cyan, green and yellow to red
+// (`frame.debug_view.y` or more). The enumeration modules count as they work; `shade` shows the view.
+// Keep `heat_map` in sync with `config::heat_map`.
+
+const DEBUG_VIEW_OFF: u32 = 0u;
+// Lights whose light reaches the point (after the tight test), in any method.
+const DEBUG_VIEW_LIGHTS_REACHING: u32 = 1u;
+// The light method's work: BVH nodes visited (bvh), lights in the froxel's list (clustered:
+// cluster occupancy), lights tested (brute force).
+const DEBUG_VIEW_LIGHT_WORK: u32 = 2u;
+// Decals covering the point (inside the box, facing, with alpha), in any method.
+const DEBUG_VIEW_DECALS_COVERING: u32 = 3u;
+// The particle lights' radiance alone, as the grid or the exact method gives it.
+const DEBUG_VIEW_PARTICLE_LIGHT: u32 = 4u;
+
+var<private> debug_lights_reaching: u32;
+var<private> debug_light_work: u32;
+var<private> debug_decals_covering: u32;
+
+fn heat_map(count: u32, scale: u32) -> vec3<f32> {
+    if count == 0u {
+        return vec3<f32>(0.0);
+    }
+    let t = saturate(f32(count) / f32(max(scale, 1u))) * 4.0;
+    let stops = array<vec3<f32>, 5>(
+        vec3<f32>(0.0, 0.0, 1.0),
+        vec3<f32>(0.0, 1.0, 1.0),
+        vec3<f32>(0.0, 1.0, 0.0),
+        vec3<f32>(1.0, 1.0, 0.0),
+        vec3<f32>(1.0, 0.0, 0.0),
+    );
+    let i = min(u32(t), 3u);
+    return mix(stops[i], stops[i + 1u], t - f32(i));
+}

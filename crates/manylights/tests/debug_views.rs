@@ -1,0 +1,132 @@
+//! Debug views (`config::DebugView`): the heat map of lights reaching each point equals the count a
+//! CPU finds for the wall point a pixel shows, in every light method and pipeline; brute force's work
+//! is every light at every point, the BVH's its own node count; the decals covering a point are
+//! counted as the CPU counts them by every decal method.
+
+mod common;
+
+use common::*;
+use glam::{Affine3A, Vec3, Vec4};
+use manylights::{
+    config::{heat_map, DebugView, RenderConfig},
+    pipelines::{DecalMethod, LightMethod, PipelineKind},
+    renderer::Image,
+    scene::{Decal, Material},
+};
+
+const SIZE: (u32, u32) = (96, 54);
+
+/// The wall point (z = 0) the centre of pixel (x, y) shows: the test camera is 4 m away with a 60°
+/// vertical field of view.
+fn wall_point(x: u32, y: u32) -> Vec3 {
+    let tan = 30f32.to_radians().tan();
+    let aspect = SIZE.0 as f32 / SIZE.1 as f32;
+    let (nx, ny) = ((x as f32 + 0.5) / SIZE.0 as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / SIZE.1 as f32 * 2.0);
+    Vec3::new(nx * tan * aspect * 4.0, ny * tan * 4.0, 0.0)
+}
+
+fn close(got: [f32; 4], expected: [f32; 3]) -> bool {
+    (0..3).all(|c| (got[c] - expected[c]).abs() <= 1e-5)
+}
+
+fn debug_image(scene: &manylights::scene::Scene, camera: &manylights::scene::Camera, config: RenderConfig) -> Image<[f32; 4]> {
+    render_with(scene, camera, config).1
+}
+
+#[test]
+fn the_lights_reaching_each_point_are_counted_alike_by_every_method_and_pipeline_and_as_the_cpu_counts() {
+    // Overlapping lights of different ranges in front of the wall: 0 to 4 reach a point.
+    let lights = vec![
+        point_light(Vec3::new(-1.0, 0.0, 0.5), 1.0, 2.0),
+        point_light(Vec3::new(0.5, 0.3, 0.5), 1.0, 1.5),
+        point_light(Vec3::new(0.0, -0.5, 1.0), 1.0, 2.5),
+        point_light(Vec3::new(2.5, 1.0, 0.3), 1.0, 1.0),
+    ];
+    let (scene, camera) = wall_scene(lights.clone());
+    let scale = DebugView::LightsReaching.scale();
+    for pipeline in PipelineKind::ALL {
+        for method in [LightMethod::Brute, LightMethod::Bvh, LightMethod::Clustered] {
+            let what = format!("{} {}", pipeline.name(), method.name());
+            let config = RenderConfig { pipeline, debug_view: DebugView::LightsReaching, ..config(SIZE.0, SIZE.1, method) };
+            let image = debug_image(&scene, &camera, config);
+            let mut checked = [0usize; 5];
+            for y in 0..SIZE.1 {
+                for x in 0..SIZE.0 {
+                    let p = wall_point(x, y);
+                    let distances: Vec<f32> = lights.iter().map(|l| (l.position - p).length() / l.range).collect();
+                    // Points within 2 % of a range's edge may round either way.
+                    if distances.iter().any(|d| (d - 1.0).abs() < 0.02) {
+                        continue;
+                    }
+                    let count = distances.iter().filter(|&&d| d < 1.0).count();
+                    let got = pixel(&image, x, y);
+                    assert!(close(got, heat_map(count as u32, scale)), "{what}: pixel ({x}, {y}) shows {got:?}, {count} lights reach it");
+                    checked[count] += 1;
+                }
+            }
+            assert!(checked[..4].iter().all(|&n| n > 20), "{what}: too few pixels reached by 0 to 3 lights: {checked:?}");
+        }
+    }
+    // The work: brute force tests all four lights everywhere; the BVH's query shows its own count
+    // (nodes visited), not brute force's.
+    let work = |method| debug_image(&scene, &camera, RenderConfig { debug_view: DebugView::LightWork, ..config(SIZE.0, SIZE.1, method) });
+    let brute = work(LightMethod::Brute);
+    let all_four = heat_map(4, DebugView::LightWork.scale());
+    assert!(brute.pixels.iter().all(|&p| close(p, all_four)), "brute force tests every light at every point");
+    let bvh = work(LightMethod::Bvh);
+    assert!(
+        bvh.pixels.iter().all(|&p| !close(p, all_four) && p[..3] != [0.0; 3]),
+        "the BVH's work is its nodes visited, at least its root"
+    );
+}
+
+#[test]
+fn the_decals_covering_each_point_are_counted_alike_by_every_decal_method() {
+    let (mut scene, camera) = ambient_wall();
+    scene.materials.push(Material { base_color_factor: Vec4::new(1.0, 0.0, 0.0, 1.0), metallic_factor: 0.0, ..Default::default() });
+    let material = scene.materials.len() - 1;
+    // Two 2 m decals overlapping over 1 m, and a third inside both.
+    let at = |x: f32, size: f32| Decal {
+        world_from_decal: Affine3A::from_scale_rotation_translation(
+            Vec3::new(size, size, 0.5),
+            glam::Quat::IDENTITY,
+            Vec3::new(x, 0.0, 0.0),
+        ),
+        material,
+        layer: 0,
+        weight: 1.0,
+    };
+    scene.decals = vec![at(-0.5, 2.0), at(0.5, 2.0), at(0.0, 0.5)];
+    let scale = DebugView::DecalsCovering.scale();
+    for method in [DecalMethod::Brute, DecalMethod::Bvh, DecalMethod::Clustered] {
+        let config =
+            RenderConfig { decal_method: method, debug_view: DebugView::DecalsCovering, ..config(SIZE.0, SIZE.1, LightMethod::Off) };
+        let image = debug_image(&scene, &camera, config);
+        let mut seen = [0usize; 4];
+        for y in 0..SIZE.1 {
+            for x in 0..SIZE.0 {
+                let p = wall_point(x, y);
+                let inside = |d: &Decal| {
+                    let q = d.world_from_decal.inverse().transform_point3(p);
+                    q.x.abs() < 0.5 && q.y.abs() < 0.5
+                };
+                let near_edge = scene.decals.iter().any(|d| {
+                    let q = d.world_from_decal.inverse().transform_point3(p);
+                    (q.x.abs().max(q.y.abs()) - 0.5).abs() <= 0.02
+                });
+                if near_edge {
+                    continue;
+                }
+                let count = scene.decals.iter().filter(|d| inside(d)).count();
+                let got = pixel(&image, x, y);
+                assert!(
+                    close(got, heat_map(count as u32, scale)),
+                    "{}: pixel ({x}, {y}) shows {got:?}, {count} decals cover it",
+                    method.name()
+                );
+                seen[count] += 1;
+            }
+        }
+        assert!(seen.iter().all(|&n| n > 10), "{}: {seen:?}", method.name());
+    }
+}
