@@ -89,6 +89,9 @@ pub struct RenderArgs {
     /// the particle lights' radiance alone.
     #[arg(long, value_enum, default_value_t = DebugViewArg::Off)]
     debug_view: DebugViewArg,
+    /// Height in metres of the particle-grid-slice debug view's plane. [default: a metre below the eye]
+    #[arg(long, allow_negative_numbers = true)]
+    debug_slice_height: Option<f32>,
     /// Largest texture size kept on the GPU (larger images are downsampled).
     #[arg(long, default_value_t = 1024)]
     texture_size: u32,
@@ -238,6 +241,7 @@ pub(crate) enum DebugViewArg {
     LightWork,
     DecalsCovering,
     ParticleLight,
+    ParticleGridSlice,
 }
 
 impl From<DebugViewArg> for DebugView {
@@ -248,6 +252,7 @@ impl From<DebugViewArg> for DebugView {
             DebugViewArg::LightWork => DebugView::LightWork,
             DebugViewArg::DecalsCovering => DebugView::DecalsCovering,
             DebugViewArg::ParticleLight => DebugView::ParticleLight,
+            DebugViewArg::ParticleGridSlice => DebugView::ParticleGridSlice,
         }
     }
 }
@@ -427,6 +432,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         rays: args.rays.settings(&scene)?,
         post: args.post.settings(),
         debug_view: args.debug_view.into(),
+        debug_slice_height: args.debug_slice_height,
     };
 
     let ctx = GpuContext::new()?;

@@ -157,7 +157,7 @@ impl Switches {
             }
             "debug-view" => {
                 self.debug_view = *DebugView::ALL.iter().find(|v| v.name() == value).with_context(|| {
-                    format!("debug-view={value}: give off, lights-reaching, light-work, decals-covering or particle-light")
+                    format!("debug-view={value}: give off, lights-reaching, light-work, decals-covering, particle-light or particle-grid-slice")
                 })?
             }
             "shadows" => {

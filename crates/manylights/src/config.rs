@@ -35,11 +35,20 @@ pub enum DebugView {
     DecalsCovering = 3,
     /// The particle lights' radiance alone (exposed and tonemapped as usual).
     ParticleLight = 4,
+    /// A horizontal slice through the particle grid (`RenderConfig::debug_slice_height`): the grid's
+    /// colour sums where pixels' rays cross it before their surface, the scene dimmed elsewhere.
+    ParticleGridSlice = 5,
 }
 
 impl DebugView {
-    pub const ALL: [DebugView; 5] =
-        [DebugView::Off, DebugView::LightsReaching, DebugView::LightWork, DebugView::DecalsCovering, DebugView::ParticleLight];
+    pub const ALL: [DebugView; 6] = [
+        DebugView::Off,
+        DebugView::LightsReaching,
+        DebugView::LightWork,
+        DebugView::DecalsCovering,
+        DebugView::ParticleLight,
+        DebugView::ParticleGridSlice,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -48,6 +57,7 @@ impl DebugView {
             DebugView::LightWork => "light-work",
             DebugView::DecalsCovering => "decals-covering",
             DebugView::ParticleLight => "particle-light",
+            DebugView::ParticleGridSlice => "particle-grid-slice",
         }
     }
 
@@ -56,13 +66,13 @@ impl DebugView {
         match self {
             DebugView::LightsReaching | DebugView::DecalsCovering => 16,
             DebugView::LightWork => 128,
-            DebugView::Off | DebugView::ParticleLight => 0,
+            DebugView::Off | DebugView::ParticleLight | DebugView::ParticleGridSlice => 0,
         }
     }
 
-    /// The frame uniforms' `debug_view`.
-    pub fn uniform(self) -> [u32; 4] {
-        [self as u32, self.scale(), 0, 0]
+    /// The frame uniforms' `debug_view`, with the slice's height (metres) for the grid slice.
+    pub fn uniform(self, slice_height: f32) -> [u32; 4] {
+        [self as u32, self.scale(), slice_height.to_bits(), 0]
     }
 }
 
@@ -114,6 +124,8 @@ pub struct RenderConfig {
     pub post: PostSettings,
     /// What the frame shows instead of its radiance (`Off`: its radiance).
     pub debug_view: DebugView,
+    /// Height of `DebugView::ParticleGridSlice`'s plane in metres; `None`: a metre below the eye.
+    pub debug_slice_height: Option<f32>,
 }
 
 impl Default for RenderConfig {
@@ -138,6 +150,7 @@ impl Default for RenderConfig {
             rays: RaySettings::default(),
             post: PostSettings::default(),
             debug_view: DebugView::Off,
+            debug_slice_height: None,
         }
     }
 }
@@ -195,6 +208,11 @@ impl RenderConfig {
             crate::particles::check_clipmap(self.particle_cascade_resolution, self.particle_cascades)?;
         }
         self.rays.validate()?;
+        if let Some(height) = self.debug_slice_height.filter(|h| !h.is_finite()) {
+            return Err(Error::InvalidConfig(format!(
+                "debug slice height {height} must be a finite height in metres (--debug-slice-height)"
+            )));
+        }
         self.post.validate()?;
         if !(1..=16).contains(&self.anisotropy) {
             return Err(Error::InvalidConfig(format!("anisotropy {} must be between 1 and 16", self.anisotropy)));

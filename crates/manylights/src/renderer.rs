@@ -298,7 +298,7 @@ impl Renderer {
         uniforms.light_instance_count = self.lights.instance_count();
         uniforms.decal_instance_count = self.decals.instance_count();
         (uniforms.ray_options, uniforms.ray_settings) = self.config.rays.uniforms(camera, self.config.height);
-        uniforms.debug_view = self.config.debug_view.uniform();
+        uniforms.debug_view = self.config.debug_view.uniform(self.config.debug_slice_height.unwrap_or(camera.position().y - 1.0));
         if let Some(particles) = &self.particles {
             if let (Some(volume), Some(scales)) = (particles.volume(), particles.scales()) {
                 uniforms.particle_volume = volume.dims().extend(volume.cascade_count()).to_array();

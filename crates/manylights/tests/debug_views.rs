@@ -130,3 +130,34 @@ fn the_decals_covering_each_point_are_counted_alike_by_every_decal_method() {
         assert!(seen.iter().all(|&n| n > 10), "{}: {seen:?}", method.name());
     }
 }
+
+#[test]
+fn a_slice_through_the_particle_grid_shows_where_it_is_crossed_and_the_dimmed_scene_elsewhere() {
+    let mut scene = manylights::scene::demo::demo_scene();
+    let particles = manylights::scene::generators::ScatterParticles::new(4000, 1, 8);
+    manylights::scene::generators::add_particles(&mut scene, &particles).unwrap();
+    let camera = scene.cameras[0].clone();
+    let render = |debug_view, debug_slice_height| {
+        let config = RenderConfig { debug_view, debug_slice_height, ..config(SIZE.0, SIZE.1, LightMethod::Brute) };
+        debug_image(&scene, &camera, config)
+    };
+    let shaded = render(DebugView::Off, None);
+    // A plane far above everything: no ray crosses it before its surface, so every surface is shown
+    // at a tenth of its radiance (the sky is not shaded).
+    let above = render(DebugView::ParticleGridSlice, Some(1000.0));
+    let near = |a: f32, b: f32| (a - b).abs() <= 1e-6 * b.abs().max(1.0);
+    let (mut dimmed, mut sky) = (0, 0);
+    for (a, s) in above.pixels.iter().zip(&shaded.pixels) {
+        if (0..3).all(|c| near(a[c], 0.1 * s[c])) {
+            dimmed += 1;
+        } else {
+            assert!((0..3).all(|c| a[c] == s[c]), "a pixel neither dimmed nor sky: {a:?} from {s:?}");
+            sky += 1;
+        }
+    }
+    assert!(dimmed > sky * 2, "{dimmed} dimmed surface pixels, {sky} sky pixels");
+    // Half a metre above the floor, through the particles: the grid shows where rays cross it.
+    let through = render(DebugView::ParticleGridSlice, Some(0.5));
+    let sliced = through.pixels.iter().zip(&above.pixels).filter(|(t, a)| (0..3).any(|c| (t[c] - a[c]).abs() > 1e-3)).count();
+    assert!(sliced * 10 > through.pixels.len(), "only {sliced} pixels show the slice");
+}

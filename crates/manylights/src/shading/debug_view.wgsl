@@ -13,6 +13,10 @@ const DEBUG_VIEW_LIGHT_WORK: u32 = 2u;
 const DEBUG_VIEW_DECALS_COVERING: u32 = 3u;
 // The particle lights' radiance alone, as the grid or the exact method gives it.
 const DEBUG_VIEW_PARTICLE_LIGHT: u32 = 4u;
+// A horizontal slice through the particle grid at height `frame.debug_view.z` (f32 bits): where a
+// pixel's ray crosses it before its surface, the grid's colour sum there; elsewhere the surface,
+// dimmed.
+const DEBUG_VIEW_PARTICLE_GRID_SLICE: u32 = 5u;
 
 var<private> debug_lights_reaching: u32;
 var<private> debug_light_work: u32;

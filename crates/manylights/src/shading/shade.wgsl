@@ -37,6 +37,15 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
         case DEBUG_VIEW_PARTICLE_LIGHT: {
             return particles;
         }
+        case DEBUG_VIEW_PARTICLE_GRID_SLICE: {
+            let eye = frame.world_from_view[3].xyz;
+            let to_surface = s.position - eye;
+            let t = (bitcast<f32>(frame.debug_view.z) - eye.y) / to_surface.y;
+            if to_surface.y != 0.0 && t > 0.0 && t < 1.0 {
+                return particle_grid_at(eye + to_surface * t);
+            }
+            return radiance * 0.1;
+        }
         default: {
             return radiance;
         }

@@ -41,6 +41,7 @@ pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfi
         rays: RaySettings::default(),
         post: PostSettings::default(),
         debug_view: Default::default(),
+        debug_slice_height: None,
     }
 }
 

@@ -128,6 +128,19 @@ fn particle_light_at(s: ShadingInput, p: vec3<f32>) -> vec3<f32> {
     return color * brdf_times_cosine(s, grid.direction * inverseSqrt(length_sq));
 }
 
+// The grid's colour sum at world point `p` (the debug view's slices), without a surface: zero
+// outside the grid.
+fn particle_grid_at(p: vec3<f32>) -> vec3<f32> {
+    if frame.particle_volume.w == 0u {
+        return vec3<f32>(0.0);
+    }
+    let c = particle_cascade_at(p);
+    if particle_cascade_room(c, p) < 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return max(particle_sample_cascade(c, p).color, vec3<f32>(0.0)) * frame.particle_texture_unscale.x;
+}
+
 fn shade_particle_lights(s: ShadingInput) -> vec3<f32> {
     if frame.particle_volume.w == 0u {
         return vec3<f32>(0.0);
