@@ -175,6 +175,7 @@ impl Renderer {
             decals: config.decal_method,
             particles: config.particle_method,
             reflections: config.rays.reflection_bounces > 0,
+            light_shadows: config.rays.light_shadow_rays > 0,
         };
         let setup = FrameSetup {
             methods,

@@ -75,6 +75,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/reflections.wgsl", include_str!("../shading/reflections.wgsl")),
     ("shading/light_shadows.wgsl", include_str!("../shading/light_shadows.wgsl")),
     ("shading/reflections_off.wgsl", include_str!("../shading/reflections_off.wgsl")),
+    ("shading/light_shadows_off.wgsl", include_str!("../shading/light_shadows_off.wgsl")),
     ("rays/ray_types.wgsl", include_str!("../rays/ray_types.wgsl")),
     ("rays/trace.wgsl", include_str!("../rays/trace.wgsl")),
     ("rays/trace_probe.wgsl", include_str!("../rays/trace_probe.wgsl")),
@@ -223,8 +224,10 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
     for lights in LightMethod::ALL {
         for decals in DecalMethod::ALL {
             // `ParticleMethod::Bvh` composes as `Off`: its particles are lights.
-            for (particles, reflections) in [(ParticleMethod::Off, false), (ParticleMethod::Grid, false), (ParticleMethod::Grid, true)] {
-                let methods = ShadingMethods { lights, decals, particles, reflections };
+            #[rustfmt::skip]
+            let variants = [(ParticleMethod::Off, false, false), (ParticleMethod::Grid, false, false), (ParticleMethod::Grid, true, true)];
+            for (particles, reflections, light_shadows) in variants {
+                let methods = ShadingMethods { lights, decals, particles, reflections, light_shadows };
                 if decals.works_in(PipelineKind::Visbuffer) {
                     shaders.push(crate::passes::visbuffer_shade::shader(methods));
                 }

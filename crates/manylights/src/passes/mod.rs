@@ -24,14 +24,15 @@ pub mod visbuffer_raster;
 pub mod visbuffer_shade;
 
 /// A pass's shader that calls the shading core, composed with the WGSL modules of its methods
-/// (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION`, `$DECAL_ENUMERATION` and `$PARTICLE_LIGHTING`;
-/// the opaque surfaces' shading passes include `$REFLECTIONS`).
+/// (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION`, `$DECAL_ENUMERATION` and `$PARTICLE_LIGHTING`,
+/// the light modules `$LIGHT_SHADOWS`; the opaque surfaces' shading passes include `$REFLECTIONS`).
 pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods) -> ShaderDesc {
     ShaderDesc::new(entry)
         .with("LIGHT_ENUMERATION", methods.lights.enumeration_module())
         .with("DECAL_ENUMERATION", methods.decals.enumeration_module())
         .with("PARTICLE_LIGHTING", methods.particles.lighting_module())
         .with("REFLECTIONS", if methods.reflections { "shading/reflections.wgsl" } else { "shading/reflections_off.wgsl" })
+        .with("LIGHT_SHADOWS", if methods.light_shadows { "shading/light_shadows.wgsl" } else { "shading/light_shadows_off.wgsl" })
 }
 
 /// Workgroup edge of the 2D compute passes (`@workgroup_size(8, 8)` in their WGSL).

@@ -288,11 +288,14 @@ impl ParticleMethod {
 }
 
 /// The methods a shading core is composed with: one per kind of light source and for decals, and
-/// whether glossy surfaces trace reflections (`shading/reflections.wgsl`).
+/// whether glossy surfaces trace reflections (`shading/reflections.wgsl`) and points trace shadow rays
+/// towards lamps (`shading/light_shadows.wgsl`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub struct ShadingMethods {
     pub lights: LightMethod,
     pub decals: DecalMethod,
     pub particles: ParticleMethod,
     pub reflections: bool,
+    /// Shadow rays towards local lights that cast them (`--light-shadow-rays` above 0).
+    pub light_shadows: bool,
 }

@@ -3,7 +3,7 @@
 // `shade_local_lights` with this shape.
 #include "shading/light_bindings.wgsl"
 #include "shading/lights.wgsl"
-#include "shading/light_shadows.wgsl"
+#include "$LIGHT_SHADOWS"
 #include "shading/debug_view.wgsl"
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {

@@ -6,7 +6,7 @@
 #include "shading/light_bindings.wgsl"
 #include "shading/lights.wgsl"
 #include "accel/cluster_grid.wgsl"
-#include "shading/light_shadows.wgsl"
+#include "$LIGHT_SHADOWS"
 #include "shading/debug_view.wgsl"
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
