@@ -25,12 +25,6 @@ if ! command -v apt-get >/dev/null; then
        "or Mesa's lavapipe (often packaged as mesa-vulkan-drivers or vulkan-swrast)" >&2
   exit 1
 fi
-sudo=""
-if [ "$(id -u)" != 0 ]; then
-  command -v sudo >/dev/null || { echo "error: need root or sudo to install mesa-vulkan-drivers" >&2; exit 1; }
-  sudo="sudo"
-fi
-echo "Installing the Vulkan loader and Mesa's software Vulkan driver (lavapipe)..." >&2
-$sudo apt-get update -qq
-$sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libvulkan1 mesa-vulkan-drivers >/dev/null
+source "$(dirname "$0")/apt-install.sh"
+apt_install "the Vulkan loader and Mesa's software Vulkan driver (lavapipe)" libvulkan1 mesa-vulkan-drivers
 have_loader && have_driver || { echo "error: Vulkan still unavailable after installing mesa-vulkan-drivers" >&2; exit 1; }

@@ -17,11 +17,5 @@ if ! command -v apt-get >/dev/null; then
        "with your package manager (Debian: xvfb xauth libxkbcommon-x11-0 libxcursor1 libx11-xcb1 libxi6 libxrandr2)" >&2
   exit 1
 fi
-sudo=""
-if [ "$(id -u)" != 0 ]; then
-  command -v sudo >/dev/null || { echo "error: need root or sudo to install xvfb" >&2; exit 1; }
-  sudo="sudo"
-fi
-echo "Installing Xvfb and the X11 libraries the viewer loads..." >&2
-$sudo apt-get update -qq
-$sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq xvfb xauth libxkbcommon-x11-0 libxcursor1 libx11-xcb1 libxi6 libxrandr2 >/dev/null
+source "$(dirname "$0")/apt-install.sh"
+apt_install "Xvfb and the X11 libraries the viewer loads" xvfb xauth libxkbcommon-x11-0 libxcursor1 libx11-xcb1 libxi6 libxrandr2

@@ -8,6 +8,21 @@ pub fn uniform(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupL
     buffer(binding, visibility, wgpu::BufferBindingType::Uniform)
 }
 
+/// A uniform bound at a dynamic offset, `size` bytes from it: one buffer of many records, a record per
+/// dispatch.
+pub fn uniform_dynamic(binding: u32, visibility: wgpu::ShaderStages, size: u64) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: true,
+            min_binding_size: wgpu::BufferSize::new(size),
+        },
+        count: None,
+    }
+}
+
 pub fn storage_read(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     buffer(binding, visibility, wgpu::BufferBindingType::Storage { read_only: true })
 }
@@ -76,8 +91,18 @@ pub fn bind_group(
     layout: &wgpu::BindGroupLayout,
     resources: Vec<wgpu::BindingResource<'_>>,
 ) -> wgpu::BindGroup {
+    bind_group_at(device, label, layout, resources.into_iter().enumerate().map(|(binding, resource)| (binding as u32, resource)).collect())
+}
+
+/// A bind group whose resources are bound at the slots given (for layouts with gaps).
+pub fn bind_group_at(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    resources: Vec<(u32, wgpu::BindingResource<'_>)>,
+) -> wgpu::BindGroup {
     let entries: Vec<wgpu::BindGroupEntry> =
-        resources.into_iter().enumerate().map(|(binding, resource)| wgpu::BindGroupEntry { binding: binding as u32, resource }).collect();
+        resources.into_iter().map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource }).collect();
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
 }
 

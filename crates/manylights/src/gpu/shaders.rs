@@ -44,6 +44,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("passes/visbuffer_shade.wgsl", include_str!("../passes/visbuffer_shade.wgsl")),
     ("passes/deform.wgsl", include_str!("../passes/deform.wgsl")),
     ("shading/debug_view.wgsl", include_str!("../shading/debug_view.wgsl")),
+    ("shading/pixel_hash.wgsl", include_str!("../shading/pixel_hash.wgsl")),
     ("rays/refit.wgsl", include_str!("../rays/refit.wgsl")),
     ("post/post_types.wgsl", include_str!("../post/post_types.wgsl")),
     ("post/velocity.wgsl", include_str!("../post/velocity.wgsl")),

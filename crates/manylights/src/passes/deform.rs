@@ -90,16 +90,7 @@ impl Deform {
             device,
             "deform",
             &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: c,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: true,
-                        min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<DeformJob>() as u64),
-                    },
-                    count: None,
-                },
+                bindings::uniform_dynamic(0, c, std::mem::size_of::<DeformJob>() as u64),
                 bindings::storage_read(1, c),
                 bindings::storage_read_write(2, c),
             ],

@@ -8,20 +8,12 @@
 #include "shading/scene_bindings.wgsl"
 #include "shading/depth_normal.wgsl"
 #include "rays/trace.wgsl"
+#include "shading/pixel_hash.wgsl"
 
 @group(1) @binding(0) var depth: texture_depth_2d;
 @group(1) @binding(1) var visibility_output: texture_storage_2d<rg32float, write>;
 
 const GOLDEN_RATIO_CONJUGATE: f32 = 0.6180339887;
-
-// A per-pixel value in [0, 1), to rotate each pixel's samples over the sun's disc differently (the
-// filter then averages the differences out).
-fn pixel_hash(pixel: vec2<u32>) -> f32 {
-    var h = pixel.x * 0x8da6b343u ^ pixel.y * 0xd8163841u;
-    h = (h ^ (h >> 16u)) * 0x7feb352du;
-    h = (h ^ (h >> 15u)) * 0x846ca68bu;
-    return f32((h ^ (h >> 16u)) >> 8u) / 16777216.0;
-}
 
 // Direction `k` of `count` towards the sun's disc of angular radius `radius` around `axis`: a
 // golden-angle spiral, uniform in solid angle, turned by `rotation` (in [0, 1)).

@@ -4,7 +4,7 @@
 // luminance-weighted average against fireflies); `bloom_upsample` climbs back, each level its own
 // downsampled image plus a 3×3 tent of the level below. `tonemap` blends the top level over the image
 // by `post.bloom.x`, divided by the levels the climb added up. Bilinear taps are done by hand
-// (`bilinear`): the full image is 32-bit float, which not every GPU filters.
+// (`post_bilinear`).
 #include "shading/scene_bindings.wgsl"
 #include "post/post_types.wgsl"
 
@@ -14,20 +14,6 @@
 // Upsampling: this level's downsampled image, which the climb adds to.
 @group(1) @binding(2) var base: texture_2d<f32>;
 @group(1) @binding(3) var output: texture_storage_2d<rgba16float, write>;
-
-// `texture` at a point in its texel coordinates (texel centres at +0.5), bilinearly, clamped to its
-// edges.
-fn bilinear(texture: texture_2d<f32>, p: vec2<f32>) -> vec3<f32> {
-    let size = vec2<i32>(textureDimensions(texture));
-    let q = p - 0.5;
-    let base_texel = vec2<i32>(floor(q));
-    let f = q - floor(q);
-    let t00 = textureLoad(texture, clamp(base_texel, vec2<i32>(0), size - 1), 0).rgb;
-    let t10 = textureLoad(texture, clamp(base_texel + vec2<i32>(1, 0), vec2<i32>(0), size - 1), 0).rgb;
-    let t01 = textureLoad(texture, clamp(base_texel + vec2<i32>(0, 1), vec2<i32>(0), size - 1), 0).rgb;
-    let t11 = textureLoad(texture, clamp(base_texel + vec2<i32>(1, 1), vec2<i32>(0), size - 1), 0).rgb;
-    return mix(mix(t00, t10, f.x), mix(t01, t11, f.x), f.y);
-}
 
 // The levels are 16-bit floats and filled before exposure: radiance above their largest finite value
 // (a sharp sun highlight) would store infinity, and infinity times a zero filter weight is NaN.
@@ -52,19 +38,19 @@ fn bloom_downsample(@builtin(global_invocation_id) id: vec3<u32>) {
     let scale = vec2<f32>(textureDimensions(source)) / vec2<f32>(size);
     let c = (vec2<f32>(id.xy) + 0.5) * scale;
     let s = scale * 0.5;
-    let a = bilinear(source, c + vec2<f32>(-2.0, -2.0) * s);
-    let b = bilinear(source, c + vec2<f32>(0.0, -2.0) * s);
-    let cc = bilinear(source, c + vec2<f32>(2.0, -2.0) * s);
-    let d = bilinear(source, c + vec2<f32>(-1.0, -1.0) * s);
-    let e = bilinear(source, c + vec2<f32>(1.0, -1.0) * s);
-    let f = bilinear(source, c + vec2<f32>(-2.0, 0.0) * s);
-    let g = bilinear(source, c);
-    let h = bilinear(source, c + vec2<f32>(2.0, 0.0) * s);
-    let i = bilinear(source, c + vec2<f32>(-1.0, 1.0) * s);
-    let j = bilinear(source, c + vec2<f32>(1.0, 1.0) * s);
-    let k = bilinear(source, c + vec2<f32>(-2.0, 2.0) * s);
-    let l = bilinear(source, c + vec2<f32>(0.0, 2.0) * s);
-    let m = bilinear(source, c + vec2<f32>(2.0, 2.0) * s);
+    let a = post_bilinear(source, c + vec2<f32>(-2.0, -2.0) * s);
+    let b = post_bilinear(source, c + vec2<f32>(0.0, -2.0) * s);
+    let cc = post_bilinear(source, c + vec2<f32>(2.0, -2.0) * s);
+    let d = post_bilinear(source, c + vec2<f32>(-1.0, -1.0) * s);
+    let e = post_bilinear(source, c + vec2<f32>(1.0, -1.0) * s);
+    let f = post_bilinear(source, c + vec2<f32>(-2.0, 0.0) * s);
+    let g = post_bilinear(source, c);
+    let h = post_bilinear(source, c + vec2<f32>(2.0, 0.0) * s);
+    let i = post_bilinear(source, c + vec2<f32>(-1.0, 1.0) * s);
+    let j = post_bilinear(source, c + vec2<f32>(1.0, 1.0) * s);
+    let k = post_bilinear(source, c + vec2<f32>(-2.0, 2.0) * s);
+    let l = post_bilinear(source, c + vec2<f32>(0.0, 2.0) * s);
+    let m = post_bilinear(source, c + vec2<f32>(2.0, 2.0) * s);
     // Five overlapping boxes: the centre one weighs half, the four corner ones an eighth each.
     let boxes = array<vec3<f32>, 5>(
         (d + e + i + j) * 0.25,
@@ -96,7 +82,7 @@ fn bloom_upsample(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var dy = -1; dy <= 1; dy += 1) {
         for (var dx = -1; dx <= 1; dx += 1) {
             let w = f32((2 - abs(dx)) * (2 - abs(dy))) / 16.0;
-            tent += bilinear(source, c + vec2<f32>(f32(dx), f32(dy)) * scale) * w;
+            tent += post_bilinear(source, c + vec2<f32>(f32(dx), f32(dy)) * scale) * w;
         }
     }
     textureStore(output, id.xy, vec4<f32>(half_float_range(textureLoad(base, id.xy, 0).rgb + tent), 1.0));

@@ -83,7 +83,7 @@ fn depth_of_field(@builtin(global_invocation_id) id: vec3<u32>) {
     var sum = center_color.rgb / max(center_radius * center_radius, 0.25);
     var weight_sum = 1.0 / max(center_radius * center_radius, 0.25);
     let sample_area = search * search / f32(DOF_SAMPLES);
-    let rotation = 6.283185307 * post_pixel_hash(id.xy);
+    let rotation = 6.283185307 * pixel_hash(id.xy);
     let pixel = vec2<f32>(id.xy) + 0.5;
     for (var k = 0u; k < DOF_SAMPLES; k += 1u) {
         let r = search * sqrt((f32(k) + 0.5) / f32(DOF_SAMPLES));

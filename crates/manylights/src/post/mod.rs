@@ -20,7 +20,7 @@ pub mod motion_blur;
 pub mod tonemap;
 pub mod velocity;
 
-use crate::gpu::{GpuContext, GpuScene, GpuTimer};
+use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::scene::{Camera, Projection};
 use crate::{Error, Result};
 
@@ -260,16 +260,54 @@ fn tile_count(width: u32, height: u32) -> (u32, u32) {
     (width.div_ceil(TILE), height.div_ceil(TILE))
 }
 
-/// A bind group whose resources are bound at the given slots (for layouts with gaps).
-fn bind_group_at(
-    device: &wgpu::Device,
-    label: &str,
-    layout: &wgpu::BindGroupLayout,
-    resources: Vec<(u32, wgpu::BindingResource<'_>)>,
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> =
-        resources.into_iter().map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource }).collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+/// An image of one texel per tile, written by a tile pass and read by its gather.
+fn tile_image(device: &wgpu::Device, label: &str, format: wgpu::TextureFormat, (width, height): (u32, u32)) -> wgpu::TextureView {
+    let (columns, rows) = tile_count(width, height);
+    let usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING;
+    crate::pipelines::target(device, label, columns, rows, format, usage).create_view(&Default::default())
+}
+
+/// A pass in two dispatches of one shader — a reduction per 16×16 tile, then a per-pixel gather that
+/// reads it (depth of field, motion blur) — each timed under its entry point's name.
+pub struct TiledGather {
+    steps: [TiledStep; 2],
+}
+
+struct TiledStep {
+    entry: &'static str,
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    workgroups: (u32, u32),
+}
+
+/// An entry point and what it binds in group 1: each layout entry with the resource at its slot.
+type Bindings<'a> = (&'static str, Vec<(wgpu::BindGroupLayoutEntry, wgpu::BindingResource<'a>)>);
+
+impl TiledGather {
+    fn new(ctx: &GpuContext, scene: &GpuScene, shader: &'static str, size: (u32, u32), tiles: Bindings, gather: Bindings) -> Result<Self> {
+        let (columns, rows) = tile_count(size.0, size.1);
+        let step = |(entry, bound): Bindings, (width, height): (u32, u32)| -> Result<TiledStep> {
+            let (entries, resources): (Vec<_>, Vec<_>) = bound.into_iter().map(|(e, r)| (e, (e.binding, r))).unzip();
+            let layout = bindings::layout(&ctx.device, entry, &entries);
+            let pipeline = bindings::compute_pipeline(&ctx.device, entry, &ShaderDesc::new(shader), &[&scene.bind_group_layout, &layout])?;
+            let bind_group = bindings::bind_group_at(&ctx.device, entry, &layout, resources);
+            Ok(TiledStep { entry, pipeline, bind_group, workgroups: crate::passes::dispatch_size(width, height) })
+        };
+        Ok(Self { steps: [step(tiles, (columns, rows))?, step(gather, size)?] })
+    }
+
+    fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, scene: &GpuScene) {
+        for step in &self.steps {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(step.entry),
+                timestamp_writes: timer.as_deref_mut().map(|t| t.compute_pass(step.entry)),
+            });
+            pass.set_pipeline(&step.pipeline);
+            pass.set_bind_group(0, &scene.bind_group, &[]);
+            pass.set_bind_group(1, &step.bind_group, &[]);
+            pass.dispatch_workgroups(step.workgroups.0, step.workgroups.1, 1);
+        }
+    }
 }
 
 /// An intermediate image of the chain.
@@ -288,9 +326,9 @@ pub struct PostChain {
     exposure_saved: wgpu::Buffer,
     size: (u32, u32),
     depth: wgpu::TextureView,
-    depth_of_field: Option<depth_of_field::DepthOfFieldPass>,
+    depth_of_field: Option<TiledGather>,
     /// Motion blur, its velocity pass and the velocity image.
-    motion_blur: Option<(velocity::Velocity, wgpu::TextureView, motion_blur::MotionBlurPass)>,
+    motion_blur: Option<(velocity::Velocity, wgpu::TextureView, TiledGather)>,
     exposure: Option<exposure::AutoExposurePass>,
     bloom: Option<bloom::BloomPass>,
     tonemap: tonemap::Tonemap,
@@ -330,7 +368,7 @@ impl PostChain {
         let depth_of_field = match settings.depth_of_field {
             Some(_) => {
                 let output = post_image(device, "depth of field", size);
-                let pass = depth_of_field::DepthOfFieldPass::new(ctx, scene, &uniforms, (&depth_view, &current, &output), size)?;
+                let pass = depth_of_field::new(ctx, scene, &uniforms, (&depth_view, &current, &output), size)?;
                 current = output;
                 Some(pass)
             }
@@ -349,7 +387,7 @@ impl PostChain {
                 let velocity_view = view(&velocity_image);
                 let velocity = velocity::Velocity::new(ctx, scene, &uniforms, &depth_view, &velocity_view)?;
                 let output = post_image(device, "motion blur", size);
-                let pass = motion_blur::MotionBlurPass::new(ctx, scene, &uniforms, (&depth_view, &velocity_view, &current, &output), size)?;
+                let pass = motion_blur::new(ctx, scene, &uniforms, (&depth_view, &velocity_view, &current, &output), size)?;
                 current = output;
                 Some((velocity, velocity_view, pass))
             }
@@ -421,11 +459,11 @@ impl PostChain {
     /// Records the chain after the frame's HDR image is complete.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, scene: &GpuScene, eye: glam::Vec3) {
         if let Some(pass) = &self.depth_of_field {
-            pass.record(encoder, timer.as_deref_mut(), scene, self.size);
+            pass.record(encoder, timer.as_deref_mut(), scene);
         }
         if let Some((velocity, velocity_view, pass)) = &self.motion_blur {
             velocity.record(encoder, timer.as_deref_mut(), scene, eye, (&self.depth, velocity_view), self.size);
-            pass.record(encoder, timer.as_deref_mut(), scene, self.size);
+            pass.record(encoder, timer.as_deref_mut(), scene);
         }
         if let Some(pass) = &self.exposure {
             pass.record(encoder, timer.as_deref_mut(), scene, self.size);

@@ -97,7 +97,7 @@ fn motion_blur(@builtin(global_invocation_id) id: vec3<u32>) {
     var sum = center_color.rgb * weight_sum;
     // Samples spread evenly over [−½, ½] of the longest blur, shifted per pixel to trade banding for
     // noise.
-    let jitter = post_pixel_hash(id.xy) - 0.5;
+    let jitter = pixel_hash(id.xy) - 0.5;
     let pixel = vec2<f32>(id.xy) + 0.5;
     for (var k = 0u; k < samples; k += 1u) {
         let t = (f32(k) + 0.5 + jitter) / f32(samples) - 0.5;

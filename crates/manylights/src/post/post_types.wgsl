@@ -1,6 +1,7 @@
 // The post chain's per-frame constants (`post::PostUniforms`, keep in sync) and what its passes share.
 // Every pass binds the scene as group 0 (frame uniforms, camera rays) and these at group 1, binding 0.
 #include "shading/camera.wgsl"
+#include "shading/pixel_hash.wgsl"
 
 struct PostUniforms {
     // The previous frame's clip space from the current frame's camera-relative world: where a point
@@ -30,13 +31,19 @@ fn clip_to_pixel(clip: vec4<f32>) -> vec2<f32> {
     return vec2<f32>((ndc.x * 0.5 + 0.5) * frame.viewport.x, (0.5 - ndc.y * 0.5) * frame.viewport.y);
 }
 
-// A per-pixel value in [0, 1), to turn each pixel's sample pattern differently (noise instead of
-// banding).
-fn post_pixel_hash(pixel: vec2<u32>) -> f32 {
-    var h = pixel.x * 0x8da6b343u ^ pixel.y * 0xd8163841u;
-    h = (h ^ (h >> 16u)) * 0x7feb352du;
-    h = (h ^ (h >> 15u)) * 0x846ca68bu;
-    return f32((h ^ (h >> 16u)) >> 8u) / 16777216.0;
+// `texture` at a point in its texel coordinates (texel centres at +0.5), bilinearly, clamped to its
+// edges. Taps are loaded by hand: the chain's full-resolution images are 32-bit float, which not every
+// GPU filters.
+fn post_bilinear(texture: texture_2d<f32>, p: vec2<f32>) -> vec3<f32> {
+    let size = vec2<i32>(textureDimensions(texture));
+    let q = p - 0.5;
+    let base_texel = vec2<i32>(floor(q));
+    let f = q - floor(q);
+    let t00 = textureLoad(texture, clamp(base_texel, vec2<i32>(0), size - 1), 0).rgb;
+    let t10 = textureLoad(texture, clamp(base_texel + vec2<i32>(1, 0), vec2<i32>(0), size - 1), 0).rgb;
+    let t01 = textureLoad(texture, clamp(base_texel + vec2<i32>(0, 1), vec2<i32>(0), size - 1), 0).rgb;
+    let t11 = textureLoad(texture, clamp(base_texel + vec2<i32>(1, 1), vec2<i32>(0), size - 1), 0).rgb;
+    return mix(mix(t00, t10, f.x), mix(t01, t11, f.x), f.y);
 }
 
 // Distance along the view axis from the camera to the surface a pixel of the depth buffer shows

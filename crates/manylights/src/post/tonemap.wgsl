@@ -66,17 +66,9 @@ fn linear_to_srgb(c: vec3<f32>) -> vec3<f32> {
     return select(high, low, c <= vec3<f32>(0.0031308));
 }
 
-// `bloom` at a full-resolution pixel, bilinearly, its texels loaded by hand as the bloom chain does.
+// `bloom` (half resolution) at a full-resolution pixel.
 fn bloom_at(pixel: vec2<f32>) -> vec3<f32> {
-    let size = vec2<i32>(textureDimensions(bloom));
-    let q = pixel * vec2<f32>(size) * frame.viewport.zw - 0.5;
-    let base_texel = vec2<i32>(floor(q));
-    let f = q - floor(q);
-    let t00 = textureLoad(bloom, clamp(base_texel, vec2<i32>(0), size - 1), 0).rgb;
-    let t10 = textureLoad(bloom, clamp(base_texel + vec2<i32>(1, 0), vec2<i32>(0), size - 1), 0).rgb;
-    let t01 = textureLoad(bloom, clamp(base_texel + vec2<i32>(0, 1), vec2<i32>(0), size - 1), 0).rgb;
-    let t11 = textureLoad(bloom, clamp(base_texel + vec2<i32>(1, 1), vec2<i32>(0), size - 1), 0).rgb;
-    return mix(mix(t00, t10, f.x), mix(t01, t11, f.x), f.y);
+    return post_bilinear(bloom, pixel * vec2<f32>(textureDimensions(bloom)) * frame.viewport.zw);
 }
 
 // Natural vignetting: a lens passes cos⁴ θ of the light arriving θ off its axis; `strength` blends

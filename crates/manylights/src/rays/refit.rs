@@ -124,16 +124,7 @@ impl BlasRefit {
             device,
             "blas_refit",
             &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: c,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: true,
-                        min_binding_size: step_size,
-                    },
-                    count: None,
-                },
+                bindings::uniform_dynamic(0, c, std::mem::size_of::<RefitStep>() as u64),
                 bindings::storage_read(1, c),
                 bindings::storage_read(2, c),
                 bindings::storage_read(3, c),
