@@ -1,11 +1,13 @@
-//! The WGSL point query (`accel/volume_query.wgsl`), run on the GPU through the two-level structure,
-//! reaches exactly the lights the CPU oracle finds: for every point, the lights of every group
-//! instance whose volume, placed in the world, contains it (`accel::light_contains`).
+//! The WGSL point query (`accel/volume_query.wgsl`, and `volume_query_subgroup.wgsl` walked a
+//! subgroup at a time), run on the GPU through the two-level structure, reaches exactly the lights the
+//! CPU oracle finds: for every point, the lights of every group instance whose volume, placed in the
+//! world, contains it (`accel::light_contains`). Points come scattered (every lane of a subgroup far
+//! from the others) and in tight clusters (neighbouring pixels' points).
 
 use glam::{Affine3A, Quat, Vec3};
 use manylights::{
-    accel::{light_contains, BvhBuild, VolumeStructure, CPU_TOP_LEVEL_MAX_INSTANCES},
-    gpu::{readback, shaders, shaders::ShaderDesc, GpuContext},
+    accel::{light_contains, volume_query_probe_shader, BvhBuild, VolumeStructure, CPU_TOP_LEVEL_MAX_INSTANCES},
+    gpu::{readback, shaders, GpuContext},
     scene::{GroupInstance, Groups, Light, LightKind, Spin},
 };
 use rand::{Rng, SeedableRng};
@@ -36,7 +38,14 @@ fn random_lights(count: usize, rng: &mut rand_pcg::Pcg64) -> Vec<Light> {
 }
 
 /// Per point: (count, Σ index, Σ index²) of the lights the GPU query reaches and the tight test keeps.
-fn gpu_query(ctx: &GpuContext, lights: &[Light], groups: &Groups, build: BvhBuild, time: f32, points: &[Vec3]) -> Vec<[u32; 4]> {
+fn gpu_query(
+    ctx: &GpuContext,
+    lights: &[Light],
+    groups: &Groups,
+    (build, subgroups): (BvhBuild, bool),
+    time: f32,
+    points: &[Vec3],
+) -> Vec<[u32; 4]> {
     let device = &ctx.device;
     let mut structure = VolumeStructure::for_lights(ctx, lights, groups, build, None).unwrap();
     let gpu_points: Vec<[f32; 4]> = points.iter().map(|p| p.extend(1.0).to_array()).collect();
@@ -71,7 +80,7 @@ fn gpu_query(ctx: &GpuContext, lights: &[Light], groups: &Groups, build: BvhBuil
         label: None,
         entries: &[entry(0, true), entry(1, false), entry(2, true)],
     });
-    let module = shaders::create_module(device, &ShaderDesc::new("accel/volume_query_probe.wgsl")).unwrap();
+    let module = shaders::create_module(device, &volume_query_probe_shader(subgroups)).unwrap();
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("volume_query_probe"),
         layout: Some(&device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -137,17 +146,47 @@ fn cpu_oracle(lights: &[Light], groups: &Groups, time: f32, p: Vec3) -> [u32; 4]
     summary
 }
 
+fn random_point(rng: &mut rand_pcg::Pcg64, half_extent: f32) -> Vec3 {
+    Vec3::new(
+        rng.random_range(-half_extent..half_extent),
+        rng.random_range(-half_extent..half_extent),
+        rng.random_range(-half_extent..half_extent),
+    )
+}
+
+/// Queries 4,096 scattered points and 4,096 in clusters of 64 within 0.3 m, with every build and both
+/// walks; returns the lights the scattered points reach.
 fn check(ctx: &GpuContext, lights: &[Light], groups: &Groups, time: f32, rng: &mut rand_pcg::Pcg64) -> u32 {
-    let points: Vec<Vec3> =
-        (0..4096).map(|_| Vec3::new(rng.random_range(-12.0..12.0), rng.random_range(-12.0..12.0), rng.random_range(-12.0..12.0))).collect();
+    assert!(
+        ctx.features.contains(wgpu::Features::SUBGROUP),
+        "{} has no subgroup operations, so the subgroup walk would go untested",
+        ctx.describe()
+    );
+    let scattered: Vec<Vec3> = (0..4096).map(|_| random_point(rng, 12.0)).collect();
+    let clustered: Vec<Vec3> = (0..64)
+        .flat_map(|_| {
+            let centre = random_point(rng, 10.0);
+            (0..64).map(|_| centre + random_point(rng, 0.3)).collect::<Vec<_>>()
+        })
+        .collect();
     let mut reached = 0;
-    for build in [BvhBuild::CpuOnce, BvhBuild::GpuEveryFrame] {
-        let gpu = gpu_query(ctx, lights, groups, build, time, &points);
-        reached = 0;
-        for (p, got) in points.iter().zip(&gpu) {
-            let expected = cpu_oracle(lights, groups, time, *p);
-            assert_eq!(*got, expected, "{} lights, {build:?}, point {p}: GPU (count, Σi, Σi²) differs from the CPU oracle", lights.len());
-            reached += expected[0];
+    for (points, name) in [(&scattered, "scattered"), (&clustered, "clustered")] {
+        let expected: Vec<[u32; 4]> = points.iter().map(|p| cpu_oracle(lights, groups, time, *p)).collect();
+        for build in [BvhBuild::CpuOnce, BvhBuild::GpuEveryFrame] {
+            for subgroups in [false, true] {
+                let gpu = gpu_query(ctx, lights, groups, (build, subgroups), time, points);
+                for ((p, got), expected) in points.iter().zip(&gpu).zip(&expected) {
+                    assert_eq!(
+                        got,
+                        expected,
+                        "{} lights, {build:?}, subgroups {subgroups}, {name} point {p}: GPU (count, Σi, Σi²) differs from the CPU oracle",
+                        lights.len()
+                    );
+                }
+            }
+        }
+        if name == "scattered" {
+            reached = expected.iter().map(|e| e[0]).sum();
         }
     }
     reached

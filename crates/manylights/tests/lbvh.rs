@@ -76,6 +76,42 @@ fn gpu_builds_are_valid_and_exact() {
     assert!(build(&ctx, &mut lbvh, &[]).nodes.is_empty());
 }
 
+/// Leaves of several boxes (the particle lights' groups): small subtrees become leaves over their
+/// range of sorted boxes, the walk never enters the nodes below them, and queries stay exact.
+#[test]
+fn gpu_builds_with_leaves_of_several_boxes_are_valid_and_exact() {
+    let ctx = GpuContext::new().expect("a GPU adapter");
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(21);
+    for size in [2, 8, 16] {
+        let mut lbvh = GpuLbvh::new(&ctx, 5000).unwrap().with_max_leaf_size(size);
+        for count in [1, 2, 9, 300, 5000] {
+            let boxes = random_boxes(count, &mut rng);
+            let bvh = build(&ctx, &mut lbvh, &boxes);
+            check(&bvh, &boxes, &mut rng);
+            // Every leaf the walk reaches holds at most `size` boxes, and large trees have leaves
+            // holding several.
+            let mut reached = Vec::new();
+            let mut n = 0u32;
+            while n != manylights::accel::END {
+                let node = &bvh.nodes[n as usize];
+                match bvh.children(node) {
+                    Some((first, _)) => n = first,
+                    None => {
+                        reached.push(node.leaf_range().len());
+                        n = node.skip;
+                    }
+                }
+            }
+            assert_eq!(reached.iter().sum::<usize>(), count, "leaf size {size}: the leaves hold every box once");
+            assert!(reached.iter().all(|&l| (1..=size as usize).contains(&l)), "leaf size {size}: {reached:?}");
+            if count >= 300 {
+                let most = if size >= 8 { count / 3 } else { count - 1 };
+                assert!(reached.len() <= most, "leaf size {size}: {} leaves for {count} boxes", reached.len());
+            }
+        }
+    }
+}
+
 #[test]
 fn bad_volumes_and_overflow_are_errors() {
     let ctx = GpuContext::new().expect("a GPU adapter");

@@ -388,8 +388,9 @@ fn every_filter_and_supersampling_light_the_wall_like_the_point_light() {
 }
 
 /// The exact method: the particles as point lights in the lights' BVH, rebuilt on the GPU every
-/// frame beside the scene's own light, light the scene as the same lights from the CPU twin do
-/// through brute force.
+/// frame (leaves of several particles) beside the scene's own light, light the scene as the same
+/// lights from the CPU twin do through brute force, in every pipeline, the compute ones walking the
+/// BVH a subgroup at a time or, on a device without subgroups, one invocation at a time.
 #[test]
 fn particles_as_lights_equal_their_point_lights() {
     let scene_light = point_light(Vec3::new(3.0, 2.0, 1.5), 2.0, 4.0);
@@ -404,12 +405,6 @@ fn particles_as_lights_equal_their_point_lights() {
     };
     scene.particles = Some(settings.clone());
     let time = 1.7;
-    let exact =
-        RenderConfig { particle_method: ParticleMethod::Bvh, decal_method: DecalMethod::Off, ..config(SIZE.0, SIZE.1, LightMethod::Bvh) };
-    let mut renderer = common::renderer(&scene, exact);
-    renderer.time = time;
-    renderer.render(&camera).unwrap();
-    let image = renderer.read_hdr().unwrap();
 
     let lights: Vec<Light> = (0..settings.count)
         .map(|i| {
@@ -427,15 +422,28 @@ fn particles_as_lights_equal_their_point_lights() {
         .chain([scene_light])
         .collect();
     let (reference_scene, _) = wall_scene(lights);
-    let reference = render_with(
-        &reference_scene,
-        &camera,
-        RenderConfig { decal_method: DecalMethod::Off, ..config(SIZE.0, SIZE.1, LightMethod::Brute) },
-    )
-    .1;
-    assert!(reference.pixels.iter().map(|&p| luminance(p)).fold(0.0, f32::max) > 0.05, "the particles light nothing");
-    let difference = max_abs_difference(&image, &reference);
-    assert!(difference <= 1e-3, "max abs difference {difference} from the point lights");
+    let with_subgroups = GpuContext::new().unwrap();
+    assert!(with_subgroups.features.contains(wgpu::Features::SUBGROUP), "the subgroup walk would go untested");
+    let without_subgroups = GpuContext::without(wgpu::Features::SUBGROUP).unwrap();
+    for pipeline in PipelineKind::ALL {
+        // Pipelines differ by their G-buffer's precision: each is compared with itself.
+        let brute = RenderConfig { decal_method: DecalMethod::Off, pipeline, ..config(SIZE.0, SIZE.1, LightMethod::Brute) };
+        let reference = render_with(&reference_scene, &camera, brute).1;
+        assert!(reference.pixels.iter().map(|&p| luminance(p)).fold(0.0, f32::max) > 0.05, "the particles light nothing");
+        for (ctx, walk) in [(&with_subgroups, "subgroup"), (&without_subgroups, "invocation")] {
+            let exact = RenderConfig {
+                particle_method: ParticleMethod::Bvh,
+                decal_method: DecalMethod::Off,
+                pipeline,
+                ..config(SIZE.0, SIZE.1, LightMethod::Bvh)
+            };
+            let mut renderer = manylights::renderer::Renderer::new(ctx.clone(), &scene, exact).unwrap();
+            renderer.time = time;
+            renderer.render(&camera).unwrap();
+            let difference = max_abs_difference(&renderer.read_hdr().unwrap(), &reference);
+            assert!(difference <= 1e-3, "{} pipeline, {walk} walk: max abs difference {difference} from the point lights", pipeline.name());
+        }
+    }
 
     // Other light methods do not read the particles' lights: a clear error.
     let err = manylights::renderer::Renderer::new(

@@ -219,6 +219,43 @@ impl Bvh {
         deepest
     }
 
+    /// The nodes a walk from the root reaches, renumbered depth-first with their links remapped. A GPU
+    /// build whose small subtrees became leaves (`GpuLbvh::with_max_leaf_size`) leaves the nodes below
+    /// them in its node array, unreachable. A malformed tree is returned as it is, for
+    /// [`validate`](Self::validate) to report.
+    pub fn reachable(&self) -> Bvh {
+        let mut order = Vec::new();
+        let mut stack = vec![0u32];
+        while let Some(n) = stack.pop() {
+            let Some(node) = self.nodes.get(n as usize) else { return self.clone() };
+            if order.len() == self.nodes.len() {
+                return self.clone();
+            }
+            order.push(n);
+            if !node.is_leaf() {
+                let Some(first) = self.nodes.get(node.entry as usize) else { return self.clone() };
+                stack.push(first.skip);
+                stack.push(node.entry);
+            }
+        }
+        if self.nodes.is_empty() || order.len() == self.nodes.len() {
+            return self.clone();
+        }
+        let mut renumbered = vec![END; self.nodes.len()];
+        for (new, &old) in order.iter().enumerate() {
+            renumbered[old as usize] = new as u32;
+        }
+        let remap = |n: u32| renumbered.get(n as usize).copied().unwrap_or(END);
+        let nodes = order
+            .iter()
+            .map(|&n| {
+                let node = self.nodes[n as usize];
+                BvhNode { entry: if node.is_leaf() { node.entry } else { remap(node.entry) }, skip: remap(node.skip), ..node }
+            })
+            .collect();
+        Bvh { nodes, primitive_indices: self.primitive_indices.clone() }
+    }
+
     /// Checks everything the GPU traversal relies on, for this BVH over `aabbs`: child and primitive
     /// indices in range, every node reached exactly once from the root (no cycles, no orphans), each
     /// second child skipping where its parent does and the root to [`END`], non-empty leaves covering
@@ -543,6 +580,46 @@ pub(crate) mod tests {
             points.push(p);
         }
         points
+    }
+
+    /// A subtree turned into a leaf over its primitives, as the GPU builder's larger leaves are: the
+    /// nodes below it drop out, renumbered links still validate, and queries are unchanged.
+    #[test]
+    fn reachable_drops_the_nodes_under_a_collapsed_subtree() {
+        let mut rng = Pcg64::seed_from_u64(0xc011);
+        let boxes = random_boxes(&mut rng, 200);
+        let mut bvh = Bvh::build(&boxes).unwrap();
+        assert_eq!(bvh.reachable(), bvh, "a tree without orphans is kept as it is");
+        // The primitive slots of each internal node's subtree (one contiguous run, built depth-first).
+        let subtree_slots = |bvh: &Bvh, root: u32| {
+            let (mut slots, mut n, stop) = (Vec::new(), root, bvh.nodes[root as usize].skip);
+            while n != stop {
+                let node = bvh.nodes[n as usize];
+                match bvh.children(&node) {
+                    Some((child, _)) => n = child,
+                    None => {
+                        slots.extend(node.leaf_range());
+                        n = node.skip;
+                    }
+                }
+            }
+            slots
+        };
+        // An internal node below the root over more primitives than one leaf of the builder holds.
+        let first = (1..bvh.nodes.len() as u32)
+            .find(|&n| !bvh.nodes[n as usize].is_leaf() && (9..=MAX_LEAF_COUNT as usize).contains(&subtree_slots(&bvh, n).len()))
+            .unwrap();
+        let slots = subtree_slots(&bvh, first);
+        let (start, count) = (slots[0] as u32, slots.len() as u32);
+        assert!(slots.iter().enumerate().all(|(i, &s)| s == slots[0] + i));
+        bvh.nodes[first as usize].entry = BvhNode::leaf_entry(start, count);
+        assert!(bvh.validate(&boxes).unwrap_err().contains("not reachable"));
+        let compact = bvh.reachable();
+        compact.validate(&boxes).unwrap();
+        assert!(compact.nodes.len() < bvh.nodes.len());
+        for p in random_points(&mut rng, &boxes, 500) {
+            assert_eq!(query(&compact, &boxes, p), query(&Bvh::build(&boxes).unwrap(), &boxes, p));
+        }
     }
 
     #[test]

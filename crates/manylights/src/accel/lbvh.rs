@@ -4,7 +4,7 @@
 //! the top level, so their boxes change only when the group's contents change). The nodes land in a
 //! region of a node array that may hold other BVHs too ([`LbvhTarget`]).
 
-use super::{radix_sort::GpuRadixSort, Aabb, Bvh, BvhNode};
+use super::{radix_sort::GpuRadixSort, Aabb, Bvh, BvhNode, MAX_LEAF_SIZE};
 use crate::gpu::{bindings, readback, shaders::ShaderDesc, GpuContext, GpuTimer};
 use crate::{Error, Result};
 use glam::Vec3;
@@ -25,6 +25,8 @@ struct LbvhParams {
     node_base: u32,
     primitive_base: u32,
     item_base: u32,
+    max_leaf_size: u32,
+    _pad: [u32; 3],
     centre_min: [f32; 4],
     centre_max: [f32; 4],
 }
@@ -71,6 +73,7 @@ pub struct GpuLbvh {
     target: LbvhTarget,
     capacity: u32,
     count: u32,
+    max_leaf_size: u32,
 }
 
 impl GpuLbvh {
@@ -156,7 +159,16 @@ impl GpuLbvh {
             target,
             capacity,
             count: 0,
+            max_leaf_size: 1,
         })
+    }
+
+    /// Builds leaves of up to `size` boxes (1 to [`MAX_LEAF_SIZE`]): subtrees of Karras's hierarchy
+    /// over at most that many boxes become leaves. Takes effect at the next `set_boxes` or
+    /// `set_gpu_boxes`.
+    pub fn with_max_leaf_size(mut self, size: u32) -> Self {
+        self.max_leaf_size = size.clamp(1, MAX_LEAF_SIZE);
+        self
     }
 
     /// Sets the boxes of the next build. Non-finite or inverted boxes are errors, as for the CPU builder.
@@ -184,6 +196,8 @@ impl GpuLbvh {
             node_base: t.node_base,
             primitive_base: t.primitive_base,
             item_base: t.item_base,
+            max_leaf_size: self.max_leaf_size,
+            _pad: [0; 3],
             centre_min: centre_min.extend(0.0).to_array(),
             centre_max: centre_max.extend(0.0).to_array(),
         };
@@ -209,6 +223,8 @@ impl GpuLbvh {
             node_base: t.node_base,
             primitive_base: t.primitive_base,
             item_base: t.item_base,
+            max_leaf_size: self.max_leaf_size,
+            _pad: [0; 3],
             centre_min: centres.min.extend(0.0).to_array(),
             centre_max: centres.max.extend(0.0).to_array(),
         };
@@ -253,7 +269,8 @@ impl GpuLbvh {
     }
 
     /// Reads the last build back, with indices local to it (as if `node_base`, `primitive_base` and
-    /// `item_base` were 0): for tests and validation.
+    /// `item_base` were 0) and only the nodes a walk reaches ([`Bvh::reachable`]): for tests and
+    /// validation.
     pub fn read_back(&self, ctx: &GpuContext) -> Result<Bvh> {
         let copy = |source: &wgpu::Buffer, offset: u64, size: u64| -> Result<Vec<u8>> {
             let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -282,7 +299,7 @@ impl GpuLbvh {
         for primitive in &mut bvh.primitive_indices {
             *primitive = primitive.wrapping_sub(t.item_base);
         }
-        Ok(bvh)
+        Ok(bvh.reachable())
     }
 }
 

@@ -12,6 +12,8 @@ struct LbvhParams {
     node_base: u32,
     primitive_base: u32,
     item_base: u32,
+    // Subtrees over at most this many boxes are leaves (1: every box its own leaf).
+    max_leaf_size: u32,
     // The Morton grid: the bounds of the box centres when the CPU uploads the boxes, or bounds the
     // centres are known to stay within when a GPU pass writes them (centres outside are clamped in).
     centre_min: vec4<f32>,
@@ -171,7 +173,11 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
     let gamma = i + split * d + min(d, 0);
     let left = child_node(gamma, min(i, j) == gamma);
     let right = child_node(gamma + 1, max(i, j) == gamma + 1);
-    nodes[params.node_base + id.x].entry = params.node_base + left;
+    let first = u32(min(i, j));
+    let size = u32(max(i, j)) + 1u - first;
+    // A small subtree becomes a leaf over its range of sorted boxes; the nodes below it are never
+    // reached (the bounds pass still gives it the box of its whole range).
+    nodes[params.node_base + id.x].entry = select(params.node_base + left, BVH_LEAF | ((size - 1u) << BVH_LEAF_COUNT_SHIFT) | (params.primitive_base + first), size <= params.max_leaf_size);
     nodes[params.node_base + id.x].skip = skip_after(max(i, j));
     parents[left] = id.x;
     parents[right] = id.x;

@@ -3,7 +3,7 @@
 // item indices, which the tests compare with the CPU oracle. Runs the same query code as shading.
 #include "shading/light_bindings.wgsl"
 #include "shading/light_volume.wgsl"
-#include "accel/volume_query.wgsl" with VOLUMES=light
+#include "$LIGHT_QUERY" with VOLUMES=light
 
 @group(1) @binding(0) var<storage, read> points: array<vec4<f32>>;
 @group(1) @binding(1) var<storage, read_write> results: array<vec4<u32>>;
@@ -18,7 +18,7 @@ fn volume_query_probe(@builtin(global_invocation_id) id: vec3<u32>) {
     let p = points[id.x].xyz;
     var summary = vec4<u32>(0u);
     light_query_begin(p, instance_count);
-    for (var leaf = light_query_next_leaf(); leaf.x < leaf.y; leaf = light_query_next_leaf()) {
+    for (var leaf = light_query_next_leaf(); leaf.x != BVH_END; leaf = light_query_next_leaf()) {
         for (var k = leaf.x; k < leaf.y; k += 1u) {
             let light = light_primitives[k];
             if light_reaches(light_in_world(lights[light], light_query_instance), p) {

@@ -15,9 +15,12 @@ use crate::{Error, Result};
 const REQUIRED_STORAGE_BUFFERS: u32 = 19;
 /// Features the renderer uses when the adapter has them; none is required by every scene.
 /// `primitive_index` lets the visibility raster draw indexed; `float32_blendable` lets transparent
-/// surfaces blend into the f32 HDR image (scenes with them need it).
-const OPTIONAL_FEATURES: wgpu::Features =
-    wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::PRIMITIVE_INDEX).union(wgpu::Features::FLOAT32_BLENDABLE);
+/// surfaces blend into the f32 HDR image (scenes with them need it); `subgroups` let compute passes
+/// walk the lights' BVH a subgroup at a time.
+const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
+    .union(wgpu::Features::PRIMITIVE_INDEX)
+    .union(wgpu::Features::FLOAT32_BLENDABLE)
+    .union(wgpu::Features::SUBGROUP);
 
 /// Clones share the device: several renderers (a benchmark's configurations) can use one.
 #[derive(Clone)]

@@ -5,8 +5,12 @@
 //! `#include "path" with KEY=value` includes a template: every name starting `KEY_` in it becomes
 //! `value_` (once per distinct value), which is how lights and decals each get a point query over their
 //! own bindings without binding-array support.
+//!
+//! `MANYLIGHTS_SHADER_DIR`, when set, names a directory laid out like this crate's `src/` whose WGSL
+//! files replace the embedded ones: shader edits take effect without rebuilding the binary.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
+use std::sync::OnceLock;
 
 /// Every WGSL file, by the path the `#include` lines use.
 const SOURCES: &[(&str, &str)] = &[
@@ -33,6 +37,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("accel/cluster_build.wgsl", include_str!("../accel/cluster_build.wgsl")),
     ("accel/workgroup_scan.wgsl", include_str!("../accel/workgroup_scan.wgsl")),
     ("accel/volume_query.wgsl", include_str!("../accel/volume_query.wgsl")),
+    ("accel/volume_query_subgroup.wgsl", include_str!("../accel/volume_query_subgroup.wgsl")),
     ("accel/bvh_types.wgsl", include_str!("../accel/bvh_types.wgsl")),
     ("shading/camera.wgsl", include_str!("../shading/camera.wgsl")),
     ("accel/lbvh.wgsl", include_str!("../accel/lbvh.wgsl")),
@@ -128,7 +133,12 @@ impl ShaderDesc {
         if !seen.insert(key) {
             return Ok(());
         }
-        let (_, source) = embedded(path).ok_or_else(|| format!("unknown shader file `{path}` (included from {:?})", stack.last()))?;
+        let (_, embedded_source) =
+            embedded(path).ok_or_else(|| format!("unknown shader file `{path}` (included from {:?})", stack.last()))?;
+        let source = match shader_dir() {
+            Some(dir) => from_dir(dir, path)?,
+            None => embedded_source,
+        };
         stack.push(path);
         for line in source.lines() {
             match include_target(line) {
@@ -173,6 +183,28 @@ fn embedded(path: &str) -> Option<(&'static str, &'static str)> {
     SOURCES.iter().find(|(p, _)| *p == path).copied()
 }
 
+/// The directory `MANYLIGHTS_SHADER_DIR` names, if set.
+fn shader_dir() -> Option<&'static str> {
+    static DIR: OnceLock<Option<String>> = OnceLock::new();
+    DIR.get_or_init(|| std::env::var("MANYLIGHTS_SHADER_DIR").ok().filter(|d| !d.is_empty())).as_deref()
+}
+
+/// The file at `path` under `dir`, read once and kept for the process's life (shaders are composed
+/// again for every pipeline).
+fn from_dir(dir: &str, path: &str) -> Result<&'static str, String> {
+    static FILES: OnceLock<std::sync::Mutex<HashMap<String, &'static str>>> = OnceLock::new();
+    let mut files = FILES.get_or_init(Default::default).lock().unwrap_or_else(|p| p.into_inner());
+    if let Some(text) = files.get(path) {
+        return Ok(text);
+    }
+    let file = std::path::Path::new(dir).join(path);
+    let text = std::fs::read_to_string(&file)
+        .map_err(|e| format!("MANYLIGHTS_SHADER_DIR: cannot read {}: {e} (unset it to use the built-in shaders)", file.display()))?;
+    let text: &'static str = Box::leak(text.into_boxed_str());
+    files.insert(path.to_string(), text);
+    Ok(text)
+}
+
 /// The path of an `#include "path"` line, and the text after `with` if it has one.
 fn include_target(line: &str) -> Option<(&str, Option<&str>)> {
     let rest = line.trim().strip_prefix("#include")?.trim().strip_prefix('"')?;
@@ -207,7 +239,8 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("post/exposure.wgsl"),
         ShaderDesc::new("post/bloom.wgsl"),
         ShaderDesc::new("post/tonemap.wgsl"),
-        ShaderDesc::new("accel/volume_query_probe.wgsl"),
+        crate::accel::volume_query_probe_shader(false),
+        crate::accel::volume_query_probe_shader(true),
         ShaderDesc::new("accel/lbvh.wgsl"),
         ShaderDesc::new("accel/radix_sort.wgsl"),
         ShaderDesc::new("accel/cluster_build.wgsl"),
@@ -228,15 +261,19 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
             #[rustfmt::skip]
             let variants = [(ParticleMethod::Off, false, false), (ParticleMethod::Grid, false, false), (ParticleMethod::Grid, true, true)];
             for (particles, reflections, light_shadows) in variants {
-                let methods = ShadingMethods { lights, decals, particles, reflections, light_shadows };
-                if decals.works_in(PipelineKind::Visbuffer) {
-                    shaders.push(crate::passes::visbuffer_shade::shader(methods));
-                }
+                let methods = ShadingMethods { lights, decals, particles, reflections, light_shadows, subgroup_light_queries: false };
                 if decals.works_in(PipelineKind::Forward) {
                     shaders.push(crate::passes::forward_shade::shader(methods));
                 }
-                shaders.push(crate::passes::deferred_shade::shader(methods));
                 shaders.push(crate::passes::transparent_shade::shader(methods));
+                // Compute passes walk the lights' BVH per invocation or per subgroup.
+                for subgroup_light_queries in [false, true] {
+                    let methods = ShadingMethods { subgroup_light_queries, ..methods };
+                    if decals.works_in(PipelineKind::Visbuffer) {
+                        shaders.push(crate::passes::visbuffer_shade::shader(methods));
+                    }
+                    shaders.push(crate::passes::deferred_shade::shader(methods));
+                }
             }
         }
     }
@@ -251,11 +288,14 @@ mod tests {
         let source = desc.compose().unwrap_or_else(|e| panic!("{}: {e}", desc.entry));
         let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}:\n{}", desc.entry, e.emit_to_string(&source)));
         // Shaders that enable a WGSL extension run only on devices with the matching feature.
-        let capabilities = if source.contains("enable primitive_index;") {
-            naga::valid::Capabilities::PRIMITIVE_INDEX
-        } else {
-            naga::valid::Capabilities::empty()
-        };
+        let mut capabilities = naga::valid::Capabilities::empty();
+        if source.contains("enable primitive_index;") {
+            capabilities |= naga::valid::Capabilities::PRIMITIVE_INDEX;
+        }
+        // Subgroup built-ins need no `enable` in wgpu's WGSL (naga rejects the standard's).
+        if source.contains("subgroupAny(") {
+            capabilities |= naga::valid::Capabilities::SUBGROUP;
+        }
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
             .validate(&module)
             .unwrap_or_else(|e| panic!("{}:\n{}", desc.entry, e.emit_to_string(&source)));
@@ -288,6 +328,31 @@ mod tests {
         assert!(!source.contains("#include"));
         let err = ShaderDesc::new("passes/visbuffer_shade.wgsl").compose().unwrap_err();
         assert!(err.contains("$LIGHT_ENUMERATION"), "{err}");
+    }
+
+    #[test]
+    fn compute_passes_walk_the_lights_a_subgroup_at_a_time_only_when_asked_and_fragments_never() {
+        use crate::pipelines::{DecalMethod, LightMethod, ShadingMethods};
+        let methods = ShadingMethods { lights: LightMethod::Bvh, decals: DecalMethod::Bvh, ..Default::default() };
+        let walks = |desc: ShaderDesc| desc.compose().unwrap().matches("subgroupAny(").count();
+        let subgroups = ShadingMethods { subgroup_light_queries: true, ..methods };
+        assert_eq!(walks(crate::passes::visbuffer_shade::shader(subgroups)), 1, "the light query, not the decal query");
+        assert_eq!(walks(crate::passes::deferred_shade::shader(subgroups)), 1);
+        assert_eq!(walks(crate::passes::visbuffer_shade::shader(methods)), 0);
+        assert_eq!(walks(crate::passes::forward_shade::shader(subgroups)), 0);
+        assert_eq!(walks(crate::passes::transparent_shade::shader(subgroups)), 0);
+    }
+
+    #[test]
+    fn a_shader_directory_replaces_the_embedded_files() {
+        let dir = std::env::temp_dir().join(format!("manylights-shaders-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("post")).unwrap();
+        std::fs::write(dir.join("post/post_types.wgsl"), "// replaced\n").unwrap();
+        let replaced = from_dir(dir.to_str().unwrap(), "post/post_types.wgsl").unwrap();
+        assert_eq!(replaced, "// replaced\n");
+        let missing = from_dir(dir.to_str().unwrap(), "post/tonemap.wgsl").unwrap_err();
+        assert!(missing.contains("MANYLIGHTS_SHADER_DIR") && missing.contains("tonemap.wgsl"), "{missing}");
+        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]

@@ -33,6 +33,16 @@ pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods) -> Shad
         .with("PARTICLE_LIGHTING", methods.particles.lighting_module())
         .with("REFLECTIONS", if methods.reflections { "shading/reflections.wgsl" } else { "shading/reflections_off.wgsl" })
         .with("LIGHT_SHADOWS", if methods.light_shadows { "shading/light_shadows.wgsl" } else { "shading/light_shadows_off.wgsl" })
+        .with("LIGHT_QUERY", volume_query_module(methods.subgroup_light_queries))
+}
+
+/// The lights' point query module: walked by a whole subgroup, or by each invocation alone.
+pub fn volume_query_module(subgroups: bool) -> &'static str {
+    if subgroups {
+        "accel/volume_query_subgroup.wgsl"
+    } else {
+        "accel/volume_query.wgsl"
+    }
 }
 
 /// Workgroup edge of the 2D compute passes (`@workgroup_size(8, 8)` in their WGSL).

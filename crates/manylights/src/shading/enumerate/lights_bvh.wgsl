@@ -3,7 +3,7 @@
 // inside `light_contribution` (range, cone), so the result equals the brute-force loop's.
 #include "shading/light_bindings.wgsl"
 #include "shading/lights.wgsl"
-#include "accel/volume_query.wgsl" with VOLUMES=light
+#include "$LIGHT_QUERY" with VOLUMES=light
 #include "$LIGHT_SHADOWS"
 #include "shading/debug_view.wgsl"
 
@@ -16,7 +16,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var entered = 0xffffffffu;
     debug_lights_reaching = 0u;
     light_query_begin(s.position, frame.light_instance_count);
-    for (var leaf = light_query_next_leaf(); leaf.x < leaf.y; leaf = light_query_next_leaf()) {
+    for (var leaf = light_query_next_leaf(); leaf.x != BVH_END; leaf = light_query_next_leaf()) {
         if light_query_instance_index != entered {
             entered = light_query_instance_index;
             local = shading_input_in_group(s, light_query_instance);
