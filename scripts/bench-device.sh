@@ -11,6 +11,7 @@
 #   scripts/bench-device.sh sweeps       `manylights bench`: lights and decals from 1k to 1M (issue 5)
 #   scripts/bench-device.sh particles    moving particle lights through the 3D-texture grid (issue 6)
 #   scripts/bench-device.sh clipmap      1M particles: clipmap cascades against the grid over the scene (issue 6)
+#   scripts/bench-device.sh exact        262,144 and 1,048,576 particles as exact lights, every pipeline (issue 6)
 #   scripts/bench-device.sh rays         ray-traced sun shadows and reflections on Sponza (issue 7)
 #   scripts/bench-device.sh post         the post chain's effects, alone and together, on Sponza (issue 7)
 #   scripts/bench-device.sh deform       Sponza's curtains waving: GPU deformation and BLAS refit (issue 7)
@@ -107,6 +108,20 @@ particles() {
   echo "== particle-error 262144"
   timeout 300 $bin particle-error --scene $sponza --particles 262144 --particle-emitters 256 --width 1920 --height 1080 \
     --voxel-sizes 1,0.5,0.25 --filters nearest,trilinear,tricubic --samples 1,8 2>&1 | grep -v "^GPU"
+}
+
+# The particles as exact lights (the lights' BVH rebuilt every frame, walked a subgroup at a time in
+# the compute pipelines); the forward pipeline's fragments take seconds a frame, so few of them.
+exact() {
+  local n p
+  for n in 262144 1048576; do
+    for p in visbuffer deferred; do
+      WARMUP=10 run "exact_${n}_$p" 60 --scene $sponza --particles $n --particle-emitters 256 --pipeline $p --particle-method bvh \
+        --light-method bvh --decal-method off
+    done
+  done
+  WARMUP=1 run exact_262144_forward 3 --scene $sponza --particles 262144 --particle-emitters 256 --pipeline forward --particle-method bvh \
+    --light-method bvh --decal-method off
 }
 
 # Camera-centred clipmap cascades against the one grid over the scene, 1M particles.
@@ -220,12 +235,13 @@ for set in "${@:-structures}"; do
     tests) tests ;;
     particles) particles ;;
     clipmap) clipmap ;;
+    exact) exact ;;
     rays) rays ;;
     post) post ;;
     deform) deform ;;
     table) bench table --sweeps none ;;
     sweeps) bench sweeps --scenes none ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles, clipmap, rays, post or deform)" >&2; exit 2 ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles, exact, clipmap, rays, post or deform)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .
