@@ -16,12 +16,8 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
         let local = shading_input_in_group(s, instance);
         let falloff = 1.0 / (instance.scale * instance.scale);
         for (var k = instance.first_item; k < instance.first_item + instance.item_count; k += 1u) {
-            // Most lights are out of range: test with the struct's first 16 bytes (position and
-            // range) before loading the rest.
             debug_light_work += 1u;
-            let to_light = lights[k].position - local.position;
-            let range = lights[k].range;
-            if dot(to_light, to_light) < range * range {
+            if light_in_range(k, local.position) {
                 let light = lights[k];
                 let contribution = light_contribution(light, local);
                 if any(contribution > vec3<f32>(0.0)) {

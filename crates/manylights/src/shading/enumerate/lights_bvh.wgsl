@@ -23,11 +23,14 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             falloff = 1.0 / (light_query_instance.scale * light_query_instance.scale);
         }
         for (var k = leaf.x; k < leaf.y; k += 1u) {
-            let light = lights[light_primitives[k]];
-            let contribution = light_contribution(light, local);
-            if any(contribution > vec3<f32>(0.0)) {
-                debug_lights_reaching += 1u;
-                radiance += contribution * falloff * light_visibility(light, light_query_instance, s, &shadow_rays);
+            let index = light_primitives[k];
+            if light_in_range(index, local.position) {
+                let light = lights[index];
+                let contribution = light_contribution(light, local);
+                if any(contribution > vec3<f32>(0.0)) {
+                    debug_lights_reaching += 1u;
+                    radiance += contribution * falloff * light_visibility(light, light_query_instance, s, &shadow_rays);
+                }
             }
         }
     }

@@ -27,11 +27,13 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             local = shading_input_in_group(s, instance);
             falloff = 1.0 / (instance.scale * instance.scale);
         }
-        let light = lights[entry.y];
-        let contribution = light_contribution(light, local);
-        if any(contribution > vec3<f32>(0.0)) {
-            debug_lights_reaching += 1u;
-            radiance += contribution * falloff * light_visibility(light, instance, s, &shadow_rays);
+        if light_in_range(entry.y, local.position) {
+            let light = lights[entry.y];
+            let contribution = light_contribution(light, local);
+            if any(contribution > vec3<f32>(0.0)) {
+                debug_lights_reaching += 1u;
+                radiance += contribution * falloff * light_visibility(light, instance, s, &shadow_rays);
+            }
         }
     }
     return radiance;
