@@ -176,9 +176,7 @@ impl Renderer {
             particles: config.particle_method,
             reflections: config.rays.reflection_bounces > 0,
             light_shadows: config.rays.light_shadow_rays > 0,
-            // Particles as exact lights put hundreds of lights on every lit point: a walk shared by
-            // the subgroup loads each node once for all its pixels (BENCHMARKS.md).
-            subgroup_light_queries: config.particle_method == ParticleMethod::Bvh && ctx.features.contains(wgpu::Features::SUBGROUP),
+            subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
         };
         let setup = FrameSetup {
             methods,

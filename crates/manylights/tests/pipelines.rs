@@ -36,6 +36,14 @@ fn render(scene: &Scene, config: RenderConfig) -> Image<[f32; 4]> {
     render_with(scene, &scene.cameras[0], config).1
 }
 
+/// On a device without subgroup operations, where every walk is per invocation.
+fn render_without_subgroups(scene: &Scene, config: RenderConfig) -> Image<[f32; 4]> {
+    let ctx = manylights::gpu::GpuContext::without(wgpu::Features::SUBGROUP).expect("a GPU adapter");
+    let mut renderer = manylights::renderer::Renderer::new(ctx, scene, config).expect("renderer");
+    renderer.render(&scene.cameras[0]).expect("frame");
+    renderer.read_hdr().expect("hdr")
+}
+
 fn configured(pipeline: PipelineKind, lights: LightMethod, decals: DecalMethod, (width, height): (u32, u32)) -> RenderConfig {
     RenderConfig { pipeline, decal_method: decals, ..config(width, height, lights) }
 }
@@ -47,7 +55,8 @@ fn sorted_differences(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>) -> Vec<f32> {
     d
 }
 
-/// Within `pipeline`, each pair of methods gives the brute-force image.
+/// Within `pipeline`, each pair of methods gives the brute-force image, on the test device (whose
+/// subgroup operations some walks use) and on one without subgroup operations.
 fn assert_methods_equal_brute_force(pipeline: PipelineKind, methods: &[(LightMethod, DecalMethod)], seed: u64) {
     let size = (64, 36);
     let scene = scene_with(300, 300, seed);
@@ -55,15 +64,17 @@ fn assert_methods_equal_brute_force(pipeline: PipelineKind, methods: &[(LightMet
     let lit = brute.pixels.iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count();
     assert!(lit > brute.pixels.len() / 2, "the reference image is mostly black");
     for &(lights, decals) in methods {
-        let image = render(&scene, configured(pipeline, lights, decals, size));
-        let difference = max_abs_difference(&brute, &image);
-        assert!(
-            difference <= TOLERANCE,
-            "{}, lights {}, decals {}: max abs difference {difference}",
-            pipeline.name(),
-            lights.name(),
-            decals.name()
-        );
+        let config = configured(pipeline, lights, decals, size);
+        for (image, device) in [(render(&scene, config.clone()), "subgroups"), (render_without_subgroups(&scene, config), "no subgroups")] {
+            let difference = max_abs_difference(&brute, &image);
+            assert!(
+                difference <= TOLERANCE,
+                "{}, lights {}, decals {}, {device}: max abs difference {difference}",
+                pipeline.name(),
+                lights.name(),
+                decals.name()
+            );
+        }
     }
 }
 

@@ -1,7 +1,6 @@
 // The point query of `volume_query.wgsl`, walked by a whole subgroup at once: a packet traversal.
-// Same template (`VOLUMES`), same cursor and same results; the compute passes use it where the device
-// has subgroup operations (`GpuContext::features`), fragment shaders never (lavapipe's helper lanes read
-// storage as zeros and would steer the shared walk).
+// Same template (`VOLUMES`), same cursor and same results; where the device has subgroup operations,
+// passes use it for the structures it walks faster (`passes::query_walks`).
 //
 // Every lane of the subgroup visits the same node: a node is entered when its box holds any lane's
 // point (`subgroupAny`) and skipped otherwise, so each lane still reaches every leaf whose box holds
@@ -12,6 +11,10 @@
 //
 // Every lane that begins a query must call `VOLUMES_query_next_leaf` until it returns BVH_END (every
 // lane gets BVH_END at once), without returning early: a lane that leaves stops steering the walk.
+// Correctness never depends on which lanes run together: a lane skips a node only when its own point
+// is outside it, and gets a leaf only when its point is inside. Lanes with garbage data — lavapipe runs
+// fragment helper lanes with storage loads masked to zero — only make the others visit more, and end
+// at a node linking to itself as in `volume_query.wgsl`.
 #include "accel/bvh_types.wgsl"
 
 var<private> VOLUMES_query_world_point: vec3<f32>;
@@ -59,7 +62,8 @@ fn VOLUMES_query_enter(instance_index: u32) {
         // higher node). The walk covers them all from the lowest start to the highest stop: what lies
         // between and holds no lane's point is skipped as usual. Empty cells (start BVH_END) add none.
         let cell = entry_grid_cell(VOLUMES_nodes[root - 1u], VOLUMES_query_point);
-        let start = VOLUMES_primitives[cell];
+        // A start below the group's root is a helper lane's zero, not a cell of this group.
+        let start = select(VOLUMES_primitives[cell], BVH_END, VOLUMES_primitives[cell] < root);
         VOLUMES_query_node = subgroupMin(start);
         VOLUMES_query_stop = subgroupMax(select(VOLUMES_primitives[cell + 1u], 0u, start == BVH_END));
     }
@@ -85,11 +89,11 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
         VOLUMES_query_visits += 1u;
         let inside = bvh_node_contains(node, VOLUMES_query_point);
         if !subgroupAny(inside) {
-            VOLUMES_query_node = node.skip;
+            VOLUMES_query_node = select(node.skip, BVH_END, node.skip == VOLUMES_query_node);
             continue;
         }
         if (node.entry & BVH_LEAF) == 0u {
-            VOLUMES_query_node = node.entry;
+            VOLUMES_query_node = select(node.entry, BVH_END, node.entry == VOLUMES_query_node);
             continue;
         }
         VOLUMES_query_node = node.skip;

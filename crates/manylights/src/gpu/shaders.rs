@@ -257,18 +257,18 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
     use crate::pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind, ShadingMethods};
     for lights in LightMethod::ALL {
         for decals in DecalMethod::ALL {
-            // `ParticleMethod::Bvh` composes as `Off`: its particles are lights.
+            // `ParticleMethod::Bvh` lights with the particles' lights (its lighting module is
+            // `Off`'s), which subgroups walk together.
             #[rustfmt::skip]
-            let variants = [(ParticleMethod::Off, false, false), (ParticleMethod::Grid, false, false), (ParticleMethod::Grid, true, true)];
+            let variants = [(ParticleMethod::Off, false, false), (ParticleMethod::Grid, false, false), (ParticleMethod::Grid, true, true), (ParticleMethod::Bvh, false, false)];
             for (particles, reflections, light_shadows) in variants {
-                let methods = ShadingMethods { lights, decals, particles, reflections, light_shadows, subgroup_light_queries: false };
-                if decals.works_in(PipelineKind::Forward) {
-                    shaders.push(crate::passes::forward_shade::shader(methods));
-                }
-                shaders.push(crate::passes::transparent_shade::shader(methods));
-                // Compute passes walk the lights' BVH per invocation or per subgroup.
-                for subgroup_light_queries in [false, true] {
-                    let methods = ShadingMethods { subgroup_light_queries, ..methods };
+                // Every pass with and without subgroup walks.
+                for subgroups in [false, true] {
+                    let methods = ShadingMethods { lights, decals, particles, reflections, light_shadows, subgroups };
+                    if decals.works_in(PipelineKind::Forward) {
+                        shaders.push(crate::passes::forward_shade::shader(methods));
+                    }
+                    shaders.push(crate::passes::transparent_shade::shader(methods));
                     if decals.works_in(PipelineKind::Visbuffer) {
                         shaders.push(crate::passes::visbuffer_shade::shader(methods));
                     }
@@ -330,17 +330,22 @@ mod tests {
         assert!(err.contains("$LIGHT_ENUMERATION"), "{err}");
     }
 
+    /// Subgroup walks where they were measured faster: dense lights (particles as exact lights) in
+    /// every stage, decals in fragments; none without subgroup operations.
     #[test]
-    fn compute_passes_walk_the_lights_a_subgroup_at_a_time_only_when_asked_and_fragments_never() {
-        use crate::pipelines::{DecalMethod, LightMethod, ShadingMethods};
-        let methods = ShadingMethods { lights: LightMethod::Bvh, decals: DecalMethod::Bvh, ..Default::default() };
+    fn passes_walk_a_subgroup_at_a_time_where_it_pays() {
+        use crate::passes::{deferred_shade, forward_shade, transparent_shade, visbuffer_shade};
+        use crate::pipelines::{DecalMethod, LightMethod, ParticleMethod, ShadingMethods};
+        let sparse = ShadingMethods { lights: LightMethod::Bvh, decals: DecalMethod::Bvh, subgroups: true, ..Default::default() };
+        let dense = ShadingMethods { particles: ParticleMethod::Bvh, ..sparse };
         let walks = |desc: ShaderDesc| desc.compose().unwrap().matches("subgroupAny(").count();
-        let subgroups = ShadingMethods { subgroup_light_queries: true, ..methods };
-        assert_eq!(walks(crate::passes::visbuffer_shade::shader(subgroups)), 1, "the light query, not the decal query");
-        assert_eq!(walks(crate::passes::deferred_shade::shader(subgroups)), 1);
-        assert_eq!(walks(crate::passes::visbuffer_shade::shader(methods)), 0);
-        assert_eq!(walks(crate::passes::forward_shade::shader(subgroups)), 0);
-        assert_eq!(walks(crate::passes::transparent_shade::shader(subgroups)), 0);
+        assert_eq!(walks(visbuffer_shade::shader(sparse)), 0, "compute: sparse lights and decals walk per invocation");
+        assert_eq!(walks(deferred_shade::shader(dense)), 1, "compute: the dense lights' walk only");
+        assert_eq!(walks(visbuffer_shade::shader(dense)), 1);
+        assert_eq!(walks(forward_shade::shader(sparse)), 1, "fragments: the decals' walk");
+        assert_eq!(walks(transparent_shade::shader(dense)), 2, "fragments: both walks");
+        assert_eq!(walks(forward_shade::shader(ShadingMethods { subgroups: false, ..dense })), 0);
+        assert_eq!(walks(visbuffer_shade::shader(ShadingMethods { subgroups: false, ..dense })), 0);
     }
 
     #[test]

@@ -10,7 +10,7 @@ use crate::Result;
 
 /// The shader for a set of shading methods.
 pub fn shader(methods: ShadingMethods) -> ShaderDesc {
-    super::shading_core_shader("passes/deferred_shade.wgsl", methods)
+    super::shading_core_shader("passes/deferred_shade.wgsl", methods, super::ShadingStage::Compute)
 }
 
 pub struct DeferredShade {

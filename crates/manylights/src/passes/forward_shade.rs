@@ -13,10 +13,9 @@ use crate::passes::ray_shadows::{self, RayShadows};
 use crate::pipelines::{FrameInputs, ShadingMethods};
 use crate::Result;
 
-/// The shader for a set of shading methods. Fragments walk the BVHs one invocation at a time: on
-/// lavapipe, helper lanes read storage as zeros and would steer a subgroup's shared walk.
+/// The shader for a set of shading methods.
 pub fn shader(methods: ShadingMethods) -> ShaderDesc {
-    super::shading_core_shader("passes/forward_shade.wgsl", ShadingMethods { subgroup_light_queries: false, ..methods })
+    super::shading_core_shader("passes/forward_shade.wgsl", methods, super::ShadingStage::Fragment)
 }
 
 pub struct ForwardShade {

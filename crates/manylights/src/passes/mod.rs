@@ -26,17 +26,43 @@ pub mod visbuffer_shade;
 /// A pass's shader that calls the shading core, composed with the WGSL modules of its methods
 /// (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION`, `$DECAL_ENUMERATION` and `$PARTICLE_LIGHTING`,
 /// the light modules `$LIGHT_SHADOWS`; the opaque surfaces' shading passes include `$REFLECTIONS`).
-pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods) -> ShaderDesc {
+pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: ShadingStage) -> ShaderDesc {
+    let walks = query_walks(methods, stage);
     ShaderDesc::new(entry)
         .with("LIGHT_ENUMERATION", methods.lights.enumeration_module())
         .with("DECAL_ENUMERATION", methods.decals.enumeration_module())
         .with("PARTICLE_LIGHTING", methods.particles.lighting_module())
         .with("REFLECTIONS", if methods.reflections { "shading/reflections.wgsl" } else { "shading/reflections_off.wgsl" })
         .with("LIGHT_SHADOWS", if methods.light_shadows { "shading/light_shadows.wgsl" } else { "shading/light_shadows_off.wgsl" })
-        .with("LIGHT_QUERY", volume_query_module(methods.subgroup_light_queries))
+        .with("LIGHT_QUERY", volume_query_module(walks.lights))
+        .with("DECAL_QUERY", volume_query_module(walks.decals))
 }
 
-/// The lights' point query module: walked by a whole subgroup, or by each invocation alone.
+/// The shader stage a pass shades in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadingStage {
+    Compute,
+    Fragment,
+}
+
+/// Which structures a pass's point queries walk a subgroup at a time (where the device has subgroup
+/// operations), as measured on the H100 (BENCHMARKS.md, "Subgroup walks"): a walk shared by the
+/// subgroup loads each node once for all its lanes, but lanes that need nothing wait for it, and each
+/// item any lane finds is processed in a round of its own. It pays for dense lights (particles as
+/// exact lights: hundreds reach every point) in every stage, and for decals in fragments, whose lanes
+/// walking alone diverge most; not for sparse lights, nor for decals in compute.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct QueryWalks {
+    pub lights: bool,
+    pub decals: bool,
+}
+
+pub fn query_walks(methods: ShadingMethods, stage: ShadingStage) -> QueryWalks {
+    let dense_lights = methods.particles == crate::pipelines::ParticleMethod::Bvh;
+    QueryWalks { lights: methods.subgroups && dense_lights, decals: methods.subgroups && stage == ShadingStage::Fragment }
+}
+
+/// A point query module: walked by a whole subgroup, or by each invocation alone.
 pub fn volume_query_module(subgroups: bool) -> &'static str {
     if subgroups {
         "accel/volume_query_subgroup.wgsl"

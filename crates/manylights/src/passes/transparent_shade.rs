@@ -14,10 +14,9 @@ use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, G
 use crate::pipelines::{FrameInputs, ShadingMethods};
 use crate::{Error, Result};
 
-/// The shader for a set of shading methods. Fragments walk the BVHs one invocation at a time: on
-/// lavapipe, helper lanes read storage as zeros and would steer a subgroup's shared walk.
+/// The shader for a set of shading methods.
 pub fn shader(methods: ShadingMethods) -> ShaderDesc {
-    super::shading_core_shader("passes/transparent_shade.wgsl", ShadingMethods { subgroup_light_queries: false, ..methods })
+    super::shading_core_shader("passes/transparent_shade.wgsl", methods, super::ShadingStage::Fragment)
 }
 
 pub struct TransparentShade {

@@ -11,7 +11,7 @@ pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 /// The shader for a set of shading methods.
 pub fn shader(methods: ShadingMethods) -> ShaderDesc {
-    super::shading_core_shader("passes/visbuffer_shade.wgsl", methods)
+    super::shading_core_shader("passes/visbuffer_shade.wgsl", methods, super::ShadingStage::Compute)
 }
 
 pub struct VisbufferShade {

@@ -289,7 +289,7 @@ impl ParticleMethod {
 
 /// The methods a shading core is composed with: one per kind of light source and for decals, whether
 /// glossy surfaces trace reflections (`shading/reflections.wgsl`) and points trace shadow rays towards
-/// lamps (`shading/light_shadows.wgsl`), and how point queries walk the lights' BVH.
+/// lamps (`shading/light_shadows.wgsl`), and whether point queries may walk a subgroup at a time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub struct ShadingMethods {
     pub lights: LightMethod,
@@ -298,9 +298,7 @@ pub struct ShadingMethods {
     pub reflections: bool,
     /// Shadow rays towards local lights that cast them (`--light-shadow-rays` above 0).
     pub light_shadows: bool,
-    /// Compute passes walk the lights' BVH a subgroup at a time (`accel/volume_query_subgroup.wgsl`)
-    /// instead of one invocation at a time: for dense lights, hundreds reaching each point (particles
-    /// as exact lights), on devices with subgroup operations. Fragment passes, and the decals' BVH,
-    /// are always walked one invocation at a time (BENCHMARKS.md, "Subgroup walks").
-    pub subgroup_light_queries: bool,
+    /// The device has subgroup operations: passes may walk BVHs a subgroup at a time
+    /// (`accel/volume_query_subgroup.wgsl`), where that is faster (`passes::query_walks`).
+    pub subgroups: bool,
 }

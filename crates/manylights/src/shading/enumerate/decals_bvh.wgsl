@@ -3,7 +3,7 @@
 // exact box test, so the result equals the brute-force loop's.
 #include "shading/decal_bindings.wgsl"
 #include "shading/decals.wgsl"
-#include "accel/volume_query.wgsl" with VOLUMES=decal
+#include "$DECAL_QUERY" with VOLUMES=decal
 
 fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
     decal_blend_begin();
