@@ -392,8 +392,8 @@ fn every_filter_and_supersampling_light_the_wall_like_the_point_light() {
 
 /// The exact method: the particles as point lights in the lights' BVH, rebuilt on the GPU every
 /// frame (leaves of several particles) beside the scene's own light, light the scene as the same
-/// lights from the CPU twin do through brute force, in every pipeline, the compute ones walking the
-/// BVH a subgroup at a time or, on a device without subgroups, one invocation at a time.
+/// lights from the CPU twin do through brute force, in every pipeline, walking the BVH a subgroup at
+/// a time or, on a device without subgroups, one invocation at a time.
 #[test]
 fn particles_as_lights_equal_their_point_lights() {
     let scene_light = point_light(Vec3::new(3.0, 2.0, 1.5), 2.0, 4.0);

@@ -245,6 +245,14 @@ impl Bvh {
         for (new, &old) in order.iter().enumerate() {
             renumbered[old as usize] = new as u32;
         }
+        // A reachable node linking to one no walk reaches is a broken tree, kept whole for `validate`.
+        let dangling = |n: u32| n != END && renumbered.get(n as usize).is_some_and(|&r| r == END);
+        if order.iter().any(|&n| {
+            let node = self.nodes[n as usize];
+            dangling(node.skip) || (!node.is_leaf() && dangling(node.entry))
+        }) {
+            return self.clone();
+        }
         let remap = |n: u32| renumbered.get(n as usize).copied().unwrap_or(END);
         let nodes = order
             .iter()
@@ -612,10 +620,16 @@ pub(crate) mod tests {
         let slots = subtree_slots(&bvh, first);
         let (start, count) = (slots[0] as u32, slots.len() as u32);
         assert!(slots.iter().enumerate().all(|(i, &s)| s == slots[0] + i));
+        let dropped_child = bvh.nodes[first as usize].entry;
         bvh.nodes[first as usize].entry = BvhNode::leaf_entry(start, count);
         assert!(bvh.validate(&boxes).unwrap_err().contains("not reachable"));
         let compact = bvh.reachable();
         compact.validate(&boxes).unwrap();
+        // A link into the dropped nodes is a broken tree, which renumbering must not hide.
+        let mut broken = bvh.clone();
+        let last = (0..broken.nodes.len()).rev().find(|&n| broken.nodes[n].skip == END && broken.nodes[n].is_leaf()).unwrap();
+        broken.nodes[last].skip = dropped_child;
+        assert!(broken.reachable().validate(&boxes).is_err());
         assert!(compact.nodes.len() < bvh.nodes.len());
         for p in random_points(&mut rng, &boxes, 500) {
             assert_eq!(query(&compact, &boxes, p), query(&Bvh::build(&boxes).unwrap(), &boxes, p));

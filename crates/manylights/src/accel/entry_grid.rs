@@ -15,12 +15,19 @@ use super::{Aabb, Bvh, END};
 
 /// Groups with fewer primitives are queried from the root: their trees are a few levels deep.
 pub const MIN_PRIMITIVES: usize = 16;
-/// Cells per primitive the grid aims at, and the most one grid has (16 MiB of cells). Finer cells
-/// start more queries at a leaf or end them at once: 28k small lights shade in 0.244, 0.228, 0.213,
-/// 0.200, 0.195 and 0.188 ms with 2, 4, 8, 16, 32 and 64 cells per light on the H100, while ≈ 1 m
-/// decals, which overlap every cell anyway, shade alike (BENCHMARKS.md).
+/// Cells per primitive the grids aim at, and the most a structure's grids hold together (16 MiB of
+/// cells). Finer cells start more queries at a leaf or end them at once: 28k small lights shade in
+/// 0.244, 0.228, 0.213, 0.200, 0.195 and 0.188 ms with 2, 4, 8, 16, 32 and 64 cells per light on the
+/// H100, while ≈ 1 m decals, which overlap every cell anyway, shade alike (BENCHMARKS.md).
 const CELLS_PER_PRIMITIVE: f64 = 32.0;
 const MAX_CELLS: f64 = (1 << 21) as f64;
+
+/// Cells per primitive for the grids of a structure whose CPU-built groups hold `primitives` in all:
+/// [`CELLS_PER_PRIMITIVE`], fewer where the grids would exceed [`MAX_CELLS`] together (a million
+/// volumes get two each, however they are grouped).
+pub fn cells_per_primitive(primitives: usize) -> f64 {
+    (MAX_CELLS / primitives.max(1) as f64).min(CELLS_PER_PRIMITIVE)
+}
 /// Cells per axis fit 10 bits each in the header node's `skip` (`structure.rs`, `entry_grid_header`).
 pub const MAX_CELLS_PER_AXIS: u32 = 1023;
 
@@ -37,9 +44,10 @@ pub struct EntryGrid {
 }
 
 impl EntryGrid {
-    /// The grid for `bvh`, built over `aabbs`, or `None` when it has fewer than [`MIN_PRIMITIVES`]
-    /// primitives or its bounds are not finite.
-    pub fn build(bvh: &Bvh, aabbs: &[Aabb]) -> Option<EntryGrid> {
+    /// The grid for `bvh`, built over `aabbs`, with about `cells_per_primitive` cells per primitive
+    /// ([`cells_per_primitive`]), or `None` when it has fewer than [`MIN_PRIMITIVES`] primitives or
+    /// its bounds are not finite.
+    pub fn build(bvh: &Bvh, aabbs: &[Aabb], cells_per_primitive: f64) -> Option<EntryGrid> {
         if bvh.primitive_indices.len() < MIN_PRIMITIVES {
             return None;
         }
@@ -48,7 +56,7 @@ impl EntryGrid {
         if !(extent.is_finite() && bounds.min.is_finite()) {
             return None;
         }
-        let dims = grid_dims(extent, (bvh.primitive_indices.len() as f64 * CELLS_PER_PRIMITIVE).min(MAX_CELLS));
+        let dims = grid_dims(extent, (bvh.primitive_indices.len() as f64 * cells_per_primitive).min(MAX_CELLS));
         let cells_per_unit = Vec3::select(extent.cmpgt(Vec3::ZERO), dims.as_vec3() / extent, Vec3::ZERO);
         let cell_size = Vec3::select(extent.cmpgt(Vec3::ZERO), extent / dims.as_vec3(), Vec3::ZERO);
         // Cells are widened before they are matched with boxes, so a point whose cell index rounds
@@ -155,7 +163,7 @@ mod tests {
             for _ in 0..sets {
                 let boxes = random_boxes(&mut rng, size);
                 let bvh = Bvh::build(&boxes).unwrap();
-                let Some(grid) = EntryGrid::build(&bvh, &boxes) else {
+                let Some(grid) = EntryGrid::build(&bvh, &boxes, CELLS_PER_PRIMITIVE) else {
                     // Only non-finite bounds (boxes spanning ±1e30 along an axis overflow the extent) go without.
                     assert!(!(bvh.nodes[0].bounds().max - bvh.nodes[0].bounds().min).is_finite());
                     continue;
@@ -180,7 +188,7 @@ mod tests {
             })
             .collect();
         let bvh = Bvh::build(&boxes).unwrap();
-        let grid = EntryGrid::build(&bvh, &boxes).unwrap();
+        let grid = EntryGrid::build(&bvh, &boxes, CELLS_PER_PRIMITIVE).unwrap();
         let cells = grid.cells.len() as f64;
         let aim = 5000.0 * CELLS_PER_PRIMITIVE;
         assert!((aim / 2.0..=aim * 2.0).contains(&cells), "{cells} cells for 5000 boxes");
@@ -193,13 +201,22 @@ mod tests {
     }
 
     #[test]
+    fn a_structures_grids_share_a_budget_of_cells() {
+        assert_eq!(cells_per_primitive(28_000), CELLS_PER_PRIMITIVE);
+        assert_eq!(cells_per_primitive(1 << 20), 2.0);
+        assert_eq!(cells_per_primitive(0), CELLS_PER_PRIMITIVE);
+        // 2,000 groups of 500 volumes: each grid's share, not each grid's own cap.
+        assert!(cells_per_primitive(1_000_000) * 1_000_000.0 <= MAX_CELLS);
+    }
+
+    #[test]
     fn small_or_unbounded_sets_have_no_grid() {
         let boxes: Vec<Aabb> = (0..MIN_PRIMITIVES - 1).map(|i| Aabb::new(Vec3::splat(i as f32), Vec3::splat(i as f32 + 0.5))).collect();
-        assert!(EntryGrid::build(&Bvh::build(&boxes).unwrap(), &boxes).is_none());
+        assert!(EntryGrid::build(&Bvh::build(&boxes).unwrap(), &boxes, CELLS_PER_PRIMITIVE).is_none());
         let mut flat: Vec<Aabb> = (0..100).map(|i| Aabb::new(Vec3::new(i as f32, 0.0, 0.0), Vec3::new(i as f32 + 0.5, 0.0, 1.0))).collect();
-        let grid = EntryGrid::build(&Bvh::build(&flat).unwrap(), &flat).unwrap();
+        let grid = EntryGrid::build(&Bvh::build(&flat).unwrap(), &flat, CELLS_PER_PRIMITIVE).unwrap();
         assert_eq!(grid.dims.y, 1, "flat along y: one cell");
         flat.push(Aabb::new(Vec3::splat(-3e38), Vec3::splat(3e38)));
-        assert!(EntryGrid::build(&Bvh::build(&flat).unwrap(), &flat).is_none(), "an extent that overflows");
+        assert!(EntryGrid::build(&Bvh::build(&flat).unwrap(), &flat, CELLS_PER_PRIMITIVE).is_none(), "an extent that overflows");
     }
 }

@@ -19,7 +19,7 @@ use super::{
     bvh::MAX_PRIMITIVES,
     clusters::{ClusterBounds, ClusterGrid, ClusterLists},
     decal_aabb,
-    entry_grid::EntryGrid,
+    entry_grid::{self, EntryGrid},
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
     light_aabb, Aabb, Bvh, BvhNode,
 };
@@ -318,7 +318,9 @@ impl VolumeStructure {
         if primitive_count > MAX_PRIMITIVES as u64 {
             return Err(Error::InvalidScene(format!("{count} {label}s; a structure holds at most {MAX_PRIMITIVES} volumes and instances")));
         }
-        // CPU builds first: their entry grids' cells follow the primitive indices in the same array.
+        // CPU builds first: their entry grids' cells follow the primitive indices in the same array,
+        // within one budget of cells for all the groups.
+        let cells_per_primitive = entry_grid::cells_per_primitive(count);
         let cpu_builds: Vec<Option<(Bvh, Option<EntryGrid>)>> = ranges
             .iter()
             .map(|range| {
@@ -327,7 +329,7 @@ impl VolumeStructure {
                     return Ok(None);
                 }
                 let bvh = Bvh::build(boxes)?;
-                let grid = EntryGrid::build(&bvh, boxes);
+                let grid = EntryGrid::build(&bvh, boxes, cells_per_primitive);
                 Ok(Some((bvh, grid)))
             })
             .collect::<Result<_>>()?;

@@ -11,7 +11,7 @@
 // caller applies its own tight test to the leaf's items (light range and cone, decal box) without a
 // copy of the traversal per use. It hands out whole leaves: a cursor returning one item per call
 // measured 20 % slower shading on the H200. `volume_query_subgroup.wgsl` is the same query walked by
-// a whole subgroup together, which compute passes use where the device has subgroup operations.
+// a whole subgroup together, which passes use where it is faster (`passes::query_walks`).
 #include "accel/bvh_types.wgsl"
 
 // The query in flight, one per invocation. The traversal needs no stack (`bvh_types.wgsl`): the

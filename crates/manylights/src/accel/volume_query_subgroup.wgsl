@@ -64,8 +64,15 @@ fn VOLUMES_query_enter(instance_index: u32) {
         let cell = entry_grid_cell(VOLUMES_nodes[root - 1u], VOLUMES_query_point);
         // A start below the group's root is a helper lane's zero, not a cell of this group.
         let start = select(VOLUMES_primitives[cell], BVH_END, VOLUMES_primitives[cell] < root);
-        VOLUMES_query_node = subgroupMin(start);
-        VOLUMES_query_stop = subgroupMax(select(VOLUMES_primitives[cell + 1u], 0u, start == BVH_END));
+        let stop = select(VOLUMES_primitives[cell + 1u], 0u, start == BVH_END);
+        VOLUMES_query_node = start;
+        VOLUMES_query_stop = stop;
+        // Only cells of one group combine: lanes running together in different instances (which
+        // shared walks never start, but nothing promises) each walk their own cell.
+        if subgroupAll(instance_index == subgroupBroadcastFirst(instance_index)) {
+            VOLUMES_query_node = subgroupMin(start);
+            VOLUMES_query_stop = subgroupMax(stop);
+        }
     }
     VOLUMES_query_in_group = true;
 }

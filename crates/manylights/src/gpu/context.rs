@@ -15,8 +15,8 @@ use crate::{Error, Result};
 const REQUIRED_STORAGE_BUFFERS: u32 = 19;
 /// Features the renderer uses when the adapter has them; none is required by every scene.
 /// `primitive_index` lets the visibility raster draw indexed; `float32_blendable` lets transparent
-/// surfaces blend into the f32 HDR image (scenes with them need it); `subgroups` let compute passes
-/// walk the lights' BVH a subgroup at a time.
+/// surfaces blend into the f32 HDR image (scenes with them need it); `subgroups` let passes walk BVHs
+/// a subgroup at a time where that is faster (`passes::query_walks`).
 const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::PRIMITIVE_INDEX)
     .union(wgpu::Features::FLOAT32_BLENDABLE)

@@ -194,14 +194,15 @@ fn shader_dir() -> Option<&'static str> {
 fn from_dir(dir: &str, path: &str) -> Result<&'static str, String> {
     static FILES: OnceLock<std::sync::Mutex<HashMap<String, &'static str>>> = OnceLock::new();
     let mut files = FILES.get_or_init(Default::default).lock().unwrap_or_else(|p| p.into_inner());
-    if let Some(text) = files.get(path) {
+    let file = std::path::Path::new(dir).join(path);
+    let key = file.to_string_lossy().into_owned();
+    if let Some(text) = files.get(&key) {
         return Ok(text);
     }
-    let file = std::path::Path::new(dir).join(path);
     let text = std::fs::read_to_string(&file)
         .map_err(|e| format!("MANYLIGHTS_SHADER_DIR: cannot read {}: {e} (unset it to use the built-in shaders)", file.display()))?;
     let text: &'static str = Box::leak(text.into_boxed_str());
-    files.insert(path.to_string(), text);
+    files.insert(key, text);
     Ok(text)
 }
 
@@ -257,12 +258,12 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
     use crate::pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind, ShadingMethods};
     for lights in LightMethod::ALL {
         for decals in DecalMethod::ALL {
-            // `ParticleMethod::Bvh` lights with the particles' lights (its lighting module is
-            // `Off`'s), which subgroups walk together.
-            #[rustfmt::skip]
-            let variants = [(ParticleMethod::Off, false, false), (ParticleMethod::Grid, false, false), (ParticleMethod::Grid, true, true), (ParticleMethod::Bvh, false, false)];
+            // Every particle method (`Bvh` lights with the particles' lights, which subgroups walk
+            // together), with and without reflections, lamp shadows and subgroup walks.
+            let flags = [false, true];
+            let variants: Vec<_> =
+                ParticleMethod::ALL.iter().flat_map(|&p| flags.iter().flat_map(move |&r| flags.map(move |s| (p, r, s)))).collect();
             for (particles, reflections, light_shadows) in variants {
-                // Every pass with and without subgroup walks.
                 for subgroups in [false, true] {
                     let methods = ShadingMethods { lights, decals, particles, reflections, light_shadows, subgroups };
                     if decals.works_in(PipelineKind::Forward) {
