@@ -39,9 +39,7 @@ fn render(scene: &Scene, config: RenderConfig) -> Image<[f32; 4]> {
 /// On a device without subgroup operations, where every walk is per invocation.
 fn render_without_subgroups(scene: &Scene, config: RenderConfig) -> Image<[f32; 4]> {
     let ctx = manylights::gpu::GpuContext::without(wgpu::Features::SUBGROUP).expect("a GPU adapter");
-    let mut renderer = manylights::renderer::Renderer::new(ctx, scene, config).expect("renderer");
-    renderer.render(&scene.cameras[0]).expect("frame");
-    renderer.read_hdr().expect("hdr")
+    render_on(ctx, scene, &scene.cameras[0], config).1
 }
 
 fn configured(pipeline: PipelineKind, lights: LightMethod, decals: DecalMethod, (width, height): (u32, u32)) -> RenderConfig {

@@ -238,7 +238,7 @@ impl Bvh {
                 stack.push(node.entry);
             }
         }
-        if self.nodes.is_empty() || order.len() == self.nodes.len() {
+        if order.len() == self.nodes.len() {
             return self.clone();
         }
         let mut renumbered = vec![END; self.nodes.len()];

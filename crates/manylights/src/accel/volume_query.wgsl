@@ -1,21 +1,36 @@
 // The point query — the paper's zero-length ray — through a two-level structure (`accel/structure.rs`):
 // the top level's leaves are group instances; entering one moves the point into the group's space
-// and continues in the group's BVH. A template: `VOLUMES` is replaced by the structure's prefix
-// (`#include "accel/volume_query.wgsl" with VOLUMES=light`), naming its bindings `VOLUMES_nodes`,
-// `VOLUMES_primitives`, `VOLUMES_instances`, so lights and decals each get their own cursor.
+// and continues in the group's BVH. A template: `VOLUMES` is replaced by the structure's prefix,
+// naming its bindings `VOLUMES_nodes`, `VOLUMES_primitives`, `VOLUMES_instances`, so lights and
+// decals each get their own cursor. Enumeration modules include it through a walk module, which
+// decides how invocations walk together (`passes::volume_query_module`):
+// `accel/volume_query_invocation.wgsl`, each invocation alone, or `accel/volume_query_subgroup.wgsl`,
+// a whole subgroup together. A walk module defines `VOLUMES_walk_any(inside)`, whether to enter a node
+// whose box holds (`inside`) or not this invocation's point, and `VOLUMES_walk_cells(instance, start,
+// stop)`, the range of nodes to walk for this invocation's entry-grid cell.
 //
-// Inside a group the query starts where the group's entry grid says, if it has one (CPU-built groups),
-// and ends at the node after that subtree.
+// Inside a group the query starts where the group's entry grid says, if it has one (CPU-built groups,
+// laid out depth first, so every step of a walk moves to a higher node), and ends at or past the node
+// after that subtree.
 //
 // A cursor: `VOLUMES_query_next_leaf` returns every group leaf whose box contains the point, and the
 // caller applies its own tight test to the leaf's items (light range and cone, decal box) without a
 // copy of the traversal per use. It hands out whole leaves: a cursor returning one item per call
-// measured 20 % slower shading on the H200. `volume_query_subgroup.wgsl` is the same query walked by
-// a whole subgroup together, which passes use where it is faster (`passes::query_walks`).
+// measured 20 % slower shading on the H200. Every invocation that begins a query calls
+// `VOLUMES_query_next_leaf` until it returns BVH_END, without leaving the loop early.
+//
+// An invocation skips a node only when its own point is outside it, and gets a leaf's items only when
+// its point is inside, whichever invocations walk with it. A link back to the node itself ends the
+// walk: no valid tree has one, but lavapipe's fragment shaders run lanes outside the triangle (helpers)
+// with storage loads masked to zero, so node 0 reads as a box at the origin linking to node 0, and a
+// lane looping there until llvmpipe's loop limiter (65,535 iterations, shared by every loop of the
+// shader) runs out ends every later loop of its whole 8-lane vector, the light loop included. For the
+// same reason a grid start below the group's root (a helper's zero) counts as an empty cell.
 #include "accel/bvh_types.wgsl"
 
-// The query in flight, one per invocation. The traversal needs no stack (`bvh_types.wgsl`): the
-// node to visit next, and the top-level node to resume at when the current instance is done.
+// The query in flight. The traversal needs no stack (`bvh_types.wgsl`): the node to visit next, the
+// node at or past which the group's walk ends, and the top-level node to resume at when the current
+// instance is done.
 var<private> VOLUMES_query_world_point: vec3<f32>;
 // The point in the current level's space: the world's in the top level, the group's inside an
 // instance. Callers read it to test items in their group's space.
@@ -24,15 +39,13 @@ var<private> VOLUMES_query_point: vec3<f32>;
 var<private> VOLUMES_query_instance: VolumeInstance;
 var<private> VOLUMES_query_instance_index: u32;
 var<private> VOLUMES_query_node: u32;
-// Where the group's traversal ends: BVH_END from its root, or the node after the subtree an entry
-// grid's cell starts it at.
 var<private> VOLUMES_query_stop: u32;
 var<private> VOLUMES_query_resume: u32;
 var<private> VOLUMES_query_in_group: bool;
-// Nodes the query has visited (tested against the point): the debug view of the method's work.
+// Nodes the walk visited: the debug view of the method's work.
 var<private> VOLUMES_query_visits: u32;
 
-// Starts a point query (world space), replacing any in flight; with no instances it finds nothing.
+// Starts a query at a world-space point, replacing any in flight; with no instances it finds nothing.
 // With one instance the top level is a single leaf: the query enters its group at once, saving the
 // two dependent loads of that leaf (the group's own boxes still bound the point).
 fn VOLUMES_query_begin(point: vec3<f32>, instance_count: u32) {
@@ -57,19 +70,23 @@ fn VOLUMES_query_enter(instance_index: u32) {
     VOLUMES_query_node = root;
     VOLUMES_query_stop = BVH_END;
     if (VOLUMES_query_instance.blas_root & ENTRY_GRID_FLAG) != 0u {
-        // Start below the levels every leaf reaching the point's cell shares (`accel/entry_grid.rs`).
+        // Start below the levels every leaf reaching the point's cell shares (`accel/entry_grid.rs`);
+        // an empty cell starts at BVH_END.
         let cell = entry_grid_cell(VOLUMES_nodes[root - 1u], VOLUMES_query_point);
-        VOLUMES_query_node = VOLUMES_primitives[cell];
-        VOLUMES_query_stop = VOLUMES_primitives[cell + 1u];
+        let start = select(VOLUMES_primitives[cell], BVH_END, VOLUMES_primitives[cell] < root);
+        let range = VOLUMES_walk_cells(instance_index, start, select(VOLUMES_primitives[cell + 1u], 0u, start == BVH_END));
+        VOLUMES_query_node = range.x;
+        VOLUMES_query_stop = range.y;
     }
     VOLUMES_query_in_group = true;
 }
 
 // The next group leaf whose box contains the point, as the range [x, y) of `VOLUMES_primitives`
-// (item indices); x is BVH_END when the query is done.
+// (item indices), or an empty range when the walk visits a leaf for other invocations; x is BVH_END
+// when the query is done.
 fn VOLUMES_query_next_leaf() -> vec2<u32> {
     loop {
-        if VOLUMES_query_node == BVH_END || (VOLUMES_query_in_group && VOLUMES_query_node == VOLUMES_query_stop) {
+        if VOLUMES_query_node == BVH_END || (VOLUMES_query_in_group && VOLUMES_query_node >= VOLUMES_query_stop) {
             if !VOLUMES_query_in_group {
                 break;
             }
@@ -81,12 +98,8 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
         }
         let node = VOLUMES_nodes[VOLUMES_query_node];
         VOLUMES_query_visits += 1u;
-        // A link back to the node itself ends the query. No valid tree has one, but lavapipe's
-        // fragment shaders run lanes outside the triangle (helpers) with storage loads masked to
-        // zero: node 0 reads as a box at the origin linking to node 0, and a lane looping there until
-        // llvmpipe's loop limiter (65,535 iterations, shared by every loop of the shader) runs out
-        // ends every later loop of its whole 8-lane vector, the light loop included.
-        if !bvh_node_contains(node, VOLUMES_query_point) {
+        let inside = bvh_node_contains(node, VOLUMES_query_point);
+        if !VOLUMES_walk_any(inside) {
             VOLUMES_query_node = select(node.skip, BVH_END, node.skip == VOLUMES_query_node);
             continue;
         }
@@ -97,7 +110,7 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
         VOLUMES_query_node = node.skip;
         let leaf = bvh_leaf_range(node.entry);
         if VOLUMES_query_in_group {
-            return leaf;
+            return select(vec2<u32>(leaf.x), leaf, inside);
         }
         // A top-level leaf holds one instance: enter its group.
         VOLUMES_query_enter(VOLUMES_primitives[leaf.x]);

@@ -4,7 +4,7 @@
 //! method (`shading/enumerate/*.wgsl`) without copies of the shading core.
 //! `#include "path" with KEY=value` includes a template: every name starting `KEY_` in it becomes
 //! `value_` (once per distinct value), which is how lights and decals each get a point query over their
-//! own bindings without binding-array support.
+//! own bindings without binding-array support; inside a template, `with KEY=KEY` passes its value on.
 //!
 //! `MANYLIGHTS_SHADER_DIR`, when set, names a directory laid out like this crate's `src/` whose WGSL
 //! files replace the embedded ones: shader edits take effect without rebuilding the binary.
@@ -25,6 +25,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/light_bindings.wgsl", include_str!("../shading/light_bindings.wgsl")),
     ("shading/decal_bindings.wgsl", include_str!("../shading/decal_bindings.wgsl")),
     ("shading/decals.wgsl", include_str!("../shading/decals.wgsl")),
+    ("shading/enumerate/light_loop.wgsl", include_str!("../shading/enumerate/light_loop.wgsl")),
     ("shading/enumerate/lights_brute.wgsl", include_str!("../shading/enumerate/lights_brute.wgsl")),
     ("shading/enumerate/lights_bvh.wgsl", include_str!("../shading/enumerate/lights_bvh.wgsl")),
     ("shading/enumerate/decals_brute.wgsl", include_str!("../shading/enumerate/decals_brute.wgsl")),
@@ -37,6 +38,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("accel/cluster_build.wgsl", include_str!("../accel/cluster_build.wgsl")),
     ("accel/workgroup_scan.wgsl", include_str!("../accel/workgroup_scan.wgsl")),
     ("accel/volume_query.wgsl", include_str!("../accel/volume_query.wgsl")),
+    ("accel/volume_query_invocation.wgsl", include_str!("../accel/volume_query_invocation.wgsl")),
     ("accel/volume_query_subgroup.wgsl", include_str!("../accel/volume_query_subgroup.wgsl")),
     ("accel/bvh_types.wgsl", include_str!("../accel/bvh_types.wgsl")),
     ("shading/camera.wgsl", include_str!("../shading/camera.wgsl")),
@@ -144,13 +146,19 @@ impl ShaderDesc {
             match include_target(line) {
                 Some((target, arguments)) => {
                     let template = match arguments {
-                        Some(arguments) => Some(
-                            arguments
+                        Some(arguments) => {
+                            let (name, value) = arguments
                                 .split_once('=')
                                 .map(|(n, v)| (n.trim(), v.trim()))
                                 .filter(|(n, v)| !n.is_empty() && !v.is_empty())
-                                .ok_or_else(|| format!("{path}: expected `with NAME=value`, got `with {arguments}`"))?,
-                        ),
+                                .ok_or_else(|| format!("{path}: expected `with NAME=value`, got `with {arguments}`"))?;
+                            // A template passing its own name passes its value.
+                            let value = match template {
+                                Some((outer, outer_value)) if value == outer => outer_value,
+                                _ => value,
+                            };
+                            Some((name, value))
+                        }
                         None => None,
                     };
                     let resolved = match target.strip_prefix('$') {

@@ -67,7 +67,7 @@ pub fn volume_query_module(subgroups: bool) -> &'static str {
     if subgroups {
         "accel/volume_query_subgroup.wgsl"
     } else {
-        "accel/volume_query.wgsl"
+        "accel/volume_query_invocation.wgsl"
     }
 }
 

@@ -11,13 +11,3 @@
 // its entries, and the entries as (instance, light) pairs. One-element placeholders for other methods.
 @group(2) @binding(4) var<storage, read> light_cluster_ranges: array<vec2<u32>>;
 @group(2) @binding(5) var<storage, read> light_cluster_entries: array<vec2<u32>>;
-
-// Whether light `index` can reach `p` (group space) by its range: the first test of every light
-// loop. Most lights a loop meets are out of range, so it reads the record's first 16 bytes (position
-// and range) and the loop loads the rest only for lights that pass: a million particle lights shade
-// 12 % faster through the BVH (BENCHMARKS.md).
-fn light_in_range(index: u32, p: vec3<f32>) -> bool {
-    let to_light = lights[index].position - p;
-    let range = lights[index].range;
-    return dot(to_light, to_light) < range * range;
-}

@@ -52,7 +52,12 @@ pub fn renderer(scene: &Scene, config: RenderConfig) -> Renderer {
 
 /// Renders one frame with the given settings; returns the tonemapped and the linear image.
 pub fn render_with(scene: &Scene, camera: &Camera, config: RenderConfig) -> (Image<[u8; 4]>, Image<[f32; 4]>) {
-    let mut r = renderer(scene, config);
+    render_on(GpuContext::new().expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)"), scene, camera, config)
+}
+
+/// As `render_with`, on a given device (one withholding features, say).
+pub fn render_on(ctx: GpuContext, scene: &Scene, camera: &Camera, config: RenderConfig) -> (Image<[u8; 4]>, Image<[f32; 4]>) {
+    let mut r = Renderer::new(ctx, scene, config).expect("renderer");
     r.render(camera).expect("frame");
     (r.read_ldr().expect("ldr"), r.read_hdr().expect("hdr"))
 }

@@ -1,10 +1,7 @@
 // Light enumeration, brute force: every light of every instance for every shading point. The
 // reference the accelerated methods are compared against. Every light enumeration module defines
 // `shade_local_lights` with this shape.
-#include "shading/light_bindings.wgsl"
-#include "shading/lights.wgsl"
-#include "$LIGHT_SHADOWS"
-#include "shading/debug_view.wgsl"
+#include "shading/enumerate/light_loop.wgsl"
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
@@ -17,14 +14,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
         let falloff = 1.0 / (instance.scale * instance.scale);
         for (var k = instance.first_item; k < instance.first_item + instance.item_count; k += 1u) {
             debug_light_work += 1u;
-            if light_in_range(k, local.position) {
-                let light = lights[k];
-                let contribution = light_contribution(light, local);
-                if any(contribution > vec3<f32>(0.0)) {
-                    debug_lights_reaching += 1u;
-                    radiance += contribution * falloff * light_visibility(light, instance, s, &shadow_rays);
-                }
-            }
+            radiance += local_light_radiance(k, instance, s, local, falloff, &shadow_rays);
         }
     }
     return radiance;

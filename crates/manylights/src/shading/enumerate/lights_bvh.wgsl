@@ -1,11 +1,8 @@
 // Light enumeration through the lights' acceleration structure (Hansen & Peters 2021): a point query
 // reaches only the leaves whose box contains the shading point; each light there gets the tight test
 // inside `light_contribution` (range, cone), so the result equals the brute-force loop's.
-#include "shading/light_bindings.wgsl"
-#include "shading/lights.wgsl"
+#include "shading/enumerate/light_loop.wgsl"
 #include "$LIGHT_QUERY" with VOLUMES=light
-#include "$LIGHT_SHADOWS"
-#include "shading/debug_view.wgsl"
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
@@ -23,15 +20,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             falloff = 1.0 / (light_query_instance.scale * light_query_instance.scale);
         }
         for (var k = leaf.x; k < leaf.y; k += 1u) {
-            let index = light_primitives[k];
-            if light_in_range(index, local.position) {
-                let light = lights[index];
-                let contribution = light_contribution(light, local);
-                if any(contribution > vec3<f32>(0.0)) {
-                    debug_lights_reaching += 1u;
-                    radiance += contribution * falloff * light_visibility(light, light_query_instance, s, &shadow_rays);
-                }
-            }
+            radiance += local_light_radiance(light_primitives[k], light_query_instance, s, local, falloff, &shadow_rays);
         }
     }
     debug_light_work = light_query_visits;

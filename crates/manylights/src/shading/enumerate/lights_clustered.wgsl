@@ -3,11 +3,8 @@
 // (`accel/cluster_build.wgsl`); each gets the tight test inside `light_contribution`, so the result
 // equals the brute-force loop's for every point in the view frustum. Points outside it (a
 // reflection's hit point) find a froxel that does not list their lights: the method's limit.
-#include "shading/light_bindings.wgsl"
-#include "shading/lights.wgsl"
+#include "shading/enumerate/light_loop.wgsl"
 #include "accel/cluster_grid.wgsl"
-#include "$LIGHT_SHADOWS"
-#include "shading/debug_view.wgsl"
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
@@ -27,14 +24,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             local = shading_input_in_group(s, instance);
             falloff = 1.0 / (instance.scale * instance.scale);
         }
-        if light_in_range(entry.y, local.position) {
-            let light = lights[entry.y];
-            let contribution = light_contribution(light, local);
-            if any(contribution > vec3<f32>(0.0)) {
-                debug_lights_reaching += 1u;
-                radiance += contribution * falloff * light_visibility(light, instance, s, &shadow_rays);
-            }
-        }
+        radiance += local_light_radiance(entry.y, instance, s, local, falloff, &shadow_rays);
     }
     return radiance;
 }
