@@ -6,8 +6,8 @@
 // decides how invocations walk together (`passes::volume_query_module`):
 // `accel/volume_query_invocation.wgsl`, each invocation alone, or `accel/volume_query_subgroup.wgsl`,
 // a whole subgroup together. A walk module defines `VOLUMES_walk_any(inside)`, whether to enter a node
-// whose box holds (`inside`) or not this invocation's point, and `VOLUMES_walk_cells(instance, start,
-// stop)`, the range of nodes to walk for this invocation's entry-grid cell.
+// whose box holds (`inside`) or not this invocation's point, and `VOLUMES_walk_cells(start, stop)`, the
+// range of nodes to walk for this invocation's entry-grid cell.
 //
 // Inside a group the query starts where the group's entry grid says, if it has one (CPU-built groups,
 // laid out depth first, so every step of a walk moves to a higher node), and ends at or past the node
@@ -74,7 +74,7 @@ fn VOLUMES_query_enter(instance_index: u32) {
         // an empty cell starts at BVH_END.
         let cell = entry_grid_cell(VOLUMES_nodes[root - 1u], VOLUMES_query_point);
         let start = select(VOLUMES_primitives[cell], BVH_END, VOLUMES_primitives[cell] < root);
-        let range = VOLUMES_walk_cells(instance_index, start, select(VOLUMES_primitives[cell + 1u], 0u, start == BVH_END));
+        let range = VOLUMES_walk_cells(start, select(VOLUMES_primitives[cell + 1u], 0u, start == BVH_END));
         VOLUMES_query_node = range.x;
         VOLUMES_query_stop = range.y;
     }

@@ -6,6 +6,6 @@ fn VOLUMES_walk_any(inside: bool) -> bool {
     return inside;
 }
 
-fn VOLUMES_walk_cells(instance_index: u32, start: u32, stop: u32) -> vec2<u32> {
+fn VOLUMES_walk_cells(start: u32, stop: u32) -> vec2<u32> {
     return vec2<u32>(start, stop);
 }

@@ -13,11 +13,10 @@ fn VOLUMES_walk_any(inside: bool) -> bool {
 
 // The lanes' cells name subtrees, each [start, stop) in node order; the walk covers them all from the
 // lowest start to the highest stop (what lies between and holds no lane's point is skipped as usual;
-// empty cells add none). Only cells of one group combine: lanes running together in different
-// instances (which shared walks never start, but nothing promises) each walk their own cell.
-fn VOLUMES_walk_cells(instance_index: u32, start: u32, stop: u32) -> vec2<u32> {
-    if subgroupAll(instance_index == subgroupBroadcastFirst(instance_index)) {
-        return vec2<u32>(subgroupMin(start), subgroupMax(stop));
-    }
-    return vec2<u32>(start, stop);
+// empty cells add none). This is the walk's one assumption: lanes running together entered the same
+// instance, as they do when they share the top-level walk from the query's start. (Lavapipe's helper
+// lanes read no grid flag and never get here.) Checking it with two more subgroup operations made
+// 100k decals in fragments three times slower on the H100, with no lane ever failing it.
+fn VOLUMES_walk_cells(start: u32, stop: u32) -> vec2<u32> {
+    return vec2<u32>(subgroupMin(start), subgroupMax(stop));
 }
