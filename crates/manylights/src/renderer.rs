@@ -340,13 +340,17 @@ impl Renderer {
             };
             self.pipeline.post().write_uniforms(&self.ctx.queue, post)?;
             self.previous_camera = Some(camera.clone());
-            // Particles first: as lights, they are the light structure's dynamic group.
+            // Particles first: as lights, they are the light structure's dynamic group, whose build
+            // reads their boxes; their light records follow the build, in its leaves' order.
             if let Some(particles) = &self.particles {
                 particles.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time, camera.position());
             }
             for structure in [&mut self.lights, &mut self.decals] {
                 structure.record(&self.ctx, &mut encoder, self.timer.as_mut(), self.time)?;
                 structure.record_clusters(&mut encoder, self.timer.as_mut(), &self.scene.bind_group);
+            }
+            if let Some(particles) = &self.particles {
+                particles.record_lights(&mut encoder, self.timer.as_mut());
             }
             let inputs = FrameInputs { scene: &self.scene, lights: &self.lights, decals: &self.decals, eye: camera.position() };
             self.pipeline.record(&mut encoder, self.timer.as_mut(), &inputs);

@@ -237,6 +237,11 @@ impl GpuLbvh {
         &self.boxes
     }
 
+    /// The first of the build's primitive indices in its target's `primitives`.
+    pub fn primitive_base(&self) -> u32 {
+        self.target.primitive_base
+    }
+
     /// Number of nodes the last `set_boxes` builds (0 for no boxes).
     pub fn node_count(&self) -> u32 {
         (2 * self.count).saturating_sub(1)

@@ -156,12 +156,16 @@ pub struct DynamicGroup {
     pub bounds: Aabb,
 }
 
-/// Where a GPU pass writes a [`DynamicGroup`]'s volumes each frame: items from `first_item` of
-/// `items`, and their boxes into `boxes`, before the structure's `record`.
+/// Where GPU passes write a [`DynamicGroup`]'s volumes each frame: their boxes into `boxes`, before
+/// the structure's `record`; items from `first_item` of `items`, in any order the pass chooses, with
+/// the group's primitive indices from `first_primitive` of `primitives` naming them: the build leaves
+/// primitive k naming `first_item` + the index of the k-th box in leaf order.
 pub struct DynamicTargets<'a> {
     pub items: &'a wgpu::Buffer,
     pub first_item: u32,
     pub boxes: &'a wgpu::Buffer,
+    pub primitives: &'a wgpu::Buffer,
+    pub first_primitive: u32,
 }
 
 /// The clustered method's lists, for structures that shading reads through them: the froxel grid,
@@ -237,7 +241,14 @@ impl VolumeStructure {
     /// Where the GPU writes the dynamic group's volumes, if the structure has one.
     pub fn dynamic_group(&self) -> Option<DynamicTargets<'_>> {
         let group = self.groups.iter().find(|g| g.dynamic)?;
-        Some(DynamicTargets { items: &self.items, first_item: group.items.start, boxes: group.builder.as_ref()?.boxes() })
+        let builder = group.builder.as_ref()?;
+        Some(DynamicTargets {
+            items: &self.items,
+            first_item: group.items.start,
+            boxes: builder.boxes(),
+            primitives: &self.primitives,
+            first_primitive: builder.primitive_base(),
+        })
     }
 
     /// The structure over a scene's decals; with clustered lists on `clusters`' grid when given.

@@ -496,8 +496,16 @@ pub struct ParticleSystem {
 enum Output {
     // Boxed: its handles outweigh the other variant's several times.
     Grid(Box<GridSplat>),
-    /// `particle_lights`: records and boxes for the lights' dynamic group.
-    Lights(wgpu::ComputePipeline, wgpu::BindGroup),
+    /// Boxes and records for the lights' dynamic group (`particles/lights.wgsl`).
+    Lights(LightOutput),
+}
+
+/// The two passes around the dynamic group's build: `particle_boxes` before it, `particle_lights`
+/// (the records, in leaf order) after it.
+struct LightOutput {
+    boxes: wgpu::ComputePipeline,
+    lights: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
 }
 
 /// The splat's sums, the two textures and its passes.
@@ -533,7 +541,9 @@ impl ParticleSystem {
         Ok(Self { settings: settings.clone(), params, particles, motion, output: Output::Grid(Box::new(splat)) })
     }
 
-    /// Particles written every frame as point lights into a light structure's dynamic group.
+    /// Particles written every frame as point lights into a light structure's dynamic group: their
+    /// boxes by [`record`](Self::record), before the structure's build, and their records in leaf
+    /// order by [`record_lights`](Self::record_lights), after it.
     pub fn with_lights(ctx: &GpuContext, settings: &ParticleSettings, targets: DynamicTargets) -> Result<Self> {
         let (params, particles, motion) = Self::motion(ctx, settings)?;
         let device = &ctx.device;
@@ -546,14 +556,17 @@ impl ParticleSystem {
                 bindings::storage_read(1, compute),
                 bindings::storage_read_write(2, compute),
                 bindings::storage_read_write(3, compute),
-                bindings::uniform(4, compute),
+                bindings::storage_read_write(4, compute),
+                bindings::uniform(5, compute),
             ],
         );
-        let pipeline = bindings::compute_pipeline(device, "particle_lights", &ShaderDesc::new("particles/lights.wgsl"), &[&layout])?;
+        let shader = ShaderDesc::new("particles/lights.wgsl");
+        let boxes = bindings::compute_pipeline(device, "particle_boxes", &shader, &[&layout])?;
+        let lights = bindings::compute_pipeline(device, "particle_lights", &shader, &[&layout])?;
         use wgpu::util::DeviceExt;
-        let first_light = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("particle first light"),
-            contents: bytemuck::cast_slice(&[targets.first_item, 0, 0, 0]),
+        let group = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("particle light group"),
+            contents: bytemuck::cast_slice(&[targets.first_item, targets.first_primitive, 0, 0]),
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let bind_group = bindings::bind_group(
@@ -565,11 +578,13 @@ impl ParticleSystem {
                 particles.as_entire_binding(),
                 targets.items.as_entire_binding(),
                 targets.boxes.as_entire_binding(),
-                first_light.as_entire_binding(),
+                targets.primitives.as_entire_binding(),
+                group.as_entire_binding(),
             ],
         );
         ctx.check_errors()?;
-        Ok(Self { settings: settings.clone(), params, particles, motion, output: Output::Lights(pipeline, bind_group) })
+        let output = Output::Lights(LightOutput { boxes, lights, bind_group });
+        Ok(Self { settings: settings.clone(), params, particles, motion, output })
     }
 
     /// The parameters, the particle lights and the motion pass, shared by both outputs.
@@ -642,8 +657,8 @@ impl ParticleSystem {
     }
 
     /// Records the particles' motion to `time`, timed as `particle_motion`, and what they become:
-    /// the splat into the textures around a camera at `eye` (`particle_splat`), or lights (within
-    /// `particle_motion`).
+    /// the splat into the textures around a camera at `eye` (`particle_splat`), or the boxes of the
+    /// lights' dynamic group (within `particle_motion`).
     pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, time: f32, eye: Vec3) {
         let (x, y) = self.dispatch();
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&self.settings.gpu_params(time, x * WORKGROUP)));
@@ -656,9 +671,9 @@ impl ParticleSystem {
                 pass.set_pipeline(&self.motion.0);
                 pass.set_bind_group(0, &self.motion.1, &[]);
                 pass.dispatch_workgroups(x, y, 1);
-                if let Output::Lights(pipeline, bind_group) = &self.output {
-                    pass.set_pipeline(pipeline);
-                    pass.set_bind_group(0, bind_group, &[]);
+                if let Output::Lights(output) = &self.output {
+                    pass.set_pipeline(&output.boxes);
+                    pass.set_bind_group(0, &output.bind_group, &[]);
                     pass.dispatch_workgroups(x, y, 1);
                 }
             }
@@ -667,6 +682,23 @@ impl ParticleSystem {
             ctx.queue.write_buffer(&splat.volume_uniform, 0, bytemuck::bytes_of(&splat.volume.gpu(eye, splat.scales)));
             splat.record(encoder, timer, self.settings.count > 0, (x, y));
         }
+    }
+
+    /// With the method that makes them lights, records their light records in the order of the
+    /// dynamic group's leaves, timed as `particle_lights`: after the light structure's build.
+    pub fn record_lights(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
+        let Output::Lights(output) = &self.output else { return };
+        if self.settings.count == 0 {
+            return;
+        }
+        let (x, y) = self.dispatch();
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("particle_lights"),
+            timestamp_writes: timer.map(|t| t.compute_pass("particle_lights")),
+        });
+        pass.set_pipeline(&output.lights);
+        pass.set_bind_group(0, &output.bind_group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
     }
 
     /// The particle lights of the last recorded frame (for tests and the exact method's oracle).
