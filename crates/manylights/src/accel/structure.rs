@@ -40,9 +40,10 @@ pub const CPU_TOP_LEVEL_MAX_INSTANCES: usize = 1024;
 
 /// The dynamic group (particle lights, rebuilt every frame) gets leaves of up to this many lights:
 /// particles crowd, so hundreds reach each lit point, and a walk over one-light leaves visits about
-/// twenty nodes per light it finds. Leaves of 8 visit 3.4 times fewer nodes for 2.3 times more
-/// range tests: 1M particles shade in 27.5 ms instead of 38.6 (4: 28.8, 16: 27.9; BENCHMARKS.md).
-pub const DYNAMIC_GROUP_LEAF_SIZE: u32 = 8;
+/// twenty nodes per light it finds. Bigger leaves trade node visits for range tests, which read the
+/// leaf's records side by side (they are written in leaf order): 1M particles shade in 22.4 ms at 16,
+/// 23.5 at 8 and 38.6 at 1 (BENCHMARKS.md). 16 is the most a leaf can hold.
+pub const DYNAMIC_GROUP_LEAF_SIZE: u32 = 16;
 
 /// Where and when the groups' BVHs are built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
