@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use common::*;
 use glam::{Affine3A, Vec3};
 use manylights::{
-    accel::BvhBuild,
+    accel::{clusters::ClusterGrid, BvhBuild, VolumeStructure},
     config::RenderConfig,
     gpu::GpuContext,
     pipelines::{DecalMethod, LightMethod},
@@ -142,6 +142,27 @@ fn a_million_decals_fit() {
     let without = render_at(&base, config, 0.0);
     assert!(with.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())));
     assert!(max_abs_difference(&with, &without) > 0.01, "a million decals changed nothing");
+}
+
+/// A BVH rebuilt on the GPU puts its items in a new leaf order every frame, out of the CPU's sight:
+/// clustered lists (binned in the CPU's order) and deferred decals (drawn in layer order) refuse such
+/// a structure with an error saying to build once on the CPU, and accept the one built there.
+#[test]
+fn gpu_rebuilt_decals_refuse_cpu_ordered_uses() {
+    let ctx = GpuContext::new().expect("a GPU adapter");
+    let scene = with_decals_and_lights(demo_scene(), 50, 0, 3);
+    let frame_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
+    let grid = ClusterGrid::for_resolution(64, 36);
+    let structure = |build, clustered: bool| {
+        VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, build, clustered.then_some((grid, &frame_layout)))
+    };
+    let message = structure(BvhBuild::GpuEveryFrame, true).err().expect("clustered lists over GPU rebuilds are an error").to_string();
+    assert!(message.contains("clustered") && message.contains("once on the CPU"), "{message}");
+    let rebuilt = structure(BvhBuild::GpuEveryFrame, false).expect("a GPU-rebuilt structure");
+    let message = rebuilt.pairs_in_layer_order().expect_err("layer order over GPU rebuilds is an error").to_string();
+    assert!(message.contains("layer order") && message.contains("once on the CPU"), "{message}");
+    let (pairs, _) = structure(BvhBuild::CpuOnce, false).unwrap().pairs_in_layer_order().expect("layer order of a CPU-built structure");
+    assert_eq!(pairs.len(), scene.decals.len());
 }
 
 #[test]

@@ -94,7 +94,7 @@ pub(crate) struct Timing {
 /// Passes summed into the columns of the tables.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum PassGroup {
-    /// Per-frame builds: BVHs rebuilt on the GPU, clustered lists.
+    /// Per-frame builds: BVHs rebuilt on the GPU and their items put in leaf order, clustered lists.
     Build,
     /// The pipeline's raster pass: visibility buffer, G-buffer or depth prepass.
     Raster,
@@ -110,7 +110,7 @@ impl PassGroup {
 
     pub fn of(pass: &str) -> PassGroup {
         match pass {
-            p if p.ends_with("_build") => PassGroup::Build,
+            p if p.ends_with("_build") || p.ends_with("_leaf_order") => PassGroup::Build,
             "visbuffer_raster" | "gbuffer_raster" | "depth_prepass" => PassGroup::Raster,
             "deferred_decals" => PassGroup::DeferredDecals,
             "visbuffer_shade" | "deferred_shade" | "forward_shade" => PassGroup::Shade,

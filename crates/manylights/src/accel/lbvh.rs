@@ -26,13 +26,17 @@ struct LbvhParams {
     primitive_base: u32,
     item_base: u32,
     max_leaf_size: u32,
-    _pad: [u32; 3],
+    leaf_base: u32,
+    _pad: [u32; 2],
     centre_min: [f32; 4],
     centre_max: [f32; 4],
 }
 
 /// Where a build writes: `2 × capacity − 1` nodes from `node_base` in `nodes`, and `capacity` primitive
-/// indices from `primitive_base` in `primitives`, each `item_base` + the box's index.
+/// indices from `primitive_base` in `primitives`, each `item_base` + the box's index, in leaf order. A
+/// leaf over sorted positions [j, j + n) names the range from `leaf_base` + j: `primitive_base` where
+/// queries read the primitive indices (a top level's instance indices), or `item_base` where a pass
+/// after the build stores the items themselves in leaf order (a group's lights or decals).
 #[derive(Clone, Debug)]
 pub struct LbvhTarget {
     pub nodes: wgpu::Buffer,
@@ -40,6 +44,7 @@ pub struct LbvhTarget {
     pub node_base: u32,
     pub primitive_base: u32,
     pub item_base: u32,
+    pub leaf_base: u32,
 }
 
 /// The timer scope a build is recorded in: `starts` opens it at the build's first pass, `ends` closes
@@ -93,6 +98,7 @@ impl GpuLbvh {
             node_base: 0,
             primitive_base: 0,
             item_base: 0,
+            leaf_base: 0,
         };
         Self::with_target(ctx, capacity, target)
     }
@@ -197,7 +203,8 @@ impl GpuLbvh {
             primitive_base: t.primitive_base,
             item_base: t.item_base,
             max_leaf_size: self.max_leaf_size,
-            _pad: [0; 3],
+            leaf_base: t.leaf_base,
+            _pad: [0; 2],
             centre_min: centre_min.extend(0.0).to_array(),
             centre_max: centre_max.extend(0.0).to_array(),
         };
@@ -224,7 +231,8 @@ impl GpuLbvh {
             primitive_base: t.primitive_base,
             item_base: t.item_base,
             max_leaf_size: self.max_leaf_size,
-            _pad: [0; 3],
+            leaf_base: t.leaf_base,
+            _pad: [0; 2],
             centre_min: centres.min.extend(0.0).to_array(),
             centre_max: centres.max.extend(0.0).to_array(),
         };
@@ -273,8 +281,8 @@ impl GpuLbvh {
         Ok(())
     }
 
-    /// Reads the last build back, with indices local to it (as if `node_base`, `primitive_base` and
-    /// `item_base` were 0) and only the nodes a walk reaches ([`Bvh::reachable`]): for tests and
+    /// Reads the last build back, with indices local to it (as if `node_base`, `primitive_base`,
+    /// `item_base` and `leaf_base` were 0) and only the nodes a walk reaches ([`Bvh::reachable`]): for tests and
     /// validation.
     pub fn read_back(&self, ctx: &GpuContext) -> Result<Bvh> {
         let copy = |source: &wgpu::Buffer, offset: u64, size: u64| -> Result<Vec<u8>> {
@@ -299,7 +307,7 @@ impl GpuLbvh {
         ctx.check_errors()?;
         let mut bvh = Bvh { nodes: bytemuck::pod_collect_to_vec(&nodes), primitive_indices: bytemuck::pod_collect_to_vec(&primitives) };
         for node in &mut bvh.nodes {
-            *node = node.offset(t.node_base.wrapping_neg(), t.primitive_base.wrapping_neg());
+            *node = node.offset(t.node_base.wrapping_neg(), t.leaf_base.wrapping_neg());
         }
         for primitive in &mut bvh.primitive_indices {
             *primitive = primitive.wrapping_sub(t.item_base);

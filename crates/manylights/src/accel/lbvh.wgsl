@@ -3,8 +3,9 @@
 // → one thread per internal node finds its range and split → bounds propagated from the leaves up.
 // Node indices: internal nodes 0 .. count - 2 (root 0), leaf k at count - 1 + k, all offset by
 // `node_base` in `nodes`: several BVHs (a top level and the groups' BVHs) share one node array, so the
-// query needs no binding per BVH. Leaves name `primitives[primitive_base + k]`, which holds
-// `item_base` + the index of the box among this build's boxes.
+// query needs no binding per BVH. `primitives[primitive_base + k]` gets `item_base` + the index of the
+// k-th box in sorted (leaf) order among this build's boxes; a leaf over sorted positions [k, k + n)
+// names the range from `leaf_base + k` (`LbvhTarget` in `lbvh.rs`).
 #include "accel/bvh_types.wgsl"
 
 struct LbvhParams {
@@ -14,6 +15,7 @@ struct LbvhParams {
     item_base: u32,
     // Subtrees over at most this many boxes are leaves (1: every box its own leaf).
     max_leaf_size: u32,
+    leaf_base: u32,
     // The Morton grid: the bounds of the box centres when the CPU uploads the boxes, or bounds the
     // centres are known to stay within when a GPU pass writes them (centres outside are clamped in).
     centre_min: vec4<f32>,
@@ -131,7 +133,7 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
     // Every thread writes its leaf; threads below n - 1 also build internal node id.x.
     let leaf = params.node_base + n - 1u + id.x;
     // One box per leaf: the count − 1 bits stay 0.
-    nodes[leaf].entry = BVH_LEAF | (params.primitive_base + id.x);
+    nodes[leaf].entry = BVH_LEAF | (params.leaf_base + id.x);
     nodes[leaf].skip = skip_after(i32(id.x));
     primitives[params.primitive_base + id.x] = params.item_base + sorted_keys[id.x].y;
     if id.x == 0u {
@@ -177,7 +179,7 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
     let size = u32(max(i, j)) + 1u - first;
     // A small subtree becomes a leaf over its range of sorted boxes; the nodes below it are never
     // reached (the bounds pass still gives it the box of its whole range).
-    nodes[params.node_base + id.x].entry = select(params.node_base + left, BVH_LEAF | ((size - 1u) << BVH_LEAF_COUNT_SHIFT) | (params.primitive_base + first), size <= params.max_leaf_size);
+    nodes[params.node_base + id.x].entry = select(params.node_base + left, BVH_LEAF | ((size - 1u) << BVH_LEAF_COUNT_SHIFT) | (params.leaf_base + first), size <= params.max_leaf_size);
     nodes[params.node_base + id.x].skip = skip_after(max(i, j));
     parents[left] = id.x;
     parents[right] = id.x;

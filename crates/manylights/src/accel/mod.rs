@@ -15,6 +15,7 @@ pub mod bvh;
 pub mod clusters;
 pub mod entry_grid;
 pub mod lbvh;
+pub mod leaf_order;
 pub mod overlap;
 pub mod radix_sort;
 pub mod structure;

@@ -5,15 +5,20 @@
 //! places them in the world. Moving or instancing a group never touches its BVH.
 //!
 //! One bind group per structure, read by `accel/volume_query.wgsl` and the enumeration modules:
-//! `items` (lights or decals, group after group, each in its group's space), `nodes` (the top level
-//! first, then each group's entry-grid header node and BVH), `primitives` (the top level's instance indices, then item indices,
-//! then the entry grids' cells of CPU-built groups, `entry_grid.rs`) and `instances`. Sharing one node array between all BVHs keeps the binding count fixed; a
-//! structure over 1M volumes still stays under lavapipe's 128 MiB per binding.
+//! `items` (lights or decals, group after group, each in its group's space and in its BVH's leaf
+//! order, so a group leaf names the range of items it holds), `nodes` (the top level first, then each
+//! group's entry-grid header node and BVH), `primitives` (the top level's instance indices, then each
+//! item's index in the scene, then the entry grids' cells of CPU-built groups, `entry_grid.rs`) and
+//! `instances`. Sharing one node array between all BVHs keeps the binding count fixed; a structure
+//! over 1M volumes still stays under lavapipe's 128 MiB per binding.
+//!
+//! Items in leaf order save the query an index load per item and put a leaf's items side by side. A
+//! CPU-built group is uploaded in that order; a group rebuilt on the GPU is put in it after each build
+//! (`leaf_order.rs`), and the dynamic group by the pass that writes it.
 
 use std::ops::Range;
 
 use glam::Affine3A;
-use wgpu::util::DeviceExt;
 
 use super::{
     bvh::MAX_PRIMITIVES,
@@ -21,6 +26,7 @@ use super::{
     decal_aabb,
     entry_grid::{self, EntryGrid},
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
+    leaf_order::LeafOrder,
     light_aabb, Aabb, Bvh, BvhNode,
 };
 use crate::{
@@ -126,11 +132,12 @@ impl VolumeKind {
         }
     }
 
-    /// Timer scopes of the top-level build, of the groups' rebuilds and of the clustered lists.
-    fn scopes(self) -> (&'static str, &'static str, &'static str) {
+    /// Timer scopes of the top-level build, of the groups' rebuilds, of putting the rebuilt groups'
+    /// items in leaf order and of the clustered lists.
+    fn scopes(self) -> [&'static str; 4] {
         match self {
-            VolumeKind::Lights => ("light_tlas_build", "light_blas_build", "light_cluster_build"),
-            VolumeKind::Decals => ("decal_tlas_build", "decal_blas_build", "decal_cluster_build"),
+            VolumeKind::Lights => ["light_tlas_build", "light_blas_build", "light_leaf_order", "light_cluster_build"],
+            VolumeKind::Decals => ["decal_tlas_build", "decal_blas_build", "decal_leaf_order", "decal_cluster_build"],
         }
     }
 }
@@ -158,9 +165,9 @@ pub struct DynamicGroup {
 }
 
 /// Where GPU passes write a [`DynamicGroup`]'s volumes each frame: their boxes into `boxes`, before
-/// the structure's `record`; items from `first_item` of `items`, in any order the pass chooses, with
-/// the group's primitive indices from `first_primitive` of `primitives` naming them: the build leaves
-/// primitive k naming `first_item` + the index of the k-th box in leaf order.
+/// the structure's `record`, and after it the items from `first_item` of `items` in leaf order: the
+/// build leaves primitive `first_primitive` + k naming `first_item` + the index of the box it sorted to
+/// position k, and the leaves over position k name item `first_item` + k.
 pub struct DynamicTargets<'a> {
     pub items: &'a wgpu::Buffer,
     pub first_item: u32,
@@ -185,6 +192,10 @@ pub struct VolumeStructure {
     items: wgpu::Buffer,
     /// Each item's decal layer (empty for lights): deferred decals draw in layer order.
     layers: Vec<u32>,
+    /// The scene's index of each item but the dynamic group's, in the order of `items` once uploaded.
+    scene_indices: Vec<u32>,
+    /// Puts the items in leaf order after GPU rebuilds (none when every group is built on the CPU).
+    leaf_order: Option<LeafOrder>,
     /// Present for the clustered method; its buffers are bindings 4 and 5, placeholders otherwise.
     clusters: Option<ClusterLists>,
     groups: Vec<Group>,
@@ -200,6 +211,10 @@ pub struct VolumeStructure {
     /// The time the top level was last built for; `None` before the first build.
     built_for: Option<f32>,
 }
+
+/// Every (instance, item) pair in the order deferred decals draw them, and the range of pairs in each
+/// layer that has any ([`VolumeStructure::pairs_in_layer_order`]).
+pub type LayerOrder = (Vec<[u32; 2]>, Vec<Range<u32>>);
 
 impl VolumeStructure {
     /// The structure over a scene's lights; with clustered lists on `clusters`' grid when given.
@@ -269,14 +284,21 @@ impl VolumeStructure {
         });
         let volumes = Volumes { kind: VolumeKind::Decals, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: None };
         let mut structure = Self::new(ctx, &volumes, build, clustering)?;
-        structure.layers = decals.iter().map(|d| d.layer).collect();
+        structure.layers = structure.scene_indices.iter().map(|&i| decals[i as usize].layer).collect();
         Ok(structure)
     }
 
     /// Every (instance, item) pair, instances in the order of the instance buffer, sorted stably by
     /// decal layer — the order deferred decals are drawn in, bottom layer first — and the range of
-    /// pairs in each layer that has any.
-    pub fn pairs_in_layer_order(&self) -> (Vec<[u32; 2]>, Vec<std::ops::Range<u32>>) {
+    /// pairs in each layer that has any. Errors when groups are rebuilt on the GPU: their items' order
+    /// changes every frame, out of the CPU's sight.
+    pub fn pairs_in_layer_order(&self) -> Result<LayerOrder> {
+        if self.leaf_order.is_some() {
+            return Err(Error::InvalidConfig(format!(
+                "drawing {}s in layer order needs their items in a fixed order; build their BVH once on the CPU",
+                self.label
+            )));
+        }
         let layer = |item: u32| self.layers.get(item as usize).copied().unwrap_or(0);
         let mut pairs: Vec<[u32; 2]> = self
             .instances
@@ -285,14 +307,14 @@ impl VolumeStructure {
             .flat_map(|(i, instance)| self.groups[instance.group].items.clone().map(move |item| [i as u32, item]))
             .collect();
         pairs.sort_by_key(|&[_, item]| layer(item));
-        let mut ranges: Vec<std::ops::Range<u32>> = Vec::new();
+        let mut ranges: Vec<Range<u32>> = Vec::new();
         for (i, &[_, item]) in pairs.iter().enumerate() {
             match ranges.last_mut() {
                 Some(range) if layer(pairs[range.start as usize][1]) == layer(item) => range.end = i as u32 + 1,
                 _ => ranges.push(i as u32..i as u32 + 1),
             }
         }
-        (pairs, ranges)
+        Ok((pairs, ranges))
     }
 
     pub fn new(ctx: &GpuContext, volumes: &Volumes, build: BvhBuild, clustering: Option<Clustering>) -> Result<Self> {
@@ -345,6 +367,25 @@ impl VolumeStructure {
                 Ok(Some((bvh, grid)))
             })
             .collect::<Result<_>>()?;
+        // Each item's scene index, in the order the items are stored: a CPU-built group's in its
+        // leaf order; the others' as the scene has them until their builds sort them.
+        let scene_indices: Vec<u32> = ranges
+            .iter()
+            .zip(&cpu_builds)
+            .flat_map(|(range, build)| {
+                let start = range.start as u32;
+                match build {
+                    Some((bvh, _)) => bvh.primitive_indices.iter().map(|&p| start + p).collect::<Vec<_>>(),
+                    None => range.clone().map(|i| i as u32).collect(),
+                }
+            })
+            .collect();
+        let rebuilt_on_gpu = ranges.iter().zip(&cpu_builds).any(|(range, build)| build.is_none() && !range.is_empty());
+        if rebuilt_on_gpu && clustering.is_some() {
+            return Err(Error::InvalidConfig(format!(
+                "clustered lists bin the {label}s in the order the CPU stores them, which GPU rebuilds change every frame; build the {label}s' BVH once on the CPU"
+            )));
+        }
         let cell_words: u64 = cpu_builds.iter().flatten().filter_map(|(_, g)| g.as_ref()).map(|g| 2 * g.cells.len() as u64).sum();
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let node_bytes = node_count * std::mem::size_of::<BvhNode>() as u64;
@@ -374,21 +415,25 @@ impl VolumeStructure {
         let primitives = storage("bvh primitives", primitive_bytes, U::COPY_DST | U::COPY_SRC);
         let instance_buffer =
             storage("instances", u64::from(instance_slots) * std::mem::size_of::<GpuVolumeInstance>() as u64, U::COPY_DST);
-        let items = if let Some(d) = dynamic {
-            let buffer = storage("items", volumes.items.len() as u64 + u64::from(d.count) * d.item_bytes, U::COPY_DST);
-            if !volumes.items.is_empty() {
-                ctx.queue.write_buffer(&buffer, 0, volumes.items);
-            }
-            buffer
-        } else if volumes.items.is_empty() {
-            storage("items", 64, U::empty())
+        let items = storage("items", item_bytes.max(64), U::COPY_DST);
+        let bytes_per_item = volumes.items.len().checked_div(count).unwrap_or(0);
+        let leaf_order = if rebuilt_on_gpu {
+            let scope = volumes.kind.scopes()[2];
+            Some(LeafOrder::new(ctx, scope, volumes.items, bytes_per_item, (&items, &primitives, instance_slots))?)
         } else {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(&format!("{label} items")),
-                contents: volumes.items,
-                usage: U::STORAGE,
-            })
+            let in_leaf_order: Vec<u8> = scene_indices
+                .iter()
+                .flat_map(|&i| &volumes.items[i as usize * bytes_per_item..(i as usize + 1) * bytes_per_item])
+                .copied()
+                .collect();
+            if !in_leaf_order.is_empty() {
+                ctx.queue.write_buffer(&items, 0, &in_leaf_order);
+            }
+            None
         };
+        if !scene_indices.is_empty() {
+            ctx.queue.write_buffer(&primitives, u64::from(instance_slots) * 4, bytemuck::cast_slice(&scene_indices));
+        }
 
         let mut groups = Vec::new();
         let mut next_cell = primitive_count as u32;
@@ -399,13 +444,8 @@ impl VolumeStructure {
             let mut has_entry_grid = false;
             let builder = match cpu_build {
                 Some((bvh, grid)) => {
-                    let (group_nodes, group_primitives) = relocate(&bvh, blas_root, instance_slots + items_range.start, items_range.start);
+                    let group_nodes = relocate(&bvh, blas_root, items_range.start);
                     ctx.queue.write_buffer(&nodes, u64::from(blas_root) * 32, bytemuck::cast_slice(&group_nodes));
-                    ctx.queue.write_buffer(
-                        &primitives,
-                        u64::from(instance_slots + items_range.start) * 4,
-                        bytemuck::cast_slice(&group_primitives),
-                    );
                     if let Some(grid) = grid {
                         let cells = relocate_cells(&grid, blas_root);
                         ctx.queue.write_buffer(&primitives, u64::from(next_cell) * 4, bytemuck::cast_slice(&cells));
@@ -424,6 +464,7 @@ impl VolumeStructure {
                         node_base: blas_root,
                         primitive_base: instance_slots + items_range.start,
                         item_base: items_range.start,
+                        leaf_base: items_range.start,
                     };
                     let mut builder = GpuLbvh::with_target(ctx, boxes.len() as u32, target)?;
                     builder.set_boxes(&ctx.queue, boxes)?;
@@ -440,6 +481,7 @@ impl VolumeStructure {
                 node_base: dynamic_root,
                 primitive_base: instance_slots + first,
                 item_base: first,
+                leaf_base: first,
             };
             let mut builder = GpuLbvh::with_target(ctx, d.count, target)?.with_max_leaf_size(DYNAMIC_GROUP_LEAF_SIZE);
             builder.set_gpu_boxes(&ctx.queue, d.count, &d.bounds)?;
@@ -453,17 +495,25 @@ impl VolumeStructure {
             });
         }
         let top_level_builder = if instances.len() > CPU_TOP_LEVEL_MAX_INSTANCES {
-            let target = LbvhTarget { nodes: nodes.clone(), primitives: primitives.clone(), node_base: 0, primitive_base: 0, item_base: 0 };
+            let target = LbvhTarget {
+                nodes: nodes.clone(),
+                primitives: primitives.clone(),
+                node_base: 0,
+                primitive_base: 0,
+                item_base: 0,
+                leaf_base: 0,
+            };
             Some(GpuLbvh::with_target(ctx, instance_slots, target)?)
         } else {
             None
         };
 
-        let (top_level_scope, blas_scope, cluster_scope) = volumes.kind.scopes();
+        let [top_level_scope, blas_scope, _, cluster_scope] = volumes.kind.scopes();
         let clusters = match clustering {
             Some(c) => {
                 let instance_items: Vec<u32> = instances.iter().map(|i| ranges[i.group].len() as u32).collect();
-                Some(ClusterLists::new(ctx, (label, cluster_scope), c.frame_layout, &instance_buffer, &instance_items, &c.bounds, c.grid)?)
+                let bounds: Vec<ClusterBounds> = scene_indices.iter().map(|&i| c.bounds[i as usize]).collect();
+                Some(ClusterLists::new(ctx, (label, cluster_scope), c.frame_layout, &instance_buffer, &instance_items, &bounds, c.grid)?)
             }
             None => None,
         };
@@ -478,6 +528,8 @@ impl VolumeStructure {
             label,
             items,
             layers: Vec::new(),
+            scene_indices,
+            leaf_order,
             clusters,
             groups,
             instances,
@@ -534,6 +586,9 @@ impl VolumeStructure {
         for (k, &g) in rebuilding.iter().enumerate() {
             let span = TimerSpan { name: self.blas_scope, starts: k == 0, ends: k + 1 == rebuilding.len() };
             self.groups[g].builder.as_mut().expect("filtered on builders").record(encoder, timer.as_deref_mut(), span)?;
+        }
+        if let Some(leaf_order) = &self.leaf_order {
+            leaf_order.record(encoder, timer.as_deref_mut());
         }
         let moved = match self.built_for {
             None => true,
@@ -593,13 +648,11 @@ fn shading_bind_group(
     bindings::bind_group(&ctx.device, label, layout, resources)
 }
 
-/// Moves a CPU-built BVH into the shared arrays: node links by `node_base` (the last node's [`END`](super::END)
-/// stays, ending the group's traversal), leaf ranges by `primitive_base`, primitive values by
-/// `item_base`.
-fn relocate(bvh: &Bvh, node_base: u32, primitive_base: u32, item_base: u32) -> (Vec<BvhNode>, Vec<u32>) {
-    let nodes = bvh.nodes.iter().map(|n| n.offset(node_base, primitive_base)).collect();
-    let primitives = bvh.primitive_indices.iter().map(|&p| p + item_base).collect();
-    (nodes, primitives)
+/// Moves a CPU-built BVH's nodes into the shared array: node links by `node_base` (the last node's
+/// [`END`](super::END) stays, ending the group's traversal), leaf ranges by `item_base`, where the
+/// group's items are stored in leaf order.
+fn relocate(bvh: &Bvh, node_base: u32, item_base: u32) -> Vec<BvhNode> {
+    bvh.nodes.iter().map(|n| n.offset(node_base, item_base)).collect()
 }
 
 /// An entry grid's cells as (start, stop) words in the shared node numbering: node links by
@@ -660,10 +713,10 @@ mod tests {
     }
 
     #[test]
-    fn relocation_offsets_children_leaves_and_items() {
+    fn relocation_offsets_children_and_leaves() {
         let boxes: Vec<Aabb> = (0..20).map(|i| Aabb::new(glam::Vec3::splat(i as f32), glam::Vec3::splat(i as f32 + 0.5))).collect();
         let bvh = Bvh::build(&boxes).unwrap();
-        let (nodes, primitives) = relocate(&bvh, 100, 50, 7);
+        let nodes = relocate(&bvh, 100, 50);
         for (moved, original) in nodes.iter().zip(&bvh.nodes) {
             if original.is_leaf() {
                 assert_eq!(moved.leaf_range(), original.leaf_range().start + 50..original.leaf_range().end + 50);
@@ -674,6 +727,5 @@ mod tests {
             assert_eq!(moved.skip, skip);
         }
         assert_eq!(nodes[0].skip, END, "the root ends the group's traversal");
-        assert!(primitives.iter().zip(&bvh.primitive_indices).all(|(m, o)| *m == o + 7));
     }
 }

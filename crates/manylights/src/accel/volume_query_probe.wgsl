@@ -1,6 +1,8 @@
 // Test probe of the point query: for each point, the lights the two-level query reaches that pass the
 // tight test (`light_reaches`, in the world), summarised as count, sum and sum of squares of their
-// item indices, which the tests compare with the CPU oracle. Runs the same query code as shading.
+// indices in the scene, which the tests compare with the CPU oracle. Runs the same query code as
+// shading. The structure stores its items in leaf order; the primitive indices after the top level's
+// (one per instance, at least one) hold each item's scene index (`accel/structure.rs`).
 #include "shading/light_bindings.wgsl"
 #include "shading/light_volume.wgsl"
 #include "$LIGHT_QUERY" with VOLUMES=light
@@ -20,8 +22,8 @@ fn volume_query_probe(@builtin(global_invocation_id) id: vec3<u32>) {
     light_query_begin(p, instance_count);
     for (var leaf = light_query_next_leaf(); leaf.x != BVH_END; leaf = light_query_next_leaf()) {
         for (var k = leaf.x; k < leaf.y; k += 1u) {
-            let light = light_primitives[k];
-            if light_reaches(light_in_world(lights[light], light_query_instance), p) {
+            let light = light_primitives[max(instance_count, 1u) + k];
+            if light_reaches(light_in_world(lights[k], light_query_instance), p) {
                 summary += vec4<u32>(1u, light, light * light, 0u);
             }
         }

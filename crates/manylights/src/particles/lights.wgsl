@@ -2,8 +2,8 @@
 // frame becomes a point light in the lights' acceleration structure, rebuilt every frame
 // (`accel/structure.rs`, `DynamicGroup`). Two passes around the group's LBVH build: `particle_boxes`
 // writes each particle's box for the build; `particle_lights` then writes the light records in the
-// order of the built leaves, so the lights of a leaf lie side by side in memory (a query tests a leaf's
-// lights one after the other), and points the leaves at them.
+// order of the built leaves, which name their lights directly (`LbvhTarget::leaf_base`): a leaf's
+// lights lie side by side in memory, and a query tests them one after the other.
 #include "particles/types.wgsl"
 #include "shading/types.wgsl"
 
@@ -16,8 +16,9 @@ struct LightBox {
     max: vec4<f32>,
 }
 @group(0) @binding(3) var<storage, read_write> boxes: array<LightBox>;
-// The structure's primitive indices: the group's leaves name items from `group.y`.
-@group(0) @binding(4) var<storage, read_write> primitives: array<u32>;
+// The structure's primitive indices: from `group.y`, the build's sorted order, each naming its
+// particle as the first light + the particle's index.
+@group(0) @binding(4) var<storage, read> primitives: array<u32>;
 // x: the first light record the particles take (after the scene's lights); y: the group's first
 // primitive index.
 @group(0) @binding(5) var<uniform> group: vec4<u32>;
@@ -33,16 +34,15 @@ fn particle_boxes(@builtin(global_invocation_id) id: vec3<u32>) {
     boxes[i] = LightBox(vec4<f32>(particle.position - particle.radius, 0.0), vec4<f32>(particle.position + particle.radius, 0.0));
 }
 
-// Item k of the built group: the build left it naming its particle (first light + the particle's
-// index); it becomes light record first light + k.
+// Position k of the built group's leaf order: the particle the build sorted there becomes light
+// record first light + k, which the leaves over k name.
 @compute @workgroup_size(256)
 fn particle_lights(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = id.y * params.row_threads + id.x;
     if k >= params.count {
         return;
     }
-    let slot = group.y + k;
-    let particle = particles[primitives[slot] - group.x];
+    let particle = particles[primitives[group.y + k] - group.x];
     var light: Light;
     light.position = particle.position;
     light.range = particle.radius;
@@ -52,5 +52,4 @@ fn particle_lights(@builtin(global_invocation_id) id: vec3<u32>) {
     light.spot_scale = 0.0;
     light.spot_offset = 1.0;
     lights[group.x + k] = light;
-    primitives[slot] = group.x + k;
 }

@@ -556,7 +556,7 @@ impl ParticleSystem {
                 bindings::storage_read(1, compute),
                 bindings::storage_read_write(2, compute),
                 bindings::storage_read_write(3, compute),
-                bindings::storage_read_write(4, compute),
+                bindings::storage_read(4, compute),
                 bindings::uniform(5, compute),
             ],
         );

@@ -102,7 +102,7 @@ impl DeferredDecals {
             })
         };
         let pipelines = [pipeline(false), pipeline(true)];
-        let (order, layers) = decals.pairs_in_layer_order();
+        let (order, layers) = decals.pairs_in_layer_order()?;
         let order_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("deferred decal order"),
             contents: if order.is_empty() { &[0; 8] } else { bytemuck::cast_slice(&order) },

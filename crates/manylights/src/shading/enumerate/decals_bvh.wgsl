@@ -10,7 +10,7 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
     decal_query_begin(s.position, frame.decal_instance_count);
     for (var leaf = decal_query_next_leaf(); leaf.x != BVH_END; leaf = decal_query_next_leaf()) {
         for (var k = leaf.x; k < leaf.y; k += 1u) {
-            decal_accumulate(decals[decal_primitives[k]], decal_query_instance, decal_query_point, s, dp);
+            decal_accumulate(decals[k], decal_query_instance, decal_query_point, s, dp);
         }
     }
     return decal_blend_end(s);

@@ -20,7 +20,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             falloff = 1.0 / (light_query_instance.scale * light_query_instance.scale);
         }
         for (var k = leaf.x; k < leaf.y; k += 1u) {
-            radiance += local_light_radiance(light_primitives[k], light_query_instance, s, local, falloff, &shadow_rays);
+            radiance += local_light_radiance(k, light_query_instance, s, local, falloff, &shadow_rays);
         }
     }
     debug_light_work = light_query_visits;
