@@ -5,7 +5,8 @@
 //!
 //! `bvh.rs` holds the node layout shared with WGSL (`accel/bvh_types.wgsl`) and the CPU builder and
 //! query, which serve static groups and are the oracle for the GPU. `volumes.rs` bounds each light's
-//! and decal's volume. `lbvh.rs` builds BVHs on the GPU (Karras LBVH) in the same layout.
+//! and decal's volume. `lbvh.rs` builds BVHs on the GPU (Karras LBVH) in the same layout, and
+//! `leaf_order.rs` puts a rebuilt group's items in the order of its leaves.
 //! `entry_grid.rs` tells a query where to start in a CPU-built group's BVH.
 //! `structure.rs` is the two-level structure the shaders query (`accel/volume_query.wgsl`): a BVH
 //! per group of volumes and a top level over the groups' instances. `clusters.rs` builds the
