@@ -144,13 +144,18 @@ fn a_million_decals_fit() {
     assert!(max_abs_difference(&with, &without) > 0.01, "a million decals changed nothing");
 }
 
-/// A BVH rebuilt on the GPU puts its items in a new leaf order every frame, out of the CPU's sight:
-/// clustered lists (binned in the CPU's order) and deferred decals (drawn in layer order) refuse such
-/// a structure with an error saying to build once on the CPU, and accept the one built there.
+/// A structure stores its decals in leaf order, so the decals deferred decals draw in layer order are
+/// the stored ones: their layers never decrease, each layer's range holds that layer's decals, and
+/// every decal is drawn once. A BVH rebuilt on the GPU puts its items in a new leaf order every
+/// frame, out of the CPU's sight: clustered lists (binned in the CPU's order) and deferred decals
+/// refuse such a structure with an error saying to build once on the CPU.
 #[test]
-fn gpu_rebuilt_decals_refuse_cpu_ordered_uses() {
+fn decals_keep_their_layers_in_leaf_order_and_gpu_rebuilds_refuse_cpu_ordered_uses() {
     let ctx = GpuContext::new().expect("a GPU adapter");
-    let scene = with_decals_and_lights(demo_scene(), 50, 0, 3);
+    let mut scene = with_decals_and_lights(demo_scene(), 200, 0, 3);
+    for (i, decal) in scene.decals.iter_mut().enumerate() {
+        decal.layer = (i * 7 % 4) as u32;
+    }
     let frame_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
     let grid = ClusterGrid::for_resolution(64, 36);
     let structure = |build, clustered: bool| {
@@ -161,8 +166,23 @@ fn gpu_rebuilt_decals_refuse_cpu_ordered_uses() {
     let rebuilt = structure(BvhBuild::GpuEveryFrame, false).expect("a GPU-rebuilt structure");
     let message = rebuilt.pairs_in_layer_order().expect_err("layer order over GPU rebuilds is an error").to_string();
     assert!(message.contains("layer order") && message.contains("once on the CPU"), "{message}");
-    let (pairs, _) = structure(BvhBuild::CpuOnce, false).unwrap().pairs_in_layer_order().expect("layer order of a CPU-built structure");
-    assert_eq!(pairs.len(), scene.decals.len());
+    let built = structure(BvhBuild::CpuOnce, false).unwrap();
+    let mut stored: Vec<u32> = built.scene_indices().to_vec();
+    assert!(stored.iter().enumerate().any(|(i, &s)| s != i as u32), "the decals are not reordered: the test would prove nothing");
+    let (pairs, ranges) = built.pairs_in_layer_order().expect("layer order of a CPU-built structure");
+    let layer_of = |item: u32| scene.decals[built.scene_indices()[item as usize] as usize].layer;
+    let layers: Vec<u32> = pairs.iter().map(|&[_, item]| layer_of(item)).collect();
+    assert!(layers.windows(2).all(|w| w[0] <= w[1]), "deferred decals would draw layers out of order: {layers:?}");
+    for range in &ranges {
+        let in_range = &layers[range.start as usize..range.end as usize];
+        assert!(in_range.iter().all(|&l| l == in_range[0]), "a layer's range mixes layers {in_range:?}");
+    }
+    assert_eq!(ranges.len(), 4, "four layers in use");
+    stored.sort_unstable();
+    assert!(stored.iter().enumerate().all(|(i, &s)| s == i as u32), "the stored decals are not a permutation of the scene's");
+    let mut drawn: Vec<u32> = pairs.iter().map(|&[_, item]| item).collect();
+    drawn.sort_unstable();
+    assert!(drawn.iter().enumerate().all(|(i, &d)| d == i as u32), "every stored decal is drawn once");
 }
 
 #[test]

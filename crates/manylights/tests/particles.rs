@@ -7,6 +7,7 @@ mod common;
 use common::*;
 use glam::{UVec3, Vec3};
 use manylights::{
+    accel::BvhBuild,
     config::RenderConfig,
     gpu::GpuContext,
     particles::{ParticleFilter, ParticleGrid, ParticleSettings, ParticleSystem, ParticleVolume},
@@ -391,13 +392,15 @@ fn every_filter_and_supersampling_light_the_wall_like_the_point_light() {
 }
 
 /// The exact method: the particles as point lights in the lights' BVH, rebuilt on the GPU every
-/// frame (leaves of several particles) beside the scene's own light, light the scene as the same
+/// frame (leaves of several particles) beside the scene's own lights, light the scene as the same
 /// lights from the CPU twin do through brute force, in every pipeline, walking the BVH a subgroup at
-/// a time or, on a device without subgroups, one invocation at a time.
+/// a time or, on a device without subgroups, one invocation at a time; and with the scene's lights'
+/// group rebuilt on the GPU too, so their leaf-order copy runs before the particles' records.
 #[test]
 fn particles_as_lights_equal_their_point_lights() {
-    let scene_light = point_light(Vec3::new(3.0, 2.0, 1.5), 2.0, 4.0);
-    let (mut scene, camera) = wall_scene(vec![scene_light]);
+    let scene_lights: Vec<Light> =
+        (0..24).map(|i| point_light(Vec3::new(-3.0 + 0.25 * i as f32, 2.0 - 0.1 * i as f32, 1.5), 0.4, 1.5 + 0.1 * i as f32)).collect();
+    let (mut scene, camera) = wall_scene(scene_lights.clone());
     let settings = ParticleSettings {
         count: 3000,
         seed: 5,
@@ -422,7 +425,7 @@ fn particles_as_lights_equal_their_point_lights() {
                 cast_shadows: false,
             }
         })
-        .chain([scene_light])
+        .chain(scene_lights)
         .collect();
     let (reference_scene, _) = wall_scene(lights);
     let with_subgroups = GpuContext::new().unwrap();
@@ -433,10 +436,16 @@ fn particles_as_lights_equal_their_point_lights() {
         let brute = RenderConfig { decal_method: DecalMethod::Off, pipeline, ..config(SIZE.0, SIZE.1, LightMethod::Brute) };
         let reference = render_with(&reference_scene, &camera, brute).1;
         assert!(reference.pixels.iter().map(|&p| luminance(p)).fold(0.0, f32::max) > 0.05, "the particles light nothing");
-        for (ctx, walk) in [(&with_subgroups, "subgroup"), (&without_subgroups, "invocation")] {
+        let runs = [
+            (&with_subgroups, "subgroup", BvhBuild::CpuOnce),
+            (&without_subgroups, "invocation", BvhBuild::CpuOnce),
+            (&with_subgroups, "subgroup", BvhBuild::GpuEveryFrame),
+        ];
+        for (ctx, walk, light_bvh_build) in runs {
             let exact = RenderConfig {
                 particle_method: ParticleMethod::Bvh,
                 decal_method: DecalMethod::Off,
+                light_bvh_build,
                 pipeline,
                 ..config(SIZE.0, SIZE.1, LightMethod::Bvh)
             };
@@ -444,7 +453,11 @@ fn particles_as_lights_equal_their_point_lights() {
             renderer.time = time;
             renderer.render(&camera).unwrap();
             let difference = max_abs_difference(&renderer.read_hdr().unwrap(), &reference);
-            assert!(difference <= 1e-3, "{} pipeline, {walk} walk: max abs difference {difference} from the point lights", pipeline.name());
+            assert!(
+                difference <= 1e-3,
+                "{} pipeline, {walk} walk, scene lights {light_bvh_build:?}: max abs difference {difference} from the point lights",
+                pipeline.name()
+            );
         }
     }
 

@@ -1,6 +1,7 @@
 // BVH nodes as `accel/bvh.rs` lays them out (keep in sync with `BvhNode` there), for a traversal
 // without a stack: `entry` is an internal node's first child (its second is that child's `skip`), or a
-// leaf's `BVH_LEAF | (count − 1) << 27 | first`, naming a range of the primitive index array; `skip`
+// leaf's `BVH_LEAF | (count − 1) << 27 | first`, naming a range of what the BVH's leaves index (a group's
+// items in a volume structure, stored in leaf order; a top level's primitive indices); `skip`
 // is the node after the subtree, where the traversal goes when the point is outside the box or after
 // a leaf (BVH_END after the last). A lone BVH's root is node 0; in a two-level structure the top
 // level's root is node 0 and each group's is its instances' `blas_root` (without ENTRY_GRID_FLAG). Shared by the query
@@ -18,7 +19,7 @@ const BVH_END: u32 = 0xffffffffu;
 const BVH_LEAF_COUNT_SHIFT: u32 = 27u;
 const BVH_LEAF_FIRST_MASK: u32 = 0x07ffffffu;
 
-// The range [x, y) of the primitive index array a leaf's `entry` names.
+// The range [x, y) a leaf's `entry` names.
 fn bvh_leaf_range(entry: u32) -> vec2<u32> {
     let first = entry & BVH_LEAF_FIRST_MASK;
     return vec2<u32>(first, first + ((entry & ~BVH_LEAF) >> BVH_LEAF_COUNT_SHIFT) + 1u);

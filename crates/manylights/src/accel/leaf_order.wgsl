@@ -18,8 +18,8 @@ struct LeafOrderParams {
 // The items the shaders read, in leaf order.
 @group(0) @binding(3) var<storage, read_write> items: array<vec4<u32>>;
 
-// One invocation per 16 bytes: neighbouring invocations copy one item's consecutive words, so each
-// item is read and written in whole segments (an invocation per item, looping over its words, took
+// One invocation per 16 bytes: neighbouring invocations copy one item's consecutive parts, so each
+// item is read and written in whole segments (an invocation per item, looping over its parts, took
 // 0.19 ms for 1M lights on an H100).
 @compute @workgroup_size(256)
 fn leaf_order(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -28,6 +28,6 @@ fn leaf_order(@builtin(global_invocation_id) id: vec3<u32>) {
     if i >= params.count {
         return;
     }
-    let word = t % params.vec4s_per_item;
-    items[t] = scene_items[primitives[params.first_primitive + i] * params.vec4s_per_item + word];
+    let part = t % params.vec4s_per_item;
+    items[t] = scene_items[primitives[params.first_primitive + i] * params.vec4s_per_item + part];
 }

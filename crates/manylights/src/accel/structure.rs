@@ -47,8 +47,9 @@ pub const CPU_TOP_LEVEL_MAX_INSTANCES: usize = 1024;
 /// The dynamic group (particle lights, rebuilt every frame) gets leaves of up to this many lights:
 /// particles crowd, so hundreds reach each lit point, and a walk over one-light leaves visits about
 /// twenty nodes per light it finds. Bigger leaves trade node visits for range tests, which read the
-/// leaf's records side by side (they are written in leaf order): 1M particles shade in 22.4 ms at 16,
-/// 23.5 at 8 and 38.6 at 1 (BENCHMARKS.md). 16 is the most a leaf can hold.
+/// leaf's records side by side (they are written in leaf order): 1M particles shaded in 22.4 ms at 16,
+/// 23.5 at 8 and 38.6 at 1, before leaves named their items without an index (BENCHMARKS.md). 16 is
+/// the most a leaf can hold.
 pub const DYNAMIC_GROUP_LEAF_SIZE: u32 = 16;
 
 /// Where and when the groups' BVHs are built.
@@ -132,14 +133,39 @@ impl VolumeKind {
         }
     }
 
-    /// Timer scopes of the top-level build, of the groups' rebuilds, of putting the rebuilt groups'
-    /// items in leaf order and of the clustered lists.
-    fn scopes(self) -> [&'static str; 4] {
+    fn scopes(self) -> Scopes {
         match self {
-            VolumeKind::Lights => ["light_tlas_build", "light_blas_build", "light_leaf_order", "light_cluster_build"],
-            VolumeKind::Decals => ["decal_tlas_build", "decal_blas_build", "decal_leaf_order", "decal_cluster_build"],
+            VolumeKind::Lights => Scopes {
+                top_level: "light_tlas_build",
+                groups: "light_blas_build",
+                leaf_order: "light_leaf_order",
+                clusters: "light_cluster_build",
+            },
+            VolumeKind::Decals => Scopes {
+                top_level: "decal_tlas_build",
+                groups: "decal_blas_build",
+                leaf_order: "decal_leaf_order",
+                clusters: "decal_cluster_build",
+            },
         }
     }
+
+    /// Bytes of one item's record (`GpuLight` or `GpuDecal`).
+    fn record_bytes(self) -> usize {
+        match self {
+            VolumeKind::Lights => std::mem::size_of::<GpuLight>(),
+            VolumeKind::Decals => std::mem::size_of::<GpuDecal>(),
+        }
+    }
+}
+
+/// A structure's timer scopes: the top-level build, the groups' rebuilds, putting rebuilt groups'
+/// items in leaf order, and the clustered lists.
+struct Scopes {
+    top_level: &'static str,
+    groups: &'static str,
+    leaf_order: &'static str,
+    clusters: &'static str,
 }
 
 /// The volumes a structure is built over: the GPU items (one record per volume) and their boxes, in
@@ -192,7 +218,9 @@ pub struct VolumeStructure {
     items: wgpu::Buffer,
     /// Each item's decal layer (empty for lights): deferred decals draw in layer order.
     layers: Vec<u32>,
-    /// The scene's index of each item but the dynamic group's, in the order of `items` once uploaded.
+    /// The scene's index of each item but the dynamic group's, in the order they are stored: CPU-built
+    /// groups' in leaf order; GPU-rebuilt groups' in scene order, as their copy into leaf order reads
+    /// them (where they land changes with every build).
     scene_indices: Vec<u32>,
     /// Puts the items in leaf order after GPU rebuilds (none when every group is built on the CPU).
     leaf_order: Option<LeafOrder>,
@@ -320,6 +348,13 @@ impl VolumeStructure {
     pub fn new(ctx: &GpuContext, volumes: &Volumes, build: BvhBuild, clustering: Option<Clustering>) -> Result<Self> {
         let label = volumes.kind.label();
         let count = volumes.boxes.len();
+        if volumes.items.len() != count * volumes.kind.record_bytes() {
+            return Err(Error::InvalidConfig(format!(
+                "{} bytes of {label} records for {count} volumes; each record takes {} bytes",
+                volumes.items.len(),
+                volumes.kind.record_bytes()
+            )));
+        }
         if let Some(i) = volumes.boxes.iter().position(|b| !b.is_valid()) {
             return Err(Error::InvalidScene(format!(
                 "{label} {i}: its volume has a NaN, infinite or inverted bound {:?}",
@@ -416,9 +451,9 @@ impl VolumeStructure {
         let instance_buffer =
             storage("instances", u64::from(instance_slots) * std::mem::size_of::<GpuVolumeInstance>() as u64, U::COPY_DST);
         let items = storage("items", item_bytes.max(64), U::COPY_DST);
-        let bytes_per_item = volumes.items.len().checked_div(count).unwrap_or(0);
+        let bytes_per_item = volumes.kind.record_bytes();
         let leaf_order = if rebuilt_on_gpu {
-            let scope = volumes.kind.scopes()[2];
+            let scope = volumes.kind.scopes().leaf_order;
             Some(LeafOrder::new(ctx, scope, volumes.items, bytes_per_item, (&items, &primitives, instance_slots))?)
         } else {
             let in_leaf_order: Vec<u8> = scene_indices
@@ -508,7 +543,7 @@ impl VolumeStructure {
             None
         };
 
-        let [top_level_scope, blas_scope, _, cluster_scope] = volumes.kind.scopes();
+        let Scopes { top_level: top_level_scope, groups: blas_scope, clusters: cluster_scope, .. } = volumes.kind.scopes();
         let clusters = match clustering {
             Some(c) => {
                 let instance_items: Vec<u32> = instances.iter().map(|i| ranges[i.group].len() as u32).collect();
@@ -541,6 +576,13 @@ impl VolumeStructure {
             blas_scope,
             built_for: None,
         })
+    }
+
+    /// The scene's index of each stored item but the dynamic group's: item i of the structure is the
+    /// scene's light or decal `scene_indices()[i]` where its group is built on the CPU, which stores
+    /// it in leaf order.
+    pub fn scene_indices(&self) -> &[u32] {
+        &self.scene_indices
     }
 
     /// Instances the shaders visit (those of non-empty groups).
