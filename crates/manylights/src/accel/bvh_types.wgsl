@@ -40,11 +40,23 @@ struct VolumeInstance {
 // Set in `VolumeInstance::blas_root` when the group has an entry grid (`accel/entry_grid.rs`).
 const ENTRY_GRID_FLAG: u32 = 0x80000000u;
 
+// Set in an entry-grid cell's second word when the cell names a cover of several subtrees
+// (`accel/entry_grid.rs`, `CELL_COVER`): bits 27–30 hold their count − 1, bits 0–26 the primitive
+// index where their (start, stop) pairs begin.
+const ENTRY_CELL_COVER: u32 = 0x80000000u;
+
+// The range [x, y) of the primitive array holding a cover's (start, stop) pairs, from its cell's
+// second word.
+fn entry_cell_cover_pairs(word: u32) -> vec2<u32> {
+    let first = word & 0x07ffffffu;
+    return vec2<u32>(first, first + 2u * (((word >> 27u) & 15u) + 1u));
+}
+
 // The first word of the entry-grid cell holding the group-space point `p`, clamped into the grid (the
 // CPU's twin is `EntryGrid::cell_of`). `header` is the node before the group's root (`structure.rs`,
 // `entry_grid_header`): the grid's corner (min), its first cell in the primitives array (entry), cells
 // per unit length (max) and cells per axis, 10 bits each (skip). A cell is two words: the node to
-// start at and the node the query stops at.
+// start at and the node the query stops at, or, with ENTRY_CELL_COVER, where its cover's pairs are.
 fn entry_grid_cell(header: BvhNode, p: vec3<f32>) -> u32 {
     let dims = (vec3<u32>(header.skip) >> vec3<u32>(0u, 10u, 20u)) & vec3<u32>(1023u);
     let cell = vec3<u32>(clamp(floor((p - header.min) * header.max), vec3<f32>(0.0), vec3<f32>(dims - 1u)));

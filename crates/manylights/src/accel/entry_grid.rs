@@ -1,13 +1,18 @@
 //! Entry grids: where a point query starts in a group's BVH. A uniform grid over the group's bounds
-//! names, per cell, the deepest node whose subtree holds every leaf whose box reaches the cell, and
-//! the node after that subtree, where the query stops. A query then skips the levels above that node
-//! — for small volumes, most of the tree: a cell reached by one leaf starts at that leaf, a cell
-//! reached by none ends the query at once — and still finds exactly what a query from the root finds.
+//! names, per cell, the subtrees that hold every leaf whose box reaches the cell: the deepest node
+//! whose subtree holds them all, or, where those leaves lie in a few separate parts of the tree, up to
+//! [`MAX_COVER`] smaller subtrees (the cell's *cover*), each with the node after it, where its walk
+//! stops. A query then skips the levels above them and the parts of the tree between them — for
+//! small volumes, most of the tree: a cell reached by one leaf starts at that leaf, a cell reached by
+//! a few walks just those, a cell reached by none ends the query at once — and still finds exactly
+//! what a query from the root finds.
 //!
 //! Built on the CPU with the group's BVH (`BvhBuild::CpuOnce`); groups rebuilt on the GPU start at
 //! their root. `structure.rs` stores the cells after the primitive indices and the grid's placement in
 //! a header node before the group's root (flagged in the instances' `blas_root`);
 //! `volume_query.wgsl` looks the cell up as [`EntryGrid::start`] does here.
+
+use std::collections::HashMap;
 
 use glam::{UVec3, Vec3};
 
@@ -22,14 +27,43 @@ pub const MIN_PRIMITIVES: usize = 16;
 const CELLS_PER_PRIMITIVE: f64 = 32.0;
 const MAX_CELLS: f64 = (1 << 21) as f64;
 
-/// Cells per primitive for the grids of a structure whose CPU-built groups hold `primitives` in all:
-/// [`CELLS_PER_PRIMITIVE`], fewer where the grids would exceed [`MAX_CELLS`] together (a million
-/// volumes get two each, however they are grouped).
-pub fn cells_per_primitive(primitives: usize) -> f64 {
-    (MAX_CELLS / primitives.max(1) as f64).min(CELLS_PER_PRIMITIVE)
+/// Most words of covers a structure's grids hold together (32 MiB). 100k ≈ 1 m decals over Sponza
+/// take 6.4M: a million cells name covers, 333k of them different.
+const MAX_COVER_WORDS: f64 = (1 << 23) as f64;
+
+/// What a structure's grids may hold, per primitive of the group a grid is built for: a share of
+/// [`MAX_CELLS`] cells and of [`MAX_COVER_WORDS`].
+#[derive(Clone, Copy, Debug)]
+pub struct GridBudget {
+    pub cells_per_primitive: f64,
+    pub cover_words_per_primitive: f64,
+}
+
+impl GridBudget {
+    /// For a structure whose CPU-built groups hold `primitives` in all: [`CELLS_PER_PRIMITIVE`] cells
+    /// each, fewer where the grids would exceed [`MAX_CELLS`] together (a million volumes get two
+    /// each, however they are grouped), and an equal share of the cover words.
+    pub fn for_structure(primitives: usize) -> Self {
+        let primitives = primitives.max(1) as f64;
+        GridBudget {
+            cells_per_primitive: (MAX_CELLS / primitives).min(CELLS_PER_PRIMITIVE),
+            cover_words_per_primitive: MAX_COVER_WORDS / primitives,
+        }
+    }
 }
 /// Cells per axis fit 10 bits each in the header node's `skip` (`structure.rs`, `entry_grid_header`).
 pub const MAX_CELLS_PER_AXIS: u32 = 1023;
+
+/// Most subtrees a cell's cover names. Each one spares the walk the nodes above and beside it, and
+/// costs a (start, stop) pair in the grid's covers.
+pub const MAX_COVER: usize = 16;
+/// Set in a cell's second word when it names a cover of several subtrees: bits 27–30 hold their
+/// count − 1, bits 0–26 where its (start, stop) pairs begin in [`EntryGrid::covers`]. Keep in sync
+/// with `ENTRY_CELL_COVER` in `accel/bvh_types.wgsl`.
+pub const CELL_COVER: u32 = 1 << 31;
+const CELL_COVER_COUNT_SHIFT: u32 = 27;
+/// Primitive words a structure's grids can name covers within.
+pub const CELL_COVER_OFFSET_MASK: u32 = (1 << CELL_COVER_COUNT_SHIFT) - 1;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct EntryGrid {
@@ -39,15 +73,20 @@ pub struct EntryGrid {
     pub cells_per_unit: Vec3,
     pub dims: UVec3,
     /// Per cell, x fastest: (the node to start at, the node to stop at), node indices of the BVH;
-    /// ([`END`], [`END`]) where no leaf reaches the cell.
+    /// ([`END`], [`END`]) where no leaf reaches the cell; (the first subtree's root, [`CELL_COVER`] |
+    /// its count and place in `covers`) where the cell names a cover of several subtrees.
     pub cells: Vec<[u32; 2]>,
+    /// The covers' (start, stop) pairs, in node order within each cover; cells with the same cover
+    /// share it.
+    pub covers: Vec<u32>,
 }
 
 impl EntryGrid {
-    /// The grid for `bvh`, built over `aabbs`, with about `cells_per_primitive` cells per primitive
-    /// ([`cells_per_primitive`]), or `None` when it has fewer than [`MIN_PRIMITIVES`] primitives or
-    /// its bounds are not finite.
-    pub fn build(bvh: &Bvh, aabbs: &[Aabb], cells_per_primitive: f64) -> Option<EntryGrid> {
+    /// The grid for `bvh`, built over `aabbs`, within `budget` for its primitives: covers of up to
+    /// [`MAX_COVER`] subtrees, or half as many until they fit (one: the lowest common ancestors
+    /// alone). `None` when it has fewer than [`MIN_PRIMITIVES`] primitives or its bounds are not
+    /// finite.
+    pub fn build(bvh: &Bvh, aabbs: &[Aabb], budget: GridBudget) -> Option<EntryGrid> {
         if bvh.primitive_indices.len() < MIN_PRIMITIVES {
             return None;
         }
@@ -56,7 +95,8 @@ impl EntryGrid {
         if !(extent.is_finite() && bounds.min.is_finite()) {
             return None;
         }
-        let dims = grid_dims(extent, (bvh.primitive_indices.len() as f64 * cells_per_primitive).min(MAX_CELLS));
+        let primitives = bvh.primitive_indices.len() as f64;
+        let dims = grid_dims(extent, (primitives * budget.cells_per_primitive).min(MAX_CELLS));
         let cells_per_unit = Vec3::select(extent.cmpgt(Vec3::ZERO), dims.as_vec3() / extent, Vec3::ZERO);
         let cell_size = Vec3::select(extent.cmpgt(Vec3::ZERO), extent / dims.as_vec3(), Vec3::ZERO);
         // Cells are widened before they are matched with boxes, so a point whose cell index rounds
@@ -64,17 +104,19 @@ impl EntryGrid {
         // 80 float steps of the coordinates' magnitude, which bounds the rounding of the lookup.
         let magnitude = bounds.min.abs().max(bounds.max.abs());
         let margin = cell_size * 1e-3 + magnitude * 1e-5;
-        let mut cells = Vec::with_capacity((dims.x * dims.y * dims.z) as usize);
-        for z in 0..dims.z {
-            for y in 0..dims.y {
-                for x in 0..dims.x {
-                    let corner = bounds.min + UVec3::new(x, y, z).as_vec3() * cell_size;
-                    let cell = Aabb::new(corner - margin, corner + cell_size + margin);
-                    cells.push(entry_for(bvh, aabbs, &cell));
-                }
+        let cell_box = |x: u32, y: u32, z: u32| {
+            let corner = bounds.min + UVec3::new(x, y, z).as_vec3() * cell_size;
+            Aabb::new(corner - margin, corner + cell_size + margin)
+        };
+        let cover_words = (primitives * budget.cover_words_per_primitive).min(f64::from(CELL_COVER_OFFSET_MASK));
+        let mut max_cover = MAX_COVER;
+        loop {
+            let (cells, covers) = cells_and_covers(bvh, aabbs, dims, &cell_box, max_cover);
+            if covers.len() as f64 <= cover_words || max_cover == 1 {
+                return Some(EntryGrid { min: bounds.min, cells_per_unit, dims, cells, covers });
             }
+            max_cover /= 2;
         }
-        Some(EntryGrid { min: bounds.min, cells_per_unit, dims, cells })
     }
 
     /// The cell of `p` (clamped into the grid): the CPU twin of the WGSL lookup.
@@ -84,9 +126,40 @@ impl EntryGrid {
         ((cell.z * self.dims.y + cell.y) * self.dims.x + cell.x) as usize
     }
 
-    /// (start, stop) of a query at `p`.
-    pub fn start(&self, p: Vec3) -> [u32; 2] {
-        self.cells[self.cell_of(p)]
+    /// The (start, stop) pairs of the subtrees a query at `p` walks, in node order.
+    pub fn cover(&self, p: Vec3) -> Vec<[u32; 2]> {
+        match self.cells[self.cell_of(p)] {
+            [start, _] if start == END => Vec::new(),
+            [start, stop] if stop & CELL_COVER == 0 => vec![[start, stop]],
+            [_, cover] => {
+                let count = ((cover & !CELL_COVER) >> CELL_COVER_COUNT_SHIFT) as usize + 1;
+                let offset = (cover & CELL_COVER_OFFSET_MASK) as usize;
+                self.covers[offset..offset + 2 * count].chunks(2).map(|pair| [pair[0], pair[1]]).collect()
+            }
+        }
+    }
+
+    /// Words of the primitive array the grid takes on the GPU: its cells, then its covers.
+    pub fn gpu_len(&self) -> usize {
+        2 * self.cells.len() + self.covers.len()
+    }
+
+    /// The grid as the GPU reads it from word `first_word` of the primitive array: the cells, then the
+    /// covers, with node indices moved by `node_base` ([`END`] stays) and each cover's place by where
+    /// the covers land. The covers must end within the 27 bits of a cell's offset.
+    pub fn gpu_words(&self, node_base: u32, first_word: u32) -> Vec<u32> {
+        let node = |n: u32| if n == END { n } else { n + node_base };
+        let covers_at = first_word + 2 * self.cells.len() as u32;
+        debug_assert!(covers_at as usize + self.covers.len() <= CELL_COVER_OFFSET_MASK as usize);
+        let cells = self.cells.iter().flat_map(|&[start, stop]| {
+            let stop = if start != END && stop & CELL_COVER != 0 {
+                (stop & !CELL_COVER_OFFSET_MASK) | ((stop & CELL_COVER_OFFSET_MASK) + covers_at)
+            } else {
+                node(stop)
+            };
+            [node(start), stop]
+        });
+        cells.chain(self.covers.iter().map(|&n| node(n))).collect()
     }
 
     /// `dims` packed as the GPU reads them: 10 bits per axis, x lowest.
@@ -112,28 +185,89 @@ fn overlaps(a: &Aabb, b: &Aabb) -> bool {
     a.min.cmple(b.max).all() && b.min.cmple(a.max).all()
 }
 
-/// The lowest node whose subtree holds every primitive whose box reaches the cell, and the node
-/// after its subtree; ([`END`], [`END`]) when no primitive reaches it.
-fn entry_for(bvh: &Bvh, aabbs: &[Aabb], cell: &Aabb) -> [u32; 2] {
-    match lowest_common_ancestor(bvh, aabbs, 0, cell) {
-        Some(n) => [n, bvh.nodes[n as usize].skip],
-        None => [END, END],
+/// Every cell's words (x fastest) and the covers they name, with covers of up to `max_cover` subtrees;
+/// `cell_box` gives a cell's box from its coordinates.
+fn cells_and_covers(
+    bvh: &Bvh,
+    aabbs: &[Aabb],
+    dims: UVec3,
+    cell_box: &dyn Fn(u32, u32, u32) -> Aabb,
+    max_cover: usize,
+) -> (Vec<[u32; 2]>, Vec<u32>) {
+    // A subtree ending the tree stops at the node count rather than END, which would read as
+    // CELL_COVER: the walk reaches END first either way.
+    let stop = |n: u32| bvh.nodes[n as usize].skip.min(bvh.nodes.len() as u32);
+    let mut cells = Vec::with_capacity((dims.x * dims.y * dims.z) as usize);
+    let mut covers = Vec::new();
+    let mut shared: HashMap<Vec<u32>, u32> = HashMap::new();
+    for z in 0..dims.z {
+        for y in 0..dims.y {
+            for x in 0..dims.x {
+                let pairs: Vec<u32> = cover(bvh, aabbs, &cell_box(x, y, z), max_cover).into_iter().flat_map(|n| [n, stop(n)]).collect();
+                cells.push(match pairs.len() {
+                    0 => [END, END],
+                    2 => [pairs[0], pairs[1]],
+                    len => {
+                        let first = pairs[0];
+                        let offset = *shared.entry(pairs).or_insert_with_key(|pairs| {
+                            covers.extend_from_slice(pairs);
+                            (covers.len() - pairs.len()) as u32
+                        });
+                        [first, CELL_COVER | ((len / 2 - 1) as u32) << CELL_COVER_COUNT_SHIFT | offset]
+                    }
+                });
+            }
+        }
     }
+    (cells, covers)
 }
 
-/// Of the leaves under node `n` with a primitive whose box reaches the cell: their lowest common
-/// ancestor, if any. Visits the nodes whose boxes reach the cell, as a box query would.
-fn lowest_common_ancestor(bvh: &Bvh, aabbs: &[Aabb], n: u32, cell: &Aabb) -> Option<u32> {
+/// The subtrees that hold every leaf with a primitive whose box reaches the cell, in node order: none,
+/// the leaves' lowest common ancestor, or — expanding the largest subtree into its children's, as long
+/// as there are at most `max_cover` — the separate parts of the tree they lie in.
+fn cover(bvh: &Bvh, aabbs: &[Aabb], cell: &Aabb, max_cover: usize) -> Vec<u32> {
+    let mut reached = Vec::new();
+    let Some(root) = reached_tree(bvh, aabbs, 0, cell, &mut reached) else { return Vec::new() };
+    // Entries of `reached`: one per subtree root, in node order; expanded while they fit.
+    let mut parts = vec![root];
+    while parts.len() < max_cover {
+        let span = |r: &Reached| bvh.nodes[r.node as usize].skip.min(bvh.nodes.len() as u32) - r.node;
+        let widest = (0..parts.len()).filter(|&i| reached[parts[i]].children.is_some()).max_by_key(|&i| span(&reached[parts[i]]));
+        let Some(i) = widest else { break };
+        let (first, second) = reached[parts[i]].children.expect("filtered on children");
+        parts.splice(i..=i, [first, second]);
+    }
+    parts.into_iter().map(|i| reached[i].node).collect()
+}
+
+/// A node of the BVH whose subtree holds leaves reaching a cell, with the same for its children when
+/// both hold some (a chain of nodes with one such child is skipped down to where it branches).
+struct Reached {
+    node: u32,
+    children: Option<(usize, usize)>,
+}
+
+/// Of the leaves under node `n` with a primitive whose box reaches the cell: the tree of where they
+/// branch, pushed onto `reached`, and its root's place there. Visits the nodes whose boxes reach the
+/// cell, as a box query would.
+fn reached_tree(bvh: &Bvh, aabbs: &[Aabb], n: u32, cell: &Aabb, reached: &mut Vec<Reached>) -> Option<usize> {
     let node = &bvh.nodes[n as usize];
     if !overlaps(&node.bounds(), cell) {
         return None;
     }
     let Some((first, second)) = bvh.children(node) else {
         let primitives = &bvh.primitive_indices[node.leaf_range()];
-        return primitives.iter().any(|&i| overlaps(&aabbs[i as usize], cell)).then_some(n);
+        if !primitives.iter().any(|&i| overlaps(&aabbs[i as usize], cell)) {
+            return None;
+        }
+        reached.push(Reached { node: n, children: None });
+        return Some(reached.len() - 1);
     };
-    match (lowest_common_ancestor(bvh, aabbs, first, cell), lowest_common_ancestor(bvh, aabbs, second, cell)) {
-        (Some(_), Some(_)) => Some(n),
+    match (reached_tree(bvh, aabbs, first, cell, reached), reached_tree(bvh, aabbs, second, cell, reached)) {
+        (Some(a), Some(b)) => {
+            reached.push(Reached { node: n, children: Some((a, b)) });
+            Some(reached.len() - 1)
+        }
         (one, None) | (None, one) => one,
     }
 }
@@ -148,7 +282,9 @@ mod tests {
 
     fn query_from_grid(bvh: &Bvh, grid: &EntryGrid, boxes: &[Aabb], p: Vec3) -> Vec<u32> {
         let mut found = Vec::new();
-        bvh.query_point_between(boxes, p, grid.start(p), |i| found.push(i));
+        for part in grid.cover(p) {
+            bvh.query_point_between(boxes, p, part, |i| found.push(i));
+        }
         found.sort_unstable();
         found
     }
@@ -163,14 +299,21 @@ mod tests {
             for _ in 0..sets {
                 let boxes = random_boxes(&mut rng, size);
                 let bvh = Bvh::build(&boxes).unwrap();
-                let Some(grid) = EntryGrid::build(&bvh, &boxes, CELLS_PER_PRIMITIVE) else {
-                    // Only non-finite bounds (boxes spanning ±1e30 along an axis overflow the extent) go without.
-                    assert!(!(bvh.nodes[0].bounds().max - bvh.nodes[0].bounds().min).is_finite());
-                    continue;
-                };
-                assert_eq!(grid.cells.len(), grid.dims.element_product() as usize);
-                for p in random_points(&mut rng, &boxes, points) {
-                    assert_eq!(query_from_grid(&bvh, &grid, &boxes, p), brute_force(&boxes, p), "at {p:?} ({size} boxes)");
+                // With room for covers, and (the smaller sets) with none: each cell its lowest common
+                // ancestor.
+                let budgets =
+                    [GridBudget::for_structure(size), GridBudget { cover_words_per_primitive: 0.0, ..GridBudget::for_structure(size) }];
+                for &budget in &budgets[..if size <= 1000 { 2 } else { 1 }] {
+                    let Some(grid) = EntryGrid::build(&bvh, &boxes, budget) else {
+                        // Only non-finite bounds (boxes spanning ±1e30 along an axis overflow the extent) go without.
+                        assert!(!(bvh.nodes[0].bounds().max - bvh.nodes[0].bounds().min).is_finite());
+                        continue;
+                    };
+                    assert_eq!(grid.cells.len(), grid.dims.element_product() as usize);
+                    assert!(budget.cover_words_per_primitive > 0.0 || grid.covers.is_empty());
+                    for p in random_points(&mut rng, &boxes, points) {
+                        assert_eq!(query_from_grid(&bvh, &grid, &boxes, p), brute_force(&boxes, p), "at {p:?} ({size} boxes)");
+                    }
                 }
             }
         }
@@ -188,7 +331,7 @@ mod tests {
             })
             .collect();
         let bvh = Bvh::build(&boxes).unwrap();
-        let grid = EntryGrid::build(&bvh, &boxes, CELLS_PER_PRIMITIVE).unwrap();
+        let grid = EntryGrid::build(&bvh, &boxes, GridBudget::for_structure(boxes.len())).unwrap();
         let cells = grid.cells.len() as f64;
         let aim = 5000.0 * CELLS_PER_PRIMITIVE;
         assert!((aim / 2.0..=aim * 2.0).contains(&cells), "{cells} cells for 5000 boxes");
@@ -200,23 +343,66 @@ mod tests {
         }
     }
 
+    /// Heavily overlapping boxes in clumps, as decals on walls: cells reached by leaves in separate
+    /// parts of the tree name covers, and a walk from them visits fewer nodes than one from the
+    /// leaves' lowest common ancestor, finding the same boxes.
     #[test]
-    fn a_structures_grids_share_a_budget_of_cells() {
-        assert_eq!(cells_per_primitive(28_000), CELLS_PER_PRIMITIVE);
-        assert_eq!(cells_per_primitive(1 << 20), 2.0);
-        assert_eq!(cells_per_primitive(0), CELLS_PER_PRIMITIVE);
+    fn covers_walk_fewer_nodes_than_one_subtree() {
+        let mut rng = Pcg64::seed_from_u64(11);
+        let boxes: Vec<Aabb> = (0..4000)
+            .map(|_| {
+                let c = Vec3::new(rng.random_range(0.0..40.0), rng.random_range(0.0..10.0), rng.random_range(0.0..20.0));
+                Aabb::new(c - 0.5, c + 0.5)
+            })
+            .collect();
+        let bvh = Bvh::build(&boxes).unwrap();
+        let with = EntryGrid::build(&bvh, &boxes, GridBudget::for_structure(boxes.len())).unwrap();
+        let without =
+            EntryGrid::build(&bvh, &boxes, GridBudget { cover_words_per_primitive: 0.0, ..GridBudget::for_structure(boxes.len()) })
+                .unwrap();
+        assert!(!with.covers.is_empty() && without.covers.is_empty());
+        let visits = |grid: &EntryGrid, p: Vec3| -> usize {
+            // The GPU walk's visits: every node from each subtree's start until it reaches its stop.
+            let mut count = 0;
+            for [start, stop] in grid.cover(p) {
+                let mut n = start;
+                while n != stop && n != END {
+                    count += 1;
+                    let node = &bvh.nodes[n as usize];
+                    n = if node.bounds().contains(p) && !node.is_leaf() { node.entry } else { node.skip };
+                }
+            }
+            count
+        };
+        let points = random_points(&mut rng, &boxes, 3000);
+        let (fewer, more): (usize, usize) =
+            points.iter().map(|&p| (visits(&with, p), visits(&without, p))).fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        assert!((fewer as f64) < 0.8 * more as f64, "covers visit {fewer} nodes, single subtrees {more}");
+        for &p in &points {
+            assert_eq!(query_from_grid(&bvh, &with, &boxes, p), brute_force(&boxes, p), "at {p:?}");
+        }
+    }
+
+    #[test]
+    fn a_structures_grids_share_a_budget_of_cells_and_covers() {
+        assert_eq!(GridBudget::for_structure(28_000).cells_per_primitive, CELLS_PER_PRIMITIVE);
+        assert_eq!(GridBudget::for_structure(1 << 20).cells_per_primitive, 2.0);
+        assert_eq!(GridBudget::for_structure(0).cells_per_primitive, CELLS_PER_PRIMITIVE);
         // 2,000 groups of 500 volumes: each grid's share, not each grid's own cap.
-        assert!(cells_per_primitive(1_000_000) * 1_000_000.0 <= MAX_CELLS);
+        let million = GridBudget::for_structure(1_000_000);
+        assert!(million.cells_per_primitive * 1_000_000.0 <= MAX_CELLS);
+        assert!(million.cover_words_per_primitive * 1_000_000.0 <= MAX_COVER_WORDS);
     }
 
     #[test]
     fn small_or_unbounded_sets_have_no_grid() {
         let boxes: Vec<Aabb> = (0..MIN_PRIMITIVES - 1).map(|i| Aabb::new(Vec3::splat(i as f32), Vec3::splat(i as f32 + 0.5))).collect();
-        assert!(EntryGrid::build(&Bvh::build(&boxes).unwrap(), &boxes, CELLS_PER_PRIMITIVE).is_none());
+        let budget = GridBudget::for_structure(100);
+        assert!(EntryGrid::build(&Bvh::build(&boxes).unwrap(), &boxes, budget).is_none());
         let mut flat: Vec<Aabb> = (0..100).map(|i| Aabb::new(Vec3::new(i as f32, 0.0, 0.0), Vec3::new(i as f32 + 0.5, 0.0, 1.0))).collect();
-        let grid = EntryGrid::build(&Bvh::build(&flat).unwrap(), &flat, CELLS_PER_PRIMITIVE).unwrap();
+        let grid = EntryGrid::build(&Bvh::build(&flat).unwrap(), &flat, budget).unwrap();
         assert_eq!(grid.dims.y, 1, "flat along y: one cell");
         flat.push(Aabb::new(Vec3::splat(-3e38), Vec3::splat(3e38)));
-        assert!(EntryGrid::build(&Bvh::build(&flat).unwrap(), &flat, CELLS_PER_PRIMITIVE).is_none(), "an extent that overflows");
+        assert!(EntryGrid::build(&Bvh::build(&flat).unwrap(), &flat, budget).is_none(), "an extent that overflows");
     }
 }

@@ -389,7 +389,7 @@ impl VolumeStructure {
         }
         // CPU builds first: their entry grids' cells follow the primitive indices in the same array,
         // within one budget of cells for all the groups.
-        let cells_per_primitive = entry_grid::cells_per_primitive(count);
+        let grid_budget = entry_grid::GridBudget::for_structure(count);
         let cpu_builds: Vec<Option<(Bvh, Option<EntryGrid>)>> = ranges
             .iter()
             .map(|range| {
@@ -398,7 +398,7 @@ impl VolumeStructure {
                     return Ok(None);
                 }
                 let bvh = Bvh::build(boxes)?;
-                let grid = EntryGrid::build(&bvh, boxes, cells_per_primitive);
+                let grid = EntryGrid::build(&bvh, boxes, grid_budget);
                 Ok(Some((bvh, grid)))
             })
             .collect::<Result<_>>()?;
@@ -421,7 +421,14 @@ impl VolumeStructure {
                 "clustered lists bin the {label}s in the order the CPU stores them, which GPU rebuilds change every frame; build the {label}s' BVH once on the CPU"
             )));
         }
-        let cell_words: u64 = cpu_builds.iter().flatten().filter_map(|(_, g)| g.as_ref()).map(|g| 2 * g.cells.len() as u64).sum();
+        let cell_words: u64 = cpu_builds.iter().flatten().filter_map(|(_, g)| g.as_ref()).map(|g| g.gpu_len() as u64).sum();
+        if primitive_count + cell_words > u64::from(entry_grid::CELL_COVER_OFFSET_MASK) {
+            return Err(Error::InvalidScene(format!(
+                "{count} {label}s need {} words of primitive indices and entry grids, over the {} a structure addresses; use fewer {label}s",
+                primitive_count + cell_words,
+                entry_grid::CELL_COVER_OFFSET_MASK
+            )));
+        }
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let node_bytes = node_count * std::mem::size_of::<BvhNode>() as u64;
         let primitive_bytes = (primitive_count + cell_words) * 4;
@@ -482,7 +489,7 @@ impl VolumeStructure {
                     let group_nodes = relocate(&bvh, blas_root, items_range.start);
                     ctx.queue.write_buffer(&nodes, u64::from(blas_root) * 32, bytemuck::cast_slice(&group_nodes));
                     if let Some(grid) = grid {
-                        let cells = relocate_cells(&grid, blas_root);
+                        let cells = grid.gpu_words(blas_root, next_cell);
                         ctx.queue.write_buffer(&primitives, u64::from(next_cell) * 4, bytemuck::cast_slice(&cells));
                         let header = entry_grid_header(&grid, next_cell);
                         ctx.queue.write_buffer(&nodes, u64::from(blas_root - 1) * 32, bytemuck::bytes_of(&header));
@@ -695,13 +702,6 @@ fn shading_bind_group(
 /// group's items are stored in leaf order.
 fn relocate(bvh: &Bvh, node_base: u32, item_base: u32) -> Vec<BvhNode> {
     bvh.nodes.iter().map(|n| n.offset(node_base, item_base)).collect()
-}
-
-/// An entry grid's cells as (start, stop) words in the shared node numbering: node links by
-/// `node_base`; [`END`](super::END) stays.
-fn relocate_cells(grid: &EntryGrid, node_base: u32) -> Vec<u32> {
-    let relocate = |n: u32| if n == super::END { n } else { n + node_base };
-    grid.cells.iter().flat_map(|&[start, stop]| [relocate(start), relocate(stop)]).collect()
 }
 
 #[cfg(test)]

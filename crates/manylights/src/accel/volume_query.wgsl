@@ -6,12 +6,13 @@
 // decides how invocations walk together (`passes::volume_query_module`):
 // `accel/volume_query_invocation.wgsl`, each invocation alone, or `accel/volume_query_subgroup.wgsl`,
 // a whole subgroup together. A walk module defines `VOLUMES_walk_any(inside)`, whether to enter a node
-// whose box holds (`inside`) or not this invocation's point, and `VOLUMES_walk_cells(start, stop)`, the
-// range of nodes to walk for this invocation's entry-grid cell.
+// whose box holds (`inside`) or not this invocation's point, `VOLUMES_walk_cells(start, stop)`, the
+// range of nodes to walk for this invocation's entry-grid cell, and `VOLUMES_walk_covers()`, whether
+// a cell naming several subtrees has them walked one by one, or as one range from the first to the last.
 //
 // Inside a group the query starts where the group's entry grid says, if it has one (CPU-built groups,
 // laid out depth first, so every step of a walk moves to a higher node), and ends at or past the node
-// after that subtree.
+// after that subtree; where the cell names several subtrees (a cover), it walks each in turn.
 //
 // A cursor: `VOLUMES_query_next_leaf` returns every group leaf whose box contains the point, as the
 // range of items it holds (items are stored in leaf order, `accel/structure.rs`), and the caller
@@ -42,6 +43,10 @@ var<private> VOLUMES_query_instance_index: u32;
 var<private> VOLUMES_query_node: u32;
 var<private> VOLUMES_query_stop: u32;
 var<private> VOLUMES_query_resume: u32;
+// The (start, stop) pairs of the cell's further subtrees left to walk: [cover, cover_end) of the
+// primitive array.
+var<private> VOLUMES_query_cover: u32;
+var<private> VOLUMES_query_cover_end: u32;
 var<private> VOLUMES_query_in_group: bool;
 // Nodes the walk visited: the debug view of the method's work.
 var<private> VOLUMES_query_visits: u32;
@@ -70,12 +75,26 @@ fn VOLUMES_query_enter(instance_index: u32) {
     let root = VOLUMES_query_instance.blas_root & ~ENTRY_GRID_FLAG;
     VOLUMES_query_node = root;
     VOLUMES_query_stop = BVH_END;
+    VOLUMES_query_cover = 0u;
+    VOLUMES_query_cover_end = 0u;
     if (VOLUMES_query_instance.blas_root & ENTRY_GRID_FLAG) != 0u {
         // Start below the levels every leaf reaching the point's cell shares (`accel/entry_grid.rs`);
         // an empty cell starts at BVH_END.
         let cell = entry_grid_cell(VOLUMES_nodes[root - 1u], VOLUMES_query_point);
         let start = select(VOLUMES_primitives[cell], BVH_END, VOLUMES_primitives[cell] < root);
-        let range = VOLUMES_walk_cells(start, select(VOLUMES_primitives[cell + 1u], 0u, start == BVH_END));
+        var stop = select(VOLUMES_primitives[cell + 1u], 0u, start == BVH_END);
+        if (stop & ENTRY_CELL_COVER) != 0u {
+            // Several subtrees: the first now, the rest after it, or all as one range.
+            let pairs = entry_cell_cover_pairs(stop);
+            if VOLUMES_walk_covers() {
+                stop = VOLUMES_primitives[pairs.x + 1u];
+                VOLUMES_query_cover = pairs.x + 2u;
+                VOLUMES_query_cover_end = pairs.y;
+            } else {
+                stop = VOLUMES_primitives[pairs.y - 1u];
+            }
+        }
+        let range = VOLUMES_walk_cells(start, stop);
         VOLUMES_query_node = range.x;
         VOLUMES_query_stop = range.y;
     }
@@ -89,6 +108,13 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
         if VOLUMES_query_node == BVH_END || (VOLUMES_query_in_group && VOLUMES_query_node >= VOLUMES_query_stop) {
             if !VOLUMES_query_in_group {
                 break;
+            }
+            if VOLUMES_query_cover < VOLUMES_query_cover_end {
+                // The cell's next subtree.
+                VOLUMES_query_node = VOLUMES_primitives[VOLUMES_query_cover];
+                VOLUMES_query_stop = VOLUMES_primitives[VOLUMES_query_cover + 1u];
+                VOLUMES_query_cover += 2u;
+                continue;
             }
             // The instance's BVH is done: back in the top level.
             VOLUMES_query_in_group = false;

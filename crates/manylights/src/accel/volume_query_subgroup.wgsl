@@ -20,3 +20,9 @@ fn VOLUMES_walk_any(inside: bool) -> bool {
 fn VOLUMES_walk_cells(start: u32, stop: u32) -> vec2<u32> {
     return vec2<u32>(subgroupMin(start), subgroupMax(stop));
 }
+
+// A cell's cover is walked whole, from its first subtree's start to its last one's stop: the lanes'
+// cells are merged into one range anyway.
+fn VOLUMES_walk_covers() -> bool {
+    return false;
+}
