@@ -8,7 +8,7 @@
 //! `items` (lights or decals, group after group, each in its group's space and in its BVH's leaf
 //! order, so a group leaf names the range of items it holds), `nodes` (the top level first, then each
 //! group's entry-grid header node and BVH), `primitives` (the top level's instance indices, then each
-//! item's index in the scene, then the entry grids' cells of CPU-built groups, `entry_grid.rs`) and
+//! item's index in the scene, then the entry grids' cells and covers of CPU-built groups, `entry_grid.rs`) and
 //! `instances`. Sharing one node array between all BVHs keeps the binding count fixed; a structure
 //! over 1M volumes still stays under lavapipe's 128 MiB per binding.
 //!
