@@ -10,7 +10,7 @@
 //! Built on the CPU with the group's BVH (`BvhBuild::CpuOnce`); groups rebuilt on the GPU start at
 //! their root. `structure.rs` stores the cells after the primitive indices and the grid's placement in
 //! a header node before the group's root (flagged in the instances' `blas_root`);
-//! `volume_query.wgsl` looks the cell up as [`EntryGrid::start`] does here.
+//! `volume_query.wgsl` looks the cell up and walks its cover as [`EntryGrid::cover`] says here.
 
 use std::collections::HashMap;
 
@@ -109,6 +109,8 @@ impl EntryGrid {
             Aabb::new(corner - margin, corner + cell_size + margin)
         };
         let cover_words = (primitives * budget.cover_words_per_primitive).min(f64::from(CELL_COVER_OFFSET_MASK));
+        // Each try walks every cell's part of the tree again; grids over budget at 16 are rare (100k
+        // ≈ 1 m decals take 6.4M of the 8M words, 1M 5 cm decals 1.7M).
         let mut max_cover = MAX_COVER;
         loop {
             let (cells, covers) = cells_and_covers(bvh, aabbs, dims, &cell_box, max_cover);
@@ -150,7 +152,7 @@ impl EntryGrid {
     pub fn gpu_words(&self, node_base: u32, first_word: u32) -> Vec<u32> {
         let node = |n: u32| if n == END { n } else { n + node_base };
         let covers_at = first_word + 2 * self.cells.len() as u32;
-        debug_assert!(covers_at as usize + self.covers.len() <= CELL_COVER_OFFSET_MASK as usize);
+        assert!(covers_at as usize + self.covers.len() <= CELL_COVER_OFFSET_MASK as usize, "covers past the 27 bits of a cell's offset");
         let cells = self.cells.iter().flat_map(|&[start, stop]| {
             let stop = if start != END && stop & CELL_COVER != 0 {
                 (stop & !CELL_COVER_OFFSET_MASK) | ((stop & CELL_COVER_OFFSET_MASK) + covers_at)
@@ -381,6 +383,36 @@ mod tests {
         for &p in &points {
             assert_eq!(query_from_grid(&bvh, &with, &boxes, p), brute_force(&boxes, p), "at {p:?}");
         }
+
+        // A budget just under what covers of 16 take: smaller covers that fit, still exact.
+        let words = with.covers.len() as f64 - 1.0;
+        let budget = GridBudget { cover_words_per_primitive: words / boxes.len() as f64, ..GridBudget::for_structure(boxes.len()) };
+        let smaller = EntryGrid::build(&bvh, &boxes, budget).unwrap();
+        let largest = points.iter().map(|&p| smaller.cover(p).len()).max().unwrap();
+        assert!(!smaller.covers.is_empty() && smaller.covers.len() as f64 <= words, "{} cover words for {words}", smaller.covers.len());
+        assert!((2..MAX_COVER).contains(&largest), "covers of up to {largest} subtrees");
+        for &p in &points {
+            assert_eq!(query_from_grid(&bvh, &smaller, &boxes, p), brute_force(&boxes, p), "at {p:?}");
+        }
+    }
+
+    /// The words the GPU reads: node indices moved by the group's base (END kept), the covers placed
+    /// after the cells with each cell's offset moved to where they land, and its count intact.
+    #[test]
+    fn gpu_words_relocate_nodes_and_covers() {
+        let three = CELL_COVER | 2 << CELL_COVER_COUNT_SHIFT;
+        let grid = EntryGrid {
+            min: Vec3::ZERO,
+            cells_per_unit: Vec3::ONE,
+            dims: UVec3::new(3, 1, 1),
+            cells: vec![[END, END], [4, 9], [2, three]],
+            covers: vec![2, 3, 5, 7, 8, 11],
+        };
+        assert_eq!(grid.cover(Vec3::new(0.5, 0.5, 0.5)), Vec::<[u32; 2]>::new());
+        assert_eq!(grid.cover(Vec3::new(1.5, 0.5, 0.5)), vec![[4, 9]]);
+        assert_eq!(grid.cover(Vec3::new(2.5, 0.5, 0.5)), vec![[2, 3], [5, 7], [8, 11]]);
+        let covers_at = 1000 + 6;
+        assert_eq!(grid.gpu_words(100, 1000), vec![END, END, 104, 109, 102, three | covers_at, 102, 103, 105, 107, 108, 111]);
     }
 
     #[test]

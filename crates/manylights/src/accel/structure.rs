@@ -387,8 +387,8 @@ impl VolumeStructure {
         if primitive_count > MAX_PRIMITIVES as u64 {
             return Err(Error::InvalidScene(format!("{count} {label}s; a structure holds at most {MAX_PRIMITIVES} volumes and instances")));
         }
-        // CPU builds first: their entry grids' cells follow the primitive indices in the same array,
-        // within one budget of cells for all the groups.
+        // CPU builds first: their entry grids' cells and covers follow the primitive indices in the
+        // same array, within one budget of cells and cover words for all the groups.
         let grid_budget = entry_grid::GridBudget::for_structure(count);
         let cpu_builds: Vec<Option<(Bvh, Option<EntryGrid>)>> = ranges
             .iter()

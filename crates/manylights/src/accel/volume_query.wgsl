@@ -78,8 +78,9 @@ fn VOLUMES_query_enter(instance_index: u32) {
     VOLUMES_query_cover = 0u;
     VOLUMES_query_cover_end = 0u;
     if (VOLUMES_query_instance.blas_root & ENTRY_GRID_FLAG) != 0u {
-        // Start below the levels every leaf reaching the point's cell shares (`accel/entry_grid.rs`);
-        // an empty cell starts at BVH_END.
+        // Start below the levels the leaves reaching the point's cell share: at their common subtree,
+        // or at the first of the cell's cover of subtrees (`accel/entry_grid.rs`); an empty cell
+        // starts at BVH_END.
         let cell = entry_grid_cell(VOLUMES_nodes[root - 1u], VOLUMES_query_point);
         let start = select(VOLUMES_primitives[cell], BVH_END, VOLUMES_primitives[cell] < root);
         var stop = select(VOLUMES_primitives[cell + 1u], 0u, start == BVH_END);
