@@ -196,16 +196,14 @@ fn cells_and_covers(
     cell_box: &dyn Fn(u32, u32, u32) -> Aabb,
     max_cover: usize,
 ) -> (Vec<[u32; 2]>, Vec<u32>) {
-    // A subtree ending the tree stops at the node count rather than END, which would read as
-    // CELL_COVER: the walk reaches END first either way.
-    let stop = |n: u32| bvh.nodes[n as usize].skip.min(bvh.nodes.len() as u32);
     let mut cells = Vec::with_capacity((dims.x * dims.y * dims.z) as usize);
     let mut covers = Vec::new();
     let mut shared: HashMap<Vec<u32>, u32> = HashMap::new();
     for z in 0..dims.z {
         for y in 0..dims.y {
             for x in 0..dims.x {
-                let pairs: Vec<u32> = cover(bvh, aabbs, &cell_box(x, y, z), max_cover).into_iter().flat_map(|n| [n, stop(n)]).collect();
+                let pairs: Vec<u32> =
+                    cover(bvh, aabbs, &cell_box(x, y, z), max_cover).into_iter().flat_map(|n| [n, subtree_end(bvh, n)]).collect();
                 cells.push(match pairs.len() {
                     0 => [END, END],
                     2 => [pairs[0], pairs[1]],
@@ -233,13 +231,19 @@ fn cover(bvh: &Bvh, aabbs: &[Aabb], cell: &Aabb, max_cover: usize) -> Vec<u32> {
     // Entries of `reached`: one per subtree root, in node order; expanded while they fit.
     let mut parts = vec![root];
     while parts.len() < max_cover {
-        let span = |r: &Reached| bvh.nodes[r.node as usize].skip.min(bvh.nodes.len() as u32) - r.node;
+        let span = |r: &Reached| subtree_end(bvh, r.node) - r.node;
         let widest = (0..parts.len()).filter(|&i| reached[parts[i]].children.is_some()).max_by_key(|&i| span(&reached[parts[i]]));
         let Some(i) = widest else { break };
         let (first, second) = reached[parts[i]].children.expect("filtered on children");
         parts.splice(i..=i, [first, second]);
     }
     parts.into_iter().map(|i| reached[i].node).collect()
+}
+
+/// The node after `n`'s subtree, where a walk of it stops: its `skip`, or the node count for a subtree
+/// ending the tree, as END would read as CELL_COVER (the walk reaches END first either way).
+fn subtree_end(bvh: &Bvh, n: u32) -> u32 {
+    bvh.nodes[n as usize].skip.min(bvh.nodes.len() as u32)
 }
 
 /// A node of the BVH whose subtree holds leaves reaching a cell, with the same for its children when

@@ -184,8 +184,6 @@ pub struct Volumes<'a> {
 #[derive(Clone, Copy, Debug)]
 pub struct DynamicGroup {
     pub count: u32,
-    /// Bytes of one item (`GpuLight` or `GpuDecal`).
-    pub item_bytes: u64,
     /// Bounds every one of its boxes stays within (its place in the top level).
     pub bounds: Aabb,
 }
@@ -276,7 +274,7 @@ impl VolumeStructure {
     ) -> Result<Self> {
         let items: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
         let boxes: Vec<Aabb> = lights.iter().map(light_aabb).collect();
-        let dynamic = DynamicGroup { count: particle_lights, item_bytes: std::mem::size_of::<GpuLight>() as u64, bounds: particle_bounds };
+        let dynamic = DynamicGroup { count: particle_lights, bounds: particle_bounds };
         let volumes =
             Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: Some(dynamic) };
         Self::new(ctx, &volumes, build, None)
@@ -432,7 +430,7 @@ impl VolumeStructure {
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let node_bytes = node_count * std::mem::size_of::<BvhNode>() as u64;
         let primitive_bytes = (primitive_count + cell_words) * 4;
-        let item_bytes = volumes.items.len() as u64 + dynamic.map_or(0, |d| u64::from(d.count) * d.item_bytes);
+        let item_bytes = volumes.items.len() as u64 + u64::from(dynamic_count) * volumes.kind.record_bytes() as u64;
         for (what, bytes) in [("items", item_bytes), ("BVH nodes", node_bytes), ("BVH primitives and entry grids", primitive_bytes)] {
             if bytes > limit {
                 return Err(Error::InvalidScene(format!(
