@@ -17,7 +17,11 @@
 // A cursor: `VOLUMES_query_next_leaf` returns every group leaf whose box contains the point, as the
 // range of items it holds (items are stored in leaf order, `accel/structure.rs`), and the caller
 // applies its own tight test to them (light range and cone, decal box) without a copy of the
-// traversal per use. It hands out whole leaves: a cursor returning one item per call
+// traversal per use. The caller also defines `VOLUMES_query_entered(instance)`, called as the query
+// enters an instance's group, before any of its leaves: there it keeps what its tests need of the
+// instance (lights: the surface in the group's space; decals: the instance itself). The query keeps
+// only the instance's index: a copy of the whole instance held through every walk cost the shading
+// passes more than the caller's own state (BENCHMARKS.md, "The instance handed to the caller"). It hands out whole leaves: a cursor returning one item per call
 // measured 20 % slower shading on the H200. Every invocation that begins a query calls
 // `VOLUMES_query_next_leaf` until it returns BVH_END, without leaving the loop early.
 //
@@ -37,8 +41,7 @@ var<private> VOLUMES_query_world_point: vec3<f32>;
 // The point in the current level's space: the world's in the top level, the group's inside an
 // instance. Callers read it to test items in their group's space.
 var<private> VOLUMES_query_point: vec3<f32>;
-// The instance whose group the last leaf belongs to, and its index: a query enters each instance once.
-var<private> VOLUMES_query_instance: VolumeInstance;
+// The index of the instance whose group the last leaf belongs to: a query enters each instance once.
 var<private> VOLUMES_query_instance_index: u32;
 var<private> VOLUMES_query_node: u32;
 var<private> VOLUMES_query_stop: u32;
@@ -69,15 +72,16 @@ fn VOLUMES_query_begin(point: vec3<f32>, instance_count: u32) {
 // Moves the query into an instance's group, to resume the top level at `VOLUMES_query_node` after it.
 fn VOLUMES_query_enter(instance_index: u32) {
     VOLUMES_query_instance_index = instance_index;
-    VOLUMES_query_instance = VOLUMES_instances[instance_index];
-    VOLUMES_query_point = instance_point_to_group(VOLUMES_query_instance, VOLUMES_query_world_point);
+    let instance = VOLUMES_instances[instance_index];
+    VOLUMES_query_entered(instance);
+    VOLUMES_query_point = instance_point_to_group(instance, VOLUMES_query_world_point);
     VOLUMES_query_resume = VOLUMES_query_node;
-    let root = VOLUMES_query_instance.blas_root & ~ENTRY_GRID_FLAG;
+    let root = instance.blas_root & ~ENTRY_GRID_FLAG;
     VOLUMES_query_node = root;
     VOLUMES_query_stop = BVH_END;
     VOLUMES_query_cover = 0u;
     VOLUMES_query_cover_end = 0u;
-    if (VOLUMES_query_instance.blas_root & ENTRY_GRID_FLAG) != 0u {
+    if (instance.blas_root & ENTRY_GRID_FLAG) != 0u {
         // Start below the levels the leaves reaching the point's cell share: at their common subtree,
         // or at the first of the cell's cover of subtrees (`accel/entry_grid.rs`); an empty cell
         // starts at BVH_END.

@@ -12,6 +12,13 @@
 // The number of light instances (`frame.light_instance_count` in shading).
 @group(1) @binding(2) var<storage, read> instance_count: u32;
 
+// The instance the query is in, to place its lights in the world.
+var<private> probe_instance: VolumeInstance;
+
+fn light_query_entered(instance: VolumeInstance) {
+    probe_instance = instance;
+}
+
 @compute @workgroup_size(64)
 fn volume_query_probe(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= arrayLength(&points) {
@@ -23,7 +30,7 @@ fn volume_query_probe(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var leaf = light_query_next_leaf(); leaf.x != BVH_END; leaf = light_query_next_leaf()) {
         for (var k = leaf.x; k < leaf.y; k += 1u) {
             let light = light_primitives[max(instance_count, 1u) + k];
-            if light_reaches(light_in_world(lights[k], light_query_instance), p) {
+            if light_reaches(light_in_world(lights[k], probe_instance), p) {
                 summary += vec4<u32>(1u, light, light * light, 0u);
             }
         }

@@ -4,23 +4,28 @@
 #include "shading/enumerate/light_loop.wgsl"
 #include "$LIGHT_QUERY" with VOLUMES=light
 
+// The surface being shaded, and the same surface in the space of the instance the query is in
+// (`shading_input_in_group`), with the falloff that undoes the instance's scale: set as the query
+// enters each instance.
+var<private> light_surface: ShadingInput;
+var<private> light_surface_in_group: ShadingInput;
+var<private> light_falloff: f32;
+
+fn light_query_entered(instance: VolumeInstance) {
+    light_surface_in_group = shading_input_in_group(light_surface, instance);
+    light_falloff = 1.0 / (instance.scale * instance.scale);
+}
+
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
     var shadow_rays = frame.ray_options.w;
-    // The surface in the space of the instance being visited (`shading_input_in_group`).
-    var local = s;
-    var falloff = 1.0;
-    var entered = 0xffffffffu;
     debug_lights_reaching = 0u;
+    light_surface = s;
     light_query_begin(s.position, frame.light_instance_count);
     for (var leaf = light_query_next_leaf(); leaf.x != BVH_END; leaf = light_query_next_leaf()) {
-        if light_query_instance_index != entered {
-            entered = light_query_instance_index;
-            local = shading_input_in_group(s, light_query_instance);
-            falloff = 1.0 / (light_query_instance.scale * light_query_instance.scale);
-        }
+        let instance = light_instances[light_query_instance_index];
         for (var k = leaf.x; k < leaf.y; k += 1u) {
-            radiance += local_light_radiance(k, light_query_instance, s, local, falloff, &shadow_rays);
+            radiance += local_light_radiance(k, instance, s, light_surface_in_group, light_falloff, &shadow_rays);
         }
     }
     debug_light_work = light_query_visits;
