@@ -17,13 +17,15 @@
 // A cursor: `VOLUMES_query_next_leaf` returns every group leaf whose box contains the point, as the
 // range of items it holds (items are stored in leaf order, `accel/structure.rs`), and the caller
 // applies its own tight test to them (light range and cone, decal box) without a copy of the
-// traversal per use. The caller also defines `VOLUMES_query_entered(instance)`, called as the query
-// enters an instance's group, before any of its leaves: there it keeps what its tests need of the
-// instance (lights: the surface in the group's space; decals: the instance itself). The query keeps
-// only the instance's index: a copy of the whole instance held through every walk cost the shading
-// passes more than the caller's own state (BENCHMARKS.md, "The instance handed to the caller"). It hands out whole leaves: a cursor returning one item per call
-// measured 20 % slower shading on the H200. Every invocation that begins a query calls
-// `VOLUMES_query_next_leaf` until it returns BVH_END, without leaving the loop early.
+// traversal per use. It hands out whole leaves: a cursor returning one item per call measured 20 %
+// slower shading on the H200. Every invocation that begins a query calls `VOLUMES_query_next_leaf`
+// until it returns BVH_END, without leaving the loop early.
+//
+// The caller also defines `VOLUMES_query_entered(instance)`, called as the query enters an instance's
+// group, before any of its leaves: there it keeps what its tests need of the instance (lights: the
+// surface in the group's space; decals: the instance itself). The query keeps only the instance's
+// index: a copy of the whole instance held through every walk cost the shading passes more than the
+// callers' own state (BENCHMARKS.md, "The instance handed to the caller").
 //
 // An invocation skips a node only when its own point is outside it, and gets a leaf's items only when
 // its point is inside, whichever invocations walk with it. A link back to the node itself ends the
