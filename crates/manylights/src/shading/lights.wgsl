@@ -37,3 +37,9 @@ fn shading_input_in_group(s: ShadingInput, instance: VolumeInstance) -> ShadingI
     local.view_dir = instance_vector_to_group(instance, s.view_dir) * instance.scale;
     return local;
 }
+
+// The factor that turns a group's light, shaded in the group's space, into its light in the world:
+// 1 / scale² (`shading_input_in_group`).
+fn instance_light_falloff(instance: VolumeInstance) -> f32 {
+    return 1.0 / (instance.scale * instance.scale);
+}

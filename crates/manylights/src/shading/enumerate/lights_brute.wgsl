@@ -11,7 +11,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     for (var i = 0u; i < frame.light_instance_count; i += 1u) {
         let instance = light_instances[i];
         let local = shading_input_in_group(s, instance);
-        let falloff = 1.0 / (instance.scale * instance.scale);
+        let falloff = instance_light_falloff(instance);
         for (var k = instance.first_item; k < instance.first_item + instance.item_count; k += 1u) {
             debug_light_work += 1u;
             radiance += local_light_radiance(k, instance, s, local, falloff, &shadow_rays);

@@ -13,7 +13,7 @@ var<private> light_falloff: f32;
 
 fn light_query_entered(instance: VolumeInstance) {
     light_surface_in_group = shading_input_in_group(light_surface, instance);
-    light_falloff = 1.0 / (instance.scale * instance.scale);
+    light_falloff = instance_light_falloff(instance);
 }
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {

@@ -22,7 +22,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             entered = entry.x;
             instance = light_instances[entry.x];
             local = shading_input_in_group(s, instance);
-            falloff = 1.0 / (instance.scale * instance.scale);
+            falloff = instance_light_falloff(instance);
         }
         radiance += local_light_radiance(entry.y, instance, s, local, falloff, &shadow_rays);
     }
