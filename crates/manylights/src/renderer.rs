@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use crate::{
     accel::{clusters::ClusterGrid, VolumeStructure},
-    config::RenderConfig,
+    config::{DebugView, RenderConfig},
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
     particles::{ParticleGrid, ParticleSystem, ParticleVolume},
     passes::deform::Deform,
@@ -177,6 +177,7 @@ impl Renderer {
             reflections: config.rays.reflection_bounces > 0,
             light_shadows: config.rays.light_shadow_rays > 0,
             subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
+            debug_views: config.debug_view != DebugView::Off,
         };
         let setup = FrameSetup {
             methods,

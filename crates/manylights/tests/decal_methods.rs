@@ -7,7 +7,7 @@ mod common;
 use std::path::PathBuf;
 
 use common::*;
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Quat, Vec3};
 use manylights::{
     accel::{clusters::ClusterGrid, BvhBuild, VolumeStructure},
     config::RenderConfig,
@@ -18,7 +18,7 @@ use manylights::{
         self,
         demo::demo_scene,
         generators::{self, ScatterDecals, ScatterLights},
-        Decal, Scene,
+        Decal, GroupInstance, Groups, Scene,
     },
 };
 
@@ -107,6 +107,32 @@ fn grouped_spinning_decals_and_lights() {
     // And moving them changes the picture.
     let at_zero = render_at(&scene, decal_config(128, 72, DecalMethod::Bvh, BvhBuild::CpuOnce), 0.0);
     assert!(max_abs_difference(&brute, &at_zero) > 0.01, "spinning groups did not move");
+}
+
+/// Decals are tested in their group's space: a group placed by a rotated, scaled instance gives the
+/// image of the same decals placed in the world directly, normal maps included.
+#[test]
+fn a_rotated_scaled_instance_renders_as_its_decals_placed_in_the_world() {
+    let mut world = with_decals_and_lights(demo_scene(), 2000, 300, 17);
+    world.ambient = Vec3::splat(0.2);
+    let world_from_group = Affine3A::from_scale_rotation_translation(
+        Vec3::splat(1.7),
+        Quat::from_axis_angle(Vec3::new(0.3, 1.0, -0.4).normalize(), 0.9),
+        Vec3::new(0.5, -0.2, 1.1),
+    );
+    let mut grouped = world.clone();
+    for decal in &mut grouped.decals {
+        decal.world_from_decal = world_from_group.inverse() * decal.world_from_decal;
+    }
+    grouped.decal_groups =
+        Groups { sizes: vec![grouped.decals.len()], instances: vec![GroupInstance { group: 0, world_from_group, spin: None }] };
+    assert!(decal_effect(&world, 96, 54) > 1e-3, "the decals barely change the image");
+    let expected = render_at(&world, decal_config(128, 72, DecalMethod::Brute, BvhBuild::CpuOnce), 0.0);
+    for method in [DecalMethod::Brute, DecalMethod::Bvh, DecalMethod::Clustered] {
+        let image = render_at(&grouped, decal_config(128, 72, method, BvhBuild::CpuOnce), 0.0);
+        let difference = max_abs_difference(&expected, &image);
+        assert!(difference <= TOLERANCE, "{} decals through the instance: max abs difference {difference}", method.name());
+    }
 }
 
 #[test]

@@ -37,6 +37,13 @@ struct VolumeInstance {
     scale: f32,
 }
 
+// Instance 0 and its group's entry-grid header (`accel/structure.rs`, `GpuFirstInstance`), in a uniform
+// buffer: a query over a lone instance starts from them without two dependent storage loads.
+struct FirstInstance {
+    instance: VolumeInstance,
+    entry_grid_header: BvhNode,
+}
+
 // Set in `VolumeInstance::blas_root` when the group has an entry grid (`accel/entry_grid.rs`).
 const ENTRY_GRID_FLAG: u32 = 0x80000000u;
 

@@ -18,6 +18,7 @@
 
 use std::ops::Range;
 
+use bytemuck::Zeroable;
 use glam::Affine3A;
 
 use super::{
@@ -79,6 +80,17 @@ pub struct GpuVolumeInstance {
     pub scale: f32,
 }
 
+/// Instance 0 and its group's entry-grid header (zero without one), in a uniform buffer: a query over
+/// a lone instance starts from them without two dependent storage loads before its first node, which
+/// the fragment stage waits for (BENCHMARKS.md, "The lone instance in a uniform"). Keep in sync with
+/// `FirstInstance` in `accel/bvh_types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuFirstInstance {
+    instance: GpuVolumeInstance,
+    entry_grid_header: BvhNode,
+}
+
 /// Set in `GpuVolumeInstance::blas_root` when the group has an entry grid (`entry_grid.rs`), whose
 /// header is the node before the root.
 pub const ENTRY_GRID_FLAG: u32 = 1 << 31;
@@ -90,7 +102,7 @@ impl GpuVolumeInstance {
             world_from_group: affine_rows(&world_from_group),
             first_item: group.items.start,
             item_count: group.items.len() as u32,
-            blas_root: group.blas_root | if group.has_entry_grid { ENTRY_GRID_FLAG } else { 0 },
+            blas_root: group.blas_root | if group.entry_grid_header.is_some() { ENTRY_GRID_FLAG } else { 0 },
             scale: world_from_group.matrix3.x_axis.length(),
         }
     }
@@ -108,8 +120,9 @@ fn entry_grid_header(grid: &EntryGrid, first_cell: u32) -> BvhNode {
 struct Group {
     items: Range<u32>,
     blas_root: u32,
-    /// Whether queries start where an entry grid says (CPU-built groups).
-    has_entry_grid: bool,
+    /// The header of the entry grid queries start from (CPU-built groups), also stored as the node
+    /// before the root.
+    entry_grid_header: Option<BvhNode>,
     /// Written on the GPU every frame (`Volumes::dynamic`).
     dynamic: bool,
     /// Bounds of the group's volumes, in its space: the top level's boxes are their images.
@@ -228,6 +241,8 @@ pub struct VolumeStructure {
     /// Instances of non-empty groups: instances of empty groups can contain nothing.
     instances: Vec<GroupInstance>,
     instance_buffer: wgpu::Buffer,
+    /// A [`GpuFirstInstance`].
+    first_instance: wgpu::Buffer,
     nodes: wgpu::Buffer,
     primitives: wgpu::Buffer,
     /// Builds the top level on the GPU when there are more than [`CPU_TOP_LEVEL_MAX_INSTANCES`].
@@ -455,6 +470,12 @@ impl VolumeStructure {
         let primitives = storage("bvh primitives", primitive_bytes, U::COPY_DST | U::COPY_SRC);
         let instance_buffer =
             storage("instances", u64::from(instance_slots) * std::mem::size_of::<GpuVolumeInstance>() as u64, U::COPY_DST);
+        let first_instance = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(&format!("{label} first instance")),
+            size: std::mem::size_of::<GpuFirstInstance>() as u64,
+            usage: U::UNIFORM | U::COPY_DST,
+            mapped_at_creation: false,
+        });
         let items = storage("items", item_bytes.max(64), U::COPY_DST);
         let bytes_per_item = volumes.kind.record_bytes();
         let leaf_order = if rebuilt_on_gpu {
@@ -481,7 +502,7 @@ impl VolumeStructure {
             let items_range = range.start as u32..range.end as u32;
             let boxes = &volumes.boxes[range.clone()];
             let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
-            let mut has_entry_grid = false;
+            let mut grid_header = None;
             let builder = match cpu_build {
                 Some((bvh, grid)) => {
                     let group_nodes = relocate(&bvh, blas_root, items_range.start);
@@ -491,7 +512,7 @@ impl VolumeStructure {
                         ctx.queue.write_buffer(&primitives, u64::from(next_cell) * 4, bytemuck::cast_slice(&cells));
                         let header = entry_grid_header(&grid, next_cell);
                         ctx.queue.write_buffer(&nodes, u64::from(blas_root - 1) * 32, bytemuck::bytes_of(&header));
-                        has_entry_grid = true;
+                        grid_header = Some(header);
                         next_cell += cells.len() as u32;
                     }
                     None
@@ -511,7 +532,7 @@ impl VolumeStructure {
                     Some(builder)
                 }
             };
-            groups.push(Group { items: items_range, blas_root, has_entry_grid, dynamic: false, bounds, builder });
+            groups.push(Group { items: items_range, blas_root, entry_grid_header: grid_header, dynamic: false, bounds, builder });
         }
         if let Some(d) = dynamic {
             let first = count as u32;
@@ -528,7 +549,7 @@ impl VolumeStructure {
             groups.push(Group {
                 items: first..first + d.count,
                 blas_root: dynamic_root,
-                has_entry_grid: false,
+                entry_grid_header: None,
                 dynamic: true,
                 bounds: d.bounds,
                 builder: Some(builder),
@@ -559,9 +580,11 @@ impl VolumeStructure {
         };
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
         // Keep in sync with `shading/light_bindings.wgsl` and `shading/decal_bindings.wgsl`.
-        let bind_group_layout = bindings::layout(device, label, &[0, 1, 2, 3, 4, 5].map(|binding| bindings::storage_read(binding, all)));
-        let bind_group =
-            shading_bind_group(ctx, label, &bind_group_layout, [&items, &nodes, &primitives, &instance_buffer], clusters.as_ref());
+        let mut entries = [0, 1, 2, 3, 4, 5].map(|binding| bindings::storage_read(binding, all)).to_vec();
+        entries.push(bindings::uniform(6, all));
+        let bind_group_layout = bindings::layout(device, label, &entries);
+        let buffers = [&items, &nodes, &primitives, &instance_buffer, &first_instance];
+        let bind_group = shading_bind_group(ctx, label, &bind_group_layout, buffers, clusters.as_ref());
         Ok(Self {
             bind_group_layout,
             bind_group,
@@ -574,6 +597,7 @@ impl VolumeStructure {
             groups,
             instances,
             instance_buffer,
+            first_instance,
             nodes,
             primitives,
             top_level_builder,
@@ -615,7 +639,7 @@ impl VolumeStructure {
         if clusters.fitted(ctx)? {
             return Ok(true);
         }
-        let buffers = [&self.items, &self.nodes, &self.primitives, &self.instance_buffer];
+        let buffers = [&self.items, &self.nodes, &self.primitives, &self.instance_buffer, &self.first_instance];
         self.bind_group = shading_bind_group(ctx, self.label, &self.bind_group_layout, buffers, self.clusters.as_ref());
         Ok(false)
     }
@@ -651,6 +675,8 @@ impl VolumeStructure {
             return Err(Error::InvalidScene(format!("{} instance {i}: its bounds are not finite at time {time}", self.label)));
         }
         ctx.queue.write_buffer(&self.instance_buffer, 0, bytemuck::cast_slice(&gpu));
+        let first = GpuFirstInstance { instance: gpu[0], entry_grid_header: placed[0].1.entry_grid_header.unwrap_or_else(BvhNode::zeroed) };
+        ctx.queue.write_buffer(&self.first_instance, 0, bytemuck::bytes_of(&first));
         match &mut self.top_level_builder {
             Some(builder) => {
                 builder.set_boxes(&ctx.queue, &boxes)?;
@@ -668,13 +694,13 @@ impl VolumeStructure {
     }
 }
 
-/// The bind group shading reads (`shading/*_bindings.wgsl`): items, nodes, primitives and instances,
-/// then the clustered lists' ranges and entries, or placeholders without them.
+/// The bind group shading reads (`shading/*_bindings.wgsl`): items, nodes, primitives, instances,
+/// the clustered lists' ranges and entries (or placeholders without them), and the first instance.
 fn shading_bind_group(
     ctx: &GpuContext,
     label: &str,
     layout: &wgpu::BindGroupLayout,
-    buffers: [&wgpu::Buffer; 4],
+    [items, nodes, primitives, instances, first_instance]: [&wgpu::Buffer; 5],
     clusters: Option<&ClusterLists>,
 ) -> wgpu::BindGroup {
     let placeholder;
@@ -690,8 +716,7 @@ fn shading_bind_group(
             (&placeholder, &placeholder)
         }
     };
-    let mut resources: Vec<wgpu::BindingResource> = buffers.iter().map(|b| b.as_entire_binding()).collect();
-    resources.extend([ranges.as_entire_binding(), entries.as_entire_binding()]);
+    let resources = [items, nodes, primitives, instances, ranges, entries, first_instance].map(|b| b.as_entire_binding()).to_vec();
     bindings::bind_group(&ctx.device, label, layout, resources)
 }
 
@@ -739,7 +764,7 @@ mod tests {
             glam::Quat::from_rotation_y(0.5),
             glam::Vec3::new(1.0, 2.0, 3.0),
         );
-        let mut group = Group { items: 4..9, blas_root: 17, has_entry_grid: false, dynamic: false, bounds: Aabb::EMPTY, builder: None };
+        let mut group = Group { items: 4..9, blas_root: 17, entry_grid_header: None, dynamic: false, bounds: Aabb::EMPTY, builder: None };
         let gpu = GpuVolumeInstance::new(t, &group);
         let apply =
             |rows: &[[f32; 4]; 3], p: glam::Vec3| glam::Vec3::from_array(rows.map(|r| glam::Vec4::from_array(r).dot(p.extend(1.0))));
@@ -748,7 +773,7 @@ mod tests {
         assert!((apply(&gpu.group_from_world, apply(&gpu.world_from_group, p)) - p).length() < 1e-5);
         assert_eq!((gpu.first_item, gpu.item_count, gpu.blas_root), (4, 5, 17));
         assert!((gpu.scale - 2.0).abs() < 1e-6);
-        group.has_entry_grid = true;
+        group.entry_grid_header = Some(BvhNode::zeroed());
         assert_eq!(GpuVolumeInstance::new(t, &group).blas_root, 17 | ENTRY_GRID_FLAG);
     }
 

@@ -1,14 +1,15 @@
 // The point query — the paper's zero-length ray — through a two-level structure (`accel/structure.rs`):
 // the top level's leaves are group instances; entering one moves the point into the group's space
 // and continues in the group's BVH. A template: `VOLUMES` is replaced by the structure's prefix,
-// naming its bindings `VOLUMES_nodes`, `VOLUMES_primitives`, `VOLUMES_instances`, so lights and
-// decals each get their own cursor. Enumeration modules include it through a walk module, which
+// naming its bindings `VOLUMES_nodes`, `VOLUMES_primitives`, `VOLUMES_instances` and
+// `VOLUMES_first_instance`, so lights and decals each get their own cursor. Enumeration modules include it through a walk module, which
 // decides how invocations walk together (`passes::volume_query_module`):
 // `accel/volume_query_invocation.wgsl`, each invocation alone, or `accel/volume_query_subgroup.wgsl`,
 // a whole subgroup together. A walk module defines `VOLUMES_walk_any(inside)`, whether to enter a node
 // whose box holds (`inside`) or not this invocation's point, `VOLUMES_walk_cells(start, stop)`, the
-// range of nodes to walk for this invocation's entry-grid cell, and `VOLUMES_walk_covers()`, whether
-// a cell naming several subtrees has them walked one by one, or as one range from the first to the last.
+// range of nodes to walk for this invocation's entry-grid cell, `VOLUMES_walk_covers()`, whether
+// a cell naming several subtrees has them walked one by one, or as one range from the first to the last,
+// and `VOLUMES_walk_shared()`, whether the subgroup walks as one (callers choose what to hold by it).
 //
 // Inside a group the query starts where the group's entry grid says, if it has one (CPU-built groups,
 // laid out depth first, so every step of a walk moves to a higher node), and ends at or past the node
@@ -35,10 +36,12 @@
 // shader) runs out ends every later loop of its whole 8-lane vector, the light loop included. For the
 // same reason a grid start below the group's root (a helper's zero) counts as an empty cell.
 #include "accel/bvh_types.wgsl"
+#include "shading/debug_view.wgsl"
 
 // The query in flight. The traversal needs no stack (`bvh_types.wgsl`): the node to visit next, the
-// node at or past which the group's walk ends, and the top-level node to resume at when the current
-// instance is done.
+// node at or past which the walk of the current level ends (BVH_END, past every node, in the top
+// level and in groups without an entry grid, so one comparison ends every walk), and the top-level
+// node to resume at when the current instance is done.
 var<private> VOLUMES_query_world_point: vec3<f32>;
 // The point in the current level's space: the world's in the top level, the group's inside an
 // instance. Callers read it to test items in their group's space.
@@ -58,23 +61,25 @@ var<private> VOLUMES_query_visits: u32;
 
 // Starts a query at a world-space point, replacing any in flight; with no instances it finds nothing.
 // With one instance the top level is a single leaf: the query enters its group at once, saving the
-// two dependent loads of that leaf (the group's own boxes still bound the point).
+// two dependent loads of that leaf (the group's own boxes still bound the point), from the instance
+// and grid header in `VOLUMES_first_instance`, a uniform, saving two more.
 fn VOLUMES_query_begin(point: vec3<f32>, instance_count: u32) {
     VOLUMES_query_world_point = point;
     VOLUMES_query_point = point;
     VOLUMES_query_node = select(BVH_END, 0u, instance_count > 0u);
+    VOLUMES_query_stop = BVH_END;
     VOLUMES_query_in_group = false;
     VOLUMES_query_visits = 0u;
     if instance_count == 1u {
         VOLUMES_query_node = BVH_END;
-        VOLUMES_query_enter(0u);
+        VOLUMES_query_enter(0u, VOLUMES_first_instance.instance, true);
     }
 }
 
-// Moves the query into an instance's group, to resume the top level at `VOLUMES_query_node` after it.
-fn VOLUMES_query_enter(instance_index: u32) {
+// Moves the query into an instance's group, to resume the top level at `VOLUMES_query_node` after it;
+// `first`: the instance is `VOLUMES_first_instance`'s, whose grid header is there too.
+fn VOLUMES_query_enter(instance_index: u32, instance: VolumeInstance, first: bool) {
     VOLUMES_query_instance_index = instance_index;
-    let instance = VOLUMES_instances[instance_index];
     VOLUMES_query_entered(instance);
     VOLUMES_query_point = instance_point_to_group(instance, VOLUMES_query_world_point);
     VOLUMES_query_resume = VOLUMES_query_node;
@@ -87,7 +92,11 @@ fn VOLUMES_query_enter(instance_index: u32) {
         // Start below the levels the leaves reaching the point's cell share: at their common subtree,
         // or at the first of the cell's cover of subtrees (`accel/entry_grid.rs`); an empty cell
         // starts at BVH_END.
-        let cell = entry_grid_cell(VOLUMES_nodes[root - 1u], VOLUMES_query_point);
+        var header = VOLUMES_first_instance.entry_grid_header;
+        if !first {
+            header = VOLUMES_nodes[root - 1u];
+        }
+        let cell = entry_grid_cell(header, VOLUMES_query_point);
         let start = select(VOLUMES_primitives[cell], BVH_END, VOLUMES_primitives[cell] < root);
         var stop = select(VOLUMES_primitives[cell + 1u], 0u, start == BVH_END);
         if (stop & ENTRY_CELL_COVER) != 0u {
@@ -112,7 +121,7 @@ fn VOLUMES_query_enter(instance_index: u32) {
 // empty range when the walk visits a leaf for other invocations; x is BVH_END when the query is done.
 fn VOLUMES_query_next_leaf() -> vec2<u32> {
     loop {
-        if VOLUMES_query_node == BVH_END || (VOLUMES_query_in_group && VOLUMES_query_node >= VOLUMES_query_stop) {
+        if VOLUMES_query_node >= VOLUMES_query_stop {
             if !VOLUMES_query_in_group {
                 break;
             }
@@ -126,11 +135,14 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
             // The instance's BVH is done: back in the top level.
             VOLUMES_query_in_group = false;
             VOLUMES_query_node = VOLUMES_query_resume;
+            VOLUMES_query_stop = BVH_END;
             VOLUMES_query_point = VOLUMES_query_world_point;
             continue;
         }
         let node = VOLUMES_nodes[VOLUMES_query_node];
-        VOLUMES_query_visits += 1u;
+        if DEBUG_VIEWS {
+            VOLUMES_query_visits += 1u;
+        }
         let inside = bvh_node_contains(node, VOLUMES_query_point);
         if !VOLUMES_walk_any(inside) {
             VOLUMES_query_node = select(node.skip, BVH_END, node.skip == VOLUMES_query_node);
@@ -146,7 +158,8 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
             return select(vec2<u32>(leaf.x), leaf, inside);
         }
         // A top-level leaf names one primitive, an instance index: enter its group.
-        VOLUMES_query_enter(VOLUMES_primitives[leaf.x]);
+        let instance_index = VOLUMES_primitives[leaf.x];
+        VOLUMES_query_enter(instance_index, VOLUMES_instances[instance_index], false);
     }
     return vec2<u32>(BVH_END);
 }

@@ -13,3 +13,7 @@ fn VOLUMES_walk_cells(start: u32, stop: u32) -> vec2<u32> {
 fn VOLUMES_walk_covers() -> bool {
     return true;
 }
+
+fn VOLUMES_walk_shared() -> bool {
+    return false;
+}

@@ -26,3 +26,7 @@ fn VOLUMES_walk_cells(start: u32, stop: u32) -> vec2<u32> {
 fn VOLUMES_walk_covers() -> bool {
     return false;
 }
+
+fn VOLUMES_walk_shared() -> bool {
+    return true;
+}

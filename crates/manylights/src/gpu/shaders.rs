@@ -275,7 +275,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                 ParticleMethod::ALL.iter().flat_map(|&p| flags.iter().flat_map(move |&r| flags.map(move |s| (p, r, s)))).collect();
             for (particles, reflections, light_shadows) in variants {
                 for subgroups in [false, true] {
-                    let methods = ShadingMethods { lights, decals, particles, reflections, light_shadows, subgroups };
+                    let methods = ShadingMethods { lights, decals, particles, reflections, light_shadows, subgroups, debug_views: false };
                     if decals.works_in(PipelineKind::Forward) {
                         shaders.push(crate::passes::forward_shade::shader(methods));
                     }

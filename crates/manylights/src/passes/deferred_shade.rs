@@ -50,7 +50,7 @@ impl DeferredShade {
         );
         let layouts = [&scene.bind_group_layout, &layout, &lights.bind_group_layout, &decals.bind_group_layout];
         let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
-        let constants = [("SUN_SHADOW_MASK", has_mask)];
+        let constants = [("SUN_SHADOW_MASK", has_mask), methods.debug_views_constant()];
         let pipeline = bindings::compute_pipeline_with_constants(device, "deferred_shade", &shader(methods), &layouts, &constants)?;
         let mut views = vec![wgpu::BindingResource::TextureView(depth)];
         views.extend(gbuffer.iter().map(wgpu::BindingResource::TextureView));

@@ -45,7 +45,7 @@ impl ForwardShade {
             &[&scene.bind_group_layout, &group, &lights.bind_group_layout, &decals.bind_group_layout],
         );
         let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
-        let constants = [("SUN_SHADOW_MASK", has_mask)];
+        let constants = [("SUN_SHADOW_MASK", has_mask), methods.debug_views_constant()];
         // EQUAL against the prepass's depth: only the visible fragment of each pixel is shaded.
         let depth_equal = wgpu::DepthStencilState {
             format: DEPTH_FORMAT,

@@ -62,6 +62,7 @@ impl TransparentShade {
             dst_factor: wgpu::BlendFactor::One,
             operation: wgpu::BlendOperation::Add,
         };
+        let constants = [methods.debug_views_constant()];
         let states: std::collections::BTreeSet<RasterState> = scene.transparent_draw_commands.iter().map(|c| c.state).collect();
         let pipelines = states
             .into_iter()
@@ -89,7 +90,7 @@ impl TransparentShade {
                     fragment: Some(wgpu::FragmentState {
                         module: &module,
                         entry_point: Some("transparent_shade"),
-                        compilation_options: Default::default(),
+                        compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
                         targets: &[Some(wgpu::ColorTargetState {
                             format: HDR_FORMAT,
                             blend: Some(wgpu::BlendState { color: over, alpha: keep }),

@@ -45,7 +45,7 @@ impl VisbufferShade {
         );
         let layouts = [&scene.bind_group_layout, &layout, &lights.bind_group_layout, &decals.bind_group_layout];
         let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
-        let constants = [("SUN_SHADOW_MASK", has_mask)];
+        let constants = [("SUN_SHADOW_MASK", has_mask), methods.debug_views_constant()];
         let pipeline = bindings::compute_pipeline_with_constants(device, "visbuffer_shade", &shader(methods), &layouts, &constants)?;
         let bind_group = bindings::bind_group(
             device,

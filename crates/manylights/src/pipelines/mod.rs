@@ -301,4 +301,14 @@ pub struct ShadingMethods {
     /// The device has subgroup operations: passes may walk BVHs a subgroup at a time
     /// (`accel/volume_query_subgroup.wgsl`), where that is faster (`passes::query_walks`).
     pub subgroups: bool,
+    /// A debug view is shown: the shading core counts its work (`DEBUG_VIEWS` in
+    /// `shading/debug_view.wgsl`, a pipeline constant, `ShadingMethods::pipeline_constants`).
+    pub debug_views: bool,
+}
+
+impl ShadingMethods {
+    /// The shading core's pipeline constant for its debug views' counters.
+    pub fn debug_views_constant(&self) -> (&'static str, f64) {
+        ("DEBUG_VIEWS", f64::from(u8::from(self.debug_views)))
+    }
 }

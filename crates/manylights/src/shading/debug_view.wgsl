@@ -18,6 +18,10 @@ const DEBUG_VIEW_PARTICLE_LIGHT: u32 = 4u;
 // dimmed.
 const DEBUG_VIEW_PARTICLE_GRID_SLICE: u32 = 5u;
 
+// Whether this pipeline shows a debug view (`ShadingMethods::debug_views`): otherwise the counters are
+// compiled out, which took 5 % off fragment shading on the H100 (BENCHMARKS.md, "Debug counters").
+override DEBUG_VIEWS: bool = false;
+
 var<private> debug_lights_reaching: u32;
 var<private> debug_light_work: u32;
 var<private> debug_decals_covering: u32;

@@ -11,3 +11,4 @@
 // its entries, and the entries as (instance, decal) pairs. One-element placeholders for other methods.
 @group(3) @binding(4) var<storage, read> decal_cluster_ranges: array<vec2<u32>>;
 @group(3) @binding(5) var<storage, read> decal_cluster_entries: array<vec2<u32>>;
+@group(3) @binding(6) var<uniform> decal_first_instance: FirstInstance;

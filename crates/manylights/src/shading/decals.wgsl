@@ -38,22 +38,44 @@ fn decal_blend_begin() {
     debug_decals_covering = 0u;
 }
 
-// Adds one decal if the point (`local`, in the decal's group space) is inside its box. `s` is the
-// surface before any decal.
-fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, s: ShadingInput, dp: PositionGradients) {
+// The shading point as the decals of one group see it: its normal and position gradients in the
+// group's space, where the decals' boxes are (`decal_world_surface`: the same in the world). Instances are rigid with a uniform scale, so the normal
+// keeps unit length once the scale is multiplied back.
+struct DecalSurface {
+    normal: vec3<f32>,
+    ddx: vec3<f32>,
+    ddy: vec3<f32>,
+}
+
+fn decal_world_surface(s: ShadingInput, dp: PositionGradients) -> DecalSurface {
+    return DecalSurface(s.normal, dp.ddx, dp.ddy);
+}
+
+fn decal_surface_in_group(world: DecalSurface, instance: VolumeInstance) -> DecalSurface {
+    return DecalSurface(
+        instance_vector_to_group(instance, world.normal) * instance.scale,
+        instance_vector_to_group(instance, world.ddx),
+        instance_vector_to_group(instance, world.ddy),
+    );
+}
+
+// Adds one decal if the point (`local`, in the decal's group space) is inside its box. `surface` is
+// the surface before any decal, in the same group's space (`decal_surface_in_group`).
+fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, surface: DecalSurface) {
     let p = vec4<f32>(local, 1.0) * decal.decal_from_group;
     if any(abs(p) > vec3<f32>(0.5)) {
         return;
     }
     // The rows of decal_from_group are the gradients of the decal coordinates: along the box's axes.
-    let axis_z = normalize(instance_direction_to_world(instance, decal.decal_from_group[2].xyz));
-    let facing = dot(s.normal, axis_z);
-    if facing <= 0.0 {
+    let axis_z = decal.decal_from_group[2].xyz;
+    let facing_length = dot(surface.normal, axis_z);
+    if facing_length <= 0.0 {
         return;
     }
+    let facing = facing_length * inverseSqrt(dot(axis_z, axis_z));
     let to_decal = mat3x3<f32>(decal.decal_from_group[0].xyz, decal.decal_from_group[1].xyz, decal.decal_from_group[2].xyz);
-    let ddx = instance_vector_to_group(instance, dp.ddx) * to_decal;
-    let ddy = instance_vector_to_group(instance, dp.ddy) * to_decal;
+    let ddx = surface.ddx * to_decal;
+    let ddy = surface.ddy * to_decal;
     // u along +x, v down along -y: the image as seen from the projector.
     let g = UvGradients(vec2<f32>(p.x + 0.5, 0.5 - p.y), vec2<f32>(ddx.x, -ddx.y), vec2<f32>(ddy.x, -ddy.y));
 
@@ -63,7 +85,9 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, s:
     if alpha <= 0.0 {
         return;
     }
-    debug_decals_covering += 1u;
+    if DEBUG_VIEWS {
+        debug_decals_covering += 1u;
+    }
     let aw = alpha * decal.weight;
     let roughness_metallic = material_roughness_metallic(material, g);
     let layer = min(decal.layer, DECAL_LAYERS - 1u);
@@ -78,15 +102,16 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, s:
     decal_layers[layer].transmittance *= 1.0 - alpha;
 
     if material.normal_layer != NO_TEXTURE {
-        // The decal's tangent frame on the surface: its x and y axes made orthogonal to the surface
-        // normal, so the normal map bends the surface's own normal.
-        let n = s.normal;
-        let axis_x = normalize(instance_direction_to_world(instance, decal.decal_from_group[0].xyz));
-        let axis_y = normalize(instance_direction_to_world(instance, decal.decal_from_group[1].xyz));
+        // The decal's tangent frame on the surface: its x axis made orthogonal to the surface normal,
+        // and the normal's cross product with that on the side of its y axis, so the normal map bends
+        // the surface's own normal; the result turned into the world. (The axis is not parallel to
+        // the normal: then the decal would face the surface edge-on, and have no alpha.)
+        let n = surface.normal;
+        let axis_x = decal.decal_from_group[0].xyz;
         let t = normalize(axis_x - n * dot(n, axis_x));
-        let b_raw = axis_y - n * dot(n, axis_y) - t * dot(t, axis_y);
-        let b = select(cross(n, t), normalize(b_raw), dot(b_raw, b_raw) > 1e-12);
-        let decal_normal = material_mapped_normal(material, g, n, t, b);
+        let n_cross_t = cross(n, t);
+        let b = select(n_cross_t, -n_cross_t, dot(n_cross_t, decal.decal_from_group[1].xyz) < 0.0);
+        let decal_normal = instance_direction_to_world(instance, material_mapped_normal(material, g, n, t, b));
         decal_layers[layer].normal += decal_normal * aw;
         decal_layers[layer].normal_alpha_weight += aw;
         decal_layers[layer].normal_transmittance *= 1.0 - alpha;

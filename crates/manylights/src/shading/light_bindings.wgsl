@@ -11,3 +11,4 @@
 // its entries, and the entries as (instance, light) pairs. One-element placeholders for other methods.
 @group(2) @binding(4) var<storage, read> light_cluster_ranges: array<vec2<u32>>;
 @group(2) @binding(5) var<storage, read> light_cluster_entries: array<vec2<u32>>;
+@group(2) @binding(6) var<uniform> light_first_instance: FirstInstance;

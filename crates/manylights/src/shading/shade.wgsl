@@ -24,6 +24,9 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
     radiance += shade_local_lights(s);
     let particles = shade_particle_lights(s);
     radiance += particles;
+    if !DEBUG_VIEWS {
+        return radiance;
+    }
     switch frame.debug_view.x {
         case DEBUG_VIEW_LIGHTS_REACHING: {
             return heat_map(debug_lights_reaching, frame.debug_view.y);

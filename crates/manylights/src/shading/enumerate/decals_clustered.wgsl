@@ -9,6 +9,7 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
     decal_blend_begin();
     var instance: VolumeInstance;
     var local = s.position;
+    var surface: DecalSurface;
     var entered = 0xffffffffu;
     let range = decal_cluster_ranges[cluster_of(s.position)];
     for (var i = range.x; i < range.x + range.y; i += 1u) {
@@ -17,8 +18,9 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
             entered = entry.x;
             instance = decal_instances[entry.x];
             local = instance_point_to_group(instance, s.position);
+            surface = decal_surface_in_group(decal_world_surface(s, dp), instance);
         }
-        decal_accumulate(decals[entry.y], instance, local, s, dp);
+        decal_accumulate(decals[entry.y], instance, local, surface);
     }
     return decal_blend_end(s);
 }

@@ -33,6 +33,8 @@ fn local_light_radiance(
     if !any(contribution > vec3<f32>(0.0)) {
         return vec3<f32>(0.0);
     }
-    debug_lights_reaching += 1u;
+    if DEBUG_VIEWS {
+        debug_lights_reaching += 1u;
+    }
     return contribution * falloff * light_visibility(light, instance, s, shadow_rays);
 }

@@ -12,8 +12,8 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
         let instance = light_instances[i];
         let local = shading_input_in_group(s, instance);
         let falloff = instance_light_falloff(instance);
+        debug_light_work += instance.item_count;
         for (var k = instance.first_item; k < instance.first_item + instance.item_count; k += 1u) {
-            debug_light_work += 1u;
             radiance += local_light_radiance(k, instance, s, local, falloff, &shadow_rays);
         }
     }
