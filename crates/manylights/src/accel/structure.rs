@@ -82,7 +82,7 @@ pub struct GpuVolumeInstance {
 
 /// Instance 0 and its group's entry-grid header (zero without one), in a uniform buffer: a query over
 /// a lone instance starts from them without two dependent storage loads before its first node, which
-/// the fragment stage waits for (BENCHMARKS.md, "The lone instance in a uniform"). Keep in sync with
+/// the fragment stage waits for (BENCHMARKS.md, "…, the lone instance in a uniform"). Keep in sync with
 /// `FirstInstance` in `accel/bvh_types.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]

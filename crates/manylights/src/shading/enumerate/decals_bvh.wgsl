@@ -8,7 +8,7 @@
 // The instance the query is in, and the surface in its group's space, set as the query enters it.
 // Where a whole subgroup walks together (fragments, `passes::query_walks`), the surface is turned into
 // the group's space for every decal instead: held through that walk it cost more than it saved
-// (BENCHMARKS.md, "Decals in their group's space").
+// (BENCHMARKS.md, "Debug counters, decals in their group's space, …").
 var<private> decal_instance: VolumeInstance;
 var<private> decal_world: DecalSurface;
 var<private> decal_surface: DecalSurface;
