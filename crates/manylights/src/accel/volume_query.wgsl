@@ -2,14 +2,15 @@
 // the top level's leaves are group instances; entering one moves the point into the group's space
 // and continues in the group's BVH. A template: `VOLUMES` is replaced by the structure's prefix,
 // naming its bindings `VOLUMES_nodes`, `VOLUMES_primitives`, `VOLUMES_instances` and
-// `VOLUMES_first_instance`, so lights and decals each get their own cursor. Enumeration modules include it through a walk module, which
-// decides how invocations walk together (`passes::volume_query_module`):
-// `accel/volume_query_invocation.wgsl`, each invocation alone, or `accel/volume_query_subgroup.wgsl`,
-// a whole subgroup together. A walk module defines `VOLUMES_walk_any(inside)`, whether to enter a node
-// whose box holds (`inside`) or not this invocation's point, `VOLUMES_walk_cells(start, stop)`, the
-// range of nodes to walk for this invocation's entry-grid cell, `VOLUMES_walk_covers()`, whether
-// a cell naming several subtrees has them walked one by one, or as one range from the first to the last,
-// and `VOLUMES_walk_shared()`, whether the subgroup walks as one (callers choose what to hold by it).
+// `VOLUMES_first_instance`, so lights and decals each get their own cursor. Enumeration modules
+// include it through a walk module, which decides how invocations walk together
+// (`passes::volume_query_module`): `accel/volume_query_invocation.wgsl`, each invocation alone, or
+// `accel/volume_query_subgroup.wgsl`, a whole subgroup together. A walk module defines
+// `VOLUMES_walk_any(inside)`, whether to enter a node whose box holds (`inside`) or not this
+// invocation's point, `VOLUMES_walk_cells(start, stop)`, the range of nodes to walk for this
+// invocation's entry-grid cell, `VOLUMES_walk_covers()`, whether a cell naming several subtrees has
+// them walked one by one, or as one range from the first to the last, and `VOLUMES_walk_shared()`,
+// whether the subgroup walks as one (callers choose by it what to hold through the walk).
 //
 // Inside a group the query starts where the group's entry grid says, if it has one (CPU-built groups,
 // laid out depth first, so every step of a walk moves to a higher node), and ends at or past the node
