@@ -169,6 +169,7 @@ impl Renderer {
             &scene.decal_groups,
             build(config.decal_method == DecalMethod::Bvh, config.decal_bvh_build),
             clusters(config.decal_method == DecalMethod::Clustered),
+            gpu_scene.decal_material_base,
         )?;
         let methods = ShadingMethods {
             lights: config.light_method,

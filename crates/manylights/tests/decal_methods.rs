@@ -185,7 +185,7 @@ fn decals_keep_their_layers_in_leaf_order_and_gpu_rebuilds_refuse_cpu_ordered_us
     let frame_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
     let grid = ClusterGrid::for_resolution(64, 36);
     let structure = |build, clustered: bool| {
-        VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, build, clustered.then_some((grid, &frame_layout)))
+        VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, build, clustered.then_some((grid, &frame_layout)), 0)
     };
     let message = structure(BvhBuild::GpuEveryFrame, true).err().expect("clustered lists over GPU rebuilds are an error").to_string();
     assert!(message.contains("clustered") && message.contains("once on the CPU"), "{message}");

@@ -256,3 +256,34 @@ fn textured_decals_sample_their_image_in_decal_space() {
 fn render_lit_ambient(scene: &Scene, camera: &Camera, method: DecalMethod) -> manylights::renderer::Image<[f32; 4]> {
     render_with(scene, camera, RenderConfig { decal_method: method, ..config(64, 36, LightMethod::Brute) }).1
 }
+
+/// Decal textures sit in arrays of their own size: a decal looks the same whether the scene's
+/// surfaces have small textures or large ones (sharing the surfaces' arrays, its image would be
+/// resampled to their layer size and filtered from that).
+#[test]
+fn decals_look_the_same_whatever_the_size_of_the_surfaces_textures() {
+    let (mut scene, camera) = ambient_wall();
+    // An 8×8 image of distinct texels, repeated (lavapipe samples clamped layers of large arrays slowly).
+    let rgba: Vec<u8> = (0..64u32).flat_map(|i| [(i * 37 % 256) as u8, (i * 91 % 256) as u8, (i * 13 % 256) as u8, 255]).collect();
+    scene.textures.push(Texture { name: "stamp".into(), width: 8, height: 8, rgba8: rgba });
+    let stamp = TextureRef { texture: 0, wrap_u: Wrap::Repeat, wrap_v: Wrap::Repeat };
+    scene.materials.push(Material {
+        base_color_factor: Vec4::ONE,
+        base_color_texture: Some(stamp),
+        metallic_factor: 0.0,
+        ..Default::default()
+    });
+    scene.decals = vec![decal(1, 0, 1.0)];
+    // The same wall with a 1024² white texture: its colour is unchanged, its arrays' layers are 1024².
+    let mut large = scene.clone();
+    large.textures.push(Texture { name: "white".into(), width: 1024, height: 1024, rgba8: vec![255; 1024 * 1024 * 4] });
+    large.materials[0].base_color_texture = Some(TextureRef { texture: 1, wrap_u: Wrap::Repeat, wrap_v: Wrap::Repeat });
+    for method in BLENDING_METHODS {
+        let config = RenderConfig { decal_method: method, max_texture_size: 1024, ..config(64, 36, LightMethod::Brute) };
+        let (small_image, large_image) = (render_with(&scene, &camera, config.clone()).1, render_with(&large, &camera, config).1);
+        let centre = pixel(&small_image, 32, 18);
+        assert!((Vec3::new(centre[0], centre[1], centre[2]) - WALL_COLOR).abs().max_element() > 0.05, "the decal is not visible");
+        let difference = max_abs_difference(&small_image, &large_image);
+        assert!(difference <= 1e-6, "{}: the decal changed by {difference} with the surfaces' textures", method.name());
+    }
+}

@@ -309,14 +309,17 @@ impl VolumeStructure {
     }
 
     /// The structure over a scene's decals; with clustered lists on `clusters`' grid when given.
+    /// Decals name their materials' records from `decal_material_base` on
+    /// (`GpuScene::decal_material_base`).
     pub fn for_decals(
         ctx: &GpuContext,
         decals: &[Decal],
         groups: &Groups,
         build: BvhBuild,
         clusters: Option<(ClusterGrid, &wgpu::BindGroupLayout)>,
+        decal_material_base: u32,
     ) -> Result<Self> {
-        let items: Vec<GpuDecal> = decals.iter().map(GpuDecal::from).collect();
+        let items: Vec<GpuDecal> = decals.iter().map(|d| GpuDecal::new(d, decal_material_base)).collect();
         let boxes: Vec<Aabb> = decals.iter().map(decal_aabb).collect();
         let clustering = clusters.map(|(grid, frame_layout)| Clustering {
             grid,

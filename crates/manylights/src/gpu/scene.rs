@@ -104,11 +104,12 @@ pub struct GpuDecal {
     pub _pad: u32,
 }
 
-impl From<&Decal> for GpuDecal {
-    fn from(d: &Decal) -> Self {
+impl GpuDecal {
+    /// The decal's record, naming its material's record for decals (`GpuScene::decal_material_base`).
+    pub fn new(d: &Decal, decal_material_base: u32) -> Self {
         Self {
             decal_from_group: affine_rows(&d.world_from_decal.inverse()),
-            material: d.material as u32,
+            material: decal_material_base + d.material as u32,
             layer: d.layer,
             weight: d.weight,
             _pad: 0,
@@ -176,6 +177,9 @@ pub struct GpuScene {
     pub transparent_draw_commands: Vec<DrawCommand>,
     pub constants: SceneConstants,
     pub triangle_count: u64,
+    /// The record of scene material m as decals use it is `decal_material_base + m` (its textures
+    /// in the decals' arrays); m's own record serves surfaces.
+    pub decal_material_base: u32,
     /// The scene's indices, also bound as storage: the raster pass draws indexed from it.
     pub index_buffer: wgpu::Buffer,
     /// The draws as uploaded, and the first draw of each scene instance (its primitives' draws
@@ -239,12 +243,23 @@ impl GpuScene {
         scene.validate()?;
         let device = &ctx.device;
 
-        let (srgb_used, linear_used) = texture_usage(&scene.materials);
-        let color_textures = TextureArray::upload(device, &ctx.queue, &scene.textures, &srgb_used, TextureSpace::Srgb, max_texture_size)?;
-        let data_textures =
-            TextureArray::upload(device, &ctx.queue, &scene.textures, &linear_used, TextureSpace::Linear, max_texture_size)?;
-
-        let materials: Vec<GpuMaterial> = scene.materials.iter().map(|m| gpu_material(m, &color_textures, &data_textures)).collect();
+        // Surfaces' and decals' textures go into separate arrays, each at the size of its own largest
+        // image: decal stamps are small, and sampled at the scene's texture size they took 18 % longer
+        // to apply (BENCHMARKS.md, "Decal textures at their own size"). Every material has a record
+        // for each use, the decals' after the surfaces' ([`GpuScene::decal_material_base`]).
+        let texture_arrays = |materials: &[&Material]| -> Result<(TextureArray, TextureArray)> {
+            let (srgb_used, linear_used) = texture_usage(materials);
+            let upload = |used: &[usize], space| TextureArray::upload(device, &ctx.queue, &scene.textures, used, space, max_texture_size);
+            Ok((upload(&srgb_used, TextureSpace::Srgb)?, upload(&linear_used, TextureSpace::Linear)?))
+        };
+        let surface_materials: BTreeSet<usize> = scene.meshes.iter().flat_map(|m| m.primitives.iter().map(|p| p.material)).collect();
+        let decal_materials: BTreeSet<usize> = scene.decals.iter().map(|d| d.material).collect();
+        let used_by = |set: &BTreeSet<usize>| set.iter().map(|&m| &scene.materials[m]).collect::<Vec<_>>();
+        let (color_textures, data_textures) = texture_arrays(&used_by(&surface_materials))?;
+        let (decal_color_textures, decal_data_textures) = texture_arrays(&used_by(&decal_materials))?;
+        let materials: Vec<GpuMaterial> = (scene.materials.iter().map(|m| gpu_material(m, &color_textures, &data_textures)))
+            .chain(scene.materials.iter().map(|m| gpu_material(m, &decal_color_textures, &decal_data_textures)))
+            .collect();
 
         // Concatenate every primitive's vertices and indices; record where each starts.
         let mut vertices = Vec::new();
@@ -395,6 +410,7 @@ impl GpuScene {
             .chain(particle_views.iter().map(wgpu::BindingResource::TextureView))
             .chain([wgpu::BindingResource::Sampler(&particle_sampler)])
             .chain([&ray_node_buffer, &ray_triangle_buffer, &ray_instance_buffer].map(|b| b.as_entire_binding()))
+            .chain([&decal_color_textures, &decal_data_textures].map(|t| wgpu::BindingResource::TextureView(&t.view)))
             .collect(),
         );
         ctx.check_errors()?;
@@ -407,6 +423,7 @@ impl GpuScene {
             transparent_draw_commands,
             constants: SceneConstants { sun: scene.sun, ambient: scene.ambient, exposure: scene.exposure, bounds: scene.bounds() },
             triangle_count: scene.drawn_triangle_count() as u64,
+            decal_material_base: scene.materials.len() as u32,
             index_buffer,
             draws,
             instance_first_draw,
@@ -493,6 +510,8 @@ impl GpuScene {
         entries.push(bindings::storage_read(19, all)); // ray hierarchy nodes
         entries.push(bindings::storage_read(20, all)); // ray triangles
         entries.push(bindings::storage_read(21, all)); // ray instances
+        entries.push(bindings::texture(22, all, float_array, wgpu::TextureViewDimension::D2Array)); // decal colour textures
+        entries.push(bindings::texture(23, all, float_array, wgpu::TextureViewDimension::D2Array)); // decal data textures
         bindings::layout(device, "scene", &entries)
     }
 
@@ -545,7 +564,7 @@ fn primitive_center(primitive: &crate::scene::Primitive) -> glam::Vec3 {
 }
 
 /// Scene textures used as colour (sRGB) and as data (linear); a texture used both ways is in both.
-fn texture_usage(materials: &[Material]) -> (Vec<usize>, Vec<usize>) {
+fn texture_usage(materials: &[&Material]) -> (Vec<usize>, Vec<usize>) {
     let mut srgb = BTreeSet::new();
     let mut linear = BTreeSet::new();
     for m in materials {
@@ -564,8 +583,10 @@ fn wrap_bits(t: Option<TextureRef>) -> u32 {
     t.map_or(0, |t| (code(t.wrap_v) << 2) | code(t.wrap_u))
 }
 
+/// A material's record with its textures' layers in `color` and `data`; textures not there (the
+/// material has no use that uploaded them) are NO_TEXTURE.
 fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuMaterial {
-    let layer = |t: Option<TextureRef>, array: &TextureArray| t.map_or(NO_TEXTURE, |t| array.layers[&t.texture]);
+    let layer = |t: Option<TextureRef>, array: &TextureArray| t.and_then(|t| array.layers.get(&t.texture).copied()).unwrap_or(NO_TEXTURE);
     let alpha_cutoff = match m.alpha_mode {
         AlphaMode::Mask { cutoff } => cutoff,
         AlphaMode::Opaque | AlphaMode::Blend => 0.0,

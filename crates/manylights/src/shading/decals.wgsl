@@ -79,8 +79,9 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, su
     // u along +x, v down along -y: the image as seen from the projector.
     let g = UvGradients(vec2<f32>(p.x + 0.5, 0.5 - p.y), vec2<f32>(ddx.x, -ddx.y), vec2<f32>(ddy.x, -ddy.y));
 
+    // The material's record for decals: its textures are in the decal arrays.
     let material = materials[decal.material];
-    let color = material_base_color(material, g);
+    let color = material_base_color(decal_color_textures, material, g);
     let alpha = saturate(color.a) * smoothstep(0.0, DECAL_FULL_FACING, facing);
     if alpha <= 0.0 {
         return;
@@ -89,7 +90,7 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, su
         debug_decals_covering += 1u;
     }
     let aw = alpha * decal.weight;
-    let roughness_metallic = material_roughness_metallic(material, g);
+    let roughness_metallic = material_roughness_metallic(decal_data_textures, material, g);
     let layer = min(decal.layer, DECAL_LAYERS - 1u);
     if (decal_layers_touched & (1u << layer)) == 0u {
         decal_layers_touched |= 1u << layer;
@@ -111,7 +112,7 @@ fn decal_accumulate(decal: Decal, instance: VolumeInstance, local: vec3<f32>, su
         let t = normalize(axis_x - n * dot(n, axis_x));
         let n_cross_t = cross(n, t);
         let b = select(n_cross_t, -n_cross_t, dot(n_cross_t, decal.decal_from_group[1].xyz) < 0.0);
-        let decal_normal = instance_direction_to_world(instance, material_mapped_normal(material, g, n, t, b));
+        let decal_normal = instance_direction_to_world(instance, material_mapped_normal(decal_data_textures, material, g, n, t, b));
         decal_layers[layer].normal += decal_normal * aw;
         decal_layers[layer].normal_alpha_weight += aw;
         decal_layers[layer].normal_transmittance *= 1.0 - alpha;

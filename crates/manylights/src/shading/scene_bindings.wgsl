@@ -33,3 +33,7 @@
 @group(0) @binding(19) var<storage, read> ray_nodes: array<BvhNode>;
 @group(0) @binding(20) var<storage, read> ray_triangles: array<RayTriangle>;
 @group(0) @binding(21) var<storage, read> ray_instances: array<RayInstance>;
+// Decal materials' textures (`shading/decals.wgsl`), in arrays of their own size: decal materials'
+// records (`GpuScene::decal_material_base`) name layers here.
+@group(0) @binding(22) var decal_color_textures: texture_2d_array<f32>;
+@group(0) @binding(23) var decal_data_textures: texture_2d_array<f32>;
