@@ -244,7 +244,7 @@ impl GpuScene {
         let device = &ctx.device;
 
         // Surfaces' and decals' textures go into separate arrays, each at the size of its own largest
-        // image: decal stamps are small, and sampled at the scene's texture size they took 18 % longer
+        // image: decal stamps are small, and sampled at the scene's texture size they took 19 % longer
         // to apply (BENCHMARKS.md, "Decal textures at their own size"). Every material has a record
         // for each use, the decals' after the surfaces' ([`GpuScene::decal_material_base`]).
         let texture_arrays = |materials: &[&Material]| -> Result<(TextureArray, TextureArray)> {
