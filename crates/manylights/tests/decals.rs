@@ -236,21 +236,26 @@ fn textured_decals_sample_their_image_in_decal_space() {
             rgba.extend_from_slice(if x < 4 { &[255, 0, 0, 255] } else { &[0, 255, 0, 255] });
         }
     }
-    scene.textures.push(Texture { name: "halves".into(), width: 8, height: 8, rgba8: rgba });
-    let texture = TextureRef { texture: 0, wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::ClampToEdge };
-    scene.materials.push(Material {
-        base_color_factor: Vec4::ONE,
-        base_color_texture: Some(texture),
-        metallic_factor: 0.0,
-        ..Default::default()
-    });
-    scene.decals = vec![decal(1, 0, 1.0)];
+    image_decal(&mut scene, rgba, Wrap::ClampToEdge);
     for method in BLENDING_METHODS {
         let hdr = render_lit_ambient(&scene, &camera, method);
         let (left, right) = (pixel(&hdr, 28, 18), pixel(&hdr, 36, 18));
         assert!(left[0] > 0.9 && left[1] < 0.05, "{}: left of the decal should be red, got {left:?}", method.name());
         assert!(right[1] > 0.9 && right[0] < 0.05, "{}: right of the decal should be green, got {right:?}", method.name());
     }
+}
+
+/// An 8×8 image as the only decal over the wall's centre: its material's base colour, wrapped by `wrap`.
+fn image_decal(scene: &mut Scene, rgba8: Vec<u8>, wrap: Wrap) {
+    scene.textures.push(Texture { name: "decal".into(), width: 8, height: 8, rgba8 });
+    let texture = TextureRef { texture: scene.textures.len() - 1, wrap_u: wrap, wrap_v: wrap };
+    scene.materials.push(Material {
+        base_color_factor: Vec4::ONE,
+        base_color_texture: Some(texture),
+        metallic_factor: 0.0,
+        ..Default::default()
+    });
+    scene.decals = vec![decal(scene.materials.len() - 1, 0, 1.0)];
 }
 
 fn render_lit_ambient(scene: &Scene, camera: &Camera, method: DecalMethod) -> manylights::renderer::Image<[f32; 4]> {
@@ -265,15 +270,7 @@ fn decals_look_the_same_whatever_the_size_of_the_surfaces_textures() {
     let (mut scene, camera) = ambient_wall();
     // An 8×8 image of distinct texels, repeated (lavapipe samples clamped layers of large arrays slowly).
     let rgba: Vec<u8> = (0..64u32).flat_map(|i| [(i * 37 % 256) as u8, (i * 91 % 256) as u8, (i * 13 % 256) as u8, 255]).collect();
-    scene.textures.push(Texture { name: "stamp".into(), width: 8, height: 8, rgba8: rgba });
-    let stamp = TextureRef { texture: 0, wrap_u: Wrap::Repeat, wrap_v: Wrap::Repeat };
-    scene.materials.push(Material {
-        base_color_factor: Vec4::ONE,
-        base_color_texture: Some(stamp),
-        metallic_factor: 0.0,
-        ..Default::default()
-    });
-    scene.decals = vec![decal(1, 0, 1.0)];
+    image_decal(&mut scene, rgba, Wrap::Repeat);
     // The same wall with a 1024² white texture: its colour is unchanged, its arrays' layers are 1024².
     let mut large = scene.clone();
     large.textures.push(Texture { name: "white".into(), width: 1024, height: 1024, rgba8: vec![255; 1024 * 1024 * 4] });

@@ -302,7 +302,7 @@ pub struct ShadingMethods {
     /// (`accel/volume_query_subgroup.wgsl`), where that is faster (`passes::query_walks`).
     pub subgroups: bool,
     /// A debug view is shown: the shading core counts its work (`DEBUG_VIEWS` in
-    /// `shading/debug_view.wgsl`, a pipeline constant, `ShadingMethods::pipeline_constants`).
+    /// `shading/debug_view.wgsl`, a pipeline constant: `ShadingMethods::debug_views_constant`).
     pub debug_views: bool,
 }
 

@@ -28,7 +28,7 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
         for (var k = leaf.x; k < leaf.y; k += 1u) {
             var surface = decal_surface;
             if decal_walk_shared() {
-                surface = decal_surface_in_group(decal_world_surface(s, dp), decal_instance);
+                surface = decal_surface_in_group(decal_world, decal_instance);
             }
             decal_accumulate(decals[k], decal_instance, decal_query_point, surface);
         }
