@@ -20,11 +20,14 @@ use super::{Aabb, Bvh, END};
 
 /// Groups with fewer primitives are queried from the root: their trees are a few levels deep.
 pub const MIN_PRIMITIVES: usize = 16;
-/// Cells per primitive the grids aim at, and the most a structure's grids hold together (16 MiB of
-/// cells). Finer cells start more queries at a leaf or end them at once: 28k small lights shade in
-/// 0.244, 0.228, 0.213, 0.200, 0.195 and 0.188 ms with 2, 4, 8, 16, 32 and 64 cells per light on the
-/// H100, while ≈ 1 m decals, which overlap every cell anyway, shade alike (BENCHMARKS.md).
-const CELLS_PER_PRIMITIVE: f64 = 32.0;
+/// Cells per primitive the grids aim at, the fewest a structure's grids get, and the most they hold
+/// together (16 MiB of cells). Finer cells start more queries at a leaf or end them at once: 28k small
+/// lights shade in 0.244, 0.228, 0.213, 0.200, 0.195 and 0.188 ms with 2, 4, 8, 16, 32 and 64 cells
+/// per light on the H100, while ≈ 1 m decals, which overlap every cell anyway, shade alike. A few
+/// sparse volumes get far more cells each: at 32 per decal, 100 small decals left cells about a
+/// metre wide, and a quarter of the fragments walked a subtree to find nothing (BENCHMARKS.md).
+const CELLS_PER_PRIMITIVE: f64 = 64.0;
+const MIN_CELLS: f64 = (1 << 18) as f64;
 const MAX_CELLS: f64 = (1 << 21) as f64;
 
 /// Most words of covers a structure's grids hold together (32 MiB). 100k ≈ 1 m decals over Sponza
@@ -41,12 +44,13 @@ pub struct GridBudget {
 
 impl GridBudget {
     /// For a structure whose CPU-built groups hold `primitives` in all: [`CELLS_PER_PRIMITIVE`] cells
-    /// each, fewer where the grids would exceed [`MAX_CELLS`] together (a million volumes get two
-    /// each, however they are grouped), and an equal share of the cover words.
+    /// each, more where the grids would hold fewer than [`MIN_CELLS`] together, fewer where they
+    /// would exceed [`MAX_CELLS`] (a million volumes get two each, however they are grouped), and an
+    /// equal share of the cover words.
     pub fn for_structure(primitives: usize) -> Self {
         let primitives = primitives.max(1) as f64;
         GridBudget {
-            cells_per_primitive: (MAX_CELLS / primitives).min(CELLS_PER_PRIMITIVE),
+            cells_per_primitive: (primitives * CELLS_PER_PRIMITIVE).clamp(MIN_CELLS, MAX_CELLS) / primitives,
             cover_words_per_primitive: MAX_COVER_WORDS / primitives,
         }
     }
@@ -306,9 +310,10 @@ mod tests {
                 let boxes = random_boxes(&mut rng, size);
                 let bvh = Bvh::build(&boxes).unwrap();
                 // With room for covers, and (the smaller sets) with none: each cell its lowest common
-                // ancestor.
-                let budgets =
-                    [GridBudget::for_structure(size), GridBudget { cover_words_per_primitive: 0.0, ..GridBudget::for_structure(size) }];
+                // ancestor. Cells at the rate per box, not the floor small sets get: finer cells of
+                // the same lookup, which would make this test four times slower.
+                let budget = GridBudget { cells_per_primitive: CELLS_PER_PRIMITIVE, ..GridBudget::for_structure(size) };
+                let budgets = [budget, GridBudget { cover_words_per_primitive: 0.0, ..budget }];
                 for &budget in &budgets[..if size <= 1000 { 2 } else { 1 }] {
                     let Some(grid) = EntryGrid::build(&bvh, &boxes, budget) else {
                         // Only non-finite bounds (boxes spanning ±1e30 along an axis overflow the extent) go without.
@@ -423,7 +428,9 @@ mod tests {
     fn a_structures_grids_share_a_budget_of_cells_and_covers() {
         assert_eq!(GridBudget::for_structure(28_000).cells_per_primitive, CELLS_PER_PRIMITIVE);
         assert_eq!(GridBudget::for_structure(1 << 20).cells_per_primitive, 2.0);
-        assert_eq!(GridBudget::for_structure(0).cells_per_primitive, CELLS_PER_PRIMITIVE);
+        // A few sparse volumes share the fewest cells a structure gets.
+        assert_eq!(GridBudget::for_structure(100).cells_per_primitive * 100.0, MIN_CELLS);
+        assert_eq!(GridBudget::for_structure(0).cells_per_primitive, MIN_CELLS);
         // 2,000 groups of 500 volumes: each grid's share, not each grid's own cap.
         let million = GridBudget::for_structure(1_000_000);
         assert!(million.cells_per_primitive * 1_000_000.0 <= MAX_CELLS);
