@@ -113,6 +113,37 @@ fn forward_methods_equal_brute_force() {
 const DEFERRED_DECALS_MEAN_TOLERANCE: f32 = 0.0004;
 const DEFERRED_DECALS_P995_TOLERANCE: f32 = 0.015;
 
+/// Shaders with decals are compiled to SPIR-V by manylights on Vulkan, without zeroing the decal
+/// layers' sums (`gpu/spirv.rs`); wgpu compiles them elsewhere. Both give the same image in every
+/// pipeline, with every decal method.
+#[test]
+fn decals_from_our_spirv_equal_decals_from_wgpus() {
+    let size = (64, 36);
+    let scene = scene_with(50, 400, 5);
+    let ctx = manylights::gpu::GpuContext::new().expect("a GPU adapter");
+    assert!(
+        ctx.features.contains(wgpu::Features::PASSTHROUGH_SHADERS),
+        "{} takes no passthrough shaders: our SPIR-V goes untested",
+        ctx.describe()
+    );
+    let mut cases = Vec::new();
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+        for decals in [DecalMethod::Bvh, DecalMethod::Clustered, DecalMethod::Brute] {
+            cases.push(configured(pipeline, LightMethod::Bvh, decals, size));
+        }
+    }
+    cases.push(configured(PipelineKind::Deferred, LightMethod::Bvh, DecalMethod::DeferredDecals, size));
+    for config in cases {
+        let label = format!("{:?} with {:?} decals", config.pipeline, config.decal_method);
+        let plain = render(&scene, RenderConfig { decal_method: DecalMethod::Off, ..config.clone() });
+        let ours = render(&scene, config.clone());
+        let wgpus = manylights::gpu::GpuContext::without(wgpu::Features::PASSTHROUGH_SHADERS).unwrap();
+        let wgpus = render_on(wgpus, &scene, &scene.cameras[0], config).1;
+        assert!(max_abs_difference(&ours, &plain) > 0.01, "{label}: no decal in view");
+        assert_eq!(max_abs_difference(&ours, &wgpus), 0.0, "{label}: our SPIR-V and wgpu's differ");
+    }
+}
+
 #[test]
 fn deferred_decals_match_the_shading_cores_decals_where_both_apply() {
     let size = (128, 72);

@@ -129,7 +129,7 @@ pub fn compute_pipeline_with_constants(
     bind_group_layouts: &[&wgpu::BindGroupLayout],
     constants: &[(&str, f64)],
 ) -> Result<wgpu::ComputePipeline> {
-    let module = shaders::create_module(device, shader)?;
+    let module = shaders::create_stage_module(device, shader, naga::ShaderStage::Compute, entry, constants)?;
     Ok(device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(entry),
         layout: Some(&pipeline_layout(device, entry, bind_group_layouts)),

@@ -20,7 +20,9 @@ const REQUIRED_STORAGE_BUFFERS: u32 = 19;
 const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::PRIMITIVE_INDEX)
     .union(wgpu::Features::FLOAT32_BLENDABLE)
-    .union(wgpu::Features::SUBGROUP);
+    .union(wgpu::Features::SUBGROUP)
+    // Our SPIR-V for shaders whose privates need no zeroing (`gpu/spirv.rs`).
+    .union(wgpu::Features::PASSTHROUGH_SHADERS);
 
 /// Clones share the device: several renderers (a benchmark's configurations) can use one.
 #[derive(Clone)]

@@ -1,5 +1,5 @@
 //! GPU plumbing: device context, the uploaded scene, per-frame uniforms, timestamps, readback and
-//! shader composition. Passes build on these; nothing here knows about a particular pipeline.
+//! shader composition (and, for a few shaders, their SPIR-V). Passes build on these; nothing here knows about a particular pipeline.
 
 pub mod bindings;
 pub mod context;
@@ -7,6 +7,7 @@ pub mod frame;
 pub mod readback;
 pub mod scene;
 pub mod shaders;
+pub mod spirv;
 pub mod textures;
 pub mod timestamps;
 

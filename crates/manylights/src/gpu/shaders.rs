@@ -235,6 +235,23 @@ pub fn create_module(device: &wgpu::Device, desc: &ShaderDesc) -> crate::Result<
         .create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(desc.entry), source: wgpu::ShaderSource::Wgsl(source.into()) }))
 }
 
+/// The module for one stage's entry point with its override `constants`: ours where
+/// [`spirv::create_module`] compiles it (shaders with privates that need no zeroing, on Vulkan),
+/// otherwise [`create_module`]'s, whose pipelines set the constants themselves.
+pub fn create_stage_module(
+    device: &wgpu::Device,
+    desc: &ShaderDesc,
+    stage: naga::ShaderStage,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> crate::Result<wgpu::ShaderModule> {
+    let source = desc.compose().map_err(crate::Error::Gpu)?;
+    match super::spirv::create_module(device, desc.entry, &source, stage, entry, constants)? {
+        Some(module) => Ok(module),
+        None => create_module(device, desc),
+    }
+}
+
 /// Every shader the renderer builds, with every substitution it uses: the naga test validates each.
 pub fn all_shaders() -> Vec<ShaderDesc> {
     let mut shaders = vec![

@@ -33,7 +33,9 @@ impl DeferredDecals {
         surface_normals: &wgpu::TextureView,
     ) -> Result<Self> {
         let device = &ctx.device;
-        let module = shaders::create_module(device, &ShaderDesc::new("passes/deferred_decals.wgsl"))?;
+        let desc = ShaderDesc::new("passes/deferred_decals.wgsl");
+        let module = shaders::create_module(device, &desc)?;
+        let fragment_module = shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, "deferred_decal_fragment", &[])?;
         let fragment = wgpu::ShaderStages::FRAGMENT;
         let vertex = wgpu::ShaderStages::VERTEX;
         // Keep in sync with group 1 of `deferred_decals.wgsl`.
@@ -92,7 +94,7 @@ impl DeferredDecals {
                 }),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
-                    module: &module,
+                    module: &fragment_module,
                     entry_point: Some("deferred_decal_fragment"),
                     compilation_options: Default::default(),
                     targets: &targets,

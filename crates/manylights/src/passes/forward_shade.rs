@@ -37,7 +37,8 @@ impl ForwardShade {
         shadows: Option<&RayShadows>,
     ) -> Result<Self> {
         let device = &ctx.device;
-        let module = shaders::create_module(device, &shader(methods))?;
+        let desc = shader(methods);
+        let module = shaders::create_module(device, &desc)?;
         let group = bindings::layout(device, "forward_shade", &[ray_shadows::shading_mask_entry(0, wgpu::ShaderStages::FRAGMENT)]);
         let layout = bindings::pipeline_layout(
             device,
@@ -54,8 +55,9 @@ impl ForwardShade {
             stencil: Default::default(),
             bias: Default::default(),
         };
-        let pipeline = |label, vertex_entry, fragment_entry, primitive| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        let pipeline = |label, vertex_entry, fragment_entry, primitive| -> Result<wgpu::RenderPipeline> {
+            let fragment_module = shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, fragment_entry, &constants)?;
+            Ok(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&layout),
                 vertex: wgpu::VertexState {
@@ -68,22 +70,22 @@ impl ForwardShade {
                 depth_stencil: Some(depth_equal.clone()),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
-                    module: &module,
+                    module: &fragment_module,
                     entry_point: Some(fragment_entry),
                     compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
                     targets: &[Some(HDR_FORMAT.into())],
                 }),
                 multiview_mask: None,
                 cache: None,
-            })
+            }))
         };
         let pipelines = RasterState::all()
             .map(|state| {
                 let fragment = if state.alpha_mask { "forward_masked" } else { "forward_opaque" };
-                (state, pipeline("forward_shade", "forward_vertex", fragment, state.primitive()))
+                Ok((state, pipeline("forward_shade", "forward_vertex", fragment, state.primitive())?))
             })
-            .collect();
-        let sky = pipeline("forward_sky", "forward_sky_vertex", "forward_sky", wgpu::PrimitiveState::default());
+            .collect::<Result<_>>()?;
+        let sky = pipeline("forward_sky", "forward_sky_vertex", "forward_sky", wgpu::PrimitiveState::default())?;
         let bind_group = bindings::bind_group(device, "forward_shade", &group, vec![wgpu::BindingResource::TextureView(&mask)]);
         Ok(Self { pipelines, sky, bind_group })
     }

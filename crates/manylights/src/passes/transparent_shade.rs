@@ -44,7 +44,8 @@ impl TransparentShade {
             )));
         }
         let device = &ctx.device;
-        let module = shaders::create_module(device, &shader(methods))?;
+        let desc = shader(methods);
+        let module = shaders::create_module(device, &desc)?;
         let empty = bindings::layout(device, "transparent_shade (unused)", &[]);
         let layout = bindings::pipeline_layout(
             device,
@@ -63,6 +64,7 @@ impl TransparentShade {
             operation: wgpu::BlendOperation::Add,
         };
         let constants = [methods.debug_views_constant()];
+        let fragment_module = shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, "transparent_shade", &constants)?;
         let states: std::collections::BTreeSet<RasterState> = scene.transparent_draw_commands.iter().map(|c| c.state).collect();
         let pipelines = states
             .into_iter()
@@ -88,7 +90,7 @@ impl TransparentShade {
                     }),
                     multisample: Default::default(),
                     fragment: Some(wgpu::FragmentState {
-                        module: &module,
+                        module: &fragment_module,
                         entry_point: Some("transparent_shade"),
                         compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
                         targets: &[Some(wgpu::ColorTargetState {
