@@ -8,6 +8,7 @@ use common::*;
 use manylights::{
     config::RenderConfig,
     pipelines::{DecalMethod, LightMethod, PipelineKind},
+    rays::RaySettings,
     renderer::Image,
     scene::{demo::demo_scene, generators, generators::ScatterDecals, generators::ScatterLights, Scene},
 };
@@ -113,11 +114,12 @@ fn forward_methods_equal_brute_force() {
 const DEFERRED_DECALS_MEAN_TOLERANCE: f32 = 0.0004;
 const DEFERRED_DECALS_P995_TOLERANCE: f32 = 0.015;
 
-/// Shaders with decals are compiled to SPIR-V by manylights on Vulkan, without zeroing the decal
-/// layers' sums (`gpu/spirv.rs`); wgpu compiles them elsewhere. Both give the same image in every
-/// pipeline, with every decal method.
+/// Shaders with decals or reflections are compiled to SPIR-V by manylights on Vulkan, without
+/// zeroing the decal layers' sums or the closest-hit stack (`gpu/spirv.rs`); wgpu compiles them
+/// elsewhere. Both give the same image in every pipeline, with every decal method, and with
+/// reflections of every surface.
 #[test]
-fn decals_from_our_spirv_equal_decals_from_wgpus() {
+fn images_from_our_spirv_equal_images_from_wgpus() {
     let size = (64, 36);
     let scene = scene_with(50, 400, 5);
     let ctx = manylights::gpu::GpuContext::new().expect("a GPU adapter");
@@ -126,20 +128,30 @@ fn decals_from_our_spirv_equal_decals_from_wgpus() {
         "{} takes no passthrough shaders: our SPIR-V goes untested",
         ctx.describe()
     );
+    let reflecting = |config: RenderConfig| RenderConfig {
+        rays: RaySettings { reflection_bounces: 2, reflection_roughness: 1.0, ..Default::default() },
+        ..config
+    };
+    // (configuration, one without the effect under test, which must look different)
     let mut cases = Vec::new();
     for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
         for decals in [DecalMethod::Bvh, DecalMethod::Clustered, DecalMethod::Brute] {
-            cases.push(configured(pipeline, LightMethod::Bvh, decals, size));
+            let config = configured(pipeline, LightMethod::Bvh, decals, size);
+            cases.push((config.clone(), RenderConfig { decal_method: DecalMethod::Off, ..config.clone() }));
+            if decals == DecalMethod::Bvh {
+                cases.push((reflecting(config.clone()), config));
+            }
         }
     }
-    cases.push(configured(PipelineKind::Deferred, LightMethod::Bvh, DecalMethod::DeferredDecals, size));
-    for config in cases {
-        let label = format!("{:?} with {:?} decals", config.pipeline, config.decal_method);
-        let plain = render(&scene, RenderConfig { decal_method: DecalMethod::Off, ..config.clone() });
+    let config = configured(PipelineKind::Deferred, LightMethod::Bvh, DecalMethod::DeferredDecals, size);
+    cases.push((config.clone(), RenderConfig { decal_method: DecalMethod::Off, ..config }));
+    for (config, without) in cases {
+        let label =
+            format!("{:?} with {:?} decals, {} reflection bounces", config.pipeline, config.decal_method, config.rays.reflection_bounces);
         let ours = render(&scene, config.clone());
         let wgpus = manylights::gpu::GpuContext::without(wgpu::Features::PASSTHROUGH_SHADERS).unwrap();
         let wgpus = render_on(wgpus, &scene, &scene.cameras[0], config).1;
-        assert!(max_abs_difference(&ours, &plain) > 0.01, "{label}: no decal in view");
+        assert!(max_abs_difference(&ours, &render(&scene, without)) > 0.01, "{label}: the effect is not in view");
         assert_eq!(max_abs_difference(&ours, &wgpus), 0.0, "{label}: our SPIR-V and wgpu's differ");
     }
 }

@@ -21,7 +21,7 @@ const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::PRIMITIVE_INDEX)
     .union(wgpu::Features::FLOAT32_BLENDABLE)
     .union(wgpu::Features::SUBGROUP)
-    // Our SPIR-V for shaders whose privates need no zeroing (`gpu/spirv.rs`).
+    // Our SPIR-V for shaders whose variables need no zeroing (`gpu/spirv.rs`).
     .union(wgpu::Features::PASSTHROUGH_SHADERS);
 
 /// Clones share the device: several renderers (a benchmark's configurations) can use one.

@@ -236,7 +236,7 @@ pub fn create_module(device: &wgpu::Device, desc: &ShaderDesc) -> crate::Result<
 }
 
 /// The module for one stage's entry point with its override `constants`: ours where
-/// [`spirv::create_module`] compiles it (shaders with privates that need no zeroing, on Vulkan),
+/// [`spirv::create_module`] compiles it (shaders with variables that need no zeroing, on Vulkan),
 /// otherwise [`create_module`]'s, whose pipelines set the constants themselves.
 pub fn create_stage_module(
     device: &wgpu::Device,

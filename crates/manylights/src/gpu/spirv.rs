@@ -1,19 +1,22 @@
-//! Our own SPIR-V for shaders that declare a private variable in [`UNINITIALISED_PRIVATES`].
+//! Our own SPIR-V for shaders that declare a variable in [`UNZEROED_VARIABLES`].
 //!
-//! WGSL zero-initialises every private variable, and naga writes that as an initialiser on the
-//! variable, which the driver carries out at the start of every invocation. The decal layers' sums
-//! are a 192-byte array indexed by layer, so it lives in local memory, and zeroing it cost 0.75 ms
-//! of the forward pass and 0.04–0.05 ms of the compute shading passes at 1080p on the H100, most of
-//! what 100 small decals cost there, even for pixels no decal covers (BENCHMARKS.md). Its code never
-//! reads a layer it has not written (`decal_layers_touched`), so on Vulkan these shaders are compiled
-//! here with the options wgpu's own Vulkan backend uses, the initialiser is removed from the SPIR-V,
-//! and the module is passed through (`Features::PASSTHROUGH_SHADERS`). Anywhere else — another
-//! backend, or the feature withheld — wgpu compiles the WGSL as usual, with the same results.
+//! WGSL zero-initialises every private and function variable, and naga writes that as an
+//! initialiser on the variable, which the driver carries out at the start of every invocation or
+//! call. Two arrays made that costly: the decal layers' sums, 192 bytes indexed by layer, so in local
+//! memory — zeroing them cost 0.75 ms of the forward pass and 0.04–0.05 ms of the compute shading
+//! passes at 1080p on the H100, most of what 100 small decals cost there, even for pixels no decal
+//! covers — and the closest-hit traversal's stack, 768 bytes zeroed for every reflection ray
+//! (BENCHMARKS.md). Their code never reads an element it has not written (`decal_layers_touched`,
+//! the stack's depth), so on Vulkan these shaders are compiled here with the options wgpu's own
+//! Vulkan backend uses, the initialisers are removed from the SPIR-V, and the module is passed through
+//! (`Features::PASSTHROUGH_SHADERS`). Anywhere else — another backend, or the feature withheld — wgpu
+//! compiles the WGSL as usual, with the same results.
 
 use crate::{Error, Result};
 
-/// Private variables whose code writes every element before reading it, so they need no zeroing.
-pub const UNINITIALISED_PRIVATES: &[&str] = &["decal_layers"];
+/// Variables (private, or local to a function) whose code writes every element before reading it,
+/// so they need no zeroing. Names must be unique among the shaders' variables.
+pub const UNZEROED_VARIABLES: &[&str] = &["decal_layers", "stack_nodes", "stack_entry"];
 
 const OP_NAME: u32 = 5;
 const OP_VARIABLE: u32 = 59;
@@ -101,7 +104,7 @@ impl VulkanTarget {
 }
 
 /// The module for one entry point of `source`, compiled here without the zeroing of
-/// [`UNINITIALISED_PRIVATES`]; `None` where the source declares none of them or the device needs
+/// [`UNZEROED_VARIABLES`]; `None` where the source declares none of them or the device needs
 /// wgpu to compile it.
 pub fn create_module(
     device: &wgpu::Device,
@@ -111,13 +114,13 @@ pub fn create_module(
     entry: &str,
     constants: &[(&str, f64)],
 ) -> Result<Option<wgpu::ShaderModule>> {
-    if !UNINITIALISED_PRIVATES.iter().any(|name| declares_private(source, name)) {
+    if !UNZEROED_VARIABLES.iter().any(|name| declares_variable(source, name)) {
         return Ok(None);
     }
     let Some(target) = VulkanTarget::of(device) else { return Ok(None) };
     let (words, workgroup_size) = compile(source, stage, entry, constants, &target.options())
         .map_err(|e| Error::Gpu(format!("{label}: compiling {entry} to SPIR-V: {e}")))?;
-    log::debug!("{label}: {entry} compiled to SPIR-V by manylights, without zeroing {UNINITIALISED_PRIVATES:?}");
+    log::debug!("{label}: {entry} compiled to SPIR-V by manylights, without zeroing {UNZEROED_VARIABLES:?}");
     let entry_points = [wgpu::PassthroughShaderEntryPoint {
         name: entry.to_owned().into(),
         workgroup_size: (workgroup_size[0], workgroup_size[1], workgroup_size[2]),
@@ -134,13 +137,15 @@ pub fn create_module(
     }))
 }
 
-fn declares_private(source: &str, name: &str) -> bool {
+fn declares_variable(source: &str, name: &str) -> bool {
     source.lines().any(|line| {
-        line.trim_start().strip_prefix("var<private> ").and_then(|rest| rest.strip_prefix(name)).is_some_and(|rest| rest.starts_with(':'))
+        let line = line.trim_start();
+        let rest = line.strip_prefix("var<private> ").or_else(|| line.strip_prefix("var "));
+        rest.and_then(|rest| rest.strip_prefix(name)).is_some_and(|rest| rest.starts_with(':'))
     })
 }
 
-/// SPIR-V words of `entry` with the overrides set and the listed privates' initialisers removed,
+/// SPIR-V words of `entry` with the overrides set and the listed variables' initialisers removed,
 /// and the entry's workgroup size.
 fn compile(
     source: &str,
@@ -159,11 +164,11 @@ fn compile(
     let workgroup_size = module.entry_points.iter().find(|e| e.name == entry).ok_or(format!("no entry point {entry}"))?.workgroup_size;
     let pipeline = naga::back::spv::PipelineOptions { shader_stage: stage, entry_point: entry.to_owned() };
     let words = naga::back::spv::write_vec(&module, &info, options, Some(&pipeline)).map_err(|e| e.to_string())?;
-    Ok((without_initialisers(&words, UNINITIALISED_PRIVATES), workgroup_size))
+    Ok((without_initialisers(&words, UNZEROED_VARIABLES), workgroup_size))
 }
 
 /// `words` with the initialisers of the variables named `names` removed. A name the entry point
-/// does not use has no variable there (naga writes the globals an entry point reaches).
+/// does not reach has no variable there (naga writes the globals and functions it reaches).
 fn without_initialisers(words: &[u32], names: &[&str]) -> Vec<u32> {
     let instructions = || {
         let mut at = HEADER_WORDS;
@@ -227,47 +232,52 @@ mod tests {
         (all, initialised)
     }
 
+    /// Compiles `entry` of `source` both ways and checks that exactly `removed` initialisers went,
+    /// with nothing else changed, and that the words read back as a valid module.
+    fn assert_initialisers_removed(source: &str, stage: naga::ShaderStage, entry: &str, constants: &[(&str, f64)], removed: usize) {
+        let options = target().options();
+        let module = naga::front::wgsl::parse_str(source).unwrap();
+        let validator = || naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all());
+        let info = validator().validate(&module).unwrap();
+        let constants_map: naga::back::PipelineConstants = constants.iter().map(|&(k, v)| (k.to_owned(), v)).collect();
+        let (module, info) =
+            naga::back::pipeline_constants::process_overrides(&module, &info, Some((stage, entry)), &constants_map).unwrap();
+        let pipeline = naga::back::spv::PipelineOptions { shader_stage: stage, entry_point: entry.into() };
+        let as_written = naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).unwrap();
+
+        let (words, workgroup_size) = compile(source, stage, entry, constants, &options).unwrap();
+        assert_eq!(workgroup_size, module.entry_points.iter().find(|e| e.name == entry).unwrap().workgroup_size);
+        // A word fewer per initialiser, every instruction still well formed.
+        assert_eq!(words.len() + removed, as_written.len());
+        let (before, before_initialised) = variables(&as_written);
+        let (after, after_initialised) = variables(&words);
+        assert_eq!(after, before);
+        assert_eq!(after_initialised + removed, before_initialised);
+        let back = naga::front::spv::parse_u8_slice(bytemuck::cast_slice(&words), &Default::default()).unwrap();
+        validator().validate(&back).unwrap();
+    }
+
     #[test]
     fn the_decal_layers_lose_their_zeroing_and_nothing_else_changes() {
         use crate::pipelines::{DecalMethod, LightMethod, ShadingMethods};
         let methods = ShadingMethods { lights: LightMethod::Bvh, decals: DecalMethod::Bvh, subgroups: true, ..Default::default() };
         let source = crate::passes::visbuffer_shade::shader(methods).compose().unwrap();
-        assert!(declares_private(&source, "decal_layers"));
-        let options = target().options();
-        let constants = [("DEBUG_VIEWS", 1.0)];
-        let module = naga::front::wgsl::parse_str(&source).unwrap();
-        let info =
-            naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&module).unwrap();
-        let constants_map: naga::back::PipelineConstants = constants.iter().map(|&(k, v)| (k.to_owned(), v)).collect();
-        let (module, info) = naga::back::pipeline_constants::process_overrides(
-            &module,
-            &info,
-            Some((naga::ShaderStage::Compute, "visbuffer_shade")),
-            &constants_map,
-        )
-        .unwrap();
-        let pipeline = naga::back::spv::PipelineOptions { shader_stage: naga::ShaderStage::Compute, entry_point: "visbuffer_shade".into() };
-        let as_written = naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).unwrap();
-
-        let (words, workgroup_size) = compile(&source, naga::ShaderStage::Compute, "visbuffer_shade", &constants, &options).unwrap();
-        assert_eq!(workgroup_size, module.entry_points.iter().find(|e| e.name == "visbuffer_shade").unwrap().workgroup_size);
-        // One word fewer: one initialiser gone, every instruction still well formed.
-        assert_eq!(words.len() + 1, as_written.len());
-        let (before, before_initialised) = variables(&as_written);
-        let (after, after_initialised) = variables(&words);
-        assert_eq!(after, before);
-        assert_eq!(after_initialised + 1, before_initialised);
-        // The words read back as a valid module.
-        let back = naga::front::spv::parse_u8_slice(bytemuck::cast_slice(&words), &Default::default()).unwrap();
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&back).unwrap();
+        assert_initialisers_removed(&source, naga::ShaderStage::Compute, "visbuffer_shade", &[("DEBUG_VIEWS", 1.0)], 1);
     }
 
     #[test]
-    fn every_shader_with_those_privates_compiles_for_each_entry_point() {
+    fn the_closest_hit_stack_loses_its_zeroing_and_nothing_else_changes() {
+        let source = ShaderDesc::new("rays/trace_probe.wgsl").compose().unwrap();
+        let entry = naga::front::wgsl::parse_str(&source).unwrap().entry_points[0].name.clone();
+        assert_initialisers_removed(&source, naga::ShaderStage::Compute, &entry, &[], 2);
+    }
+
+    #[test]
+    fn every_shader_with_those_variables_compiles_for_each_entry_point() {
         let mut compiled = 0;
         for desc in crate::gpu::shaders::all_shaders() {
             let source = desc.compose().unwrap();
-            if !UNINITIALISED_PRIVATES.iter().any(|name| declares_private(&source, name)) {
+            if !UNZEROED_VARIABLES.iter().any(|name| declares_variable(&source, name)) {
                 continue;
             }
             let module = naga::front::wgsl::parse_str(&source).unwrap();
@@ -281,12 +291,13 @@ mod tests {
     }
 
     #[test]
-    fn shaders_without_those_privates_are_left_to_wgpu() {
+    fn shaders_without_those_variables_are_left_to_wgpu() {
         let source = ShaderDesc::new("passes/depth_prepass.wgsl").compose().unwrap();
-        assert!(!UNINITIALISED_PRIVATES.iter().any(|name| declares_private(&source, name)));
-        assert!(declares_private("var<private> decal_layers: array<f32, 4>;", "decal_layers"));
-        assert!(!declares_private("var<private> decal_layers_touched: u32;", "decal_layers"));
-        assert!(!declares_private("// var<private> decal_layers: u32;", "decal_layers"));
+        assert!(!UNZEROED_VARIABLES.iter().any(|name| declares_variable(&source, name)));
+        assert!(declares_variable("var<private> decal_layers: array<f32, 4>;", "decal_layers"));
+        assert!(!declares_variable("var<private> decal_layers_touched: u32;", "decal_layers"));
+        assert!(!declares_variable("// var<private> decal_layers: u32;", "decal_layers"));
+        assert!(declares_variable("    var stack_nodes: array<u32, RAY_STACK_SIZE>;", "stack_nodes"));
     }
 
     #[test]

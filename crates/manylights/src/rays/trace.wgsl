@@ -183,6 +183,7 @@ const RAY_STACK_SIZE: u32 = 96u;
 // nodes (BENCHMARKS.md).
 fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> RayHit {
     var hit = RayHit(t_max, RAY_NO_HIT, 0u, 0.0, 0.0);
+    // Not zero-filled on Vulkan (`gpu/spirv.rs`, UNZEROED_VARIABLES): entries below `depth` only are read.
     var stack_nodes: array<u32, RAY_STACK_SIZE>;
     var stack_entry: array<f32, RAY_STACK_SIZE>;
     var depth = 0u;

@@ -29,7 +29,7 @@ struct DecalLayerSums {
     normal_transmittance: f32,
 }
 
-// Not zero-filled on Vulkan (`gpu/spirv.rs`, UNINITIALISED_PRIVATES): a layer is written when its bit
+// Not zero-filled on Vulkan (`gpu/spirv.rs`, UNZEROED_VARIABLES): a layer is written when its bit
 // in `decal_layers_touched` is set, and read only after.
 var<private> decal_layers: array<DecalLayerSums, DECAL_LAYERS>;
 // Bit L set: layer L has sums. Most points are under no decal, and skip the layers entirely.
