@@ -231,8 +231,11 @@ fn include_target(line: &str) -> Option<(&str, Option<&str>)> {
 /// naga test below, so they are reported as GPU errors rather than user errors.
 pub fn create_module(device: &wgpu::Device, desc: &ShaderDesc) -> crate::Result<wgpu::ShaderModule> {
     let source = desc.compose().map_err(crate::Error::Gpu)?;
-    Ok(device
-        .create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(desc.entry), source: wgpu::ShaderSource::Wgsl(source.into()) }))
+    Ok(wgsl_module(device, desc, source))
+}
+
+fn wgsl_module(device: &wgpu::Device, desc: &ShaderDesc, source: String) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(desc.entry), source: wgpu::ShaderSource::Wgsl(source.into()) })
 }
 
 /// The module for one stage's entry point with its override `constants`: ours where
@@ -248,7 +251,7 @@ pub fn create_stage_module(
     let source = desc.compose().map_err(crate::Error::Gpu)?;
     match super::spirv::create_module(device, desc.entry, &source, stage, entry, constants)? {
         Some(module) => Ok(module),
-        None => create_module(device, desc),
+        None => Ok(wgsl_module(device, desc, source)),
     }
 }
 

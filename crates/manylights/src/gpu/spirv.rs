@@ -154,6 +154,18 @@ fn compile(
     constants: &[(&str, f64)],
     options: &naga::back::spv::Options,
 ) -> std::result::Result<(Vec<u32>, [u32; 3]), String> {
+    let (words, workgroup_size) = write(source, stage, entry, constants, options)?;
+    Ok((without_initialisers(&words, UNZEROED_VARIABLES), workgroup_size))
+}
+
+/// naga's SPIR-V words of `entry` with the overrides set, as written, and the entry's workgroup size.
+fn write(
+    source: &str,
+    stage: naga::ShaderStage,
+    entry: &str,
+    constants: &[(&str, f64)],
+    options: &naga::back::spv::Options,
+) -> std::result::Result<(Vec<u32>, [u32; 3]), String> {
     let module = naga::front::wgsl::parse_str(source).map_err(|e| e.emit_to_string(source))?;
     let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
         .validate(&module)
@@ -164,7 +176,7 @@ fn compile(
     let workgroup_size = module.entry_points.iter().find(|e| e.name == entry).ok_or(format!("no entry point {entry}"))?.workgroup_size;
     let pipeline = naga::back::spv::PipelineOptions { shader_stage: stage, entry_point: entry.to_owned() };
     let words = naga::back::spv::write_vec(&module, &info, options, Some(&pipeline)).map_err(|e| e.to_string())?;
-    Ok((without_initialisers(&words, UNZEROED_VARIABLES), workgroup_size))
+    Ok((words, workgroup_size))
 }
 
 /// `words` with the initialisers of the variables named `names` removed. A name the entry point
@@ -236,16 +248,9 @@ mod tests {
     /// with nothing else changed, and that the words read back as a valid module.
     fn assert_initialisers_removed(source: &str, stage: naga::ShaderStage, entry: &str, constants: &[(&str, f64)], removed: usize) {
         let options = target().options();
-        let module = naga::front::wgsl::parse_str(source).unwrap();
-        let validator = || naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all());
-        let info = validator().validate(&module).unwrap();
-        let constants_map: naga::back::PipelineConstants = constants.iter().map(|&(k, v)| (k.to_owned(), v)).collect();
-        let (module, info) =
-            naga::back::pipeline_constants::process_overrides(&module, &info, Some((stage, entry)), &constants_map).unwrap();
-        let pipeline = naga::back::spv::PipelineOptions { shader_stage: stage, entry_point: entry.into() };
-        let as_written = naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).unwrap();
-
+        let (as_written, _) = write(source, stage, entry, constants, &options).unwrap();
         let (words, workgroup_size) = compile(source, stage, entry, constants, &options).unwrap();
+        let module = naga::front::wgsl::parse_str(source).unwrap();
         assert_eq!(workgroup_size, module.entry_points.iter().find(|e| e.name == entry).unwrap().workgroup_size);
         // A word fewer per initialiser, every instruction still well formed.
         assert_eq!(words.len() + removed, as_written.len());
@@ -254,7 +259,7 @@ mod tests {
         assert_eq!(after, before);
         assert_eq!(after_initialised + removed, before_initialised);
         let back = naga::front::spv::parse_u8_slice(bytemuck::cast_slice(&words), &Default::default()).unwrap();
-        validator().validate(&back).unwrap();
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&back).unwrap();
     }
 
     #[test]

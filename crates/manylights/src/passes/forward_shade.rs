@@ -55,9 +55,13 @@ impl ForwardShade {
             stencil: Default::default(),
             bias: Default::default(),
         };
-        let pipeline = |label, vertex_entry, fragment_entry, primitive| -> Result<wgpu::RenderPipeline> {
-            let fragment_module = shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, fragment_entry, &constants)?;
-            Ok(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        // One fragment module per entry point, shared by the raster states' pipelines.
+        let fragment = |entry: &'static str| -> Result<_> {
+            Ok((shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, entry, &constants)?, entry))
+        };
+        let (opaque, masked, sky) = (fragment("forward_opaque")?, fragment("forward_masked")?, fragment("forward_sky")?);
+        let pipeline = |label, vertex_entry, (fragment_module, fragment_entry): &(wgpu::ShaderModule, &str), primitive| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&layout),
                 vertex: wgpu::VertexState {
@@ -70,22 +74,22 @@ impl ForwardShade {
                 depth_stencil: Some(depth_equal.clone()),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
-                    module: &fragment_module,
-                    entry_point: Some(fragment_entry),
+                    module: fragment_module,
+                    entry_point: Some(*fragment_entry),
                     compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
                     targets: &[Some(HDR_FORMAT.into())],
                 }),
                 multiview_mask: None,
                 cache: None,
-            }))
+            })
         };
         let pipelines = RasterState::all()
             .map(|state| {
-                let fragment = if state.alpha_mask { "forward_masked" } else { "forward_opaque" };
-                Ok((state, pipeline("forward_shade", "forward_vertex", fragment, state.primitive())?))
+                let fragment = if state.alpha_mask { &masked } else { &opaque };
+                (state, pipeline("forward_shade", "forward_vertex", fragment, state.primitive()))
             })
-            .collect::<Result<_>>()?;
-        let sky = pipeline("forward_sky", "forward_sky_vertex", "forward_sky", wgpu::PrimitiveState::default())?;
+            .collect();
+        let sky = pipeline("forward_sky", "forward_sky_vertex", &sky, wgpu::PrimitiveState::default());
         let bind_group = bindings::bind_group(device, "forward_shade", &group, vec![wgpu::BindingResource::TextureView(&mask)]);
         Ok(Self { pipelines, sky, bind_group })
     }
