@@ -29,8 +29,12 @@
 // index: a copy of the whole instance held through every walk cost the shading passes more than the
 // callers' own state (BENCHMARKS.md, "The instance handed to the caller").
 //
-// An invocation skips a node only when its own point is outside it, and gets a leaf's items only when
-// its point is inside, whichever invocations walk with it. A link back to the node itself ends the
+// An invocation skips a node only when its own point is outside it, whichever invocations walk with it.
+// Walking alone it gets a leaf's items only when its point is inside; where the subgroup walks as one,
+// every lane gets each leaf the walk reaches, and the caller's tight test rejects the items of a leaf
+// whose box does not hold the lane's point (an item's box lies inside its leaf's): a trip count the
+// same for every lane measured faster than an empty range for the lanes outside (BENCHMARKS.md,
+// "Whole leaves for every lane"). A link back to the node itself ends the
 // walk: no valid tree has one, but lavapipe's fragment shaders run lanes outside the triangle (helpers)
 // with storage loads masked to zero, so node 0 reads as a box at the origin linking to node 0, and a
 // lane looping there until llvmpipe's loop limiter (65,535 iterations, shared by every loop of the
@@ -118,8 +122,9 @@ fn VOLUMES_query_enter(instance_index: u32, instance: VolumeInstance, first: boo
     VOLUMES_query_in_group = true;
 }
 
-// The next group leaf whose box contains the point, as the range [x, y) of the items it holds, or an
-// empty range when the walk visits a leaf for other invocations; x is BVH_END when the query is done.
+// The next group leaf whose box contains the point, as the range [x, y) of the items it holds; walking
+// alone, an empty range when the walk visits a leaf for other invocations, walking as a subgroup, any
+// leaf the walk reaches. x is BVH_END when the query is done.
 fn VOLUMES_query_next_leaf() -> vec2<u32> {
     loop {
         if VOLUMES_query_node >= VOLUMES_query_stop {
@@ -156,7 +161,7 @@ fn VOLUMES_query_next_leaf() -> vec2<u32> {
         VOLUMES_query_node = node.skip;
         let leaf = bvh_leaf_range(node.entry);
         if VOLUMES_query_in_group {
-            return select(vec2<u32>(leaf.x), leaf, inside);
+            return select(vec2<u32>(leaf.x), leaf, inside || VOLUMES_walk_shared());
         }
         // A top-level leaf names one primitive, an instance index: enter its group.
         let instance_index = VOLUMES_primitives[leaf.x];

@@ -1,7 +1,7 @@
 // The point query (`volume_query.wgsl`) walked by a whole subgroup at once: a packet traversal. Every
 // lane visits the same node: a node is entered when its box holds any lane's point (`subgroupAny`) and
-// skipped otherwise, so each lane still reaches every leaf whose box holds its own point, and a leaf
-// goes to the lanes whose point it holds (the others get an empty range and wait). Neighbouring pixels
+// skipped otherwise, so each lane still reaches every leaf whose box holds its own point; every leaf
+// goes to every lane, whose tight tests reject the items around other lanes' points. Neighbouring pixels
 // need nearly the same nodes, so this costs about one lane's walk, with one load per node for the
 // whole subgroup; lanes walking alone visit the same nodes at different times, each load a separate
 // memory transaction. Passes use it where it is faster (`passes::query_walks`).
