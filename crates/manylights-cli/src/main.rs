@@ -19,22 +19,29 @@ struct Cli {
     command: Command,
 }
 
+// Every subcommand reads "-1" as a (bad) value, so clap names the flag and why it is refused instead of
+// calling the number an unexpected argument.
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene to a PNG (and optionally EXR), with per-pass GPU timings.
+    #[command(allow_negative_numbers = true)]
     Render(render::RenderArgs),
     /// Measure the paper's Table 1 (6 large decals, 100 and 100k small decals, 28k small lights) in
     /// every pipeline with every method, and sweep lights and decals from 1k to 1M; writes Markdown,
     /// JSON, CSV and PNG plots.
+    #[command(allow_negative_numbers = true)]
     Bench(bench::BenchArgs),
     /// Compare particle-grid settings (voxel size, filter, samples) with the exact method (the same
     /// particles as point lights through the BVH): error of the particles' light and PSNR.
+    #[command(allow_negative_numbers = true)]
     ParticleError(particle_error::ParticleErrorArgs),
     /// List GPU adapters, the one manylights would choose, its driver and the features it uses; then
     /// what the scene (with the same scene options as `render`) holds.
+    #[command(allow_negative_numbers = true)]
     Info(scene_args::SceneArgs),
     /// Open a window on a scene: fly through it (WASD, Q/E, right mouse button to look), switch
     /// pipeline, methods, ray-traced and post effects live, and watch per-pass GPU timings.
+    #[command(allow_negative_numbers = true)]
     View(view::ViewArgs),
 }
 

@@ -7,7 +7,6 @@ use clap::Args;
 use manylights::{
     config::RenderConfig,
     gpu::GpuContext,
-    particles::ParticleFilter,
     pipelines::{DecalMethod, LightMethod, ParticleMethod},
     renderer::{Image, Renderer},
     scene::Scene,
@@ -76,6 +75,26 @@ pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
         renderer.render(&camera)?;
         Ok((renderer.read_hdr()?, renderer.read_ldr()?))
     };
+    // Every grid setting, checked before the first frame so a bad one fails at once.
+    let mut settings = Vec::new();
+    for &cascades in &args.cascades {
+        for &voxel in &args.voxel_sizes {
+            for &filter in &args.filters {
+                for &samples in &args.samples {
+                    let setting = RenderConfig {
+                        particle_voxel_size: voxel,
+                        particle_filter: filter.into(),
+                        particle_samples: samples,
+                        particle_cascades: cascades,
+                        particle_cascade_resolution: args.cascade_resolution,
+                        ..config(ParticleMethod::Grid)
+                    };
+                    setting.validate(&ctx)?;
+                    settings.push(setting);
+                }
+            }
+        }
+    }
     let (without, _) = frame(config(ParticleMethod::Off))?;
     let (exact, exact_ldr) = frame(config(ParticleMethod::Bvh))?;
     let exact_light: f64 = exact.pixels.iter().zip(&without.pixels).map(|(e, w)| f64::from((luminance(e) - luminance(w)).abs())).sum();
@@ -91,31 +110,17 @@ pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
         args.time
     );
     println!("{:>8} {:>8} {:>10} {:>8} {:>12} {:>9}", "cascades", "voxel m", "filter", "samples", "error %", "PSNR dB");
-    for &cascades in &args.cascades {
-        for &voxel in &args.voxel_sizes {
-            for &filter in &args.filters {
-                for &samples in &args.samples {
-                    let filter: ParticleFilter = filter.into();
-                    let config = RenderConfig {
-                        particle_voxel_size: voxel,
-                        particle_filter: filter,
-                        particle_samples: samples,
-                        particle_cascades: cascades,
-                        particle_cascade_resolution: args.cascade_resolution,
-                        ..config(ParticleMethod::Grid)
-                    };
-                    let (grid, grid_ldr) = frame(config)?;
-                    let error: f64 =
-                        grid.pixels.iter().zip(&exact.pixels).map(|(g, e)| f64::from((luminance(g) - luminance(e)).abs())).sum();
-                    println!(
-                        "{cascades:>8} {voxel:>8} {:>10} {samples:>8} {:>12.2} {:>9.2}",
-                        filter.name(),
-                        100.0 * error / exact_light,
-                        psnr(&grid_ldr, &exact_ldr)
-                    );
-                }
-            }
-        }
+    for setting in settings {
+        let (cascades, voxel, filter, samples) =
+            (setting.particle_cascades, setting.particle_voxel_size, setting.particle_filter, setting.particle_samples);
+        let (grid, grid_ldr) = frame(setting)?;
+        let error: f64 = grid.pixels.iter().zip(&exact.pixels).map(|(g, e)| f64::from((luminance(g) - luminance(e)).abs())).sum();
+        println!(
+            "{cascades:>8} {voxel:>8} {:>10} {samples:>8} {:>12.2} {:>9.2}",
+            filter.name(),
+            100.0 * error / exact_light,
+            psnr(&grid_ldr, &exact_ldr)
+        );
     }
     Ok(())
 }

@@ -85,8 +85,8 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
     tonemap: TonemapArg,
     /// Show, instead of radiance, a heat map of the lights reaching each point, of the light method's
-    /// work (BVH nodes visited, cluster occupancy, lights tested) or of the decals covering it, or
-    /// the particle lights' radiance alone.
+    /// work (BVH nodes visited, cluster occupancy, lights tested) or of the decals covering it, the
+    /// particle lights' radiance alone, or a horizontal slice through the particle grid.
     #[arg(long, value_enum, default_value_t = DebugViewArg::Off)]
     debug_view: DebugViewArg,
     /// Height in metres of the particle-grid-slice debug view's plane. [default: a metre below the eye]
@@ -380,6 +380,13 @@ enum TonemapArg {
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if !(1..=MAX_FRAMES).contains(&args.frames) || args.warmup > MAX_FRAMES {
         bail!("--frames must be between 1 and {MAX_FRAMES} and --warmup at most {MAX_FRAMES} (got {} and {})", args.frames, args.warmup);
+    }
+    // One file for two outputs: the second would silently replace the first.
+    let outputs = [Some(&args.output), args.exr.as_ref(), args.timings_json.as_ref()];
+    for (i, path) in outputs.iter().enumerate().filter_map(|(i, p)| Some((i, (*p)?))) {
+        if outputs[..i].contains(&Some(path)) {
+            bail!("{} is named for two outputs (-o, --exr, --timings-json); give each its own file", path.display());
+        }
     }
     let scene = args.scene.load()?;
     let camera = choose_camera(&scene, args.camera)?;

@@ -43,8 +43,9 @@ impl SceneArgs {
     /// Loads the scene and adds the scattered lights and decals, then groups them with --animate.
     pub fn load(&self) -> anyhow::Result<Scene> {
         if let Some(size) = self.decal_size {
-            if !(size.is_finite() && size > 0.0) {
-                bail!("--decal-size {size}: the decals' mean edge must be a finite length > 0, in metres");
+            let sizes = scene::generators::SCATTERED_DECAL_SIZES;
+            if !sizes.contains(&size) {
+                bail!("--decal-size {size}: give the decals' mean edge in metres, from {} to {}", sizes.start(), sizes.end());
             }
         }
         if self.groups == 0 {

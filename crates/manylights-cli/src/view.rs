@@ -55,8 +55,8 @@ pub struct ViewArgs {
     screenshot: Option<PathBuf>,
     /// A switch at a frame, as the panel would make it: FRAME:KEY=VALUE, KEY one of pipeline,
     /// light-method, decal-method, particle-method, shadows, reflections, bloom, depth-of-field,
-    /// motion-blur, auto-exposure (on/off), vignette (0 to 1), or the scattered lights, decals or
-    /// particles (a count: the scene is generated again). Repeatable.
+    /// motion-blur, auto-exposure (on/off), vignette (0 to 1), debug-view (a --debug-view name), or
+    /// the scattered lights, decals or particles (a count: the scene is generated again). Repeatable.
     #[arg(long = "set", value_name = "FRAME:KEY=VALUE")]
     sets: Vec<String>,
 }
@@ -264,6 +264,8 @@ impl FlyCamera {
 
 /// Points the panel is wide.
 const PANEL_WIDTH: f32 = 270.0;
+/// Largest window side asked for: X11 sizes are 16-bit; the GPU's own limit is checked once it is open.
+const MAX_WINDOW_SIZE: u32 = 32_767;
 /// Frames the rolling graph of frame times holds.
 const GRAPH_FRAMES: usize = 240;
 
@@ -306,6 +308,21 @@ struct App {
 
 pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     let scripted = args.sets.iter().map(|s| parse_set(s)).collect::<anyhow::Result<Vec<_>>>()?;
+    if args.width == 0 || args.height == 0 || args.width > MAX_WINDOW_SIZE || args.height > MAX_WINDOW_SIZE {
+        bail!("window {}×{}: give --width and --height from 1 to {MAX_WINDOW_SIZE} pixels", args.width, args.height);
+    }
+    if args.frames == Some(0) {
+        bail!("--frames 0 would stop before the first frame; give at least 1");
+    }
+    if let (Some(frames), Some(late)) = (args.frames, scripted.iter().find(|s| Some(s.frame) >= args.frames)) {
+        bail!(
+            "--set {}:{}={}: the run stops after {frames} frames (0 to {}); give an earlier frame",
+            late.frame,
+            late.key,
+            late.value,
+            frames - 1
+        );
+    }
     if cfg!(target_os = "linux") && std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
         bail!(
             "the viewer needs a display, and neither DISPLAY nor WAYLAND_DISPLAY is set; run it in a desktop session, \
@@ -356,6 +373,14 @@ impl App {
         let surface = instance.create_surface(window.clone()).context("cannot draw into the window (no Vulkan, Metal or DX12 surface)")?;
         let ctx = GpuContext::for_surface(&instance, &surface)?;
         let size = window.inner_size();
+        let most = ctx.limits.max_texture_dimension_2d;
+        if size.width > most || size.height > most {
+            bail!(
+                "a window of {}×{} pixels is over this GPU's surface limit of {most} per side; give a smaller --width or --height",
+                size.width,
+                size.height
+            );
+        }
         let caps = surface.get_capabilities(&ctx.adapter);
         // egui draws in gamma space into a plain (non-sRGB) format, and the renderer's image holds
         // sRGB-encoded values already.
@@ -392,9 +417,9 @@ impl App {
     }
 
     /// Rebuilds the renderer for the current switches and image size; a refused combination keeps the
-    /// previous renderer and says why in the panel.
-    fn rebuild(&mut self) {
-        let Some(gpu) = &mut self.gpu else { return };
+    /// previous renderer, and its error is the caller's to show or to end a scripted run with.
+    fn rebuild(&mut self) -> anyhow::Result<()> {
+        let Some(gpu) = &mut self.gpu else { return Ok(()) };
         let size = Self::image_size(gpu);
         match Renderer::new(gpu.ctx.clone(), &self.scene, self.switches.config(size)) {
             Ok(mut renderer) => {
@@ -410,28 +435,29 @@ impl App {
                 gpu.image = Some((id, size));
                 gpu.renderer = Some(renderer);
                 self.message = None;
+                Ok(())
             }
-            Err(e) => self.message = Some(format!("not switched: {e}")),
+            Err(e) => Err(anyhow::anyhow!("not switched: {e}")),
         }
     }
 
-    /// Generates the scene again with the counts the panel asks for; a refused count keeps the scene
-    /// and says why.
-    fn regenerate_scene(&mut self) {
+    /// Generates the scene again with the counts the panel asks for; a refused count keeps the scene,
+    /// and its error is the caller's to show or to end a scripted run with.
+    fn regenerate_scene(&mut self) -> anyhow::Result<()> {
         let Counts { lights, decals, particles } = self.wanted_counts;
         let args = SceneArgs { lights, decals, particles, ..self.args.scene.clone() };
         match args.load() {
             Ok(scene) => {
                 self.scene = scene;
                 self.message = None;
+                self.counts = self.wanted_counts;
+                Ok(())
             }
             Err(e) => {
-                self.message = Some(format!("not generated: {e:#}"));
                 self.wanted_counts = self.counts;
-                return;
+                Err(anyhow::anyhow!("not generated: {e:#}"))
             }
         }
-        self.counts = self.wanted_counts;
     }
 
     fn move_camera(&mut self, dt: f32) {
@@ -468,12 +494,26 @@ impl App {
         let due: Vec<(String, String)> =
             self.scripted.iter().filter(|s| s.frame == self.frame).map(|s| (s.key.clone(), s.value.clone())).collect();
         let before = self.switches;
+        // A switch a script asked for must take: its refusal ends the run; the panel's is shown.
+        let scripted = !due.is_empty();
+        let frame = self.frame;
+        let refused = |message: &mut Option<String>, result: anyhow::Result<()>| -> anyhow::Result<()> {
+            match result {
+                Err(e) if scripted => Err(e.context(format!("frame {}: a --set switch was refused", frame))),
+                Err(e) => {
+                    *message = Some(format!("{e:#}"));
+                    Ok(())
+                }
+                Ok(()) => Ok(()),
+            }
+        };
         for (key, value) in due {
             apply(&mut self.switches, &mut self.wanted_counts, &key, &value)?;
         }
         let regenerate = self.wanted_counts != self.counts;
         if regenerate {
-            self.regenerate_scene();
+            let result = self.regenerate_scene();
+            refused(&mut self.message, result)?;
             self.edited_counts = self.counts;
         }
         let Some(gpu) = &self.gpu else { return Ok(()) };
@@ -482,7 +522,8 @@ impl App {
             || before != self.switches
             || regenerate;
         if stale {
-            self.rebuild();
+            let result = self.rebuild();
+            refused(&mut self.message, result)?;
         }
         let now = std::time::Instant::now();
         let dt = (now - self.last_frame).as_secs_f32().min(0.1);
@@ -710,10 +751,9 @@ impl ApplicationHandler for App {
         match self.open(event_loop) {
             Ok(gpu) => {
                 self.gpu = Some(gpu);
-                self.rebuild();
-                if let Some(message) = self.message.take() {
-                    // The first renderer must exist: its error is the program's.
-                    self.stop(event_loop, Err(anyhow::anyhow!(message)));
+                // The first renderer must exist: its error is the program's.
+                if let Err(e) = self.rebuild() {
+                    self.stop(event_loop, Err(e));
                 }
             }
             Err(e) => self.stop(event_loop, Err(e)),

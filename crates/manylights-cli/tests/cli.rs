@@ -139,6 +139,11 @@ fn bad_particle_options() {
     assert!(cascades.contains("9 particle cascades") && cascades.contains("give 1 to 8"), "{cascades}");
     let odd = failure(&["render", "--particles", "100", "--particle-cascades", "2", "--particle-cascade-resolution", "33"]);
     assert!(odd.contains("resolution 33") && odd.contains("even"), "{odd}");
+    // Given without cascades it is still a mistake, not ignored.
+    let unused = failure(&["render", "--particles", "100", "--particle-cascade-resolution", "33", "--width", "16", "--height", "16"]);
+    assert!(unused.contains("resolution 33"), "{unused}");
+    let listed = failure(&["particle-error", "--particles", "10", "--voxel-sizes", "1,-1", "--width", "16", "--height", "16"]);
+    assert!(listed.contains("particle voxel size -1") && !listed.contains("PSNR"), "checked before the first frame: {listed}");
 }
 
 /// A scene file's particle rendering choices apply unless a flag overrides them.
@@ -205,6 +210,18 @@ fn huge_frame_counts_are_refused_not_allocated() {
 }
 
 #[test]
+fn negative_numbers_name_their_flag_and_outputs_need_files_of_their_own() {
+    let err = failure(&["render", "--lights", "-1"]);
+    assert!(err.contains("invalid value '-1' for '--lights"), "{err}");
+    let dir = temp_dir("same_outputs");
+    let same = dir.join("same");
+    let err = failure(&["render", "-o", same.to_str().unwrap(), "--exr", same.to_str().unwrap()]);
+    assert!(err.contains("named for two outputs"), "{err}");
+    let err = failure(&["bench", "--scenes", "none,small-decals", "--sweeps", "none"]);
+    assert!(err.contains("--scenes: `none`") && err.contains("alone"), "{err}");
+}
+
+#[test]
 fn camera_out_of_range() {
     let err = failure(&["render", "--camera", "7", "--width", "64", "--height", "36"]);
     assert!(err.contains("--camera 7"), "{err}");
@@ -227,9 +244,16 @@ fn renders_animated_decals_through_the_bvh() {
 
 #[test]
 fn bad_decal_sizes_are_refused() {
-    for (size, shown) in [("-1", "-1"), ("nan", "NaN"), ("0", "0"), ("inf", "inf")] {
+    for (size, shown) in [
+        ("-1", "-1"),
+        ("nan", "NaN"),
+        ("0", "0"),
+        ("inf", "inf"),
+        ("1e-30", "0.000000000000000000000000000001"),
+        ("1e30", "1000000000000000000000000000000"),
+    ] {
         let err = failure(&["render", "--width", "64", "--height", "36", "--decals", "4", "--decal-size", size]);
-        assert!(err.contains(&format!("--decal-size {shown}:")) && err.contains("finite length > 0"), "{size}: {err}");
+        assert!(err.contains(&format!("--decal-size {shown}:")) && err.contains("from 0.0001 to 100000"), "{size}: {err}");
     }
     let err = failure(&["render", "--decal-size", "1"]);
     assert!(err.contains("--decals"), "--decal-size without --decals: {err}");
@@ -478,6 +502,41 @@ fn the_viewer_without_a_display_says_how_to_get_one() {
     assert!(stderr.contains("DISPLAY") && stderr.contains("xvfb-run"), "{stderr}");
     let bad = failure(&["view", "--set", "3:light-method=magic"]);
     assert!(bad.contains("light-method=magic") && bad.contains("clustered"), "{bad}");
+    // Checked before a window opens, display or not.
+    for (args, words) in [
+        (&["view", "--width", "0"][..], &["window 0×720", "--width"][..]),
+        (&["view", "--width", "100000", "--height", "100000"], &["window 100000×100000", "32767"]),
+        (&["view", "--frames", "0"], &["--frames 0", "at least 1"]),
+        (&["view", "--frames", "2", "--set", "10:bloom=on"], &["--set 10:bloom=on", "0 to 1"]),
+    ] {
+        let err = failure(args);
+        assert!(words.iter().all(|w| err.contains(w)), "{args:?}: {err}");
+    }
+}
+
+/// A scripted switch the renderer refuses (deferred decals outside the deferred pipeline) ends the
+/// run with its reason, where the panel would only show it; so does a window the GPU cannot draw.
+#[test]
+fn the_viewer_ends_a_scripted_run_whose_switch_is_refused() {
+    #[rustfmt::skip]
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 800x600x24", env!("CARGO_BIN_EXE_manylights"), "view", "--width", "400", "--height", "200",
+               "--frames", "3", "--set", "1:decal-method=deferred-decals"])
+        .output()
+        .expect("xvfb-run (install Xvfb: scripts/ensure-xvfb.sh)");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && out.status.code() != Some(101) && !stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.contains("frame 1: a --set switch was refused") && stderr.contains("--pipeline deferred"), "{stderr}");
+    // A window over the GPU's surface limit (lavapipe's 16384) is refused once the GPU is known.
+    #[rustfmt::skip]
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 800x600x24", env!("CARGO_BIN_EXE_manylights"), "view", "--width", "20000", "--height", "200",
+               "--frames", "2"])
+        .output()
+        .expect("xvfb-run");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && out.status.code() != Some(101) && !stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.contains("over this GPU's surface limit"), "{stderr}");
 }
 
 /// A scene file's ray-traced effects apply unless flags override them; bad values name the key.

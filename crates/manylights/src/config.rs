@@ -204,9 +204,8 @@ impl RenderConfig {
                 self.particle_samples
             )));
         }
-        if self.particle_cascades > 0 {
-            crate::particles::check_clipmap(self.particle_cascade_resolution, self.particle_cascades)?;
-        }
+        // The resolution is checked without cascades too: a bad one given with none is still a mistake.
+        crate::particles::check_clipmap(self.particle_cascade_resolution, self.particle_cascades)?;
         self.rays.validate()?;
         if let Some(height) = self.debug_slice_height.filter(|h| !h.is_finite()) {
             return Err(Error::InvalidConfig(format!(

@@ -137,9 +137,9 @@ impl Renderer {
             grid_particles.as_ref().and_then(ParticleSystem::grid_textures),
             rays.as_ref(),
         )?;
-        // Brute force reads the structures' items and instances only: their BVHs are built once on the
-        // CPU, so a GPU rebuild every frame is timed only where a method uses it.
-        let build = |uses_bvh: bool, build| if uses_bvh { build } else { crate::accel::BvhBuild::CpuOnce };
+        // Brute force and clustered lists read the structures' items and instances only: their BVHs
+        // are built only where a method walks them.
+        let build = |uses_bvh: bool, build| if uses_bvh { build } else { crate::accel::BvhBuild::None };
         // Clustered lists are built every frame only where the method reads them.
         let grid = ClusterGrid::for_resolution(config.width, config.height);
         let clusters = |clustered: bool| clustered.then_some((grid, &gpu_scene.bind_group_layout));

@@ -209,6 +209,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if !(1..=crate::render::MAX_FRAMES).contains(&frames) || warmup > crate::render::MAX_FRAMES {
         bail!("--frames must be between 1 and {} and --warmup at most that (got {frames} and {warmup})", crate::render::MAX_FRAMES);
     }
+    if args.scenes.len() > 1 && args.scenes.contains(&SceneArg::None) {
+        bail!("--scenes: `none` runs no scene, so give it alone, not with others");
+    }
+    if args.sweeps.len() > 1 && args.sweeps.contains(&SweepArg::None) {
+        bail!("--sweeps: `none` runs no sweep, so give it alone, not with others");
+    }
     if !(args.time_cap_ms.is_finite() && args.time_cap_ms > 0.0) {
         bail!("--time-cap-ms {}: the cap must be a positive number of milliseconds", args.time_cap_ms);
     }

@@ -40,6 +40,8 @@ const MAX_COVER_WORDS: f64 = (1 << 23) as f64;
 pub struct GridBudget {
     pub cells_per_primitive: f64,
     pub cover_words_per_primitive: f64,
+    /// Nodes the build may visit per cell on average before it gives up on the grid.
+    pub visits_per_cell: usize,
 }
 
 impl GridBudget {
@@ -52,11 +54,19 @@ impl GridBudget {
         GridBudget {
             cells_per_primitive: (primitives * CELLS_PER_PRIMITIVE).clamp(MIN_CELLS, MAX_CELLS) / primitives,
             cover_words_per_primitive: MAX_COVER_WORDS / primitives,
+            visits_per_cell: MAX_VISITS_PER_CELL,
         }
     }
 }
 /// Cells per axis fit 10 bits each in the header node's `skip` (`structure.rs`, `entry_grid_header`).
 pub const MAX_CELLS_PER_AXIS: u32 = 1023;
+
+/// Nodes the grid's build may visit per cell, on average, before it gives up on the grid (see
+/// [`EntryGrid::build`]): over Sponza, 100 small decals visit 10 per cell, 100k ≈ 1 m decals 54, 1M
+/// 0.3 m decals 34, 28k lights of ≈ 1.7 m 108. 300k lights scattered over the one-metre Box visit
+/// more than 256 per cell over 2M cells: 27 s of building on two cores, for cells so crowded that
+/// their queries would start high in the tree anyway.
+const MAX_VISITS_PER_CELL: usize = 256;
 
 /// Most subtrees a cell's cover names. Each one spares the walk the nodes above and beside it, and
 /// costs a (start, stop) pair in the grid's covers.
@@ -88,8 +98,10 @@ pub struct EntryGrid {
 impl EntryGrid {
     /// The grid for `bvh`, built over `aabbs`, within `budget` for its primitives: covers of up to
     /// [`MAX_COVER`] subtrees, or half as many until they fit (one: the lowest common ancestors
-    /// alone). `None` when it has fewer than [`MIN_PRIMITIVES`] primitives or its bounds are not
-    /// finite.
+    /// alone). `None` when it has fewer than [`MIN_PRIMITIVES`] primitives, its bounds are not
+    /// finite, or its volumes crowd so densely that building it would visit more than
+    /// `budget.visits_per_cell` nodes per cell ([`MAX_VISITS_PER_CELL`]; queries then start at the
+    /// root, as they would from its cells anyway).
     pub fn build(bvh: &Bvh, aabbs: &[Aabb], budget: GridBudget) -> Option<EntryGrid> {
         if bvh.primitive_indices.len() < MIN_PRIMITIVES {
             return None;
@@ -117,7 +129,16 @@ impl EntryGrid {
         // ≈ 1 m decals take 6.4M of the 8M words, 1M 5 cm decals 1.7M).
         let mut max_cover = MAX_COVER;
         loop {
-            let (cells, covers) = cells_and_covers(bvh, aabbs, dims, &cell_box, max_cover);
+            // A sixteenth of the cells' allowance up front, then each cell's as it comes: a grid of
+            // dense volumes runs out after that sixteenth, whichever cells come first.
+            let mut visits = ((dims.x * dims.y * dims.z) as usize / 16 + 1).saturating_mul(budget.visits_per_cell);
+            let (cells, covers) = cells_and_covers(bvh, aabbs, dims, &cell_box, max_cover, (&mut visits, budget.visits_per_cell));
+            if visits == 0 {
+                // Volumes this dense reach most of the tree from every cell: a grid would start
+                // queries near the root anyway, after seconds of building.
+                log::info!("no entry grid for {} volumes: their cells reach too much of the tree", bvh.primitive_indices.len());
+                return None;
+            }
             if covers.len() as f64 <= cover_words || max_cover == 1 {
                 return Some(EntryGrid { min: bounds.min, cells_per_unit, dims, cells, covers });
             }
@@ -199,6 +220,7 @@ fn cells_and_covers(
     dims: UVec3,
     cell_box: &dyn Fn(u32, u32, u32) -> Aabb,
     max_cover: usize,
+    (visits, visits_per_cell): (&mut usize, usize),
 ) -> (Vec<[u32; 2]>, Vec<u32>) {
     let mut cells = Vec::with_capacity((dims.x * dims.y * dims.z) as usize);
     let mut covers = Vec::new();
@@ -206,8 +228,12 @@ fn cells_and_covers(
     for z in 0..dims.z {
         for y in 0..dims.y {
             for x in 0..dims.x {
+                *visits = visits.saturating_add(visits_per_cell);
                 let pairs: Vec<u32> =
-                    cover(bvh, aabbs, &cell_box(x, y, z), max_cover).into_iter().flat_map(|n| [n, subtree_end(bvh, n)]).collect();
+                    cover(bvh, aabbs, &cell_box(x, y, z), max_cover, visits).into_iter().flat_map(|n| [n, subtree_end(bvh, n)]).collect();
+                if *visits == 0 {
+                    return (cells, covers);
+                }
                 cells.push(match pairs.len() {
                     0 => [END, END],
                     2 => [pairs[0], pairs[1]],
@@ -229,9 +255,9 @@ fn cells_and_covers(
 /// The subtrees that hold every leaf with a primitive whose box reaches the cell, in node order: none,
 /// the leaves' lowest common ancestor, or — expanding the largest subtree into its children's, as long
 /// as there are at most `max_cover` — the separate parts of the tree they lie in.
-fn cover(bvh: &Bvh, aabbs: &[Aabb], cell: &Aabb, max_cover: usize) -> Vec<u32> {
+fn cover(bvh: &Bvh, aabbs: &[Aabb], cell: &Aabb, max_cover: usize, visits: &mut usize) -> Vec<u32> {
     let mut reached = Vec::new();
-    let Some(root) = reached_tree(bvh, aabbs, 0, cell, &mut reached) else { return Vec::new() };
+    let Some(root) = reached_tree(bvh, aabbs, 0, cell, &mut reached, visits) else { return Vec::new() };
     // Entries of `reached`: one per subtree root, in node order; expanded while they fit.
     let mut parts = vec![root];
     while parts.len() < max_cover {
@@ -259,8 +285,12 @@ struct Reached {
 
 /// Of the leaves under node `n` with a primitive whose box reaches the cell: the tree of where they
 /// branch, pushed onto `reached`, and its root's place there. Visits the nodes whose boxes reach the
-/// cell, as a box query would.
-fn reached_tree(bvh: &Bvh, aabbs: &[Aabb], n: u32, cell: &Aabb, reached: &mut Vec<Reached>) -> Option<usize> {
+/// cell, as a box query would, while `visits` lasts (each takes one; at 0 it finds nothing more).
+fn reached_tree(bvh: &Bvh, aabbs: &[Aabb], n: u32, cell: &Aabb, reached: &mut Vec<Reached>, visits: &mut usize) -> Option<usize> {
+    if *visits == 0 {
+        return None;
+    }
+    *visits -= 1;
     let node = &bvh.nodes[n as usize];
     if !overlaps(&node.bounds(), cell) {
         return None;
@@ -273,7 +303,7 @@ fn reached_tree(bvh: &Bvh, aabbs: &[Aabb], n: u32, cell: &Aabb, reached: &mut Ve
         reached.push(Reached { node: n, children: None });
         return Some(reached.len() - 1);
     };
-    match (reached_tree(bvh, aabbs, first, cell, reached), reached_tree(bvh, aabbs, second, cell, reached)) {
+    match (reached_tree(bvh, aabbs, first, cell, reached, visits), reached_tree(bvh, aabbs, second, cell, reached, visits)) {
         (Some(a), Some(b)) => {
             reached.push(Reached { node: n, children: Some((a, b)) });
             Some(reached.len() - 1)
@@ -312,7 +342,9 @@ mod tests {
                 // With room for covers, and (the smaller sets) with none: each cell its lowest common
                 // ancestor. Cells at the rate per box, not the floor small sets get: finer cells of
                 // the same lookup, which would make this test four times slower.
-                let budget = GridBudget { cells_per_primitive: CELLS_PER_PRIMITIVE, ..GridBudget::for_structure(size) };
+                // No limit on the build's visits: huge boxes among small ones crowd many cells.
+                let budget =
+                    GridBudget { cells_per_primitive: CELLS_PER_PRIMITIVE, visits_per_cell: usize::MAX, ..GridBudget::for_structure(size) };
                 let budgets = [budget, GridBudget { cover_words_per_primitive: 0.0, ..budget }];
                 for &budget in &budgets[..if size <= 1000 { 2 } else { 1 }] {
                     let Some(grid) = EntryGrid::build(&bvh, &boxes, budget) else {
@@ -422,6 +454,23 @@ mod tests {
         assert_eq!(grid.cover(Vec3::new(2.5, 0.5, 0.5)), vec![[2, 3], [5, 7], [8, 11]]);
         let covers_at = 1000 + 6;
         assert_eq!(grid.gpu_words(100, 1000), vec![END, END, 104, 109, 102, three | covers_at, 102, 103, 105, 107, 108, 111]);
+    }
+
+    #[test]
+    fn volumes_crowded_together_get_no_grid_and_are_refused_quickly() {
+        // Thousands of boxes all over the same region: every cell reaches every leaf.
+        let mut rng = Pcg64::seed_from_u64(5);
+        let boxes: Vec<Aabb> = (0..20_000)
+            .map(|_| {
+                let c = Vec3::new(rng.random(), rng.random(), rng.random()) * 0.01;
+                Aabb::new(c - Vec3::ONE, c + Vec3::ONE)
+            })
+            .collect();
+        let bvh = Bvh::build(&boxes).unwrap();
+        let started = std::time::Instant::now();
+        assert!(EntryGrid::build(&bvh, &boxes, GridBudget::for_structure(boxes.len())).is_none());
+        // Without the limit this grid visits every node from each of its 1.3M cells.
+        assert!(started.elapsed().as_secs_f32() < 30.0, "{:?}", started.elapsed());
     }
 
     #[test]

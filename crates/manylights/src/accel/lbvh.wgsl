@@ -38,8 +38,8 @@ const NO_PARENT: u32 = 0xffffffffu;
 @group(0) @binding(4) var<storage, read_write> nodes: array<BvhNode>;
 @group(0) @binding(5) var<storage, read_write> primitives: array<u32>;
 @group(0) @binding(6) var<storage, read_write> parents: array<u32>;
-// Internal nodes' bounds as order-preserving integers, 6 per node like `centre_bounds`: only for nodes
-// spanning blocks, which the hierarchy pass clears to 0.
+// Internal nodes' bounds as order-preserving integers, 6 per node (min xyz complemented, then max xyz,
+// so all six grow by atomicMax): only for nodes spanning blocks, which the hierarchy pass clears to 0.
 @group(0) @binding(7) var<storage, read_write> node_bounds: array<atomic<u32>>;
 // Internal nodes' ranges of sorted leaves [x, y].
 @group(0) @binding(8) var<storage, read_write> ranges: array<vec2<u32>>;

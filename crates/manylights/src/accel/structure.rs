@@ -62,6 +62,9 @@ pub enum BvhBuild {
     /// Every frame, on the GPU (LBVH), as groups whose volumes change need: timed as
     /// `<label>_blas_build`.
     GpuEveryFrame,
+    /// Never: the items in the scene's order with their instances, for methods that read only those
+    /// (brute force, clustered lists, off). Millions of volumes then cost no build at all.
+    None,
 }
 
 /// Keep in sync with `VolumeInstance` in `accel/bvh_types.wgsl`.
@@ -403,6 +406,11 @@ impl VolumeStructure {
         if primitive_count > MAX_PRIMITIVES as u64 {
             return Err(Error::InvalidScene(format!("{count} {label}s; a structure holds at most {MAX_PRIMITIVES} volumes and instances")));
         }
+        // Checked before the CPU builds, which take seconds for millions of volumes.
+        let item_bytes = volumes.items.len() as u64 + u64::from(dynamic_count) * volumes.kind.record_bytes() as u64;
+        check_binding_size(ctx, label, "items", item_bytes)?;
+        let node_bytes = node_count * std::mem::size_of::<BvhNode>() as u64;
+        check_binding_size(ctx, label, "BVH nodes", node_bytes)?;
         // CPU builds first: their entry grids' cells and covers follow the primitive indices in the
         // same array, within one budget of cells and cover words for all the groups.
         let grid_budget = entry_grid::GridBudget::for_structure(count);
@@ -431,7 +439,7 @@ impl VolumeStructure {
                 }
             })
             .collect();
-        let rebuilt_on_gpu = ranges.iter().zip(&cpu_builds).any(|(range, build)| build.is_none() && !range.is_empty());
+        let rebuilt_on_gpu = build == BvhBuild::GpuEveryFrame && ranges.iter().any(|range| !range.is_empty());
         if rebuilt_on_gpu && clustering.is_some() {
             return Err(Error::InvalidConfig(format!(
                 "clustered lists bin the {label}s in the order the CPU stores them, which GPU rebuilds change every frame; build the {label}s' BVH once on the CPU"
@@ -445,19 +453,8 @@ impl VolumeStructure {
                 entry_grid::CELL_COVER_OFFSET_MASK
             )));
         }
-        let limit = ctx.limits.max_storage_buffer_binding_size;
-        let node_bytes = node_count * std::mem::size_of::<BvhNode>() as u64;
         let primitive_bytes = (primitive_count + cell_words) * 4;
-        let item_bytes = volumes.items.len() as u64 + u64::from(dynamic_count) * volumes.kind.record_bytes() as u64;
-        for (what, bytes) in [("items", item_bytes), ("BVH nodes", node_bytes), ("BVH primitives and entry grids", primitive_bytes)] {
-            if bytes > limit {
-                return Err(Error::InvalidScene(format!(
-                    "the {label} {what} take {} MiB, over this GPU's storage binding limit of {} MiB; use fewer {label}s",
-                    bytes >> 20,
-                    limit >> 20
-                )));
-            }
-        }
+        check_binding_size(ctx, label, "BVH primitives and entry grids", primitive_bytes)?;
 
         let device = &ctx.device;
         use wgpu::BufferUsages as U;
@@ -520,7 +517,7 @@ impl VolumeStructure {
                     }
                     None
                 }
-                None if boxes.is_empty() => None,
+                None if boxes.is_empty() || build == BvhBuild::None => None,
                 None => {
                     let target = LbvhTarget {
                         nodes: nodes.clone(),
@@ -728,6 +725,19 @@ fn shading_bind_group(
 /// group's items are stored in leaf order.
 fn relocate(bvh: &Bvh, node_base: u32, item_base: u32) -> Vec<BvhNode> {
     bvh.nodes.iter().map(|n| n.offset(node_base, item_base)).collect()
+}
+
+/// An error naming what is over the device's storage binding limit, and the fix.
+fn check_binding_size(ctx: &GpuContext, label: &str, what: &str, bytes: u64) -> Result<()> {
+    let limit = ctx.limits.max_storage_buffer_binding_size;
+    if bytes > limit {
+        return Err(Error::InvalidScene(format!(
+            "the {label} {what} take {} MiB, over this GPU's storage binding limit of {} MiB; use fewer {label}s",
+            bytes >> 20,
+            limit >> 20
+        )));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

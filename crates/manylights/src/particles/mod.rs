@@ -315,7 +315,7 @@ impl ParticleGrid {
         let dims = extent.ceil().max(Vec3::ONE);
         if dims.max_element() > max_dimension as f32 {
             return Err(Error::InvalidConfig(format!(
-                "a particle grid of {voxel_size} m voxels over {:.1} × {:.1} × {:.1} m needs {} × {} × {} voxels, over this GPU's 3D texture limit of {max_dimension} per axis; use larger voxels, or camera-centred cascades (--particle-cascades, or `cascades` in a scene file's [particles])",
+                "a particle grid of {voxel_size} m voxels over {:.1} × {:.1} × {:.1} m needs {} × {} × {} voxels, over this GPU's 3D texture limit of {max_dimension} per axis; use larger voxels, or camera-centred cascades (render's --particle-cascades, particle-error's --cascades, or `cascades` in a scene file's [particles])",
                 bounds.max.x - bounds.min.x,
                 bounds.max.y - bounds.min.y,
                 bounds.max.z - bounds.min.z,

@@ -28,6 +28,36 @@ pub struct Camera {
     pub projection: Projection,
 }
 
+impl Projection {
+    /// Checks what `clip_from_view` needs: a field of view strictly between 0 and π, non-zero
+    /// orthographic extents, and finite planes with 0 < near < far (near ≥ 0 when orthographic).
+    pub fn validate(&self) -> Result<(), String> {
+        let finite = |v: f32| v.is_finite();
+        match *self {
+            Projection::Perspective { yfov, znear, zfar } => {
+                if !(finite(yfov) && yfov > 0.0 && yfov < std::f32::consts::PI) {
+                    return Err(format!("perspective yfov {yfov} rad must lie strictly between 0 and π"));
+                }
+                if !(finite(znear) && znear > 0.0) {
+                    return Err(format!("perspective znear {znear} must be finite and > 0"));
+                }
+                if let Some(zfar) = zfar.filter(|&f| !(finite(f) && f > znear)) {
+                    return Err(format!("perspective zfar {zfar} must be finite and beyond znear {znear}"));
+                }
+            }
+            Projection::Orthographic { xmag, ymag, znear, zfar } => {
+                if !(finite(xmag) && finite(ymag) && xmag != 0.0 && ymag != 0.0) {
+                    return Err(format!("orthographic xmag {xmag} and ymag {ymag} must be finite and non-zero"));
+                }
+                if !(finite(znear) && finite(zfar) && znear >= 0.0 && zfar > znear) {
+                    return Err(format!("orthographic znear {znear} and zfar {zfar} must be finite with 0 ≤ znear < zfar"));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 impl Camera {
     pub fn look_at(name: &str, eye: Vec3, target: Vec3, yfov: f32, znear: f32) -> Self {
         Self {

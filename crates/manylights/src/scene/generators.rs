@@ -443,12 +443,20 @@ fn check_decals(params: &ScatterDecals) -> Result<()> {
         )));
     }
     if let Some(size) = params.size {
-        if !(size.is_finite() && size > 0.0) {
-            return Err(Error::InvalidConfig(format!("scattered decals: size {size} must be a finite length > 0")));
+        if !SCATTERED_DECAL_SIZES.contains(&size) {
+            return Err(Error::InvalidConfig(format!(
+                "scattered decals: size {size} m is outside {} to {} m (their boxes' matrices would lose their volume to rounding)",
+                SCATTERED_DECAL_SIZES.start(),
+                SCATTERED_DECAL_SIZES.end()
+            )));
         }
     }
     Ok(())
 }
+
+/// Mean decal edges, in metres, the scatter accepts: from a tenth of a millimetre to a hundred
+/// kilometres, where a box's f32 matrix and its inverse stay well conditioned.
+pub const SCATTERED_DECAL_SIZES: std::ops::RangeInclusive<f32> = 1e-4..=1e5;
 
 /// Group count of [`group_for_animation`] when none is given.
 pub const DEFAULT_ANIMATION_GROUPS: usize = 16;
@@ -811,9 +819,9 @@ mod tests {
     fn impossible_decal_requests_are_errors() {
         let mut scene = two_floors();
         let materials = decal_textures::add_decal_materials(&mut scene);
-        for size in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        for size in [0.0, -1.0, f32::NAN, f32::INFINITY, 1e-30, 1e30] {
             let err = scatter_decals(&scene, &ScatterDecals { size: Some(size), ..Default::default() }, materials.clone()).unwrap_err();
-            assert!(matches!(err, Error::InvalidConfig(_)) && err.to_string().contains(&format!("size {size} must be")), "{err}");
+            assert!(matches!(err, Error::InvalidConfig(_)) && err.to_string().contains(&format!("size {size} m is outside")), "{err}");
         }
         let too_many = ScatterDecals { count: MAX_SCATTERED_DECALS + 1, ..Default::default() };
         let err = scatter_decals(&scene, &too_many, materials).unwrap_err();

@@ -10,6 +10,7 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use ::gltf::accessor::{Accessor, DataType, Dimensions};
 use ::gltf::animation::util::ReadOutputs;
 use ::gltf::buffer;
 use ::gltf::khr_lights_punctual::Kind;
@@ -30,10 +31,21 @@ const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_e
 pub fn import(path: &Path) -> Result<Scene> {
     let bytes = std::fs::read(path).map_err(|error| Error::Io { path: path.to_owned(), error })?;
     let invalid = |reason: String| Error::Gltf { path: path.to_owned(), reason };
+    if bytes.is_empty() {
+        return Err(invalid("the file is empty".into()));
+    }
+    // The parser reads anything without the GLB magic as JSON, and would report a JSON syntax error.
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) && !bytes.starts_with(b"glTF") {
+        return Err(invalid("a .glb file starts with the bytes `glTF`, and this one does not: it is corrupt or not a GLB file".into()));
+    }
     // Parsed without validation first: the gltf crate reports an unsupported required extension as
     // a generic validation failure, and this check names it.
     let ::gltf::Gltf { document, blob } = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(parse_reason(e)))?;
     check_required_extensions(path, &document)?;
+    let version = &document.as_json().asset.version;
+    if version.split('.').next() != Some("2") {
+        return Err(invalid(format!("asset.version is \"{version}\": only glTF 2.x files can be read")));
+    }
     let document = Document::from_json(document.into_json()).map_err(|e| invalid(e.to_string()))?;
 
     check_sources(&document).map_err(invalid)?;
@@ -185,8 +197,15 @@ fn decode_image(image: &::gltf::Image, base: &Path, buffers: &[buffer::Data]) ->
     // A file name is the most recognisable label; embedded images fall back to their name or index.
     let name =
         uri.map(|u| u.rsplit('/').next().unwrap_or(u)).or(image.name()).map_or_else(|| format!("image {}", image.index()), str::to_owned);
-    let data = ::gltf::image::Data::from_source(image.source(), Some(base), buffers)
-        .map_err(|e| format!("image {} ({name}): {e}", image.index()))?;
+    let data = ::gltf::image::Data::from_source(image.source(), Some(base), buffers).map_err(|e| {
+        let hint = match &e {
+            ::gltf::Error::Image(image::ImageError::Limits(_)) => {
+                format!(": the image is too large to decode (the decoder allows {} MiB); give a smaller one", super::IMAGE_DECODE_LIMIT_MIB)
+            }
+            _ => String::new(),
+        };
+        format!("image {} ({name}): {e}{hint}", image.index())
+    })?;
     Ok(Texture { name, width: data.width, height: data.height, rgba8: to_rgba8(data) })
 }
 
@@ -271,6 +290,15 @@ fn node_animation(document: &Document, buffers: &[buffer::Data], hierarchy: &Hie
     for channel in source.channels() {
         // Channels of nodes outside the scene move nothing placed.
         let Some(node) = hierarchy.index_of[channel.target().node().index()] else { continue };
+        let sampler = channel.sampler();
+        let at = |what: &str| format!("{name}: channel {} {what}", channel.index());
+        check_accessor(&sampler.input(), &at("keyframe times"), Dimensions::Scalar, FLOATS)?;
+        let (dimensions, types) = match channel.target().property() {
+            ::gltf::animation::Property::Translation | ::gltf::animation::Property::Scale => (Dimensions::Vec3, FLOATS),
+            ::gltf::animation::Property::Rotation => (Dimensions::Vec4, SIGNED_NORMALIZED),
+            ::gltf::animation::Property::MorphTargetWeights => (Dimensions::Scalar, SIGNED_NORMALIZED),
+        };
+        check_accessor(&sampler.output(), &at("keyframe values"), dimensions, types)?;
         let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
         let times: Vec<f32> =
             reader.read_inputs().ok_or_else(|| format!("{name}: channel {} has no keyframe times", channel.index()))?.collect();
@@ -449,6 +477,19 @@ fn mesh(mesh: &::gltf::Mesh, buffers: &[buffer::Data], default_material: usize) 
 }
 
 fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: usize) -> Result<Primitive, String> {
+    for (semantic, name, dimensions, types) in [
+        (Semantic::Positions, "POSITION", Dimensions::Vec3, FLOATS),
+        (Semantic::Normals, "NORMAL", Dimensions::Vec3, FLOATS),
+        (Semantic::Tangents, "TANGENT", Dimensions::Vec4, FLOATS),
+        (Semantic::TexCoords(0), "TEXCOORD_0", Dimensions::Vec2, TEX_COORDS),
+    ] {
+        if let Some(accessor) = p.get(&semantic) {
+            check_accessor(&accessor, name, dimensions, types)?;
+        }
+    }
+    if let Some(accessor) = p.indices() {
+        check_accessor(&accessor, "the indices", Dimensions::Scalar, INDICES)?;
+    }
     let reader = p.reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()));
     let positions: Vec<[f32; 3]> = reader.read_positions().ok_or("POSITION is missing or lies outside its buffer")?.collect();
     if positions.iter().flatten().any(|c| !c.is_finite()) {
@@ -495,6 +536,30 @@ fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: 
         tangents::orthonormalize(&mut vertices);
     }
     Ok(Primitive { vertices, indices, material: p.material().index().unwrap_or(default_material) })
+}
+
+/// Component types (with `normalized`) the glTF specification allows for each use of an accessor we
+/// read; the gltf crate's readers assume them and panic on others, so they are checked first.
+const FLOATS: &[(DataType, bool)] = &[(DataType::F32, false)];
+const TEX_COORDS: &[(DataType, bool)] = &[(DataType::F32, false), (DataType::U8, true), (DataType::U16, true)];
+const INDICES: &[(DataType, bool)] = &[(DataType::U8, false), (DataType::U16, false), (DataType::U32, false)];
+/// Rotations and morph weights in animations.
+const SIGNED_NORMALIZED: &[(DataType, bool)] =
+    &[(DataType::F32, false), (DataType::I8, true), (DataType::U8, true), (DataType::I16, true), (DataType::U16, true)];
+
+fn check_accessor(accessor: &Accessor, name: &str, dimensions: Dimensions, types: &[(DataType, bool)]) -> Result<(), String> {
+    let found = (accessor.data_type(), accessor.normalized());
+    if accessor.dimensions() == dimensions && types.contains(&found) {
+        return Ok(());
+    }
+    let describe = |(data_type, normalized): (DataType, bool)| format!("{}{data_type:?}", if normalized { "normalized " } else { "" });
+    Err(format!(
+        "{name} (accessor {}) is {:?} of {}; glTF allows {dimensions:?} of {}",
+        accessor.index(),
+        accessor.dimensions(),
+        describe(found),
+        types.iter().map(|&t| describe(t)).collect::<Vec<_>>().join(", ")
+    ))
 }
 
 /// Reads an optional vertex attribute, telling an absent one (`None`) from one that cannot be read.
@@ -665,6 +730,20 @@ mod tests {
     }
 
     #[test]
+    fn empty_files_and_glbs_without_their_magic_are_named() {
+        let dir = temp_dir("gltf_empty");
+        for (file, bytes, words) in [
+            ("empty.glb", &b""[..], "the file is empty"),
+            ("empty.gltf", &b""[..], "the file is empty"),
+            ("json.glb", &br#"{"asset": {"version": "2.0"}}"#[..], "starts with the bytes `glTF`"),
+        ] {
+            std::fs::write(dir.join(file), bytes).unwrap();
+            let result = import(&dir.join(file));
+            assert!(matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains(words)), "{file}: {result:?}");
+        }
+    }
+
+    #[test]
     fn unsupported_required_extension_is_named() {
         let dir = temp_dir("gltf_draco");
         let path = dir.join("draco.gltf");
@@ -798,6 +877,114 @@ mod tests {
         let origin = |i: usize| scene.instances[i].world_from_local.transform_point3(Vec3::ZERO);
         assert_eq!((origin(0), origin(1)), (Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 2.0)));
         assert_eq!(scene.drawn_triangle_count(), 8);
+    }
+
+    /// The quad of `write_quad_buffer` with `accessors` (its positions first) replacing the file's,
+    /// `primitive` its mesh's primitive and `extra` more top-level members; the import's result.
+    fn import_quad(name: &str, accessors: &str, primitive: &str, extra: &str) -> Result<Scene> {
+        let dir = temp_dir(name);
+        write_quad_buffer(&dir);
+        let json = format!(
+            r#"{{
+            "asset": {{"version": "2.0"}},
+            "buffers": [{{"uri": "quad.bin", "byteLength": 56}}],
+            "bufferViews": [{{"buffer": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 8}}],
+            "accessors": [{accessors}],
+            "meshes": [{{"primitives": [{primitive}]}}],
+            "nodes": [{{"mesh": 0}}],
+            "scenes": [{{"nodes": [0]}}]{extra}
+        }}"#
+        );
+        std::fs::write(dir.join("quad.gltf"), json).unwrap();
+        import(&dir.join("quad.gltf"))
+    }
+
+    #[test]
+    fn accessors_of_types_the_specification_forbids_are_errors() {
+        let positions = r#"{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}"#;
+        let expect = |result: Result<Scene>, words: &[&str]| match result {
+            Err(Error::Gltf { reason, .. }) => assert!(words.iter().all(|w| reason.contains(w)), "{reason}"),
+            other => panic!("{other:?}"),
+        };
+        // Float indices: the gltf crate's reader would reach `unreachable!()`.
+        let float_indices = r#"{"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR"}"#;
+        expect(
+            import_quad(
+                "gltf_float_indices",
+                &format!("{positions}, {float_indices}"),
+                r#"{"attributes": {"POSITION": 0}, "indices": 1}"#,
+                "",
+            ),
+            &["the indices (accessor 1)", "F32", "U32"],
+        );
+        let vector_indices = r#"{"bufferView": 1, "componentType": 5123, "count": 1, "type": "VEC3"}"#;
+        expect(
+            import_quad(
+                "gltf_vector_indices",
+                &format!("{positions}, {vector_indices}"),
+                r#"{"attributes": {"POSITION": 0}, "indices": 1}"#,
+                "",
+            ),
+            &["the indices (accessor 1) is Vec3"],
+        );
+        let uint_uvs = r#"{"bufferView": 0, "componentType": 5125, "count": 4, "type": "VEC2"}"#;
+        expect(
+            import_quad("gltf_uint_uvs", &format!("{positions}, {uint_uvs}"), r#"{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}}"#, ""),
+            &["TEXCOORD_0 (accessor 1) is Vec2 of U32", "normalized U16"],
+        );
+        let byte_positions = r#"{"bufferView": 0, "componentType": 5121, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}"#;
+        expect(
+            import_quad("gltf_byte_positions", byte_positions, r#"{"attributes": {"POSITION": 0}, "mode": 5}"#, ""),
+            &["POSITION (accessor 0) is Vec3 of U8"],
+        );
+        // Keyframe times must be floats.
+        let times = r#"{"bufferView": 1, "componentType": 5123, "count": 4, "type": "SCALAR"}"#;
+        let animation = r#", "animations": [{"channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}],
+            "samplers": [{"input": 1, "output": 0}]}]"#;
+        expect(
+            import_quad("gltf_integer_times", &format!("{positions}, {times}"), r#"{"attributes": {"POSITION": 0}, "mode": 5}"#, animation),
+            &["channel 0 keyframe times (accessor 1) is Scalar of U16"],
+        );
+        // The quad alone loads.
+        assert!(import_quad("gltf_quad_ok", positions, r#"{"attributes": {"POSITION": 0}, "mode": 5}"#, "").is_ok());
+    }
+
+    #[test]
+    fn other_major_versions_and_degenerate_cameras_are_errors() {
+        let dir = temp_dir("gltf_version");
+        std::fs::write(dir.join("v3.gltf"), r#"{"asset": {"version": "3.0"}}"#).unwrap();
+        let result = import(&dir.join("v3.gltf"));
+        assert!(matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("\"3.0\"") && reason.contains("2.x")), "{result:?}");
+
+        let positions = r#"{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}"#;
+        let with_camera = |name: &str, camera: &str| {
+            let extra = format!(r#", "cameras": [{camera}]"#);
+            let dir = temp_dir(name);
+            write_quad_buffer(&dir);
+            let json = format!(
+                r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"uri": "quad.bin", "byteLength": 56}}],
+                "bufferViews": [{{"buffer": 0, "byteLength": 48}}], "accessors": [{positions}],
+                "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "mode": 5}}]}}],
+                "nodes": [{{"mesh": 0}}, {{"camera": 0, "translation": [0, 0, 5]}}], "scenes": [{{"nodes": [0, 1]}}]{extra}}}"#
+            );
+            std::fs::write(dir.join("camera.gltf"), json).unwrap();
+            import(&dir.join("camera.gltf"))
+        };
+        for (name, camera, words) in [
+            ("gltf_yfov0", r#"{"type": "perspective", "perspective": {"yfov": 0, "znear": 0.1}}"#, "yfov 0"),
+            ("gltf_znear_negative", r#"{"type": "perspective", "perspective": {"yfov": 0.8, "znear": -1}}"#, "znear -1"),
+            ("gltf_zfar_near", r#"{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 1, "zfar": 0.5}}"#, "zfar 0.5"),
+            (
+                "gltf_ortho0",
+                r#"{"type": "orthographic", "orthographic": {"xmag": 0, "ymag": 0, "znear": 1, "zfar": 1}}"#,
+                "xmag 0 and ymag 0",
+            ),
+        ] {
+            let result = with_camera(name, camera);
+            assert!(matches!(&result, Err(Error::InvalidScene(m)) if m.contains("camera 0") && m.contains(words)), "{name}: {result:?}");
+        }
+        let fine = with_camera("gltf_camera_ok", r#"{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1, "zfar": 100}}"#);
+        assert_eq!(fine.unwrap().cameras.len(), 1);
     }
 
     #[test]

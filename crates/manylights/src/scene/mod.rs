@@ -24,6 +24,9 @@ use glam::{Affine3A, Mat4, Vec3, Vec4};
 pub use aabb::Aabb;
 pub use camera::{Camera, Projection};
 
+/// What the image decoder (the `image` crate's default limits) may allocate for one image, in MiB.
+pub const IMAGE_DECODE_LIMIT_MIB: u64 = 512;
+
 /// Illuminance (intensity / d²) at which a light without an explicit range is cut off: its range is
 /// derived with [`Light::range_from_cutoff`] and this value.
 pub const DEFAULT_LIGHT_CUTOFF: f32 = 0.01;
@@ -449,6 +452,9 @@ impl Scene {
         }
         if let Some(animation) = &self.animation {
             animation.validate(self.instances.len()).map_err(crate::Error::InvalidScene)?;
+        }
+        for (ci, camera) in self.cameras.iter().enumerate() {
+            camera.projection.validate().map_err(|m| crate::Error::InvalidScene(format!("camera {ci} ({}): {m}", camera.name)))?;
         }
         for (i, d) in self.deformers.iter().enumerate() {
             if d.mesh >= self.meshes.len() {

@@ -537,13 +537,26 @@ impl LightSpec {
                 (kind, Vec3::from(direction).normalize_or_zero())
             }
         };
+        let range = match self.range {
+            Some(range) => range,
+            None => {
+                let derived = Light::range_from_cutoff(self.intensity, color, DEFAULT_LIGHT_CUTOFF);
+                if !(derived.is_finite() && derived > 0.0) {
+                    return Err(format!(
+                        "no range, and intensity {} with colour {:?} gives none to derive one from; give `range`, or an intensity and colour > 0",
+                        self.intensity, self.color
+                    ));
+                }
+                derived
+            }
+        };
         Ok(Light {
             kind,
             position: Vec3::from(self.position),
             direction,
             color,
             intensity: self.intensity,
-            range: self.range.unwrap_or_else(|| Light::range_from_cutoff(self.intensity, color, DEFAULT_LIGHT_CUTOFF)),
+            range,
             cast_shadows: self.cast_shadows.unwrap_or(true),
         })
     }
@@ -669,7 +682,17 @@ fn load_image(path: &Path) -> Result<Texture, String> {
     let reader = image::ImageReader::open(path)
         .and_then(image::ImageReader::with_guessed_format)
         .map_err(|e| format!("{}: cannot read it: {e} (check that the path exists and is readable)", path.display()))?;
-    let image = reader.decode().map_err(|e| format!("{}: not a readable PNG, JPEG or EXR image: {e}", path.display()))?;
+    let image = reader.decode().map_err(|e| match e {
+        image::ImageError::Limits(_) => {
+            let size = image::image_dimensions(path).map_or_else(|_| "its size".to_owned(), |(w, h)| format!("{w}×{h} pixels"));
+            format!(
+                "{}: {size} is too large to decode (the decoder allows {} MiB); give a smaller image",
+                path.display(),
+                super::IMAGE_DECODE_LIMIT_MIB
+            )
+        }
+        e => format!("{}: not a readable PNG, JPEG or EXR image: {e}", path.display()),
+    })?;
     let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
     let rgba = image.into_rgba8();
     Ok(Texture { name, width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
@@ -1075,7 +1098,9 @@ roughness_metallic = "decals/rm.png"
         let many = reason(load_text("large_decals_many", "[[large_decals]]\ncount = 1000\n"));
         assert!(many.starts_with("large_decals 0:") && many.contains("exceeds the maximum"), "{many}");
         let size = reason(load_text("scatter_decals_size", "[[scatter_decals]]\ncount = 4\nsize = -1.0\n"));
-        assert!(size.starts_with("scatter_decals 0:") && size.contains("size -1 must be a finite length > 0"), "{size}");
+        assert!(size.starts_with("scatter_decals 0:") && size.contains("size -1 m is outside 0.0001 to 100000 m"), "{size}");
+        let dark = reason(load_text("light_dark_no_range", "[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 0.0\n"));
+        assert!(dark.starts_with("light 0:") && dark.contains("intensity 0") && dark.contains("give `range`"), "{dark}");
         let empty = reason(load_text("scatter_decals_empty", "[[scatter_decals]]\ncount = 4\n"));
         assert!(empty.starts_with("scatter_decals 0:") && empty.contains("no triangles"), "{empty}");
     }
