@@ -137,13 +137,19 @@ impl Renderer {
             grid_particles.as_ref().and_then(ParticleSystem::grid_textures),
             rays.as_ref(),
         )?;
-        // Brute force and clustered lists read the structures' items and instances only: their BVHs
-        // are built only where a method walks them.
-        let build = |uses_bvh: bool, build| if uses_bvh { build } else { crate::accel::BvhBuild::None };
+        // Only `bvh` walks the structures' BVHs. Clustered lists and deferred decals read the items in
+        // the CPU-built BVH's leaf order, which keeps neighbours together in memory (as `bvh` has
+        // them, so the methods compare fairly); brute force and off build nothing.
+        let build = |uses_bvh: bool, reads_items_in_order: bool, asked| match (uses_bvh, reads_items_in_order) {
+            (true, _) => asked,
+            (false, true) => crate::accel::BvhBuild::CpuOnce,
+            (false, false) => crate::accel::BvhBuild::None,
+        };
         // Clustered lists are built every frame only where the method reads them.
         let grid = ClusterGrid::for_resolution(config.width, config.height);
         let clusters = |clustered: bool| clustered.then_some((grid, &gpu_scene.bind_group_layout));
-        let light_build = build(config.light_method == LightMethod::Bvh, config.light_bvh_build);
+        let light_build =
+            build(config.light_method == LightMethod::Bvh, config.light_method == LightMethod::Clustered, config.light_bvh_build);
         let (lights, particles) = match light_particles {
             Some(settings) => {
                 let lights = VolumeStructure::for_lights_and_particles(
@@ -167,7 +173,11 @@ impl Renderer {
             &ctx,
             &scene.decals,
             &scene.decal_groups,
-            build(config.decal_method == DecalMethod::Bvh, config.decal_bvh_build),
+            build(
+                config.decal_method == DecalMethod::Bvh,
+                matches!(config.decal_method, DecalMethod::Clustered | DecalMethod::DeferredDecals),
+                config.decal_bvh_build,
+            ),
             clusters(config.decal_method == DecalMethod::Clustered),
             gpu_scene.decal_material_base,
         )?;

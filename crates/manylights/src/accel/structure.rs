@@ -62,8 +62,8 @@ pub enum BvhBuild {
     /// Every frame, on the GPU (LBVH), as groups whose volumes change need: timed as
     /// `<label>_blas_build`.
     GpuEveryFrame,
-    /// Never: the items in the scene's order with their instances, for methods that read only those
-    /// (brute force, clustered lists, off). Millions of volumes then cost no build at all.
+    /// Never: the items in the scene's order with their instances, for methods that read only those,
+    /// in any order (brute force, off). Millions of volumes then cost no build at all.
     None,
 }
 
