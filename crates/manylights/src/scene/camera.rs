@@ -28,18 +28,26 @@ pub struct Camera {
     pub projection: Projection,
 }
 
+/// Nearest near plane a perspective camera may have, in metres: nearer, the reverse-Z matrix's
+/// entries fall to denormals, which GPUs flush to zero, and nothing is drawn.
+pub const MIN_ZNEAR: f32 = 1e-6;
+/// Narrowest vertical field of view, in radians: narrower, the projection's scale overflows f32
+/// precision across the image.
+pub const MIN_YFOV: f32 = 1e-5;
+
 impl Projection {
-    /// Checks what `clip_from_view` needs: a field of view strictly between 0 and π, non-zero
-    /// orthographic extents, and finite planes with 0 < near < far (near ≥ 0 when orthographic).
+    /// Checks what `clip_from_view` needs: a field of view between [`MIN_YFOV`] and π, non-zero
+    /// orthographic extents, and finite planes with [`MIN_ZNEAR`] ≤ near < far (near ≥ 0 when
+    /// orthographic).
     pub fn validate(&self) -> Result<(), String> {
         let finite = |v: f32| v.is_finite();
         match *self {
             Projection::Perspective { yfov, znear, zfar } => {
-                if !(finite(yfov) && yfov > 0.0 && yfov < std::f32::consts::PI) {
-                    return Err(format!("perspective yfov {yfov} rad must lie strictly between 0 and π"));
+                if !(MIN_YFOV..std::f32::consts::PI).contains(&yfov) {
+                    return Err(format!("perspective yfov {yfov} rad must lie between {MIN_YFOV} and π"));
                 }
-                if !(finite(znear) && znear > 0.0) {
-                    return Err(format!("perspective znear {znear} must be finite and > 0"));
+                if !(finite(znear) && znear >= MIN_ZNEAR) {
+                    return Err(format!("perspective znear {znear} must be finite and at least {MIN_ZNEAR} (a micrometre)"));
                 }
                 if let Some(zfar) = zfar.filter(|&f| !(finite(f) && f > znear)) {
                     return Err(format!("perspective zfar {zfar} must be finite and beyond znear {znear}"));

@@ -122,6 +122,18 @@ fn check_sources(document: &Document) -> Result<(), String> {
             return Err(format!("URI `{uri}` does not percent-decode to UTF-8"));
         }
     }
+    // The gltf crate's validation leaves channel targets unchecked, and `target().node()` unwraps.
+    for (a, animation) in json.animations.iter().enumerate() {
+        for (c, channel) in animation.channels.iter().enumerate() {
+            let node = channel.target.node.value();
+            if node >= json.nodes.len() {
+                return Err(format!(
+                    "animation {a} channel {c}: target node {node} does not exist (the file has {} nodes)",
+                    json.nodes.len()
+                ));
+            }
+        }
+    }
     if let Some(accessor) = document.accessors().find(|a| a.count() == 0) {
         return Err(format!("accessor {} has count 0", accessor.index()));
     }
@@ -945,6 +957,19 @@ mod tests {
             import_quad("gltf_integer_times", &format!("{positions}, {times}"), r#"{"attributes": {"POSITION": 0}, "mode": 5}"#, animation),
             &["channel 0 keyframe times (accessor 1) is Scalar of U16"],
         );
+        // A channel animating a node the file lacks: the gltf crate's `target().node()` would panic.
+        let missing_node = r#", "animations": [{"channels": [{"sampler": 0, "target": {"node": 99, "path": "translation"}}],
+            "samplers": [{"input": 1, "output": 0}]}]"#;
+        let float_times = r#"{"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR"}"#;
+        expect(
+            import_quad(
+                "gltf_channel_node",
+                &format!("{positions}, {float_times}"),
+                r#"{"attributes": {"POSITION": 0}, "mode": 5}"#,
+                missing_node,
+            ),
+            &["animation 0 channel 0: target node 99 does not exist"],
+        );
         // The quad alone loads.
         assert!(import_quad("gltf_quad_ok", positions, r#"{"attributes": {"POSITION": 0}, "mode": 5}"#, "").is_ok());
     }
@@ -974,6 +999,12 @@ mod tests {
             ("gltf_yfov0", r#"{"type": "perspective", "perspective": {"yfov": 0, "znear": 0.1}}"#, "yfov 0"),
             ("gltf_znear_negative", r#"{"type": "perspective", "perspective": {"yfov": 0.8, "znear": -1}}"#, "znear -1"),
             ("gltf_zfar_near", r#"{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 1, "zfar": 0.5}}"#, "zfar 0.5"),
+            // Valid JSON numbers the GPU would flush to zero: nothing would be drawn.
+            (
+                "gltf_znear_denormal",
+                r#"{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 1e-38}}"#,
+                "znear 0.00000000000000000000000000000000000001",
+            ),
             (
                 "gltf_ortho0",
                 r#"{"type": "orthographic", "orthographic": {"xmag": 0, "ymag": 0, "znear": 1, "zfar": 1}}"#,
