@@ -277,6 +277,8 @@ struct Gpu {
     egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
     renderer: Option<Renderer>,
+    /// The switches the renderer was made with: others, from the panel or a script, rebuild it.
+    built: Option<Switches>,
     /// The renderer's image as egui sees it, and the size it was made at.
     image: Option<(egui::TextureId, (u32, u32))>,
 }
@@ -406,7 +408,7 @@ impl App {
         let egui_ctx = egui::Context::default();
         let egui_state = egui_winit::State::new(egui_ctx, egui::ViewportId::ROOT, &window, Some(window.scale_factor() as f32), None, None);
         let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, format, egui_wgpu::RendererOptions::default());
-        Ok(Gpu { window, surface, surface_config, ctx, egui_state, egui_renderer, renderer: None, image: None })
+        Ok(Gpu { window, surface, surface_config, ctx, egui_state, egui_renderer, renderer: None, built: None, image: None })
     }
 
     /// The renderer's image size: the window beside the panel, in pixels.
@@ -434,6 +436,7 @@ impl App {
                 };
                 gpu.image = Some((id, size));
                 gpu.renderer = Some(renderer);
+                gpu.built = Some(self.switches);
                 self.message = None;
                 Ok(())
             }
@@ -493,7 +496,6 @@ impl App {
     fn redraw(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
         let due: Vec<(String, String)> =
             self.scripted.iter().filter(|s| s.frame == self.frame).map(|s| (s.key.clone(), s.value.clone())).collect();
-        let before = self.switches;
         // A switch a script asked for must take: its refusal ends the run; the panel's is shown.
         let scripted = !due.is_empty();
         let frame = self.frame;
@@ -510,19 +512,27 @@ impl App {
         for (key, value) in due {
             apply(&mut self.switches, &mut self.wanted_counts, &key, &value)?;
         }
-        let regenerate = self.wanted_counts != self.counts;
-        if regenerate {
+        let mut regenerated = false;
+        if self.wanted_counts != self.counts {
             let result = self.regenerate_scene();
+            regenerated = result.is_ok();
             refused(&mut self.message, result)?;
             self.edited_counts = self.counts;
         }
         let Some(gpu) = &self.gpu else { return Ok(()) };
         let stale = gpu.renderer.is_none()
             || gpu.image.is_some_and(|(_, size)| size != Self::image_size(gpu))
-            || before != self.switches
-            || regenerate;
+            || gpu.built != Some(self.switches)
+            || regenerated;
         if stale {
             let result = self.rebuild();
+            if result.is_err() {
+                // Back to what the renderer was made with, so a refused panel switch is not retried
+                // every frame.
+                if let Some(built) = self.gpu.as_ref().and_then(|g| g.built) {
+                    self.switches = built;
+                }
+            }
             refused(&mut self.message, result)?;
         }
         let now = std::time::Instant::now();

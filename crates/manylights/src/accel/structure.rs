@@ -409,7 +409,9 @@ impl VolumeStructure {
         // Checked before the CPU builds, which take seconds for millions of volumes.
         let item_bytes = volumes.items.len() as u64 + u64::from(dynamic_count) * volumes.kind.record_bytes() as u64;
         check_binding_size(ctx, label, "items", item_bytes)?;
-        let node_bytes = node_count * std::mem::size_of::<BvhNode>() as u64;
+        // Without group BVHs only the top level's nodes are written.
+        let stored_nodes = if build == BvhBuild::None && dynamic.is_none() { u64::from(top_level_nodes) } else { node_count };
+        let node_bytes = stored_nodes * std::mem::size_of::<BvhNode>() as u64;
         check_binding_size(ctx, label, "BVH nodes", node_bytes)?;
         // CPU builds first: their entry grids' cells and covers follow the primitive indices in the
         // same array, within one budget of cells and cover words for all the groups.

@@ -16,8 +16,8 @@
 // laid out depth first, so every step of a walk moves to a higher node), and ends at or past the node
 // after that subtree; where the cell names several subtrees (a cover), it walks each in turn.
 //
-// A cursor: `VOLUMES_query_next_leaf` returns every group leaf whose box contains the point, as the
-// range of items it holds (items are stored in leaf order, `accel/structure.rs`), and the caller
+// A cursor: `VOLUMES_query_next_leaf` returns every group leaf whose box contains the point (and,
+// walking as a subgroup, the other lanes' leaves, below), as the range of items it holds (items are stored in leaf order, `accel/structure.rs`), and the caller
 // applies its own tight test to them (light range and cone, decal box) without a copy of the
 // traversal per use. It hands out whole leaves: a cursor returning one item per call measured 20 %
 // slower shading on the H200. Every invocation that begins a query calls `VOLUMES_query_next_leaf`

@@ -28,11 +28,14 @@ pub struct Camera {
     pub projection: Projection,
 }
 
-/// Nearest near plane a perspective camera may have, in metres: nearer, the reverse-Z matrix's
-/// entries fall to denormals, which GPUs flush to zero, and nothing is drawn.
+/// Nearest near plane a perspective camera may have, in metres. Reverse-Z stores near / distance, and
+/// positions are rebuilt from depth through the inverse projection, whose entries grow as 1 / near:
+/// with near at 1e-30 the sky's gradient went flat, at 1e-38 (a denormal, flushed to zero) nothing
+/// was drawn. A micrometre keeps both far inside f32's range, as the clustered grid's slices assume.
 pub const MIN_ZNEAR: f32 = 1e-6;
-/// Narrowest vertical field of view, in radians: narrower, the projection's scale overflows f32
-/// precision across the image.
+/// Narrowest vertical field of view, in radians: the projection scales by 1 / tan(yfov / 2), and at
+/// 1e-30 rad half the image showed the background; 1e-5 rad (a 0.0006° telephoto) is far narrower
+/// than any lens.
 pub const MIN_YFOV: f32 = 1e-5;
 
 impl Projection {

@@ -275,6 +275,10 @@ fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Text
     match document.default_scene().or_else(|| document.scenes().next()) {
         Some(root) => {
             let hierarchy = place_nodes(&mut scene, &root, document.nodes().len())?;
+            // Here rather than only in `Scene::validate`, so the error names the file.
+            for (ci, camera) in scene.cameras.iter().enumerate() {
+                camera.projection.validate().map_err(|m| format!("camera {ci} ({}): {m}", camera.name))?;
+            }
             scene.animation = node_animation(document, buffers, &hierarchy)?;
         }
         None => log::warn!("the glTF file has no scene: nothing is placed"),
@@ -1012,7 +1016,10 @@ mod tests {
             ),
         ] {
             let result = with_camera(name, camera);
-            assert!(matches!(&result, Err(Error::InvalidScene(m)) if m.contains("camera 0") && m.contains(words)), "{name}: {result:?}");
+            assert!(
+                matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("camera 0") && reason.contains(words)),
+                "{name}: {result:?}"
+            );
         }
         let fine = with_camera("gltf_camera_ok", r#"{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1, "zfar": 100}}"#);
         assert_eq!(fine.unwrap().cameras.len(), 1);

@@ -454,7 +454,8 @@ impl Scene {
             animation.validate(self.instances.len()).map_err(crate::Error::InvalidScene)?;
         }
         for (ci, camera) in self.cameras.iter().enumerate() {
-            camera.projection.validate().map_err(|m| crate::Error::InvalidScene(format!("camera {ci} ({}): {m}", camera.name)))?;
+            let named = if camera.name == format!("camera {ci}") { String::new() } else { format!(" ({})", camera.name) };
+            camera.projection.validate().map_err(|m| crate::Error::InvalidScene(format!("camera {ci}{named}: {m}")))?;
         }
         for (i, d) in self.deformers.iter().enumerate() {
             if d.mesh >= self.meshes.len() {

@@ -512,8 +512,8 @@ impl CameraSpec {
         if !(yfov_degrees > 0.0 && yfov_degrees < 180.0) {
             return Err(format!("yfov_degrees {yfov_degrees} must lie strictly between 0 and 180"));
         }
-        if !(near.is_finite() && near > 0.0) {
-            return Err(format!("near {near} must be finite and > 0"));
+        if !(near.is_finite() && near >= super::camera::MIN_ZNEAR) {
+            return Err(format!("near {near} must be finite and at least {} m", super::camera::MIN_ZNEAR));
         }
         Ok(Camera::look_at("scene file", position, target, yfov_degrees.to_radians(), near))
     }

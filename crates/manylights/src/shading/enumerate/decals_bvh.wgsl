@@ -1,5 +1,6 @@
 // Decal enumeration through the decals' acceleration structure (Hansen & Peters 2021): the point
-// query reaches the leaves whose box contains the shading point; `decal_accumulate` applies the
+// query reaches the leaves whose box contains the shading point (walking as a subgroup, those of its
+// neighbours too, `accel/volume_query.wgsl`); `decal_accumulate` applies the
 // exact box test, so the result equals the brute-force loop's.
 #include "shading/decal_bindings.wgsl"
 #include "shading/decals.wgsl"

@@ -1,5 +1,6 @@
 // Light enumeration through the lights' acceleration structure (Hansen & Peters 2021): a point query
-// reaches only the leaves whose box contains the shading point; each light there gets the tight test
+// reaches the leaves whose box contains the shading point (walking as a subgroup, those of its
+// neighbours too, `accel/volume_query.wgsl`); each light there gets the tight test
 // inside `light_contribution` (range, cone), so the result equals the brute-force loop's.
 #include "shading/enumerate/light_loop.wgsl"
 #include "$LIGHT_QUERY" with VOLUMES=light
