@@ -406,13 +406,17 @@ impl VolumeStructure {
         if primitive_count > MAX_PRIMITIVES as u64 {
             return Err(Error::InvalidScene(format!("{count} {label}s; a structure holds at most {MAX_PRIMITIVES} volumes and instances")));
         }
+        let fits = |what: &str, bytes: u64| {
+            ctx.check_storage_binding(&format!("{label} {what}"), bytes)
+                .map_err(|m| Error::InvalidScene(format!("{m}; use fewer {label}s")))
+        };
         // Checked before the CPU builds, which take seconds for millions of volumes.
         let item_bytes = volumes.items.len() as u64 + u64::from(dynamic_count) * volumes.kind.record_bytes() as u64;
-        check_binding_size(ctx, label, "items", item_bytes)?;
+        fits("items", item_bytes)?;
         // Without group BVHs only the top level's nodes are written.
         let stored_nodes = if build == BvhBuild::None && dynamic.is_none() { u64::from(top_level_nodes) } else { node_count };
         let node_bytes = stored_nodes * std::mem::size_of::<BvhNode>() as u64;
-        check_binding_size(ctx, label, "BVH nodes", node_bytes)?;
+        fits("BVH nodes", node_bytes)?;
         // CPU builds first: their entry grids' cells and covers follow the primitive indices in the
         // same array, within one budget of cells and cover words for all the groups.
         let grid_budget = entry_grid::GridBudget::for_structure(count);
@@ -456,7 +460,7 @@ impl VolumeStructure {
             )));
         }
         let primitive_bytes = (primitive_count + cell_words) * 4;
-        check_binding_size(ctx, label, "BVH primitives and entry grids", primitive_bytes)?;
+        fits("BVH primitives and entry grids", primitive_bytes)?;
 
         let device = &ctx.device;
         use wgpu::BufferUsages as U;
@@ -727,19 +731,6 @@ fn shading_bind_group(
 /// group's items are stored in leaf order.
 fn relocate(bvh: &Bvh, node_base: u32, item_base: u32) -> Vec<BvhNode> {
     bvh.nodes.iter().map(|n| n.offset(node_base, item_base)).collect()
-}
-
-/// An error naming what is over the device's storage binding limit, and the fix.
-fn check_binding_size(ctx: &GpuContext, label: &str, what: &str, bytes: u64) -> Result<()> {
-    let limit = ctx.limits.max_storage_buffer_binding_size;
-    if bytes > limit {
-        return Err(Error::InvalidScene(format!(
-            "the {label} {what} take {} MiB, over this GPU's storage binding limit of {} MiB; use fewer {label}s",
-            bytes >> 20,
-            limit >> 20
-        )));
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -90,6 +90,16 @@ pub fn list_adapters() -> Vec<AdapterSummary> {
 }
 
 impl GpuContext {
+    /// Whether `bytes` of `what` fit one storage binding; if not, "the {what} take N MiB, over this
+    /// GPU's storage binding limit of M MiB", for the caller to end with the fix.
+    pub fn check_storage_binding(&self, what: &str, bytes: u64) -> std::result::Result<(), String> {
+        let limit = self.limits.max_storage_buffer_binding_size;
+        if bytes > limit {
+            return Err(format!("the {what} take {} MiB, over this GPU's storage binding limit of {} MiB", bytes >> 20, limit >> 20));
+        }
+        Ok(())
+    }
+
     /// Picks an adapter as described in the module docs and opens a device on it.
     pub fn new() -> Result<Self> {
         Self::without(wgpu::Features::empty())

@@ -716,15 +716,7 @@ impl ParticleSystem {
 }
 
 fn check_binding(what: &str, bytes: u64, ctx: &GpuContext) -> Result<()> {
-    let limit = ctx.limits.max_storage_buffer_binding_size;
-    if bytes > limit {
-        return Err(Error::InvalidConfig(format!(
-            "the {what} take {} MiB, over this GPU's storage binding limit of {} MiB; use fewer particles or larger voxels",
-            bytes >> 20,
-            limit >> 20
-        )));
-    }
-    Ok(())
+    ctx.check_storage_binding(what, bytes).map_err(|m| Error::InvalidConfig(format!("{m}; use fewer particles or larger voxels")))
 }
 
 impl GridSplat {

@@ -55,7 +55,11 @@ pub fn import(path: &Path) -> Result<Scene> {
     check_views(&document, &buffers).map_err(invalid)?;
     let textures = decode_images(&document, base, &buffers).map_err(invalid)?;
     let scene = build_scene(&document, &buffers, textures).map_err(invalid)?;
-    scene.validate()?;
+    // The scene's own checks (cameras, indices, …), named by the file they came from.
+    scene.validate().map_err(|e| match e {
+        Error::InvalidScene(reason) => invalid(reason),
+        e => e,
+    })?;
     Ok(scene)
 }
 
@@ -275,10 +279,6 @@ fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Text
     match document.default_scene().or_else(|| document.scenes().next()) {
         Some(root) => {
             let hierarchy = place_nodes(&mut scene, &root, document.nodes().len())?;
-            // Here rather than only in `Scene::validate`, so the error names the file.
-            for (ci, camera) in scene.cameras.iter().enumerate() {
-                camera.projection.validate().map_err(|m| format!("camera {ci} ({}): {m}", camera.name))?;
-            }
             scene.animation = node_animation(document, buffers, &hierarchy)?;
         }
         None => log::warn!("the glTF file has no scene: nothing is placed"),
@@ -918,64 +918,70 @@ mod tests {
     #[test]
     fn accessors_of_types_the_specification_forbids_are_errors() {
         let positions = r#"{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}"#;
-        let expect = |result: Result<Scene>, words: &[&str]| match result {
-            Err(Error::Gltf { reason, .. }) => assert!(words.iter().all(|w| reason.contains(w)), "{reason}"),
-            other => panic!("{other:?}"),
+        let strip = r#"{"attributes": {"POSITION": 0}, "mode": 5}"#;
+        let indexed = r#"{"attributes": {"POSITION": 0}, "indices": 1}"#;
+        let translation_of = |node: u32| {
+            format!(
+                r#", "animations": [{{"channels": [{{"sampler": 0, "target": {{"node": {node}, "path": "translation"}}}}],
+                "samplers": [{{"input": 1, "output": 0}}]}}]"#
+            )
         };
-        // Float indices: the gltf crate's reader would reach `unreachable!()`.
-        let float_indices = r#"{"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR"}"#;
-        expect(
-            import_quad(
+        // (test, accessors, primitive, more members, words the error must hold)
+        let cases = [
+            // Float indices: the gltf crate's reader would reach `unreachable!()`.
+            (
                 "gltf_float_indices",
-                &format!("{positions}, {float_indices}"),
-                r#"{"attributes": {"POSITION": 0}, "indices": 1}"#,
-                "",
+                format!(r#"{positions}, {{"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR"}}"#),
+                indexed,
+                String::new(),
+                &["the indices (accessor 1)", "F32", "U32"][..],
             ),
-            &["the indices (accessor 1)", "F32", "U32"],
-        );
-        let vector_indices = r#"{"bufferView": 1, "componentType": 5123, "count": 1, "type": "VEC3"}"#;
-        expect(
-            import_quad(
+            (
                 "gltf_vector_indices",
-                &format!("{positions}, {vector_indices}"),
-                r#"{"attributes": {"POSITION": 0}, "indices": 1}"#,
-                "",
+                format!(r#"{positions}, {{"bufferView": 1, "componentType": 5123, "count": 1, "type": "VEC3"}}"#),
+                indexed,
+                String::new(),
+                &["the indices (accessor 1) is Vec3"],
             ),
-            &["the indices (accessor 1) is Vec3"],
-        );
-        let uint_uvs = r#"{"bufferView": 0, "componentType": 5125, "count": 4, "type": "VEC2"}"#;
-        expect(
-            import_quad("gltf_uint_uvs", &format!("{positions}, {uint_uvs}"), r#"{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}}"#, ""),
-            &["TEXCOORD_0 (accessor 1) is Vec2 of U32", "normalized U16"],
-        );
-        let byte_positions = r#"{"bufferView": 0, "componentType": 5121, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}"#;
-        expect(
-            import_quad("gltf_byte_positions", byte_positions, r#"{"attributes": {"POSITION": 0}, "mode": 5}"#, ""),
-            &["POSITION (accessor 0) is Vec3 of U8"],
-        );
-        // Keyframe times must be floats.
-        let times = r#"{"bufferView": 1, "componentType": 5123, "count": 4, "type": "SCALAR"}"#;
-        let animation = r#", "animations": [{"channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}],
-            "samplers": [{"input": 1, "output": 0}]}]"#;
-        expect(
-            import_quad("gltf_integer_times", &format!("{positions}, {times}"), r#"{"attributes": {"POSITION": 0}, "mode": 5}"#, animation),
-            &["channel 0 keyframe times (accessor 1) is Scalar of U16"],
-        );
-        // A channel animating a node the file lacks: the gltf crate's `target().node()` would panic.
-        let missing_node = r#", "animations": [{"channels": [{"sampler": 0, "target": {"node": 99, "path": "translation"}}],
-            "samplers": [{"input": 1, "output": 0}]}]"#;
-        let float_times = r#"{"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR"}"#;
-        expect(
-            import_quad(
+            (
+                "gltf_uint_uvs",
+                format!(r#"{positions}, {{"bufferView": 0, "componentType": 5125, "count": 4, "type": "VEC2"}}"#),
+                r#"{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}}"#,
+                String::new(),
+                &["TEXCOORD_0 (accessor 1) is Vec2 of U32", "normalized U16"],
+            ),
+            (
+                "gltf_byte_positions",
+                r#"{"bufferView": 0, "componentType": 5121, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}"#.to_owned(),
+                strip,
+                String::new(),
+                &["POSITION (accessor 0) is Vec3 of U8"],
+            ),
+            // Keyframe times must be floats.
+            (
+                "gltf_integer_times",
+                format!(r#"{positions}, {{"bufferView": 1, "componentType": 5123, "count": 4, "type": "SCALAR"}}"#),
+                strip,
+                translation_of(0),
+                &["channel 0 keyframe times (accessor 1) is Scalar of U16"],
+            ),
+            // A channel animating a node the file lacks: the gltf crate's `target().node()` would panic.
+            (
                 "gltf_channel_node",
-                &format!("{positions}, {float_times}"),
-                r#"{"attributes": {"POSITION": 0}, "mode": 5}"#,
-                missing_node,
+                format!(r#"{positions}, {{"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR"}}"#),
+                strip,
+                translation_of(99),
+                &["animation 0 channel 0: target node 99 does not exist"],
             ),
-            &["animation 0 channel 0: target node 99 does not exist"],
-        );
+        ];
+        for (test, accessors, primitive, extra, words) in cases {
+            match import_quad(test, &accessors, primitive, &extra) {
+                Err(Error::Gltf { reason, .. }) => assert!(words.iter().all(|w| reason.contains(w)), "{test}: {reason}"),
+                other => panic!("{test}: {other:?}"),
+            }
+        }
         // The quad alone loads.
-        assert!(import_quad("gltf_quad_ok", positions, r#"{"attributes": {"POSITION": 0}, "mode": 5}"#, "").is_ok());
+        assert!(import_quad("gltf_quad_ok", positions, strip, "").is_ok());
     }
 
     #[test]
