@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use manylights::{
-    accel::{lbvh::GpuLbvh, Aabb},
+    accel::{lbvh::GpuLbvh, Aabb, MAX_LEAF_SIZE},
     gpu::GpuContext,
 };
 use rand::{Rng, SeedableRng};
@@ -82,7 +82,7 @@ fn gpu_builds_are_valid_and_exact() {
 fn gpu_builds_with_leaves_of_several_boxes_are_valid_and_exact() {
     let ctx = GpuContext::new().expect("a GPU adapter");
     let mut rng = rand_pcg::Pcg64::seed_from_u64(21);
-    for size in [2, 8, 16] {
+    for size in [2, 8, 16, MAX_LEAF_SIZE] {
         let mut lbvh = GpuLbvh::new(&ctx, 5000).unwrap().with_max_leaf_size(size);
         for count in [1, 2, 9, 300, 5000] {
             let boxes = random_boxes(count, &mut rng);

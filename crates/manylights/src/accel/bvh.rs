@@ -13,9 +13,9 @@ pub const LEAF: u32 = 1 << 31;
 /// `BvhNode::skip` of the nodes after which the traversal is done.
 pub const END: u32 = u32::MAX;
 
-/// A leaf's `entry` keeps its primitive count − 1 in the 4 bits below [`LEAF`] and its first
-/// primitive in the 27 bits below those.
-const LEAF_COUNT_SHIFT: u32 = 27;
+/// A leaf's `entry` keeps its primitive count − 1 in the 7 bits below [`LEAF`] and its first
+/// primitive in the 24 bits below those.
+const LEAF_COUNT_SHIFT: u32 = 24;
 const LEAF_FIRST_MASK: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
 /// The most primitives a leaf's `entry` can count.
 const MAX_LEAF_COUNT: u32 = 1 << (31 - LEAF_COUNT_SHIFT);
@@ -26,10 +26,14 @@ const MAX_LEAF_COUNT: u32 = 1 << (31 - LEAF_COUNT_SHIFT);
 /// could exceed it.
 pub const MAX_DEPTH: u32 = 48;
 
-/// Leaves hold between 1 and this many primitives: nodes of at most 4 are always leaves, and the SAH
-/// keeps up to 16 in a leaf when splitting them does not pay. The GPU can rely on this bound to size
-/// per-leaf work; a leaf's count must fit its 4 bits in `entry`.
+/// The most primitives a leaf can hold, as its 7 bits in `entry` count them: the particle lights'
+/// GPU-built leaves use them all (`accel/structure.rs`, `dynamic_group_leaf_size`). The GPU can rely
+/// on this bound to size per-leaf work.
 pub const MAX_LEAF_SIZE: u32 = MAX_LEAF_COUNT;
+
+/// Leaves of [`Bvh::build`] hold between 1 and this many primitives: nodes of at most 4 are always
+/// leaves, and the SAH keeps up to 16 in a leaf when splitting them does not pay.
+pub const SAH_MAX_LEAF_SIZE: u32 = 16;
 
 /// Nodes with more primitives than this are split unless the SAH prefers a leaf.
 const MIN_SPLIT_SIZE: usize = 4;
@@ -44,7 +48,7 @@ const BINS: usize = 16;
 const TRAVERSAL_COST: f64 = 3.0;
 
 /// Most primitive slots one BVH, or one node array holding several, can address: a leaf's first
-/// primitive has 27 bits.
+/// primitive has 24 bits.
 pub const MAX_PRIMITIVES: usize = 1 << LEAF_COUNT_SHIFT;
 
 /// One BVH node, 32 bytes, laid out for a traversal without a stack: the links visit the nodes depth
@@ -52,7 +56,7 @@ pub const MAX_PRIMITIVES: usize = 1 << LEAF_COUNT_SHIFT;
 /// sync with `BvhNode` in `accel/bvh_types.wgsl`.
 ///
 /// `entry`: for an internal node, its first child (the second is that child's `skip`); for a leaf,
-/// `LEAF | (count − 1) << 27 | first`, naming `Bvh::primitive_indices[first..first + count]`.
+/// `LEAF | (count − 1) << 24 | first`, naming `Bvh::primitive_indices[first..first + count]`.
 /// `skip`: the node that follows this one's subtree in depth-first order, where the traversal goes
 /// when the point is outside the box or after a leaf; [`END`] after the last.
 /// The root is node 0; an empty BVH has no nodes.
@@ -75,7 +79,7 @@ impl BvhNode {
         self.entry & LEAF != 0
     }
 
-    /// A leaf's `entry` for `count` (1 ..= 16) primitives from `first`.
+    /// A leaf's `entry` for `count` (1 ..= [`MAX_LEAF_SIZE`]) primitives from `first`.
     pub fn leaf_entry(first: u32, count: u32) -> u32 {
         debug_assert!((1..=MAX_LEAF_COUNT).contains(&count) && first <= LEAF_FIRST_MASK);
         LEAF | (count - 1) << LEAF_COUNT_SHIFT | first
@@ -120,9 +124,9 @@ impl Bvh {
     /// Every box must be finite and non-empty (flat or point boxes are fine): a NaN bound would make
     /// every comparison false and silently drop lights, so it is an error here instead. Nodes are laid
     /// out depth-first (a first child directly follows its parent), leaves hold 1 to
-    /// [`MAX_LEAF_SIZE`] primitives, and no path is deeper than [`MAX_DEPTH`].
+    /// [`SAH_MAX_LEAF_SIZE`] primitives, and no path is deeper than [`MAX_DEPTH`].
     pub fn build(aabbs: &[Aabb]) -> crate::Result<Bvh> {
-        Self::build_with_leaf_size(aabbs, MAX_LEAF_SIZE)
+        Self::build_with_leaf_size(aabbs, SAH_MAX_LEAF_SIZE)
     }
 
     /// As [`build`](Self::build), with leaves of at most `max_leaf_size` (1 to [`MAX_LEAF_SIZE`])
@@ -418,8 +422,8 @@ fn median_levels(count: usize, leaves: LeafSizes) -> u32 {
 /// `prims[..mid]` and `prims[mid..]` are the children (both non-empty).
 ///
 /// A SAH split is taken only if its larger child can still be finished by median splits within
-/// [`MAX_DEPTH`]; median splits halve the count, so from the root (at most 2^27 primitives, 26
-/// levels, 27 with leaves of one) that bound always holds.
+/// [`MAX_DEPTH`]; median splits halve the count, so from the root (at most 2^24 primitives, 23
+/// levels, 24 with leaves of one) that bound always holds.
 fn split(prims: &mut [Prim], bounds: Aabb, level: u32, leaves: LeafSizes) -> Option<usize> {
     let count = prims.len();
     if count <= leaves.split_above {

@@ -1,6 +1,6 @@
 // BVH nodes as `accel/bvh.rs` lays them out (keep in sync with `BvhNode` there), for a traversal
 // without a stack: `entry` is an internal node's first child (its second is that child's `skip`), or a
-// leaf's `BVH_LEAF | (count − 1) << 27 | first`, naming a range of what the BVH's leaves index (a group's
+// leaf's `BVH_LEAF | (count − 1) << 24 | first`, naming a range of what the BVH's leaves index (a group's
 // items in a volume structure, stored in leaf order; a top level's primitive indices); `skip`
 // is the node after the subtree, where the traversal goes when the point is outside the box or after
 // a leaf (BVH_END after the last). A lone BVH's root is node 0; in a two-level structure the top
@@ -16,8 +16,8 @@ struct BvhNode {
 
 const BVH_LEAF: u32 = 0x80000000u;
 const BVH_END: u32 = 0xffffffffu;
-const BVH_LEAF_COUNT_SHIFT: u32 = 27u;
-const BVH_LEAF_FIRST_MASK: u32 = 0x07ffffffu;
+const BVH_LEAF_COUNT_SHIFT: u32 = 24u;
+const BVH_LEAF_FIRST_MASK: u32 = 0x00ffffffu;
 
 // The range [x, y) a leaf's `entry` names.
 fn bvh_leaf_range(entry: u32) -> vec2<u32> {

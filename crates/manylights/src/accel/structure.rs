@@ -22,7 +22,7 @@ use bytemuck::Zeroable;
 use glam::Affine3A;
 
 use super::{
-    bvh::MAX_PRIMITIVES,
+    bvh::{MAX_LEAF_SIZE, MAX_PRIMITIVES},
     clusters::{ClusterBounds, ClusterGrid, ClusterLists},
     decal_aabb,
     entry_grid::{self, EntryGrid},
@@ -45,13 +45,22 @@ use crate::{
 /// passes (0.18 ms for 16 instances on an H100). Above it, the GPU builds the top level.
 pub const CPU_TOP_LEVEL_MAX_INSTANCES: usize = 1024;
 
-/// The dynamic group (particle lights, rebuilt every frame) gets leaves of up to this many lights:
-/// particles crowd, so hundreds reach each lit point, and a walk over one-light leaves visits about
-/// twenty nodes per light it finds. Bigger leaves trade node visits for range tests, which read the
-/// leaf's records side by side (they are written in leaf order): 1M particles shaded in 22.4 ms at 16,
-/// 23.5 at 8 and 38.6 at 1, before leaves named their items without an index (BENCHMARKS.md). 16 is
-/// the most a leaf can hold.
-pub const DYNAMIC_GROUP_LEAF_SIZE: u32 = 16;
+/// The leaves of the dynamic group (particle lights, rebuilt every frame), by how its queries walk
+/// (`passes::query_walks`). Particles crowd, so hundreds reach each lit point, and a walk over
+/// one-light leaves visits about twenty nodes per light it finds; bigger leaves trade node visits for
+/// range tests. Walking alone, an invocation tests every light of a leaf it reaches: 1M particles
+/// shaded in 22.4 ms at 16, 23.5 at 8 and 38.6 at 1 (BENCHMARKS.md). Walking as a subgroup, each lane
+/// tests one light of a leaf against the box around all the lanes' points, and the lanes then share
+/// only the lights some lane kept (`shading/enumerate/lights_bvh.wgsl`), so a leaf's size costs a
+/// few box tests per lane: 1M particles shaded in 15.3 ms at 16, 12.0 at 32, 11.2 at 64 and 7.8
+/// at 128 (the most a leaf holds) on the H100 (BENCHMARKS.md, "Leaves shared out").
+pub fn dynamic_group_leaf_size(subgroup_walks: bool) -> u32 {
+    if subgroup_walks {
+        MAX_LEAF_SIZE
+    } else {
+        16
+    }
+}
 
 /// Where and when the groups' BVHs are built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -550,7 +559,8 @@ impl VolumeStructure {
                 item_base: first,
                 leaf_base: first,
             };
-            let mut builder = GpuLbvh::with_target(ctx, d.count, target)?.with_max_leaf_size(DYNAMIC_GROUP_LEAF_SIZE);
+            let mut builder = GpuLbvh::with_target(ctx, d.count, target)?
+                .with_max_leaf_size(dynamic_group_leaf_size(ctx.features.contains(wgpu::Features::SUBGROUP)));
             builder.set_gpu_boxes(&ctx.queue, d.count, &d.bounds)?;
             groups.push(Group {
                 items: first..first + d.count,

@@ -17,3 +17,25 @@ fn VOLUMES_walk_covers() -> bool {
 fn VOLUMES_walk_shared() -> bool {
     return false;
 }
+
+// Sharing a leaf's items out (`volume_query_subgroup.wgsl`) with an invocation walking alone: a
+// subgroup of one lane, whose box is its own point.
+fn VOLUMES_walk_lanes() -> vec3<u32> {
+    return vec3<u32>(0u, 1u, 1u);
+}
+
+fn VOLUMES_walk_bounds(p: vec3<f32>) -> array<vec3<f32>, 2> {
+    return array<vec3<f32>, 2>(p, p);
+}
+
+fn VOLUMES_walk_ballot(keep: bool) -> vec4<u32> {
+    return vec4<u32>(u32(keep), 0u, 0u, 0u);
+}
+
+fn VOLUMES_walk_lane_u32(value: u32, lane: u32) -> u32 {
+    return value;
+}
+
+fn VOLUMES_walk_lane_vec4(value: vec4<f32>, lane: u32) -> vec4<f32> {
+    return value;
+}

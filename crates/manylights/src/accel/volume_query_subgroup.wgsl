@@ -30,3 +30,34 @@ fn VOLUMES_walk_covers() -> bool {
 fn VOLUMES_walk_shared() -> bool {
     return true;
 }
+
+// A leaf's items shared out among the lanes walking together: each active lane takes one item, tests
+// it against the box around every lane's point, and the subgroup then processes only the items some
+// lane kept (`shading/enumerate/lights_bvh.wgsl`). x: this lane's rank among the active lanes, y: how
+// many are active, z: how many words of a ballot hold them (one on subgroups of 32 lanes or fewer).
+fn VOLUMES_walk_lanes() -> vec3<u32> {
+    let lanes = subgroupBallot(true);
+    let words = select(select(select(1u, 2u, lanes.y != 0u), 3u, lanes.z != 0u), 4u, lanes.w != 0u);
+    return vec3<u32>(subgroupExclusiveAdd(1u), subgroupAdd(1u), words);
+}
+
+// The box around the active lanes' points, as (min, max). A point that is not finite is left out: a
+// fragment shader's helper lanes may compute one from storage they read as zero.
+fn VOLUMES_walk_bounds(p: vec3<f32>) -> array<vec3<f32>, 2> {
+    let finite = all(abs(p) < vec3<f32>(3e38));
+    return array<vec3<f32>, 2>(subgroupMin(select(vec3<f32>(3e38), p, finite)), subgroupMax(select(vec3<f32>(-3e38), p, finite)));
+}
+
+// The lanes for which `keep` holds, a bit each.
+fn VOLUMES_walk_ballot(keep: bool) -> vec4<u32> {
+    return subgroupBallot(keep);
+}
+
+// `value` as lane `lane` holds it.
+fn VOLUMES_walk_lane_u32(value: u32, lane: u32) -> u32 {
+    return subgroupShuffle(value, lane);
+}
+
+fn VOLUMES_walk_lane_vec4(value: vec4<f32>, lane: u32) -> vec4<f32> {
+    return subgroupShuffle(value, lane);
+}

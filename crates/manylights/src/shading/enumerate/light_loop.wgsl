@@ -1,17 +1,31 @@
-// One light of a light enumeration loop, shared by every method (`lights_*.wgsl`): the range test,
-// then the light's contribution, counted for the debug views, times its shadow ray's visibility.
+// One light of a light enumeration loop, shared by every method (`lights_*.wgsl`): the range and
+// horizon tests, then the light's contribution, counted for the debug views, times its shadow ray's
+// visibility.
 #include "shading/light_bindings.wgsl"
 #include "shading/lights.wgsl"
 #include "$LIGHT_SHADOWS"
 #include "shading/debug_view.wgsl"
 
-// Whether light `index` can reach `p` (group space) by its range. Most lights a loop meets are out of
-// range, so it reads the record's first 16 bytes (position and range) and the rest is loaded only for
-// lights that pass: a million particle lights shade 12 % faster through the BVH (BENCHMARKS.md).
-fn light_in_range(index: u32, p: vec3<f32>) -> bool {
-    let to_light = lights[index].position - p;
-    let range = lights[index].range;
-    return dot(to_light, to_light) < range * range;
+// A light's sphere of influence: its position and range, the record's first 16 bytes. Most lights a
+// loop meets are out of range, so it reads these and loads the rest only for lights that pass: a
+// million particle lights shade 12 % faster through the BVH (BENCHMARKS.md).
+fn light_sphere(index: u32) -> vec4<f32> {
+    return vec4<f32>(lights[index].position, lights[index].range);
+}
+
+// Whether a light's sphere can light the surface `local` (group space): the surface lies within its
+// range, and the light above the surface's horizon (`brdf_times_cosine` is zero below it). Lights of
+// a crowd that fail either are common; both tests come before the rest of the record is read.
+fn sphere_may_light(sphere: vec4<f32>, local: ShadingInput) -> bool {
+    let to_light = sphere.xyz - local.position;
+    return dot(to_light, to_light) < sphere.w * sphere.w && dot(local.normal, to_light) > 0.0;
+}
+
+// Whether a light's sphere reaches some point of the box [low, high] (group space): true for every
+// sphere that reaches a point inside the box.
+fn sphere_meets_box(sphere: vec4<f32>, low: vec3<f32>, high: vec3<f32>) -> bool {
+    let gap = max(max(low - sphere.xyz, sphere.xyz - high), vec3<f32>(0.0));
+    return dot(gap, gap) < sphere.w * sphere.w;
 }
 
 // The radiance light `index`, of the group `instance` places, adds at the surface: `local` is the
@@ -25,9 +39,21 @@ fn local_light_radiance(
     falloff: f32,
     shadow_rays: ptr<function, u32>,
 ) -> vec3<f32> {
-    if !light_in_range(index, local.position) {
+    if !sphere_may_light(light_sphere(index), local) {
         return vec3<f32>(0.0);
     }
+    return light_radiance_past_tests(index, instance, s, local, falloff, shadow_rays);
+}
+
+// `local_light_radiance` for a light that passed `sphere_may_light`.
+fn light_radiance_past_tests(
+    index: u32,
+    instance: VolumeInstance,
+    s: ShadingInput,
+    local: ShadingInput,
+    falloff: f32,
+    shadow_rays: ptr<function, u32>,
+) -> vec3<f32> {
     let light = lights[index];
     let contribution = light_contribution(light, local);
     if !any(contribution > vec3<f32>(0.0)) {

@@ -11,10 +11,15 @@
 var<private> light_surface: ShadingInput;
 var<private> light_surface_in_group: ShadingInput;
 var<private> light_falloff: f32;
+// Walking as a subgroup: the box around the lanes' surfaces in the group's space.
+var<private> light_walk_box: array<vec3<f32>, 2>;
 
 fn light_query_entered(instance: VolumeInstance) {
     light_surface_in_group = shading_input_in_group(light_surface, instance);
     light_falloff = instance_light_falloff(instance);
+    if light_walk_shared() {
+        light_walk_box = light_walk_bounds(light_surface_in_group.position);
+    }
 }
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
@@ -23,10 +28,33 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     debug_lights_reaching = 0u;
     light_surface = s;
     light_query_begin(s.position, frame.light_instance_count);
+    let lanes = light_walk_lanes();
     for (var leaf = light_query_next_leaf(); leaf.x != BVH_END; leaf = light_query_next_leaf()) {
         let instance = light_instances[light_query_instance_index];
-        for (var k = leaf.x; k < leaf.y; k += 1u) {
-            radiance += local_light_radiance(k, instance, s, light_surface_in_group, light_falloff, &shadow_rays);
+        if !light_walk_shared() {
+            for (var k = leaf.x; k < leaf.y; k += 1u) {
+                radiance += local_light_radiance(k, instance, s, light_surface_in_group, light_falloff, &shadow_rays);
+            }
+            continue;
+        }
+        // The subgroup's leaf: each lane tests one light against the box around all the lanes'
+        // points, then every lane takes the lights some lane kept, one after the other, their spheres
+        // from the lanes that read them. Lanes past the leaf's end read its last light and keep none.
+        // Only the ballot's words that hold lanes are read: one on 32-lane subgroups, where reading
+        // all four measured 17 % slower on the H100.
+        for (var first = leaf.x; first < leaf.y; first += lanes.y) {
+            let k = first + lanes.x;
+            let sphere = light_sphere(min(k, leaf.y - 1u));
+            let kept = light_walk_ballot(k < leaf.y && sphere_meets_box(sphere, light_walk_box[0], light_walk_box[1]));
+            for (var word = 0u; word < lanes.z; word += 1u) {
+                for (var bits = kept[word]; bits != 0u; bits &= bits - 1u) {
+                    let lane = word * 32u + firstTrailingBit(bits);
+                    if sphere_may_light(light_walk_lane_vec4(sphere, lane), light_surface_in_group) {
+                        let light = light_walk_lane_u32(k, lane);
+                        radiance += light_radiance_past_tests(light, instance, s, light_surface_in_group, light_falloff, &shadow_rays);
+                    }
+                }
+            }
         }
     }
     debug_light_work = light_query_visits;
