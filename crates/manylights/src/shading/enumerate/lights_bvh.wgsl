@@ -51,7 +51,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
                     let lane = word * 32u + firstTrailingBit(bits);
                     if sphere_may_light(light_walk_lane_vec4(sphere, lane), light_surface_in_group) {
                         let light = light_walk_lane_u32(k, lane);
-                        radiance += light_radiance_past_tests(light, instance, s, light_surface_in_group, light_falloff, &shadow_rays);
+                        radiance += light_radiance_in_range(light, instance, s, light_surface_in_group, light_falloff, &shadow_rays);
                     }
                 }
             }
