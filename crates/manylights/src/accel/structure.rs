@@ -52,8 +52,9 @@ pub const CPU_TOP_LEVEL_MAX_INSTANCES: usize = 1024;
 /// shaded in 22.4 ms at 16, 23.5 at 8 and 38.6 at 1 (BENCHMARKS.md). Walking as a subgroup, each lane
 /// tests one light of a leaf against the box around all the lanes' points, and the lanes then share
 /// only the lights some lane kept (`shading/enumerate/lights_bvh.wgsl`), so a leaf's size costs a
-/// few box tests per lane: 1M particles shaded in 15.3 ms at 16, 12.0 at 32, 11.2 at 64 and 7.8
-/// at 128 (the most a leaf holds) on the H100 (BENCHMARKS.md, "Leaves shared out").
+/// few box tests per lane: on the H100, 1M particles shaded in 15.3 ms at 16 and 12.0 at 32 (before
+/// the loop's later steps), 8.4 at 64 and 7.8 at 128, the most a leaf holds (BENCHMARKS.md, "Leaves
+/// shared out").
 pub fn dynamic_group_leaf_size(subgroup_walks: bool) -> u32 {
     if subgroup_walks {
         MAX_LEAF_SIZE
