@@ -4,11 +4,11 @@
 use glam::Vec3;
 
 use crate::{
-    accel::{clusters::ClusterGrid, VolumeStructure},
+    accel::{clusters::ClusterGrid, structure::dynamic_group_leaf_size, VolumeStructure},
     config::{DebugView, RenderConfig},
     gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
     particles::{ParticleGrid, ParticleSystem, ParticleVolume},
-    passes::deform::Deform,
+    passes::{deform::Deform, query_walks, ShadingStage},
     pipelines::{DecalMethod, FrameInputs, FramePipeline, FrameSetup, LightMethod, ParticleMethod, ShadingMethods},
     post::PostFrame,
     rays::{refit::BlasRefit, RayStructure, RayStructureStats},
@@ -127,6 +127,15 @@ impl Renderer {
                 config.light_method.name()
             )));
         }
+        let methods = ShadingMethods {
+            lights: config.light_method,
+            decals: config.decal_method,
+            particles: config.particle_method,
+            reflections: config.rays.reflection_bounces > 0,
+            light_shadows: config.rays.light_shadow_rays > 0,
+            subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
+            debug_views: config.debug_view != DebugView::Off,
+        };
         // The triangles' hierarchy is built (on the CPU, once) only for frames that trace rays.
         let rays = config.rays.traces_rays().then(|| RayStructure::build(scene)).transpose()?;
         let gpu_scene = GpuScene::upload(
@@ -159,6 +168,8 @@ impl Renderer {
                     light_build,
                     settings.count,
                     settings.bounds(),
+                    // Leaves to suit how shading walks them (the same in every stage).
+                    dynamic_group_leaf_size(query_walks(methods, ShadingStage::Compute).lights),
                 )?;
                 let targets = lights.dynamic_group().ok_or_else(|| Error::Gpu("the particle lights' group is missing".into()))?;
                 let particles = ParticleSystem::with_lights(&ctx, settings, targets)?;
@@ -181,15 +192,6 @@ impl Renderer {
             clusters(config.decal_method == DecalMethod::Clustered),
             gpu_scene.decal_material_base,
         )?;
-        let methods = ShadingMethods {
-            lights: config.light_method,
-            decals: config.decal_method,
-            particles: config.particle_method,
-            reflections: config.rays.reflection_bounces > 0,
-            light_shadows: config.rays.light_shadow_rays > 0,
-            subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
-            debug_views: config.debug_view != DebugView::Off,
-        };
         let setup = FrameSetup {
             methods,
             shadows: config.rays.sun_shadows,

@@ -49,12 +49,12 @@ pub const CPU_TOP_LEVEL_MAX_INSTANCES: usize = 1024;
 /// (`passes::query_walks`). Particles crowd, so hundreds reach each lit point, and a walk over
 /// one-light leaves visits about twenty nodes per light it finds; bigger leaves trade node visits for
 /// range tests. Walking alone, an invocation tests every light of a leaf it reaches: 1M particles
-/// shaded in 22.4 ms at 16, 23.5 at 8 and 38.6 at 1 (BENCHMARKS.md). Walking as a subgroup, each lane
+/// shaded in 41.6 ms at 16 and 81.4 at 1 (before leaves named their items directly; BENCHMARKS.md,
+/// "Subgroup walks, particle leaves and finer entry grids"). Walking as a subgroup, each lane
 /// tests one light of a leaf against the box around all the lanes' points, and the lanes then share
 /// only the lights some lane kept (`shading/enumerate/lights_bvh.wgsl`), so a leaf's size costs a
-/// few box tests per lane: on the H100, 1M particles shaded in 15.3 ms at 16 and 12.0 at 32 (before
-/// the loop's later steps), 8.4 at 64 and 7.8 at 128, the most a leaf holds (BENCHMARKS.md, "Leaves
-/// shared out").
+/// few box tests per lane: on the H100, 1M particles shaded in 12.5 ms at 16, 10.2 at 32, 9.3 at 64
+/// and 8.6 at 128, the most a leaf holds (BENCHMARKS.md, "Leaves shared out").
 pub fn dynamic_group_leaf_size(subgroup_walks: bool) -> u32 {
     if subgroup_walks {
         MAX_LEAF_SIZE
@@ -212,6 +212,8 @@ pub struct DynamicGroup {
     pub count: u32,
     /// Bounds every one of its boxes stays within (its place in the top level).
     pub bounds: Aabb,
+    /// The most boxes a leaf of its LBVH holds ([`dynamic_group_leaf_size`]).
+    pub leaf_size: u32,
 }
 
 /// Where GPU passes write a [`DynamicGroup`]'s volumes each frame: their boxes into `boxes`, before
@@ -291,7 +293,8 @@ impl VolumeStructure {
     }
 
     /// The structure over a scene's lights and `particle_lights` point lights more, which a GPU pass
-    /// writes every frame ([`dynamic_group`](Self::dynamic_group)) within `particle_bounds`.
+    /// writes every frame ([`dynamic_group`](Self::dynamic_group)) within `particle_bounds`, in leaves
+    /// of up to `leaf_size` ([`dynamic_group_leaf_size`]).
     pub fn for_lights_and_particles(
         ctx: &GpuContext,
         lights: &[Light],
@@ -299,10 +302,11 @@ impl VolumeStructure {
         build: BvhBuild,
         particle_lights: u32,
         particle_bounds: Aabb,
+        leaf_size: u32,
     ) -> Result<Self> {
         let items: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
         let boxes: Vec<Aabb> = lights.iter().map(light_aabb).collect();
-        let dynamic = DynamicGroup { count: particle_lights, bounds: particle_bounds };
+        let dynamic = DynamicGroup { count: particle_lights, bounds: particle_bounds, leaf_size };
         let volumes =
             Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: Some(dynamic) };
         Self::new(ctx, &volumes, build, None)
@@ -414,7 +418,10 @@ impl VolumeStructure {
         let node_count = u64::from(node_base);
         let primitive_count = u64::from(instance_slots) + count as u64 + u64::from(dynamic_count);
         if primitive_count > MAX_PRIMITIVES as u64 {
-            return Err(Error::InvalidScene(format!("{count} {label}s; a structure holds at most {MAX_PRIMITIVES} volumes and instances")));
+            let particles = if dynamic_count > 0 { format!(" (and {dynamic_count} particle {label}s)") } else { String::new() };
+            return Err(Error::InvalidScene(format!(
+                "{count} {label}s{particles} and {instance_slots} instance slots; a structure holds at most {MAX_PRIMITIVES} volumes and instances: use fewer {label}s"
+            )));
         }
         let fits = |what: &str, bytes: u64| {
             ctx.check_storage_binding(&format!("{label} {what}"), bytes)
@@ -560,8 +567,7 @@ impl VolumeStructure {
                 item_base: first,
                 leaf_base: first,
             };
-            let mut builder = GpuLbvh::with_target(ctx, d.count, target)?
-                .with_max_leaf_size(dynamic_group_leaf_size(ctx.features.contains(wgpu::Features::SUBGROUP)));
+            let mut builder = GpuLbvh::with_target(ctx, d.count, target)?.with_max_leaf_size(d.leaf_size);
             builder.set_gpu_boxes(&ctx.queue, d.count, &d.bounds)?;
             groups.push(Group {
                 items: first..first + d.count,

@@ -10,7 +10,11 @@
 // invocation's point, `VOLUMES_walk_cells(start, stop)`, the range of nodes to walk for this
 // invocation's entry-grid cell, `VOLUMES_walk_covers()`, whether a cell naming several subtrees has
 // them walked one by one, or as one range from the first to the last, and `VOLUMES_walk_shared()`,
-// whether the subgroup walks as one (callers choose by it what to hold through the walk).
+// whether the subgroup walks as one (callers choose by it what to hold through the walk). For callers
+// that share a leaf's items out among the lanes walking together (`shading/enumerate/lights_bvh.wgsl`)
+// it also defines `VOLUMES_walk_lanes()`, `VOLUMES_walk_bounds(p)`, `VOLUMES_walk_ballot(keep)` and
+// `VOLUMES_walk_lane_u32` / `_vec4(value, lane)`: one lane's trivial versions where each invocation
+// walks alone.
 //
 // Inside a group the query starts where the group's entry grid says, if it has one (CPU-built groups,
 // laid out depth first, so every step of a walk moves to a higher node), and ends at or past the node

@@ -7,7 +7,7 @@
 
 // A light's sphere of influence: its position and range, the record's first 16 bytes. Most lights a
 // loop meets are out of range, so it reads these and loads the rest only for lights that pass: a
-// million particle lights shade 12 % faster through the BVH (BENCHMARKS.md).
+// million particle lights shaded 12 % faster through the BVH (BENCHMARKS.md, as `light_in_range`).
 fn light_sphere(index: u32) -> vec4<f32> {
     return vec4<f32>(lights[index].position, lights[index].range);
 }
@@ -20,7 +20,7 @@ fn sphere_reaches(sphere: vec4<f32>, p: vec3<f32>) -> bool {
 
 // Whether a light's sphere can light the surface `local` (group space): within its range, and above
 // the surface's horizon (`brdf_times_cosine` is zero below it). For crowds of lights, where most
-// lights in range of a point still fail the horizon test: 1M exact particles shade 1.4 ms faster on
+// lights in range of a point still fail the horizon test: 1M exact particles shade 1.1 ms faster on
 // the H100 with it (BENCHMARKS.md, "Leaves shared out"). Loops that meet mostly lights out of range
 // test the range alone: the horizon test made 28k lights by brute force 5 % slower there.
 fn sphere_may_light(sphere: vec4<f32>, local: ShadingInput) -> bool {

@@ -28,6 +28,9 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     debug_lights_reaching = 0u;
     light_surface = s;
     light_query_begin(s.position, frame.light_instance_count);
+    // Counted once: the lanes that begin the query walk it to its end together, every one reading
+    // the same nodes. (Lavapipe's fragment helper lanes read storage as zero; on Sponza's triangle
+    // edges their images still equal those of lanes testing every light of a leaf themselves.)
     let lanes = light_walk_lanes();
     for (var leaf = light_query_next_leaf(); leaf.x != BVH_END; leaf = light_query_next_leaf()) {
         let instance = light_instances[light_query_instance_index];
@@ -38,10 +41,11 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             continue;
         }
         // The subgroup's leaf: each lane tests one light against the box around all the lanes'
-        // points, then every lane takes the lights some lane kept, one after the other, their spheres
-        // from the lanes that read them. Lanes past the leaf's end read its last light and keep none.
-        // Only the ballot's words that hold lanes are read: one on 32-lane subgroups, where reading
-        // all four measured 17 % slower on the H100.
+        // points, then every lane takes the lights some lane kept, one after the other, their index
+        // and sphere from the lanes that read them. The shuffles run before any lane's own test: a
+        // lane shuffles only from active lanes (from one that had left, the H100 returned garbage).
+        // Lanes past the leaf's end read its last light and keep none. Only the ballot's words that
+        // hold lanes are read: one on 32-lane subgroups.
         for (var first = leaf.x; first < leaf.y; first += lanes.y) {
             let k = first + lanes.x;
             let sphere = light_sphere(min(k, leaf.y - 1u));
@@ -49,8 +53,8 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             for (var word = 0u; word < lanes.z; word += 1u) {
                 for (var bits = kept[word]; bits != 0u; bits &= bits - 1u) {
                     let lane = word * 32u + firstTrailingBit(bits);
+                    let light = light_walk_lane_u32(k, lane);
                     if sphere_may_light(light_walk_lane_vec4(sphere, lane), light_surface_in_group) {
-                        let light = light_walk_lane_u32(k, lane);
                         radiance += light_radiance_in_range(light, instance, s, light_surface_in_group, light_falloff, &shadow_rays);
                     }
                 }
