@@ -224,6 +224,18 @@ fn bad_particle_settings_are_clear_errors() {
     let wide = ParticleSettings { radius: (1.0, 16.0), ..settings(10) };
     let err = ParticleSystem::new(&ctx, &wide, ParticleVolume::World(grid(0.25))).err().expect("a 16 m particle").to_string();
     assert!(err.contains("larger voxels") && err.contains("smaller particle radius"), "{err}");
+    // As exact lights, the most particles allowed and a few hundred scene lights overflow what one
+    // structure addresses (2^24 items and instances): an error before anything is allocated.
+    let lights = (0..300).map(|i| point_light(Vec3::new(0.01 * i as f32, 0.0, 1.0), 1.0, 1.0)).collect();
+    let (mut scene, _) = wall_scene(lights);
+    scene.particles = Some(ParticleSettings { count: manylights::particles::MAX_PARTICLES, ..settings(10) });
+    let exact =
+        RenderConfig { particle_method: ParticleMethod::Bvh, decal_method: DecalMethod::Off, ..config(SIZE.0, SIZE.1, LightMethod::Bvh) };
+    let err = manylights::renderer::Renderer::new(ctx, &scene, exact).err().expect("too many lights").to_string();
+    assert!(
+        err.contains("300 lights (and 16776960 particle lights)") && err.contains("at most 16777216") && err.contains("use fewer"),
+        "{err}"
+    );
 }
 
 /// One particle that stays where it is launched (no speed, no gravity): 1 m in front of the white
