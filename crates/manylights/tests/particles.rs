@@ -224,16 +224,19 @@ fn bad_particle_settings_are_clear_errors() {
     let wide = ParticleSettings { radius: (1.0, 16.0), ..settings(10) };
     let err = ParticleSystem::new(&ctx, &wide, ParticleVolume::World(grid(0.25))).err().expect("a 16 m particle").to_string();
     assert!(err.contains("larger voxels") && err.contains("smaller particle radius"), "{err}");
-    // As exact lights, the most particles allowed and a few hundred scene lights overflow what one
-    // structure addresses (2^24 items and instances): an error before anything is allocated.
-    let lights = (0..300).map(|i| point_light(Vec3::new(0.01 * i as f32, 0.0, 1.0), 1.0, 1.0)).collect();
+    // As exact lights, the most particles allowed and 255 scene lights fill what one structure
+    // addresses (2^24 items and instances) but for one slot, and the instance slots of the two
+    // groups overflow it: an error before anything is allocated.
+    let lights = (0..255).map(|i| point_light(Vec3::new(0.01 * i as f32, 0.0, 1.0), 1.0, 1.0)).collect();
     let (mut scene, _) = wall_scene(lights);
     scene.particles = Some(ParticleSettings { count: manylights::particles::MAX_PARTICLES, ..settings(10) });
     let exact =
         RenderConfig { particle_method: ParticleMethod::Bvh, decal_method: DecalMethod::Off, ..config(SIZE.0, SIZE.1, LightMethod::Bvh) };
     let err = manylights::renderer::Renderer::new(ctx, &scene, exact).err().expect("too many lights").to_string();
     assert!(
-        err.contains("300 lights (and 16776960 particle lights)") && err.contains("at most 16777216") && err.contains("use fewer"),
+        err.contains("255 lights (and 16776960 particle lights) and 2 instance slots")
+            && err.contains("at most 16777216")
+            && err.contains("use fewer lights or particles"),
         "{err}"
     );
 }
@@ -473,10 +476,10 @@ fn particles_as_lights_equal_their_point_lights() {
                 renderer.render(&camera).unwrap();
                 let difference = max_abs_difference(&renderer.read_hdr().unwrap(), &reference);
                 assert!(
-                difference <= 1e-3,
-                "{wall}, {} pipeline, {walk} walk, scene lights {light_bvh_build:?}: max abs difference {difference} from the point lights",
-                pipeline.name()
-            );
+                    difference <= 1e-3,
+                    "{wall}, {} pipeline, {walk} walk, scene lights {light_bvh_build:?}: max abs difference {difference} from the point lights",
+                    pipeline.name()
+                );
             }
         }
     }

@@ -418,9 +418,13 @@ impl VolumeStructure {
         let node_count = u64::from(node_base);
         let primitive_count = u64::from(instance_slots) + count as u64 + u64::from(dynamic_count);
         if primitive_count > MAX_PRIMITIVES as u64 {
-            let particles = if dynamic_count > 0 { format!(" (and {dynamic_count} particle {label}s)") } else { String::new() };
+            let (particles, fewer) = if dynamic_count > 0 {
+                (format!(" (and {dynamic_count} particle {label}s)"), format!("{label}s or particles"))
+            } else {
+                (String::new(), format!("{label}s"))
+            };
             return Err(Error::InvalidScene(format!(
-                "{count} {label}s{particles} and {instance_slots} instance slots; a structure holds at most {MAX_PRIMITIVES} volumes and instances: use fewer {label}s"
+                "{count} {label}s{particles} and {instance_slots} instance slots; a structure holds at most {MAX_PRIMITIVES} volumes and instances: use fewer {fewer}"
             )));
         }
         let fits = |what: &str, bytes: u64| {

@@ -28,9 +28,9 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     debug_lights_reaching = 0u;
     light_surface = s;
     light_query_begin(s.position, frame.light_instance_count);
-    // Counted once: the lanes that begin the query walk it to its end together, every one reading
-    // the same nodes. (Lavapipe's fragment helper lanes read storage as zero; on Sponza's triangle
-    // edges their images still equal those of lanes testing every light of a leaf themselves.)
+    // Counted once, so every lane counted here must stay in the query to its end, or its share of
+    // each later leaf goes untested: every loop of the shared walk runs the same trips in every lane
+    // (docs/ARCHITECTURE.md, "The point query", on helper lanes and reflection bounces).
     let lanes = light_walk_lanes();
     for (var leaf = light_query_next_leaf(); leaf.x != BVH_END; leaf = light_query_next_leaf()) {
         let instance = light_instances[light_query_instance_index];
