@@ -30,7 +30,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     light_query_begin(s.position, frame.light_instance_count);
     // Counted once, so every lane counted here must stay in the query to its end, or its share of
     // each later leaf goes untested: every loop of the shared walk runs the same trips in every lane
-    // (docs/ARCHITECTURE.md, "The point query", on helper lanes and reflection bounces).
+    // (docs/ARCHITECTURE.md, "Acceleration structures", the point query: helper lanes, reflections).
     let lanes = light_walk_lanes();
     for (var leaf = light_query_next_leaf(); leaf.x != BVH_END; leaf = light_query_next_leaf()) {
         let instance = light_instances[light_query_instance_index];
