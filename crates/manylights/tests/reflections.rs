@@ -199,6 +199,59 @@ fn particle_by_the_panel() -> ParticleSettings {
     }
 }
 
+/// A crowd of particle lights reflected exactly: reflection rays' hit points are shaded inside per-lane
+/// control flow (lanes whose rays miss have left), where the subgroup walk shares each leaf's lights
+/// out among the lanes still bouncing; the mirror shows the crowd as their point lights through
+/// brute force show it, in every pipeline.
+#[test]
+fn a_mirror_shows_a_crowd_of_particle_lights_as_their_point_lights() {
+    let settings = ParticleSettings {
+        count: 2000,
+        seed: 11,
+        emitters: vec![(Vec3::new(0.5, 7.0, PANEL_Z + 1.0), 1.5)],
+        radius: (0.5, 1.5),
+        intensity: 0.05,
+        ..ParticleSettings::default()
+    };
+    let lights: Vec<Light> = (0..settings.count)
+        .map(|i| {
+            let p = settings.particle_at(i, 0.0);
+            Light { color: p.color, intensity: 1.0, ..point_light(p.position, 1.0, p.radius) }
+        })
+        .collect();
+    let (mut scene, camera) = mirror_scene(Vec::new(), Vec::new());
+    scene.particles = Some(settings);
+    let (lamp_scene, _) = mirror_scene(lights, Vec::new());
+    let (unlit_scene, _) = mirror_scene(Vec::new(), Vec::new());
+    for pipeline in PipelineKind::ALL {
+        let reflect = |scene: &Scene, lights, particles| {
+            let rays = RaySettings { reflection_bounces: 1, ..Default::default() };
+            let config = RenderConfig {
+                decal_method: DecalMethod::Off,
+                particle_method: particles,
+                pipeline,
+                rays,
+                ..config(WIDTH, HEIGHT, lights)
+            };
+            render_with(scene, &camera, config).1
+        };
+        let exact = reflect(&scene, LightMethod::Bvh, ParticleMethod::Bvh);
+        let lamps = reflect(&lamp_scene, LightMethod::Brute, ParticleMethod::Off);
+        let unlit = reflect(&unlit_scene, LightMethod::Off, ParticleMethod::Off);
+        let mut reflected_light = 0.0;
+        for y in 0..HEIGHT {
+            for x in 0..WIDTH {
+                if reflected(&camera, x, y).is_some_and(|r| r != Reflected::Elsewhere) {
+                    reflected_light += luminance(pixel(&lamps, x, y)) - luminance(pixel(&unlit, x, y));
+                }
+            }
+        }
+        assert!(reflected_light > 1.0, "{}: the crowd barely lights the reflected panel: {reflected_light}", pipeline.name());
+        let difference = max_abs_difference(&exact, &lamps);
+        assert!(difference < 1e-3, "{}: the exact crowd differs from its point lights by {difference}", pipeline.name());
+    }
+}
+
 /// Particle lights reach reflections' hit points too: exactly, as point lights in the lights' BVH
 /// (equal to the same point light), and through the 3D-texture grid, close to it.
 #[test]
