@@ -109,7 +109,7 @@ fn deferred_decal_fragment(in: DecalVertex) -> DecalTexel {
     let dp = gbuffer_position_gradients(pixel, relative_position, s.normal);
 
     decal_blend_begin();
-    decal_accumulate(decals[in.pair.y], instance, instance_point_to_group(instance, s.position), decal_surface_in_group(decal_world_surface(s, dp), instance));
+    decal_accumulate(in.pair.y, instance, instance_point_to_group(instance, s.position), decal_surface_in_group(decal_world_surface(s, dp), instance));
     let layer = min(decals[in.pair.y].layer, DECAL_LAYERS - 1u);
     if decal_layers_touched == 0u {
         discard;

@@ -3,6 +3,6 @@
 // into the light loops, whose registers it would otherwise claim.
 #include "shading/light_bindings.wgsl"
 
-fn light_visibility(light: Light, instance: VolumeInstance, s: ShadingInput, budget: ptr<function, u32>) -> f32 {
+fn light_visibility(index: u32, sphere: vec4<f32>, instance: VolumeInstance, s: ShadingInput, budget: ptr<function, u32>) -> f32 {
     return 1.0;
 }

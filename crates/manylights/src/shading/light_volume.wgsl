@@ -2,8 +2,9 @@
 #include "shading/types.wgsl"
 #include "accel/bvh_types.wgsl"
 
-// The tight test: whether `p` lies inside the light's range (and cone). `light_contribution` (lights.wgsl)
-// is zero wherever this is false; the CPU twin is `accel::volumes::light_contains`.
+// The tight test: whether `p` lies inside the light's range (and cone). `light_contribution`
+// (`enumerate/light_loop.wgsl`) is zero wherever this is false; the CPU twin is
+// `accel::volumes::light_contains`.
 fn light_reaches(light: Light, p: vec3<f32>) -> bool {
     let to_light = light.position - p;
     let distance_sq = dot(to_light, to_light);

@@ -5,24 +5,19 @@
 // Punctual lights with the KHR_lights_punctual falloff: inverse square, windowed to reach zero at the
 // light's range, and the glTF smooth spot cone.
 
-// Radiance a light reflects towards the viewer; zero outside its range and cone.
-fn light_contribution(light: Light, s: ShadingInput) -> vec3<f32> {
-    let to_light = light.position - s.position;
-    let distance_sq = dot(to_light, to_light);
-    let range_sq = light.range * light.range;
-    if distance_sq >= range_sq {
-        return vec3<f32>(0.0);
-    }
-    let light_dir = to_light * inverseSqrt(max(distance_sq, 1e-12));
-    // glTF's recommended window: (1 - (d / range)^4)^2, clamped.
-    let ratio_sq = distance_sq / range_sq;
+// The attenuation at squared distance `distance_sq` (within the range) of a light of range `range`:
+// inverse square times glTF's recommended window, (1 - (d / range)^4)^2, clamped.
+fn light_distance_attenuation(distance_sq: f32, range: f32) -> f32 {
+    let ratio_sq = distance_sq / (range * range);
     let window = saturate(1.0 - ratio_sq * ratio_sq);
-    var attenuation = window * window / max(distance_sq, 1e-4);
-    if light.kind == LIGHT_SPOT {
-        let cone = saturate(dot(light.direction, -light_dir) * light.spot_scale + light.spot_offset);
-        attenuation *= cone * cone;
-    }
-    return light.radiant * attenuation * brdf_times_cosine(s, light_dir);
+    return window * window / max(distance_sq, 1e-4);
+}
+
+// The glTF smooth spot cone towards `light_dir` (from the surface to the light) of a spot pointing
+// along `axis`, its cone as glTF's scale and offset.
+fn spot_cone_attenuation(axis: vec3<f32>, scale: f32, offset: f32, light_dir: vec3<f32>) -> f32 {
+    let cone = saturate(dot(axis, -light_dir) * scale + offset);
+    return cone * cone;
 }
 
 

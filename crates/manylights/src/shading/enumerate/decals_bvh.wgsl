@@ -31,7 +31,7 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
             if decal_walk_shared() {
                 surface = decal_surface_in_group(decal_world, decal_instance);
             }
-            decal_accumulate(decals[k], decal_instance, decal_query_point, surface);
+            decal_accumulate(k, decal_instance, decal_query_point, surface);
         }
     }
     return decal_blend_end(s);
