@@ -117,14 +117,14 @@ fn material_name(stamp: &Stamp) -> String {
 }
 
 /// Appends the procedural decal materials and their textures to `scene`; returns the new materials'
-/// indices. Deterministic.
+/// indices. Deterministic. Their textures are clamped to the edges, as decals sample them.
 pub fn add_decal_materials(scene: &mut Scene) -> Range<usize> {
     let first = scene.materials.len();
     for stamp in &STAMPS {
         let mut add = |kind: &str, texel: &dyn Fn(Vec2) -> [u8; 4]| {
             let name = format!("{} {kind}", material_name(stamp));
             scene.textures.push(texture(&name, DECAL_TEXTURE_SIZE, |x, y| texel(texture_point(x, y))));
-            Some(TextureRef { texture: scene.textures.len() - 1, wrap_u: Wrap::Repeat, wrap_v: Wrap::Repeat })
+            Some(TextureRef { texture: scene.textures.len() - 1, wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::ClampToEdge })
         };
         let base_color_texture = add("albedo", &|p| (stamp.albedo)(p).to_array().map(unorm8));
         let normal_texture = stamp.height.and_then(|height| add("normal", &|p| normal_texel(height, p)));
@@ -391,7 +391,7 @@ mod tests {
         for m in &scene.materials[range] {
             let refs = [m.base_color_texture, m.normal_texture, m.metallic_roughness_texture];
             for t in refs.into_iter().flatten() {
-                assert_eq!((t.wrap_u, t.wrap_v), (Wrap::Repeat, Wrap::Repeat), "{}", m.name);
+                assert_eq!((t.wrap_u, t.wrap_v), (Wrap::ClampToEdge, Wrap::ClampToEdge), "{}", m.name);
                 let image = &scene.textures[t.texture];
                 assert_eq!((image.width, image.height), (DECAL_TEXTURE_SIZE, DECAL_TEXTURE_SIZE));
             }

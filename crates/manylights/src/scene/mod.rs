@@ -214,6 +214,8 @@ pub struct Decal {
     pub world_from_decal: Affine3A,
     /// The material whose base colour (albedo and alpha), metallic-roughness and normal texture it
     /// projects. Factors apply as on surfaces; without a normal texture the decal leaves normals alone.
+    /// Its textures are sampled clamped to their edges, whatever their wrap modes: a decal projects
+    /// its image once over its box.
     pub material: usize,
     /// 0 .. DECAL_LAYERS - 1; higher layers cover lower ones.
     pub layer: u32,

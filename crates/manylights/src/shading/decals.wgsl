@@ -86,9 +86,8 @@ fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surf
     // u along +x, v down along -y: the image as seen from the projector.
     let g = UvGradients(vec2<f32>(p.x + 0.5, 0.5 - p.y), vec2<f32>(ddx.x, -ddx.y), vec2<f32>(ddy.x, -ddy.y));
 
-    // The material's record for decals: its textures are in the decal arrays.
-    let material = materials[decals[index].material];
-    let color = material_base_color(decal_color_textures, material, g);
+    let material = decals[index].material;
+    let color = decal_base_color(material, g);
     let alpha = saturate(color.a) * smoothstep(0.0, DECAL_FULL_FACING, facing);
     if alpha <= 0.0 {
         return;
@@ -97,7 +96,7 @@ fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surf
         debug_decals_covering += 1u;
     }
     let aw = alpha * decals[index].weight;
-    let roughness_metallic = material_roughness_metallic(decal_data_textures, material, g);
+    let roughness_metallic = decal_roughness_metallic(material, g);
     let layer = min(decals[index].layer, DECAL_LAYERS - 1u);
     if (decal_layers_touched & (1u << layer)) == 0u {
         decal_layers_touched |= 1u << layer;
@@ -109,7 +108,7 @@ fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surf
     decal_layers[layer].alpha_weight += aw;
     decal_layers[layer].transmittance *= 1.0 - alpha;
 
-    if material.normal_layer != NO_TEXTURE {
+    if materials[material].normal_layer != NO_TEXTURE {
         // The decal's tangent frame on the surface: its x axis made orthogonal to the surface normal,
         // and the normal's cross product with that on the side of its y axis, so the normal map bends
         // the surface's own normal; the result turned into the world. (The axis is not parallel to
@@ -119,11 +118,36 @@ fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surf
         let t = normalize(axis_x - n * dot(n, axis_x));
         let n_cross_t = cross(n, t);
         let b = select(n_cross_t, -n_cross_t, dot(n_cross_t, decal_from_group[1].xyz) < 0.0);
-        let decal_normal = instance_direction_to_world(instance, material_mapped_normal(decal_data_textures, material, g, n, t, b));
+        let texel = textureSampleGrad(decal_data_textures, wrap_u2_v2, g.uv, materials[material].normal_layer, g.ddx, g.ddy).xyz;
+        let decal_normal = instance_direction_to_world(instance, normal_map_applied(texel, materials[material].normal_scale, n, t, b));
         decal_layers[layer].normal += decal_normal * aw;
         decal_layers[layer].normal_alpha_weight += aw;
         decal_layers[layer].normal_transmittance *= 1.0 - alpha;
     }
+}
+
+// A decal material's base colour with alpha and its roughness and metallic, as `material.wgsl`'s for
+// surfaces, from the material's record for decals (its textures in the decal arrays), read field by
+// field. Decals sample their textures clamped to the edges (`wrap_u2_v2`), whatever the material's
+// wrap modes (`scene::Decal`): the switch over the nine wrap-mode samplers that surfaces take cost
+// 100k decals 0.22 ms of shading in the visibility buffer and 4.7 ms in fragments on the H100
+// (BENCHMARKS.md, "Decal textures clamped to their edges").
+fn decal_base_color(material: u32, g: UvGradients) -> vec4<f32> {
+    var color = materials[material].base_color_factor;
+    let layer = materials[material].base_color_layer;
+    if layer != NO_TEXTURE {
+        color *= textureSampleGrad(decal_color_textures, wrap_u2_v2, g.uv, layer, g.ddx, g.ddy);
+    }
+    return color;
+}
+
+fn decal_roughness_metallic(material: u32, g: UvGradients) -> vec2<f32> {
+    var roughness_metallic = vec2<f32>(materials[material].roughness_factor, materials[material].metallic_factor);
+    let layer = materials[material].metallic_roughness_layer;
+    if layer != NO_TEXTURE {
+        roughness_metallic *= textureSampleGrad(decal_data_textures, wrap_u2_v2, g.uv, layer, g.ddx, g.ddy).gb;
+    }
+    return saturate(roughness_metallic);
 }
 
 // The surface with every accumulated layer blended over it, bottom to top.

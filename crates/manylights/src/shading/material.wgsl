@@ -27,8 +27,8 @@ fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Materia
 }
 
 // The three below read a material's textures from `colors` (sRGB: base colour, emissive) and `data`
-// (linear: metallic-roughness, normal): `color_textures` and `data_textures` for surfaces, the decal
-// arrays for decal materials.
+// (linear: metallic-roughness, normal), `color_textures` and `data_textures` (decals sample their own
+// arrays, clamped, in `decals.wgsl`).
 
 // Base colour with alpha; used for alpha masking too.
 fn material_base_color(colors: texture_2d_array<f32>, material: Material, g: UvGradients) -> vec4<f32> {
@@ -51,8 +51,13 @@ fn material_roughness_metallic(data: texture_2d_array<f32>, material: Material, 
 // The material's normal map (it must have one) applied in the frame (t, b, n); a zero-length result
 // (blank normal map texel) keeps n.
 fn material_mapped_normal(data: texture_2d_array<f32>, material: Material, g: UvGradients, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    var n_ts = sample_wrapped(data, material.normal_layer, material, 3u, g).xyz * 2.0 - 1.0;
-    n_ts = vec3<f32>(n_ts.xy * material.normal_scale, n_ts.z);
+    return normal_map_applied(sample_wrapped(data, material.normal_layer, material, 3u, g).xyz, material.normal_scale, n, t, b);
+}
+
+// A normal map's texel (tangent space, [0, 1]), its x and y scaled by `scale`, in the frame (t, b, n).
+fn normal_map_applied(texel: vec3<f32>, scale: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    var n_ts = texel * 2.0 - 1.0;
+    n_ts = vec3<f32>(n_ts.xy * scale, n_ts.z);
     let mapped = t * n_ts.x + b * n_ts.y + n * n_ts.z;
     return select(n, normalize(mapped), dot(mapped, mapped) > 1e-12);
 }
