@@ -258,11 +258,10 @@ fn decal_textures_are_clamped_to_their_edges_whatever_their_wrap_modes() {
     };
     let on_wall = |p: [f32; 4]| (Vec3::new(p[0], p[1], p[2]) - WALL_COLOR).abs().max_element() < 1e-4;
     for method in BLENDING_METHODS {
+        // Magnified, mirrored repeat would read the texels clamping reads: repeat is the mode that differs.
         let clamped = render(Wrap::ClampToEdge, method);
-        for wrap in [Wrap::Repeat, Wrap::MirroredRepeat] {
-            let difference = max_abs_difference(&clamped, &render(wrap, method));
-            assert!(difference == 0.0, "{}: the decal changed by {difference} with its texture's wrap mode {wrap:?}", method.name());
-        }
+        let difference = max_abs_difference(&clamped, &render(Wrap::Repeat, method));
+        assert!(difference == 0.0, "{}: the decal changed by {difference} with its texture repeated", method.name());
         // The decal's leftmost pixel on the middle row, within a seventh of a texel of its edge: repeated,
         // over a third of it would be green.
         let edge = (0..256).map(|x| pixel(&clamped, x, 72)).find(|&p| !on_wall(p)).expect("the decal is not visible");

@@ -27,8 +27,8 @@ fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Materia
 }
 
 // The three below read a material's textures from `colors` (sRGB: base colour, emissive) and `data`
-// (linear: metallic-roughness, normal), `color_textures` and `data_textures` (decals sample their own
-// arrays, clamped, in `decals.wgsl`).
+// (linear: metallic-roughness, normal): the surfaces' `color_textures` and `data_textures` (decals
+// sample their own arrays, clamped, in `decals.wgsl`).
 
 // Base colour with alpha; used for alpha masking too.
 fn material_base_color(colors: texture_2d_array<f32>, material: Material, g: UvGradients) -> vec4<f32> {

@@ -54,9 +54,9 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
                 for (var bits = kept[word]; bits != 0u; bits &= bits - 1u) {
                     let lane = word * 32u + firstTrailingBit(bits);
                     let light = light_walk_lane_u32(k, lane);
-                    let light_sphere = light_walk_lane_vec4(sphere, lane);
-                    if sphere_may_light(light_sphere, light_surface_in_group) {
-                        radiance += light_radiance_in_range(light, light_sphere, instance, s, light_surface_in_group, light_falloff, &shadow_rays);
+                    let lane_sphere = light_walk_lane_vec4(sphere, lane);
+                    if sphere_may_light(lane_sphere, light_surface_in_group) {
+                        radiance += light_radiance_in_range(light, lane_sphere, instance, s, light_surface_in_group, light_falloff, &shadow_rays);
                     }
                 }
             }
