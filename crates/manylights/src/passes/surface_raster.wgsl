@@ -67,7 +67,7 @@ fn fragment_shading_surface(in: ForwardVertex, front_facing: bool, g: UvGradient
 // Whether an alpha-masked fragment covers its pixel (derivatives taken before any discard).
 fn forward_alpha_covers(in: ForwardVertex, g: UvGradients) -> bool {
     let material = materials[draws[in.draw_index].material];
-    return material_base_color(color_textures, material, g).a >= material.alpha_cutoff;
+    return material_base_color(material, g).a >= material.alpha_cutoff;
 }
 
 // The unit geometric normal of the fragment's triangle, from its position derivatives, on the

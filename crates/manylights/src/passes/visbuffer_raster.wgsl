@@ -31,5 +31,5 @@ fn raster_vertex(draw_index: u32, vertex: Vertex, visibility_id: u32) -> VertexO
 fn raster_alpha_covers(in: VertexOutput) -> bool {
     let material = materials[draws[in.draw_index].material];
     let g = UvGradients(in.uv, dpdx(in.uv), dpdy(in.uv));
-    return material_base_color(color_textures, material, g).a >= material.alpha_cutoff;
+    return material_base_color(material, g).a >= material.alpha_cutoff;
 }

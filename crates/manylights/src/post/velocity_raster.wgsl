@@ -48,7 +48,7 @@ fn velocity_raster(in: VelocityVertex) -> @location(0) vec4<f32> {
 fn velocity_raster_masked(in: VelocityVertex) -> @location(0) vec4<f32> {
     let material = materials[draws[in.draw_index].material];
     let g = UvGradients(in.uv, dpdx(in.uv), dpdy(in.uv));
-    if material_base_color(color_textures, material, g).a < material.alpha_cutoff {
+    if material_base_color(material, g).a < material.alpha_cutoff {
         discard;
     }
     return moved_since_previous(in);

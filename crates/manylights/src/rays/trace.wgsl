@@ -91,7 +91,7 @@ fn ray_alpha_covers(instance: RayInstance, tri: RayTriangle, b1: f32, b2: f32) -
     let v2 = vertices[draw.base_vertex + indices[first + 2u]];
     let uv = vec2<f32>(v0.u, v0.v) * (1.0 - b1 - b2) + vec2<f32>(v1.u, v1.v) * b1 + vec2<f32>(v2.u, v2.v) * b2;
     let material = materials[draw.material];
-    return material_base_color(color_textures, material, UvGradients(uv, vec2<f32>(0.0), vec2<f32>(0.0))).a >= material.alpha_cutoff;
+    return material_base_color(material, UvGradients(uv, vec2<f32>(0.0), vec2<f32>(0.0))).a >= material.alpha_cutoff;
 }
 
 // `hit` updated with the triangles of a BLAS leaf (the range [x, y) of `ray_triangles`) that the ray

@@ -26,32 +26,32 @@ fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Materia
     }
 }
 
-// The three below read a material's textures from `colors` (sRGB: base colour, emissive) and `data`
-// (linear: metallic-roughness, normal): the surfaces' `color_textures` and `data_textures` (decals
-// sample their own arrays, clamped, in `decals.wgsl`).
+// The three below read a surface material's textures from `color_textures` (sRGB: base colour,
+// emissive) and `data_textures` (linear: metallic-roughness, normal); decals sample their own arrays,
+// clamped, in `decals.wgsl`.
 
 // Base colour with alpha; used for alpha masking too.
-fn material_base_color(colors: texture_2d_array<f32>, material: Material, g: UvGradients) -> vec4<f32> {
+fn material_base_color(material: Material, g: UvGradients) -> vec4<f32> {
     var color = material.base_color_factor;
     if material.base_color_layer != NO_TEXTURE {
-        color *= sample_wrapped(colors, material.base_color_layer, material, 0u, g);
+        color *= sample_wrapped(color_textures, material.base_color_layer, material, 0u, g);
     }
     return color;
 }
 
 // Perceptual roughness and metallic (x, y): factors times the metallic-roughness texture (glTF: G, B).
-fn material_roughness_metallic(data: texture_2d_array<f32>, material: Material, g: UvGradients) -> vec2<f32> {
+fn material_roughness_metallic(material: Material, g: UvGradients) -> vec2<f32> {
     var roughness_metallic = vec2<f32>(material.roughness_factor, material.metallic_factor);
     if material.metallic_roughness_layer != NO_TEXTURE {
-        roughness_metallic *= sample_wrapped(data, material.metallic_roughness_layer, material, 2u, g).gb;
+        roughness_metallic *= sample_wrapped(data_textures, material.metallic_roughness_layer, material, 2u, g).gb;
     }
     return saturate(roughness_metallic);
 }
 
 // The material's normal map (it must have one) applied in the frame (t, b, n); a zero-length result
 // (blank normal map texel) keeps n.
-fn material_mapped_normal(data: texture_2d_array<f32>, material: Material, g: UvGradients, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    return normal_map_applied(sample_wrapped(data, material.normal_layer, material, 3u, g).xyz, material.normal_scale, n, t, b);
+fn material_mapped_normal(material: Material, g: UvGradients, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    return normal_map_applied(sample_wrapped(data_textures, material.normal_layer, material, 3u, g).xyz, material.normal_scale, n, t, b);
 }
 
 // A normal map's texel (tangent space, [0, 1]), its x and y scaled by `scale`, in the frame (t, b, n).
@@ -84,11 +84,11 @@ fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, 
     s.position = position;
     s.view_dir = view_dir;
 
-    let base = material_base_color(color_textures, material, g);
+    let base = material_base_color(material, g);
     s.base_color = base.rgb;
     s.alpha = base.a;
 
-    let roughness_metallic = material_roughness_metallic(data_textures, material, g);
+    let roughness_metallic = material_roughness_metallic(material, g);
     s.roughness = roughness_metallic.x;
     s.metallic = roughness_metallic.y;
 
@@ -102,7 +102,7 @@ fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, 
     if material.normal_layer != NO_TEXTURE {
         let t = normalize(surface.tangent - surface.normal * dot(surface.normal, surface.tangent));
         let b = cross(surface.normal, t) * surface.bitangent_sign;
-        normal = material_mapped_normal(data_textures, material, g, surface.normal, t, b);
+        normal = material_mapped_normal(material, g, surface.normal, t, b);
     }
     s.normal = normal;
     // Callers that know the triangle's own normal or an uncertain position set these.
