@@ -11,7 +11,7 @@ use manylights::{
     config::{heat_map, DebugView, RenderConfig},
     pipelines::{DecalMethod, LightMethod, PipelineKind},
     renderer::Image,
-    scene::{Decal, Material, Texture, TextureRef, Wrap},
+    scene::{Decal, Material},
 };
 
 const SIZE: (u32, u32) = (96, 54);
@@ -129,99 +129,6 @@ fn the_decals_covering_each_point_are_counted_alike_by_every_decal_method() {
         }
         assert!(seen.iter().all(|&n| n > 10), "{}: {seen:?}", method.name());
     }
-}
-
-/// A layer whose decals leave no transmittance in albedo and in normals hides the layers below, and
-/// the methods skip their decals (`shading/decals.wgsl`, `decal_hidden`): under an opaque normal-mapped
-/// decal, the decals of lower layers found after it are not counted. Over an opaque decal without a
-/// normal map they still count (their normals show). The BVH reaches the top layer first whatever the
-/// scene's order (its groups are built in layer order); brute force takes the scene's order, here
-/// bottom layer first, so it finds every decal before the one hiding it, and renders the same image.
-#[test]
-fn decals_under_an_opaque_layer_are_skipped_and_change_nothing() {
-    let (mut scene, camera) = ambient_wall();
-    scene.textures.push(Texture { name: "flat normal".into(), width: 1, height: 1, rgba8: vec![128, 128, 255, 255] });
-    let flat_normals = TextureRef { texture: scene.textures.len() - 1, wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::ClampToEdge };
-    let mut add = |color: Vec4, normal_texture: Option<TextureRef>| {
-        scene.materials.push(Material { base_color_factor: color, metallic_factor: 0.0, normal_texture, ..Default::default() });
-        scene.materials.len() - 1
-    };
-    let opaque_with_normals = add(Vec4::new(0.1, 0.8, 0.2, 1.0), Some(flat_normals));
-    let opaque_without_normals = add(Vec4::new(0.1, 0.2, 0.8, 1.0), None);
-    let lower = add(Vec4::new(0.9, 0.1, 0.1, 1.0), Some(flat_normals));
-    let at = |x: f32, size: f32, material: usize, layer: u32| Decal {
-        world_from_decal: Affine3A::from_scale_rotation_translation(
-            Vec3::new(size, size, 0.5),
-            glam::Quat::from_rotation_z(0.3),
-            Vec3::new(x, 0.0, 0.0),
-        ),
-        material,
-        layer,
-        weight: 1.0,
-    };
-    scene.decals = vec![
-        at(-1.0, 1.6, lower, 0),
-        at(1.0, 1.6, lower, 1),
-        at(-1.0, 1.0, opaque_with_normals, 3),
-        at(1.0, 1.0, opaque_without_normals, 2),
-    ];
-    let has_normals = |d: &Decal| scene.materials[d.material].normal_texture.is_some();
-    // The decals a method counts at a point, finding those whose box holds it in `order`: every decal
-    // here is opaque, so each empties its layer's albedo transmittance, and its normals' if it has a
-    // normal map.
-    let counted = |order: &[&Decal]| {
-        let (mut opaque, mut hidden_below, mut count) = ([(false, false); 4], 0, 0);
-        for d in order {
-            let layer = d.layer as usize;
-            if (layer as u32) < hidden_below {
-                continue;
-            }
-            count += 1;
-            opaque[layer] = (true, opaque[layer].1 || has_normals(d));
-            if opaque[layer] == (true, true) {
-                hidden_below = hidden_below.max(d.layer);
-            }
-        }
-        count
-    };
-    let scale = DebugView::DecalsCovering.scale();
-    for method in [DecalMethod::Bvh, DecalMethod::Brute] {
-        let config =
-            RenderConfig { decal_method: method, debug_view: DebugView::DecalsCovering, ..config(SIZE.0, SIZE.1, LightMethod::Off) };
-        let image = debug_image(&scene, &camera, config);
-        let (mut skipped, mut two_counted) = (0, 0);
-        for y in 0..SIZE.1 {
-            for x in 0..SIZE.0 {
-                let p = wall_point(x, y);
-                let local = |d: &Decal| d.world_from_decal.inverse().transform_point3(p);
-                if scene.decals.iter().any(|d| (local(d).x.abs().max(local(d).y.abs()) - 0.5).abs() <= 0.03) {
-                    continue;
-                }
-                let mut inside: Vec<&Decal> = scene.decals.iter().filter(|d| local(d).x.abs() < 0.5 && local(d).y.abs() < 0.5).collect();
-                if method == DecalMethod::Bvh {
-                    inside.sort_by_key(|d| std::cmp::Reverse(d.layer));
-                }
-                let count = counted(&inside);
-                skipped += usize::from(count < inside.len());
-                two_counted += usize::from(count == 2);
-                let got = pixel(&image, x, y);
-                assert!(
-                    close(got, heat_map(count as u32, scale)),
-                    "{}: pixel ({x}, {y}) shows {got:?}, expected {count} of the {} decals there",
-                    method.name(),
-                    inside.len()
-                );
-            }
-        }
-        assert!(two_counted > 20, "{}: {two_counted} pixels count two decals", method.name());
-        assert_eq!(skipped > 20, method == DecalMethod::Bvh, "{}: {skipped} pixels skip a decal", method.name());
-    }
-    let shaded = |scene: &manylights::scene::Scene, method| {
-        debug_image(scene, &camera, RenderConfig { decal_method: method, ..config(SIZE.0, SIZE.1, LightMethod::Off) })
-    };
-    // Brute force blends the decals the BVH skipped: the images agree.
-    let difference = max_abs_difference(&shaded(&scene, DecalMethod::Bvh), &shaded(&scene, DecalMethod::Brute));
-    assert!(difference <= 1e-6, "bvh and brute force differ by {difference}");
 }
 
 #[test]

@@ -38,10 +38,6 @@ pub const SAH_MAX_LEAF_SIZE: u32 = 16;
 /// Nodes with more primitives than this are split unless the SAH prefers a leaf.
 const MIN_SPLIT_SIZE: usize = 4;
 
-/// Most distinct keys [`Bvh::build_ordered`] splits by: six levels above the SAH's, well within
-/// [`MAX_DEPTH`].
-pub const MAX_ORDER_KEYS: usize = 64;
-
 /// SAH bins along the longest axis of the centroids' box.
 const BINS: usize = 16;
 
@@ -136,26 +132,6 @@ impl Bvh {
     /// As [`build`](Self::build), with leaves of at most `max_leaf_size` (1 to [`MAX_LEAF_SIZE`])
     /// primitives: 1 for a top level, whose leaves the query enters one instance at a time.
     pub fn build_with_leaf_size(aabbs: &[Aabb], max_leaf_size: u32) -> crate::Result<Bvh> {
-        Self::build_ordered(aabbs, &[], max_leaf_size)
-    }
-
-    /// As [`build_with_leaf_size`](Self::build_with_leaf_size), with the primitives first split by
-    /// `keys` (one per box; empty: no keys): every leaf holds primitives of one key, and the leaves
-    /// come in descending key order in the node order, which is the order a walk reaches them in.
-    /// Decal groups are built ordered by layer, top layer first, so a query can leave a group once
-    /// the layers above hide the rest (`shading/enumerate/decals_bvh.wgsl`). At most
-    /// [`MAX_ORDER_KEYS`] distinct keys: each halving of them is a level above the SAH's.
-    pub fn build_ordered(aabbs: &[Aabb], keys: &[u32], max_leaf_size: u32) -> crate::Result<Bvh> {
-        assert!(keys.is_empty() || keys.len() == aabbs.len(), "{} keys for {} boxes", keys.len(), aabbs.len());
-        let mut distinct = keys.to_vec();
-        distinct.sort_unstable();
-        distinct.dedup();
-        if distinct.len() > MAX_ORDER_KEYS {
-            return Err(crate::Error::InvalidScene(format!(
-                "{} distinct keys to order a BVH's leaves by; at most {MAX_ORDER_KEYS}",
-                distinct.len()
-            )));
-        }
         assert!((1..=MAX_LEAF_SIZE).contains(&max_leaf_size), "leaf size {max_leaf_size}");
         let invalid = |message: String| Err(crate::Error::InvalidScene(message));
         if aabbs.len() > MAX_PRIMITIVES {
@@ -175,12 +151,7 @@ impl Bvh {
         let mut prims: Vec<Prim> = aabbs
             .iter()
             .enumerate()
-            .map(|(i, b)| Prim {
-                bounds: *b,
-                centroid: (b.min.as_dvec3() + b.max.as_dvec3()) * 0.5,
-                index: i as u32,
-                key: keys.get(i).copied().unwrap_or(0),
-            })
+            .map(|(i, b)| Prim { bounds: *b, centroid: (b.min.as_dvec3() + b.max.as_dvec3()) * 0.5, index: i as u32 })
             .collect();
         let mut nodes = Vec::with_capacity(2 * aabbs.len() - 1);
         let mut children = Vec::with_capacity(2 * aabbs.len() - 1);
@@ -385,8 +356,6 @@ struct Prim {
     /// In f64: centroids of boxes near ±f32::MAX, and their spread, must not overflow.
     centroid: DVec3,
     index: u32,
-    /// Leaves hold one key each, higher keys first ([`Bvh::build_ordered`]).
-    key: u32,
 }
 
 /// Appends the subtree over `prims` (which start at `first` in the final primitive order) at `level`
@@ -456,9 +425,6 @@ fn median_levels(count: usize, leaves: LeafSizes) -> u32 {
 /// [`MAX_DEPTH`]; median splits halve the count, so from the root (at most 2^24 primitives, 23
 /// levels, 24 with leaves of one) that bound always holds.
 fn split(prims: &mut [Prim], bounds: Aabb, level: u32, leaves: LeafSizes) -> Option<usize> {
-    if let Some(mid) = split_keys(prims) {
-        return Some(mid);
-    }
     let count = prims.len();
     if count <= leaves.split_above {
         return None;
@@ -514,20 +480,6 @@ fn split(prims: &mut [Prim], bounds: Aabb, level: u32, leaves: LeafSizes) -> Opt
     let mid = count / 2;
     prims.select_nth_unstable_by(mid, |p, q| p.centroid[axis].total_cmp(&q.centroid[axis]));
     Some(mid)
-}
-
-/// Where `prims` hold several keys, `Some(mid)` after sorting them by descending key, splitting the
-/// distinct keys in two halves: the higher half first. A few keys add a few levels above the SAH's.
-fn split_keys(prims: &mut [Prim]) -> Option<usize> {
-    let first = prims.first()?.key;
-    if prims.iter().all(|p| p.key == first) {
-        return None;
-    }
-    prims.sort_unstable_by_key(|p| std::cmp::Reverse(p.key));
-    let mut keys: Vec<u32> = prims.iter().map(|p| p.key).collect();
-    keys.dedup();
-    let lowest_first_half = keys[keys.len().div_ceil(2) - 1];
-    Some(prims.partition_point(|p| p.key >= lowest_first_half))
 }
 
 /// Moves the primitives for which `left` holds to the front; returns how many there are.
@@ -686,40 +638,6 @@ pub(crate) mod tests {
         for p in random_points(&mut rng, &boxes, 500) {
             assert_eq!(query(&compact, &boxes, p), query(&Bvh::build(&boxes).unwrap(), &boxes, p));
         }
-    }
-
-    /// Leaves ordered by key: each holds one key, a walk reaches them in descending key order, and
-    /// queries still find exactly the boxes holding the point.
-    #[test]
-    fn ordered_builds_keep_one_key_per_leaf_in_descending_order() {
-        let mut rng = Pcg64::seed_from_u64(0x04d3);
-        for &(size, key_count) in &[(1, 4), (5, 4), (37, 2), (500, 4), (3000, 64)] {
-            let boxes = random_boxes(&mut rng, size);
-            let keys: Vec<u32> = (0..size).map(|_| rng.random_range(0..key_count)).collect();
-            let bvh = Bvh::build_ordered(&boxes, &keys, SAH_MAX_LEAF_SIZE).unwrap();
-            check_structure(&bvh, &boxes);
-            let leaf_keys: Vec<u32> = bvh
-                .nodes
-                .iter()
-                .filter(|n| n.is_leaf())
-                .map(|leaf| {
-                    let primitives = &bvh.primitive_indices[leaf.leaf_range()];
-                    let key = keys[primitives[0] as usize];
-                    assert!(primitives.iter().all(|&i| keys[i as usize] == key), "a leaf mixes keys");
-                    key
-                })
-                .collect();
-            assert!(leaf_keys.windows(2).all(|w| w[0] >= w[1]), "leaves out of key order: {leaf_keys:?}");
-            let stored: Vec<u32> = bvh.primitive_indices.iter().map(|&i| keys[i as usize]).collect();
-            assert!(stored.windows(2).all(|w| w[0] >= w[1]), "items out of key order");
-            for p in random_points(&mut rng, &boxes, 200) {
-                check_point(&bvh, &boxes, p);
-            }
-        }
-        let boxes = random_boxes(&mut rng, 100);
-        let keys: Vec<u32> = (0..100).collect();
-        let message = Bvh::build_ordered(&boxes, &keys, SAH_MAX_LEAF_SIZE).unwrap_err().to_string();
-        assert!(message.contains("100 distinct keys") && message.contains("at most 64"), "{message}");
     }
 
     #[test]

@@ -4,7 +4,7 @@
 // items in a volume structure, stored in leaf order; a top level's primitive indices); `skip`
 // is the node after the subtree, where the traversal goes when the point is outside the box or after
 // a leaf (BVH_END after the last). A lone BVH's root is node 0; in a two-level structure the top
-// level's root is node 0 and each group's is its instances' `instance_blas_root`. Shared by the query
+// level's root is node 0 and each group's is its instances' `blas_root` (without ENTRY_GRID_FLAG). Shared by the query
 // (`volume_query.wgsl`) and the GPU builder (`lbvh.wgsl`).
 
 struct BvhNode {
@@ -46,29 +46,17 @@ struct FirstInstance {
 
 // Set in `VolumeInstance::blas_root` when the group has an entry grid (`accel/entry_grid.rs`).
 const ENTRY_GRID_FLAG: u32 = 0x80000000u;
-// Set in `VolumeInstance::blas_root` when the group's leaves come in descending key order, the order
-// a walk reaches them in (`accel/structure.rs`, `ORDERED_FLAG`): decals' layers, top layer first.
-const ORDERED_FLAG: u32 = 0x40000000u;
-
-// The node index of the instance's group root, without the flags.
-fn instance_blas_root(instance: VolumeInstance) -> u32 {
-    return instance.blas_root & ~(ENTRY_GRID_FLAG | ORDERED_FLAG);
-}
-
-fn instance_ordered(instance: VolumeInstance) -> bool {
-    return (instance.blas_root & ORDERED_FLAG) != 0u;
-}
 
 // Set in an entry-grid cell's second word when the cell names a cover of several subtrees
-// (`accel/entry_grid.rs`, `CELL_COVER`): bits 25–30 hold their count − 1, bits 0–24 the primitive
+// (`accel/entry_grid.rs`, `CELL_COVER`): bits 27–30 hold their count − 1, bits 0–26 the primitive
 // index where their (start, stop) pairs begin.
 const ENTRY_CELL_COVER: u32 = 0x80000000u;
 
 // The range [x, y) of the primitive array holding a cover's (start, stop) pairs, from its cell's
 // second word.
 fn entry_cell_cover_pairs(word: u32) -> vec2<u32> {
-    let first = word & 0x01ffffffu;
-    return vec2<u32>(first, first + 2u * (((word >> 25u) & 63u) + 1u));
+    let first = word & 0x07ffffffu;
+    return vec2<u32>(first, first + 2u * (((word >> 27u) & 15u) + 1u));
 }
 
 // The first word of the entry-grid cell holding the group-space point `p`, clamped into the grid (the

@@ -30,10 +30,9 @@ const CELLS_PER_PRIMITIVE: f64 = 64.0;
 const MIN_CELLS: f64 = (1 << 18) as f64;
 const MAX_CELLS: f64 = (1 << 21) as f64;
 
-/// Most words of covers a structure's grids hold together (64 MiB; with the 16 MiB of cells and the
-/// primitive indices, within a 128 MiB storage binding). 100k ≈ 1 m decals over Sponza take 6.4M with
-/// covers of up to 16 subtrees, and 13.6M in layer order with up to 64 (16 a layer).
-const MAX_COVER_WORDS: f64 = (1 << 24) as f64;
+/// Most words of covers a structure's grids hold together (32 MiB). 100k ≈ 1 m decals over Sponza
+/// take 6.4M: a million cells name covers, 333k of them different.
+const MAX_COVER_WORDS: f64 = (1 << 23) as f64;
 
 /// What a structure's grids may hold, per primitive of the group a grid is built for: a share of
 /// [`MAX_CELLS`] cells and of [`MAX_COVER_WORDS`].
@@ -43,9 +42,6 @@ pub struct GridBudget {
     pub cover_words_per_primitive: f64,
     /// Nodes the build may visit per cell on average before it gives up on the grid.
     pub visits_per_cell: usize,
-    /// Most subtrees a cell's cover names: [`MAX_COVER_PER_KEY`] for each key of a tree built in key
-    /// order, whose keys' subtrees each need their own ([`GridBudget::with_keys`]).
-    pub max_cover: usize,
 }
 
 impl GridBudget {
@@ -57,21 +53,9 @@ impl GridBudget {
         let primitives = primitives.max(1) as f64;
         GridBudget {
             cells_per_primitive: (primitives * CELLS_PER_PRIMITIVE).clamp(MIN_CELLS, MAX_CELLS) / primitives,
-            // Within what a cell's offset addresses after the primitive indices and the cells.
-            cover_words_per_primitive: MAX_COVER_WORDS.min(f64::from(CELL_COVER_OFFSET_MASK) - primitives - 2.0 * MAX_CELLS).max(0.0)
-                / primitives,
+            cover_words_per_primitive: MAX_COVER_WORDS / primitives,
             visits_per_cell: MAX_VISITS_PER_CELL,
-            max_cover: MAX_COVER_PER_KEY,
         }
-    }
-
-    /// For trees built in the order of `keys` distinct keys ([`Bvh::build_ordered`]): the walk of a
-    /// cell reaches each key's part of the tree separately, so each gets covers of up to
-    /// [`MAX_COVER_PER_KEY`] subtrees (at most [`MAX_COVER`] in all). Over Sponza, 100k ≈ 1 m decals
-    /// in layer order walk 34.7 nodes a point with covers of 16, 9.9 with 64 (20,000 points spread by
-    /// area; 11.2 in one tree without layers).
-    pub fn with_keys(self, keys: usize) -> Self {
-        GridBudget { max_cover: (MAX_COVER_PER_KEY * keys.max(1)).min(MAX_COVER), ..self }
     }
 }
 /// Cells per axis fit 10 bits each in the header node's `skip` (`structure.rs`, `entry_grid_header`).
@@ -84,16 +68,14 @@ pub const MAX_CELLS_PER_AXIS: u32 = 1023;
 /// their queries would start high in the tree anyway.
 const MAX_VISITS_PER_CELL: usize = 256;
 
-/// Most subtrees a cell's cover names in a tree without keys. Each one spares the walk the nodes
-/// above and beside it, and costs a (start, stop) pair in the grid's covers.
-pub const MAX_COVER_PER_KEY: usize = 16;
-/// Most subtrees any cover names, as a cell's 6 bits count them.
-pub const MAX_COVER: usize = 64;
-/// Set in a cell's second word when it names a cover of several subtrees: bits 25–30 hold their
-/// count − 1, bits 0–24 where its (start, stop) pairs begin in [`EntryGrid::covers`]. Keep in sync
+/// Most subtrees a cell's cover names. Each one spares the walk the nodes above and beside it, and
+/// costs a (start, stop) pair in the grid's covers.
+pub const MAX_COVER: usize = 16;
+/// Set in a cell's second word when it names a cover of several subtrees: bits 27–30 hold their
+/// count − 1, bits 0–26 where its (start, stop) pairs begin in [`EntryGrid::covers`]. Keep in sync
 /// with `ENTRY_CELL_COVER` in `accel/bvh_types.wgsl`.
 pub const CELL_COVER: u32 = 1 << 31;
-const CELL_COVER_COUNT_SHIFT: u32 = 25;
+const CELL_COVER_COUNT_SHIFT: u32 = 27;
 /// Primitive words a structure's grids can name covers within.
 pub const CELL_COVER_OFFSET_MASK: u32 = (1 << CELL_COVER_COUNT_SHIFT) - 1;
 
@@ -115,7 +97,7 @@ pub struct EntryGrid {
 
 impl EntryGrid {
     /// The grid for `bvh`, built over `aabbs`, within `budget` for its primitives: covers of up to
-    /// `budget.max_cover` subtrees, or half as many until they fit (one: the lowest common ancestors
+    /// [`MAX_COVER`] subtrees, or half as many until they fit (one: the lowest common ancestors
     /// alone). `None` when it has fewer than [`MIN_PRIMITIVES`] primitives, its bounds are not
     /// finite, or its volumes crowd so densely that building it would visit more than
     /// `budget.visits_per_cell` nodes per cell ([`MAX_VISITS_PER_CELL`]; queries then start at the
@@ -145,7 +127,7 @@ impl EntryGrid {
         let cover_words = (primitives * budget.cover_words_per_primitive).min(f64::from(CELL_COVER_OFFSET_MASK));
         // Each try walks every cell's part of the tree again; grids over budget at 16 are rare (100k
         // ≈ 1 m decals take 6.4M of the 8M words, 1M 5 cm decals 1.7M).
-        let mut max_cover = budget.max_cover.clamp(1, MAX_COVER);
+        let mut max_cover = MAX_COVER;
         loop {
             // A sixteenth of the cells' allowance up front, then each cell's as it comes: a grid of
             // dense volumes runs out after that sixteenth, whichever cells come first.
@@ -191,11 +173,11 @@ impl EntryGrid {
 
     /// The grid as the GPU reads it from word `first_word` of the primitive array: the cells, then the
     /// covers, with node indices moved by `node_base` ([`END`] stays) and each cover's place by where
-    /// the covers land. The covers must end within the 25 bits of a cell's offset.
+    /// the covers land. The covers must end within the 27 bits of a cell's offset.
     pub fn gpu_words(&self, node_base: u32, first_word: u32) -> Vec<u32> {
         let node = |n: u32| if n == END { n } else { n + node_base };
         let covers_at = first_word + 2 * self.cells.len() as u32;
-        assert!(covers_at as usize + self.covers.len() <= CELL_COVER_OFFSET_MASK as usize, "covers past the 25 bits of a cell's offset");
+        assert!(covers_at as usize + self.covers.len() <= CELL_COVER_OFFSET_MASK as usize, "covers past the 27 bits of a cell's offset");
         let cells = self.cells.iter().flat_map(|&[start, stop]| {
             let stop = if start != END && stop & CELL_COVER != 0 {
                 (stop & !CELL_COVER_OFFSET_MASK) | ((stop & CELL_COVER_OFFSET_MASK) + covers_at)
@@ -449,59 +431,10 @@ mod tests {
         let smaller = EntryGrid::build(&bvh, &boxes, budget).unwrap();
         let largest = points.iter().map(|&p| smaller.cover(p).len()).max().unwrap();
         assert!(!smaller.covers.is_empty() && smaller.covers.len() as f64 <= words, "{} cover words for {words}", smaller.covers.len());
-        assert!((2..MAX_COVER_PER_KEY).contains(&largest), "covers of up to {largest} subtrees");
+        assert!((2..MAX_COVER).contains(&largest), "covers of up to {largest} subtrees");
         for &p in &points {
             assert_eq!(query_from_grid(&bvh, &smaller, &boxes, p), brute_force(&boxes, p), "at {p:?}");
         }
-    }
-
-    /// A tree ordered by keys (decal layers): each key's part of a cell gets covers of its own, so
-    /// covers name more than 16 subtrees, list them in descending key order, and the walk from the
-    /// grid stays exact and visits fewer nodes than with 16 in all.
-    #[test]
-    fn ordered_trees_get_covers_per_key_in_key_order() {
-        let mut rng = Pcg64::seed_from_u64(12);
-        let boxes: Vec<Aabb> = (0..4000)
-            .map(|_| {
-                let c = Vec3::new(rng.random_range(0.0..40.0), rng.random_range(0.0..10.0), rng.random_range(0.0..20.0));
-                Aabb::new(c - 1.5, c + 1.5)
-            })
-            .collect();
-        let keys: Vec<u32> = (0..boxes.len()).map(|_| rng.random_range(0..4)).collect();
-        let bvh = Bvh::build_ordered(&boxes, &keys, crate::accel::bvh::SAH_MAX_LEAF_SIZE).unwrap();
-        let per_key = EntryGrid::build(&bvh, &boxes, GridBudget::for_structure(boxes.len()).with_keys(4)).unwrap();
-        let shared = EntryGrid::build(&bvh, &boxes, GridBudget::for_structure(boxes.len())).unwrap();
-        let points = random_points(&mut rng, &boxes, 2000);
-        let key_of_node = |n: u32| {
-            let mut n = n;
-            while !bvh.nodes[n as usize].is_leaf() {
-                n = bvh.nodes[n as usize].entry;
-            }
-            keys[bvh.primitive_indices[bvh.nodes[n as usize].leaf_range().start] as usize]
-        };
-        let visits = |grid: &EntryGrid, p: Vec3| -> usize {
-            let mut count = 0;
-            for [start, stop] in grid.cover(p) {
-                let mut n = start;
-                while n != stop && n != END {
-                    count += 1;
-                    let node = &bvh.nodes[n as usize];
-                    n = if node.bounds().contains(p) && !node.is_leaf() { node.entry } else { node.skip };
-                }
-            }
-            count
-        };
-        let largest = points.iter().map(|&p| per_key.cover(p).len()).max().unwrap();
-        assert!(largest > MAX_COVER_PER_KEY && largest <= MAX_COVER, "covers of up to {largest} subtrees");
-        for &p in &points {
-            let cover = per_key.cover(p);
-            assert!(cover.windows(2).all(|w| w[0][1] <= w[1][0]), "cover out of node order at {p:?}");
-            assert!(cover.windows(2).all(|w| key_of_node(w[0][0]) >= key_of_node(w[1][0])), "cover out of key order at {p:?}");
-            assert_eq!(query_from_grid(&bvh, &per_key, &boxes, p), brute_force(&boxes, p), "at {p:?}");
-        }
-        let (fewer, more): (usize, usize) =
-            points.iter().map(|&p| (visits(&per_key, p), visits(&shared, p))).fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-        assert!(fewer < more, "covers per key visit {fewer} nodes, 16 in all {more}");
     }
 
     /// The words the GPU reads: node indices moved by the group's base (END kept), the covers placed

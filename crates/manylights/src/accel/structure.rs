@@ -22,7 +22,7 @@ use bytemuck::Zeroable;
 use glam::Affine3A;
 
 use super::{
-    bvh::{MAX_LEAF_SIZE, MAX_PRIMITIVES, SAH_MAX_LEAF_SIZE},
+    bvh::{MAX_LEAF_SIZE, MAX_PRIMITIVES},
     clusters::{ClusterBounds, ClusterGrid, ClusterLists},
     decal_aabb,
     entry_grid::{self, EntryGrid},
@@ -108,12 +108,6 @@ struct GpuFirstInstance {
 /// header is the node before the root.
 pub const ENTRY_GRID_FLAG: u32 = 1 << 31;
 
-/// Set in `GpuVolumeInstance::blas_root` when the group's leaves come in descending order of the
-/// volumes' keys ([`Volumes::order_keys`]; CPU-built groups), the order a query reaches them in.
-/// Decal queries leave such a group at its first decal in a layer that the layers above hide
-/// (`shading/enumerate/decals_bvh.wgsl`).
-pub const ORDERED_FLAG: u32 = 1 << 30;
-
 impl GpuVolumeInstance {
     fn new(world_from_group: Affine3A, group: &Group) -> Self {
         Self {
@@ -121,9 +115,7 @@ impl GpuVolumeInstance {
             world_from_group: affine_rows(&world_from_group),
             first_item: group.items.start,
             item_count: group.items.len() as u32,
-            blas_root: group.blas_root
-                | if group.entry_grid_header.is_some() { ENTRY_GRID_FLAG } else { 0 }
-                | if group.ordered { ORDERED_FLAG } else { 0 },
+            blas_root: group.blas_root | if group.entry_grid_header.is_some() { ENTRY_GRID_FLAG } else { 0 },
             scale: world_from_group.matrix3.x_axis.length(),
         }
     }
@@ -146,8 +138,6 @@ struct Group {
     entry_grid_header: Option<BvhNode>,
     /// Written on the GPU every frame (`Volumes::dynamic`).
     dynamic: bool,
-    /// Its leaves are in descending key order ([`ORDERED_FLAG`]).
-    ordered: bool,
     /// Bounds of the group's volumes, in its space: the top level's boxes are their images.
     bounds: Aabb,
     /// Present when the group is rebuilt on the GPU.
@@ -210,10 +200,6 @@ pub struct Volumes<'a> {
     pub kind: VolumeKind,
     pub items: &'a [u8],
     pub boxes: &'a [Aabb],
-    /// Per volume, the key a CPU-built group's leaves are ordered by, highest first
-    /// ([`Bvh::build_ordered`]), or empty: decals' layers, so that a query walks the top layer first
-    /// and may leave a group once the layers above hide the rest ([`ORDERED_FLAG`]).
-    pub order_keys: &'a [u32],
     pub groups: &'a Groups,
     /// Volumes written on the GPU every frame, after the others: one more group, placed at identity
     /// and rebuilt on the GPU every frame (particle lights, `particles/`).
@@ -302,14 +288,7 @@ impl VolumeStructure {
             bounds: lights.iter().map(ClusterBounds::of_light).collect(),
             frame_layout,
         });
-        let volumes = Volumes {
-            kind: VolumeKind::Lights,
-            items: bytemuck::cast_slice(&items),
-            boxes: &boxes,
-            order_keys: &[],
-            groups,
-            dynamic: None,
-        };
+        let volumes = Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: None };
         Self::new(ctx, &volumes, build, clustering)
     }
 
@@ -328,14 +307,8 @@ impl VolumeStructure {
         let items: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
         let boxes: Vec<Aabb> = lights.iter().map(light_aabb).collect();
         let dynamic = DynamicGroup { count: particle_lights, bounds: particle_bounds, leaf_size };
-        let volumes = Volumes {
-            kind: VolumeKind::Lights,
-            items: bytemuck::cast_slice(&items),
-            boxes: &boxes,
-            order_keys: &[],
-            groups,
-            dynamic: Some(dynamic),
-        };
+        let volumes =
+            Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: Some(dynamic) };
         Self::new(ctx, &volumes, build, None)
     }
 
@@ -370,15 +343,7 @@ impl VolumeStructure {
             bounds: decals.iter().map(ClusterBounds::of_decal).collect(),
             frame_layout,
         });
-        let layers: Vec<u32> = decals.iter().map(|d| d.layer).collect();
-        let volumes = Volumes {
-            kind: VolumeKind::Decals,
-            items: bytemuck::cast_slice(&items),
-            boxes: &boxes,
-            order_keys: &layers,
-            groups,
-            dynamic: None,
-        };
+        let volumes = Volumes { kind: VolumeKind::Decals, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: None };
         let mut structure = Self::new(ctx, &volumes, build, clustering)?;
         structure.layers = structure.scene_indices.iter().map(|&i| decals[i as usize].layer).collect();
         Ok(structure)
@@ -422,9 +387,6 @@ impl VolumeStructure {
                 volumes.items.len(),
                 volumes.kind.record_bytes()
             )));
-        }
-        if !volumes.order_keys.is_empty() && volumes.order_keys.len() != count {
-            return Err(Error::InvalidConfig(format!("{} order keys for {count} {label}s", volumes.order_keys.len())));
         }
         if let Some(i) = volumes.boxes.iter().position(|b| !b.is_valid()) {
             return Err(Error::InvalidScene(format!(
@@ -478,10 +440,7 @@ impl VolumeStructure {
         fits("BVH nodes", node_bytes)?;
         // CPU builds first: their entry grids' cells and covers follow the primitive indices in the
         // same array, within one budget of cells and cover words for all the groups.
-        let mut keys = volumes.order_keys.to_vec();
-        keys.sort_unstable();
-        keys.dedup();
-        let grid_budget = entry_grid::GridBudget::for_structure(count).with_keys(keys.len());
+        let grid_budget = entry_grid::GridBudget::for_structure(count);
         let cpu_builds: Vec<Option<(Bvh, Option<EntryGrid>)>> = ranges
             .iter()
             .map(|range| {
@@ -489,8 +448,7 @@ impl VolumeStructure {
                 if build != BvhBuild::CpuOnce || boxes.is_empty() {
                     return Ok(None);
                 }
-                let keys = volumes.order_keys.get(range.clone()).unwrap_or(&[]);
-                let bvh = Bvh::build_ordered(boxes, keys, SAH_MAX_LEAF_SIZE)?;
+                let bvh = Bvh::build(boxes)?;
                 let grid = EntryGrid::build(&bvh, boxes, grid_budget);
                 Ok(Some((bvh, grid)))
             })
@@ -601,8 +559,7 @@ impl VolumeStructure {
                     Some(builder)
                 }
             };
-            let ordered = builder.is_none() && !volumes.order_keys.is_empty() && build == BvhBuild::CpuOnce;
-            groups.push(Group { items: items_range, blas_root, entry_grid_header: grid_header, dynamic: false, ordered, bounds, builder });
+            groups.push(Group { items: items_range, blas_root, entry_grid_header: grid_header, dynamic: false, bounds, builder });
         }
         if let Some(d) = dynamic {
             let first = count as u32;
@@ -621,7 +578,6 @@ impl VolumeStructure {
                 blas_root: dynamic_root,
                 entry_grid_header: None,
                 dynamic: true,
-                ordered: false,
                 bounds: d.bounds,
                 builder: Some(builder),
             });
@@ -835,15 +791,7 @@ mod tests {
             glam::Quat::from_rotation_y(0.5),
             glam::Vec3::new(1.0, 2.0, 3.0),
         );
-        let mut group = Group {
-            items: 4..9,
-            blas_root: 17,
-            entry_grid_header: None,
-            dynamic: false,
-            ordered: false,
-            bounds: Aabb::EMPTY,
-            builder: None,
-        };
+        let mut group = Group { items: 4..9, blas_root: 17, entry_grid_header: None, dynamic: false, bounds: Aabb::EMPTY, builder: None };
         let gpu = GpuVolumeInstance::new(t, &group);
         let apply =
             |rows: &[[f32; 4]; 3], p: glam::Vec3| glam::Vec3::from_array(rows.map(|r| glam::Vec4::from_array(r).dot(p.extend(1.0))));
@@ -854,8 +802,6 @@ mod tests {
         assert!((gpu.scale - 2.0).abs() < 1e-6);
         group.entry_grid_header = Some(BvhNode::zeroed());
         assert_eq!(GpuVolumeInstance::new(t, &group).blas_root, 17 | ENTRY_GRID_FLAG);
-        group.ordered = true;
-        assert_eq!(GpuVolumeInstance::new(t, &group).blas_root, 17 | ENTRY_GRID_FLAG | ORDERED_FLAG);
     }
 
     #[test]

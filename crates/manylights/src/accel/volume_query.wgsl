@@ -25,8 +25,7 @@
 // applies its own tight test to them (light range and cone, decal box) without a copy of the
 // traversal per use. It hands out whole leaves: a cursor returning one item per call measured 20 %
 // slower shading on the H200. Every invocation that begins a query calls `VOLUMES_query_next_leaf`
-// until it returns BVH_END, without leaving the loop early; a caller done with the current instance's
-// group calls `VOLUMES_query_leave_group` instead (decals, whose groups come in layer order).
+// until it returns BVH_END, without leaving the loop early.
 //
 // The caller also defines `VOLUMES_query_entered(instance)`, called as the query enters an instance's
 // group, before any of its leaves: there it keeps what its tests need of the instance (lights: the
@@ -66,9 +65,6 @@ var<private> VOLUMES_query_resume: u32;
 var<private> VOLUMES_query_cover: u32;
 var<private> VOLUMES_query_cover_end: u32;
 var<private> VOLUMES_query_in_group: bool;
-// Set where the subgroup walks as one and this lane has left the current instance's group
-// (`VOLUMES_query_leave_group`): its point counts as outside every node until the next instance.
-var<private> VOLUMES_query_left: bool;
 // Nodes the walk visited: the debug view of the method's work.
 var<private> VOLUMES_query_visits: u32;
 
@@ -96,9 +92,8 @@ fn VOLUMES_query_enter(instance_index: u32, instance: VolumeInstance, first: boo
     VOLUMES_query_entered(instance);
     VOLUMES_query_point = instance_point_to_group(instance, VOLUMES_query_world_point);
     VOLUMES_query_resume = VOLUMES_query_node;
-    let root = instance_blas_root(instance);
+    let root = instance.blas_root & ~ENTRY_GRID_FLAG;
     VOLUMES_query_node = root;
-    VOLUMES_query_left = false;
     VOLUMES_query_stop = BVH_END;
     VOLUMES_query_cover = 0u;
     VOLUMES_query_cover_end = 0u;
@@ -129,18 +124,6 @@ fn VOLUMES_query_enter(instance_index: u32, instance: VolumeInstance, first: boo
         VOLUMES_query_stop = range.y;
     }
     VOLUMES_query_in_group = true;
-}
-
-// Ends this invocation's walk of the current instance's group: the query goes on in the top level.
-// Walking alone it jumps past the group's subtrees; walking as a subgroup the lane stops asking for
-// nodes (`VOLUMES_walk_any`) but still gets the leaves its neighbours reach, which the caller skips.
-fn VOLUMES_query_leave_group() {
-    if VOLUMES_walk_shared() {
-        VOLUMES_query_left = true;
-    } else {
-        VOLUMES_query_node = VOLUMES_query_stop;
-        VOLUMES_query_cover = VOLUMES_query_cover_end;
-    }
 }
 
 // The next group leaf whose box contains the point, as the range [x, y) of the items it holds; walking

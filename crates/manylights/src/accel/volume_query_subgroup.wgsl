@@ -7,9 +7,8 @@
 // memory transaction. Passes use it where it is faster (`passes::query_walks`).
 #include "accel/volume_query.wgsl" with VOLUMES=VOLUMES
 
-// A lane that left the instance's group (`VOLUMES_query_leave_group`) needs none of its nodes.
 fn VOLUMES_walk_any(inside: bool) -> bool {
-    return subgroupAny(inside && !VOLUMES_query_left);
+    return subgroupAny(inside);
 }
 
 // The lanes' cells name subtrees, each [start, stop) in node order; the walk covers them all from the

@@ -6,11 +6,6 @@
 //
 // where c₀ is the value below the layer. The enumeration modules (`shading/enumerate/decals_*.wgsl`)
 // call `decal_blend_begin`, `decal_accumulate` per candidate decal, and `decal_blend_end`.
-//
-// A layer whose decals leave no transmittance, Π (1 − αᵢ) = 0 in albedo and in normals alike, hides
-// every layer below it exactly: their result is multiplied by 0. The enumeration modules skip the
-// decals of hidden layers (`decal_hidden`), and the BVH's, whose groups reach the top layer first,
-// leave the group at the first one (`shading/enumerate/decals_bvh.wgsl`).
 #include "shading/scene_bindings.wgsl"
 #include "shading/shading_input.wgsl"
 #include "shading/material.wgsl"
@@ -40,12 +35,9 @@ struct DecalLayerSums {
 var<private> decal_layers: array<DecalLayerSums, DECAL_LAYERS>;
 // Bit L set: layer L has sums. Most points are under no decal, and skip the layers entirely.
 var<private> decal_layers_touched: u32;
-// The layers below this one are hidden: a layer at or above it has no transmittance left.
-var<private> decal_hidden_below: u32;
 
 fn decal_blend_begin() {
     decal_layers_touched = 0u;
-    decal_hidden_below = 0u;
     debug_decals_covering = 0u;
 }
 
@@ -68,16 +60,6 @@ fn decal_surface_in_group(world: DecalSurface, instance: VolumeInstance) -> Deca
         instance_vector_to_group(instance, world.ddx),
         instance_vector_to_group(instance, world.ddy),
     );
-}
-
-fn decal_layer(index: u32) -> u32 {
-    return min(decals[index].layer, DECAL_LAYERS - 1u);
-}
-
-// Whether decal `index` lies in a layer that the layers above hide here: it would change nothing.
-// The layer is read only once some layer is opaque.
-fn decal_hidden(index: u32) -> bool {
-    return decal_hidden_below != 0u && decal_layer(index) < decal_hidden_below;
 }
 
 // Adds decal `index` if the point (`local`, in the decal's group space) is inside its box. `surface`
@@ -115,7 +97,7 @@ fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surf
     }
     let aw = alpha * decals[index].weight;
     let roughness_metallic = decal_roughness_metallic(material, g);
-    let layer = decal_layer(index);
+    let layer = min(decals[index].layer, DECAL_LAYERS - 1u);
     if (decal_layers_touched & (1u << layer)) == 0u {
         decal_layers_touched |= 1u << layer;
         decal_layers[layer] = DecalLayerSums(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, 0.0, 0.0, 1.0, 1.0);
@@ -141,9 +123,6 @@ fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surf
         decal_layers[layer].normal += decal_normal * aw;
         decal_layers[layer].normal_alpha_weight += aw;
         decal_layers[layer].normal_transmittance *= 1.0 - alpha;
-    }
-    if decal_layers[layer].transmittance == 0.0 && decal_layers[layer].normal_transmittance == 0.0 {
-        decal_hidden_below = max(decal_hidden_below, layer);
     }
 }
 

@@ -10,9 +10,7 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
         let local = instance_point_to_group(instance, s.position);
         let surface = decal_surface_in_group(decal_world_surface(s, dp), instance);
         for (var k = instance.first_item; k < instance.first_item + instance.item_count; k += 1u) {
-            if !decal_hidden(k) {
-                decal_accumulate(k, instance, local, surface);
-            }
+            decal_accumulate(k, instance, local, surface);
         }
     }
     return decal_blend_end(s);

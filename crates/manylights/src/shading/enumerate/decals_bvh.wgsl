@@ -1,10 +1,7 @@
 // Decal enumeration through the decals' acceleration structure (Hansen & Peters 2021): the point
 // query reaches the leaves whose box contains the shading point (walking as a subgroup, those of its
 // neighbours too, `accel/volume_query.wgsl`); `decal_accumulate` applies the
-// exact box test, so the result equals the brute-force loop's. A group built on the CPU holds its
-// decals in layer order, top layer first (`accel/structure.rs`, `ORDERED_FLAG`): at its first decal in
-// a layer the layers above hide (`decal_hidden`), the rest of the group is hidden too, and the query
-// leaves it (BENCHMARKS.md, "Decal groups in layer order").
+// exact box test, so the result equals the brute-force loop's.
 #include "shading/decal_bindings.wgsl"
 #include "shading/decals.wgsl"
 #include "$DECAL_QUERY" with VOLUMES=decal
@@ -30,13 +27,6 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
     decal_query_begin(s.position, frame.decal_instance_count);
     for (var leaf = decal_query_next_leaf(); leaf.x != BVH_END; leaf = decal_query_next_leaf()) {
         for (var k = leaf.x; k < leaf.y; k += 1u) {
-            if decal_hidden(k) {
-                if instance_ordered(decal_instance) {
-                    decal_query_leave_group();
-                    break;
-                }
-                continue;
-            }
             var surface = decal_surface;
             if decal_walk_shared() {
                 surface = decal_surface_in_group(decal_world, decal_instance);

@@ -20,9 +20,7 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
             local = instance_point_to_group(instance, s.position);
             surface = decal_surface_in_group(decal_world_surface(s, dp), instance);
         }
-        if !decal_hidden(entry.y) {
-            decal_accumulate(entry.y, instance, local, surface);
-        }
+        decal_accumulate(entry.y, instance, local, surface);
     }
     return decal_blend_end(s);
 }
