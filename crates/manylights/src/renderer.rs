@@ -134,6 +134,8 @@ impl Renderer {
             reflections: config.rays.reflection_bounces > 0,
             light_shadows: config.rays.light_shadow_rays > 0,
             subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
+            // Known once the decals' structure is built, below.
+            dense_decals: false,
             debug_views: config.debug_view != DebugView::Off,
         };
         // The triangles' hierarchy is built (on the CPU, once) only for frames that trace rays.
@@ -192,6 +194,7 @@ impl Renderer {
             clusters(config.decal_method == DecalMethod::Clustered),
             gpu_scene.decal_material_base,
         )?;
+        let methods = ShadingMethods { dense_decals: decals.centre_overlap() >= crate::passes::DENSE_DECAL_OVERLAP, ..methods };
         let setup = FrameSetup {
             methods,
             shadows: config.rays.sun_shadows,

@@ -69,6 +69,21 @@ fn demo_with_thousands_of_decals() {
     assert_decal_methods_agree(&scene, 128, 72, 0.0);
 }
 
+/// Decals crowded enough that shading walks them a subgroup at a time and shares each leaf's decals
+/// out among the lanes (`passes::query_walks`, `decal_leaves_shared_out.wgsl`; lavapipe's subgroups
+/// have 8 lanes) still give the brute-force image.
+#[test]
+fn dense_decals_shared_out_among_lanes_agree_with_brute_force() {
+    let mut scene = demo_scene();
+    generators::add_scattered_decals(&mut scene, &ScatterDecals { count: 3000, seed: 4, size: Some(1.5) }).unwrap();
+    let ctx = GpuContext::new().expect("a GPU adapter");
+    let structure = VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, BvhBuild::CpuOnce, None, 0).unwrap();
+    let overlap = structure.centre_overlap();
+    assert!(overlap >= manylights::passes::DENSE_DECAL_OVERLAP, "{overlap} boxes hold a decal's centre: too few to count as dense");
+    assert!(decal_effect(&scene, 96, 54) > 1e-3, "the decals barely change the image");
+    assert_decal_methods_agree(&scene, 128, 72, 0.0);
+}
+
 /// Wall-sized decals reach more froxels than one thread walks: the clustered build spreads them over
 /// workgroups (`cluster_build.wgsl`), beside small decals walked by single threads.
 #[test]

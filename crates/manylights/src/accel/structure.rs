@@ -121,6 +121,30 @@ impl GpuVolumeInstance {
     }
 }
 
+/// Volumes [`VolumeStructure::centre_overlap`] samples, evenly spread over the CPU-built groups.
+pub const OVERLAP_SAMPLES: usize = 4096;
+
+/// The mean number of boxes of its group holding a volume's box centre, over up to [`OVERLAP_SAMPLES`]
+/// volumes of the CPU-built groups (`builds`, one per range of `boxes`); 0 without any.
+fn centre_overlap(boxes: &[Aabb], ranges: &[Range<usize>], builds: &[Option<(Bvh, Option<EntryGrid>)>]) -> f32 {
+    let built: usize = ranges.iter().zip(builds).filter(|(_, b)| b.is_some()).map(|(r, _)| r.len()).sum();
+    let step = built.div_ceil(OVERLAP_SAMPLES).max(1);
+    let (mut samples, mut holding) = (0usize, 0usize);
+    for (range, build) in ranges.iter().zip(builds) {
+        let Some((bvh, _)) = build else { continue };
+        let group = &boxes[range.clone()];
+        for b in group.iter().step_by(step) {
+            bvh.query_point(group, (b.min + b.max) * 0.5, |_| holding += 1);
+            samples += 1;
+        }
+    }
+    if samples == 0 {
+        0.0
+    } else {
+        holding as f32 / samples as f32
+    }
+}
+
 /// The node before a group's root that describes its entry grid, read when a query enters the
 /// group: its corner (`min`), its first cell's index in the primitives array (`entry`), cells per unit
 /// length (`max`) and cells per axis, 10 bits each, x lowest (`skip`). Keep in sync with
@@ -248,6 +272,8 @@ pub struct VolumeStructure {
     /// groups' in leaf order; GPU-rebuilt groups' in scene order, as their copy into leaf order reads
     /// them (where they land changes with every build).
     scene_indices: Vec<u32>,
+    /// How many volumes' boxes hold a volume's centre, on average over its CPU-built group ([`Self::centre_overlap`]).
+    centre_overlap: f32,
     /// Puts the items in leaf order after GPU rebuilds (none when every group is built on the CPU).
     leaf_order: Option<LeafOrder>,
     /// Present for the clustered method; its buffers are bindings 4 and 5, placeholders otherwise.
@@ -453,6 +479,7 @@ impl VolumeStructure {
                 Ok(Some((bvh, grid)))
             })
             .collect::<Result<_>>()?;
+        let centre_overlap = centre_overlap(volumes.boxes, &ranges, &cpu_builds);
         // Each item's scene index, in the order the items are stored: a CPU-built group's in its
         // leaf order; the others' as the scene has them until their builds sort them.
         let scene_indices: Vec<u32> = ranges
@@ -619,6 +646,7 @@ impl VolumeStructure {
             items,
             layers: Vec::new(),
             scene_indices,
+            centre_overlap,
             leaf_order,
             clusters,
             groups,
@@ -639,6 +667,15 @@ impl VolumeStructure {
     /// it in leaf order.
     pub fn scene_indices(&self) -> &[u32] {
         &self.scene_indices
+    }
+
+    /// How many volumes' boxes hold a volume's centre, on average over up to [`OVERLAP_SAMPLES`] volumes
+    /// of its CPU-built groups (0 where every group is built on the GPU, or there are none): a
+    /// decal's centre lies on the surface it is projected on, so this is how crowded the point
+    /// queries' leaves are where decals show. Shading passes choose how decals walk by it
+    /// (`passes::query_walks`).
+    pub fn centre_overlap(&self) -> f32 {
+        self.centre_overlap
     }
 
     /// Instances the shaders visit (those of non-empty groups).

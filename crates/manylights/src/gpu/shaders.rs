@@ -30,6 +30,8 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/enumerate/lights_bvh.wgsl", include_str!("../shading/enumerate/lights_bvh.wgsl")),
     ("shading/enumerate/decals_brute.wgsl", include_str!("../shading/enumerate/decals_brute.wgsl")),
     ("shading/enumerate/decals_bvh.wgsl", include_str!("../shading/enumerate/decals_bvh.wgsl")),
+    ("shading/enumerate/decal_leaves_each.wgsl", include_str!("../shading/enumerate/decal_leaves_each.wgsl")),
+    ("shading/enumerate/decal_leaves_shared_out.wgsl", include_str!("../shading/enumerate/decal_leaves_shared_out.wgsl")),
     ("shading/enumerate/lights_off.wgsl", include_str!("../shading/enumerate/lights_off.wgsl")),
     ("shading/enumerate/decals_off.wgsl", include_str!("../shading/enumerate/decals_off.wgsl")),
     ("shading/enumerate/lights_clustered.wgsl", include_str!("../shading/enumerate/lights_clustered.wgsl")),
@@ -289,13 +291,23 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
     for lights in LightMethod::ALL {
         for decals in DecalMethod::ALL {
             // Every particle method (`Bvh` lights with the particles' lights, which subgroups walk
-            // together), with and without reflections, lamp shadows and subgroup walks.
+            // together), with and without reflections, lamp shadows and subgroup walks, and with
+            // sparse and dense decals.
             let flags = [false, true];
             let variants: Vec<_> =
                 ParticleMethod::ALL.iter().flat_map(|&p| flags.iter().flat_map(move |&r| flags.map(move |s| (p, r, s)))).collect();
             for (particles, reflections, light_shadows) in variants {
-                for subgroups in [false, true] {
-                    let methods = ShadingMethods { lights, decals, particles, reflections, light_shadows, subgroups, debug_views: false };
+                for (subgroups, dense_decals) in [(false, false), (true, false), (true, true)] {
+                    let methods = ShadingMethods {
+                        lights,
+                        decals,
+                        particles,
+                        reflections,
+                        light_shadows,
+                        subgroups,
+                        dense_decals,
+                        debug_views: false,
+                    };
                     if decals.works_in(PipelineKind::Forward) {
                         shaders.push(crate::passes::forward_shade::shader(methods));
                     }
@@ -362,7 +374,7 @@ mod tests {
     }
 
     /// Subgroup walks where they were measured faster: dense lights (particles as exact lights) in
-    /// every stage, decals in fragments; none without subgroup operations.
+    /// every stage, decals in fragments, dense decals in compute too; none without subgroup operations.
     #[test]
     fn passes_walk_a_subgroup_at_a_time_where_it_pays() {
         use crate::passes::{deferred_shade, forward_shade, transparent_shade, visbuffer_shade};
@@ -377,6 +389,15 @@ mod tests {
         assert_eq!(walks(transparent_shade::shader(dense)), 2, "fragments: both walks");
         assert_eq!(walks(forward_shade::shader(ShadingMethods { subgroups: false, ..dense })), 0);
         assert_eq!(walks(visbuffer_shade::shader(ShadingMethods { subgroups: false, ..dense })), 0);
+        // Dense decals walk as a subgroup in compute too, and share their leaves out in every stage.
+        let crowded = ShadingMethods { dense_decals: true, ..sparse };
+        let shares_out = |desc: ShaderDesc| desc.compose().unwrap().contains("fn decal_box_meets_box(");
+        assert_eq!(walks(visbuffer_shade::shader(crowded)), 1, "compute: the dense decals' walk");
+        assert_eq!(walks(deferred_shade::shader(crowded)), 1);
+        assert!(shares_out(visbuffer_shade::shader(crowded)) && shares_out(forward_shade::shader(crowded)));
+        assert!(!shares_out(forward_shade::shader(sparse)), "fragments: sparse decals' leaves go to every lane whole");
+        assert_eq!(walks(visbuffer_shade::shader(ShadingMethods { subgroups: false, ..crowded })), 0);
+        assert!(!shares_out(visbuffer_shade::shader(ShadingMethods { subgroups: false, ..crowded })));
     }
 
     #[test]

@@ -36,6 +36,14 @@ pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: 
         .with("LIGHT_SHADOWS", if methods.light_shadows { "shading/light_shadows.wgsl" } else { "shading/light_shadows_off.wgsl" })
         .with("LIGHT_QUERY", volume_query_module(walks.lights))
         .with("DECAL_QUERY", volume_query_module(walks.decals))
+        .with(
+            "DECAL_LEAVES",
+            if walks.decal_leaves_shared_out {
+                "shading/enumerate/decal_leaves_shared_out.wgsl"
+            } else {
+                "shading/enumerate/decal_leaves_each.wgsl"
+            },
+        )
 }
 
 /// The shader stage a pass shades in.
@@ -46,20 +54,38 @@ pub enum ShadingStage {
 }
 
 /// Which structures a pass's point queries walk a subgroup at a time (where the device has subgroup
-/// operations), as measured on the H100 (BENCHMARKS.md, "Subgroup walks"): a walk shared by the
-/// subgroup loads each node once for all its lanes, but lanes that need nothing wait for it, and each
-/// item any lane finds is processed in a round of its own. It pays for dense lights (particles as
-/// exact lights: hundreds reach every point) in every stage, and for decals in fragments, whose lanes
-/// walking alone diverge most; not for sparse lights, nor for decals in compute.
+/// operations), as measured on the H100 (BENCHMARKS.md, "Subgroup walks", "Dense decals' leaves shared
+/// out"): a walk shared by the subgroup loads each node once for all its lanes, but lanes that need
+/// nothing wait for it, and each item any lane finds is processed in a round of its own. It pays for
+/// dense lights (particles as exact lights: hundreds reach every point) in every stage, for decals in
+/// fragments, whose lanes walking alone diverge most, and for dense decals in compute, whose leaves the
+/// lanes then share out, each testing one decal against the box around all their points; not for
+/// sparse lights, nor for sparse decals in compute.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct QueryWalks {
     pub lights: bool,
     pub decals: bool,
+    /// The decals' leaves are shared out among the lanes (`shading/enumerate/decal_leaves_shared_out.wgsl`);
+    /// otherwise each lane tests every decal of the leaves it gets (`decal_leaves_each.wgsl`).
+    pub decal_leaves_shared_out: bool,
 }
+
+/// From how many boxes hold a decal's centre, on average ([`crate::accel::VolumeStructure::centre_overlap`]),
+/// decals count as dense ([`ShadingMethods::dense_decals`]). Over Sponza, ≈ 1 m decals give 20.5 at
+/// 50,000 decals, where sharing their leaves out shaded as fast as walking alone (0.689 against 0.692
+/// ms in the visibility buffer on the H100), and 28.1 at 70,000, where it was 5 % faster; 100 decals
+/// give 1.0, which shared out were 12 % slower in fragments (BENCHMARKS.md, "Dense decals' leaves
+/// shared out").
+pub const DENSE_DECAL_OVERLAP: f32 = 24.0;
 
 pub fn query_walks(methods: ShadingMethods, stage: ShadingStage) -> QueryWalks {
     let dense_lights = methods.particles == crate::pipelines::ParticleMethod::Bvh;
-    QueryWalks { lights: methods.subgroups && dense_lights, decals: methods.subgroups && stage == ShadingStage::Fragment }
+    let dense_decals = methods.subgroups && methods.dense_decals;
+    QueryWalks {
+        lights: methods.subgroups && dense_lights,
+        decals: dense_decals || (methods.subgroups && stage == ShadingStage::Fragment),
+        decal_leaves_shared_out: dense_decals,
+    }
 }
 
 /// A point query module: walked by a whole subgroup, or by each invocation alone.

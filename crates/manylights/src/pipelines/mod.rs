@@ -301,6 +301,10 @@ pub struct ShadingMethods {
     /// The device has subgroup operations: passes may walk BVHs a subgroup at a time
     /// (`accel/volume_query_subgroup.wgsl`), where that is faster (`passes::query_walks`).
     pub subgroups: bool,
+    /// The decals crowd: their structure's [`centre_overlap`](crate::accel::VolumeStructure::centre_overlap)
+    /// reaches [`crate::passes::DENSE_DECAL_OVERLAP`], so their queries walk a subgroup at a time and
+    /// share each leaf's decals out among the lanes (`passes::query_walks`).
+    pub dense_decals: bool,
     /// A debug view is shown: the shading core counts its work (`DEBUG_VIEWS` in
     /// `shading/debug_view.wgsl`, a pipeline constant: `ShadingMethods::debug_views_constant`).
     pub debug_views: bool,

@@ -1,0 +1,51 @@
+// A leaf's decals for `decals_bvh.wgsl`, shared out among the lanes of a subgroup walking together
+// (dense decals, `passes::query_walks`), as the dense lights' leaves are (`lights_bvh.wgsl`): each
+// lane tests one decal of the leaf against the box around all the lanes' points, then every lane
+// takes the decals some lane kept, one after the other, through its own tests. A leaf's dozen box
+// tests take one round instead of one each in every lane, and each kept decal is read at one address
+// by the whole subgroup. With 100k decals of about a metre over Sponza this shaded 11 % faster than
+// every lane testing every decal, and slower where decals crowd less (BENCHMARKS.md, "Dense decals'
+// leaves shared out").
+
+// The lanes walking together (`VOLUMES_walk_lanes`), counted once: they all stay in the walk to its end.
+var<private> decal_lanes: vec3<u32>;
+// The box around the lanes' points in the space of the instance the query is in.
+var<private> decal_walk_box: array<vec3<f32>, 2>;
+
+fn decal_leaves_begin() {
+    decal_lanes = decal_walk_lanes();
+}
+
+fn decal_leaves_entered(instance: VolumeInstance) {
+    decal_walk_box = decal_walk_bounds(instance_point_to_group(instance, decal_query_world_point));
+}
+
+// Lanes past the leaf's end read its last decal and keep none. The lane's index of a kept decal comes
+// by shuffle before any lane's own tests, while every lane is active (as in `lights_bvh.wgsl`).
+fn decal_leaf(leaf: vec2<u32>) {
+    for (var first = leaf.x; first < leaf.y; first += decal_lanes.y) {
+        let k = first + decal_lanes.x;
+        let rows = decals[min(k, leaf.y - 1u)].decal_from_group;
+        let kept = decal_walk_ballot(k < leaf.y && decal_box_meets_box(rows, decal_walk_box[0], decal_walk_box[1]));
+        for (var word = 0u; word < decal_lanes.z; word += 1u) {
+            for (var bits = kept[word]; bits != 0u; bits &= bits - 1u) {
+                decal_apply(decal_walk_lane_u32(k, word * 32u + firstTrailingBit(bits)));
+            }
+        }
+    }
+}
+
+// Whether the decal box with rows `decal_from_group` (`shading/decals.wgsl`) may overlap the box
+// [lo, hi]: along each of the decal's axes, the box's centre lies within the decal's half-width plus the
+// box's reach along that axis. The decal's three separating axes alone: a conservative test, with a
+// margin for rounding, since each lane's own test decides.
+fn decal_box_meets_box(decal_from_group: mat3x4<f32>, lo: vec3<f32>, hi: vec3<f32>) -> bool {
+    let half = (hi - lo) * 0.5;
+    let centre = vec4<f32>((lo + hi) * 0.5, 1.0) * decal_from_group;
+    let reach = vec3<f32>(
+        dot(abs(decal_from_group[0].xyz), half),
+        dot(abs(decal_from_group[1].xyz), half),
+        dot(abs(decal_from_group[2].xyz), half),
+    );
+    return all(abs(centre) <= (vec3<f32>(0.5) + reach) * 1.0001 + 1e-6);
+}
