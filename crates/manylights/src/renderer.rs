@@ -193,8 +193,10 @@ impl Renderer {
             ),
             clusters(config.decal_method == DecalMethod::Clustered),
             gpu_scene.decal_material_base,
+            // Dense decals' queries share their leaves out where the device has subgroups.
+            (config.decal_method == DecalMethod::Bvh && methods.subgroups).then_some(crate::passes::DENSE_DECAL_OVERLAP),
         )?;
-        let methods = ShadingMethods { dense_decals: decals.centre_overlap() >= crate::passes::DENSE_DECAL_OVERLAP, ..methods };
+        let methods = ShadingMethods { dense_decals: decals.wide_leaves(), ..methods };
         let setup = FrameSetup {
             methods,
             shadows: config.rays.sun_shadows,

@@ -69,17 +69,18 @@ fn demo_with_thousands_of_decals() {
     assert_decal_methods_agree(&scene, 128, 72, 0.0);
 }
 
-/// Decals crowded enough that shading walks them a subgroup at a time and shares each leaf's decals
-/// out among the lanes (`passes::query_walks`, `decal_leaves_shared_out.wgsl`; lavapipe's subgroups
-/// have 8 lanes) still give the brute-force image.
+/// Decals crowded enough that their groups get wide leaves and shading walks them a subgroup at a time,
+/// sharing each leaf's decals out among the lanes (`passes::query_walks`, `decal_leaves_shared_out.wgsl`;
+/// lavapipe's subgroups have 8 lanes), still give the brute-force image.
 #[test]
 fn dense_decals_shared_out_among_lanes_agree_with_brute_force() {
     let mut scene = demo_scene();
     generators::add_scattered_decals(&mut scene, &ScatterDecals { count: 3000, seed: 4, size: Some(1.5) }).unwrap();
     let ctx = GpuContext::new().expect("a GPU adapter");
-    let structure = VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, BvhBuild::CpuOnce, None, 0).unwrap();
+    let dense = Some(manylights::passes::DENSE_DECAL_OVERLAP);
+    let structure = VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, BvhBuild::CpuOnce, None, 0, dense).unwrap();
     let overlap = structure.centre_overlap();
-    assert!(overlap >= manylights::passes::DENSE_DECAL_OVERLAP, "{overlap} boxes hold a decal's centre: too few to count as dense");
+    assert!(structure.wide_leaves(), "{overlap} boxes hold a decal's centre: too few to count as dense");
     assert!(decal_effect(&scene, 96, 54) > 1e-3, "the decals barely change the image");
     assert_decal_methods_agree(&scene, 128, 72, 0.0);
 }
@@ -200,7 +201,7 @@ fn decals_keep_their_layers_in_leaf_order_and_gpu_rebuilds_refuse_cpu_ordered_us
     let frame_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
     let grid = ClusterGrid::for_resolution(64, 36);
     let structure = |build, clustered: bool| {
-        VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, build, clustered.then_some((grid, &frame_layout)), 0)
+        VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, build, clustered.then_some((grid, &frame_layout)), 0, None)
     };
     let message = structure(BvhBuild::GpuEveryFrame, true).err().expect("clustered lists over GPU rebuilds are an error").to_string();
     assert!(message.contains("clustered") && message.contains("once on the CPU"), "{message}");

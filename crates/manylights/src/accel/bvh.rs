@@ -38,6 +38,12 @@ pub const SAH_MAX_LEAF_SIZE: u32 = 16;
 /// Nodes with more primitives than this are split unless the SAH prefers a leaf.
 const MIN_SPLIT_SIZE: usize = 4;
 
+/// Leaves of [`Bvh::build_wide`] hold up to this many primitives, and its SAH counts a node visit as
+/// this many primitive tests: measured on the H100 with 100k decals shared out, leaves of up to 16,
+/// 32 and 64 (costs 3, 16 and 32) shaded in 1.083, 0.956 and 0.939 ms.
+pub const WIDE_LEAF_SIZE: u32 = 64;
+pub const WIDE_TRAVERSAL_COST: f64 = 32.0;
+
 /// SAH bins along the longest axis of the centroids' box.
 const BINS: usize = 16;
 
@@ -132,6 +138,19 @@ impl Bvh {
     /// As [`build`](Self::build), with leaves of at most `max_leaf_size` (1 to [`MAX_LEAF_SIZE`])
     /// primitives: 1 for a top level, whose leaves the query enters one instance at a time.
     pub fn build_with_leaf_size(aabbs: &[Aabb], max_leaf_size: u32) -> crate::Result<Bvh> {
+        Self::build_with_leaves(aabbs, max_leaf_size, TRAVERSAL_COST)
+    }
+
+    /// As [`build`](Self::build), with leaves of up to [`WIDE_LEAF_SIZE`] primitives, for queries that
+    /// share each leaf out among a subgroup's lanes (`shading/enumerate/decal_leaves_shared_out.wgsl`):
+    /// they test a subgroup's width of primitives in one round, so the SAH counts a node visit as
+    /// [`WIDE_TRAVERSAL_COST`] primitive tests. 100k decals of about a metre over Sponza, shared out,
+    /// shaded in 0.939 ms instead of 1.083 on the H100 (BENCHMARKS.md, "Wide leaves for dense decals").
+    pub fn build_wide(aabbs: &[Aabb]) -> crate::Result<Bvh> {
+        Self::build_with_leaves(aabbs, WIDE_LEAF_SIZE, WIDE_TRAVERSAL_COST)
+    }
+
+    fn build_with_leaves(aabbs: &[Aabb], max_leaf_size: u32, traversal_cost: f64) -> crate::Result<Bvh> {
         assert!((1..=MAX_LEAF_SIZE).contains(&max_leaf_size), "leaf size {max_leaf_size}");
         let invalid = |message: String| Err(crate::Error::InvalidScene(message));
         if aabbs.len() > MAX_PRIMITIVES {
@@ -155,7 +174,7 @@ impl Bvh {
             .collect();
         let mut nodes = Vec::with_capacity(2 * aabbs.len() - 1);
         let mut children = Vec::with_capacity(2 * aabbs.len() - 1);
-        let leaves = LeafSizes { max: max_leaf_size as usize, split_above: MIN_SPLIT_SIZE.min(max_leaf_size as usize) };
+        let leaves = LeafSizes { max: max_leaf_size as usize, split_above: MIN_SPLIT_SIZE.min(max_leaf_size as usize), traversal_cost };
         build_node(&mut nodes, &mut children, &mut prims, 0, 1, leaves);
         link(&mut nodes, &children);
         Ok(Bvh { nodes, primitive_indices: prims.iter().map(|p| p.index).collect() })
@@ -405,6 +424,8 @@ fn link(nodes: &mut [BvhNode], children: &[(u32, u32)]) {
 struct LeafSizes {
     max: usize,
     split_above: usize,
+    /// The SAH's cost of visiting a node, in primitive tests.
+    traversal_cost: f64,
 }
 
 /// Levels below a node of `count` primitives if it and its descendants are split at the median.
@@ -463,7 +484,7 @@ fn split(prims: &mut [Prim], bounds: Aabb, level: u32, leaves: LeafSizes) -> Opt
             if left_count == 0 || left_count == count {
                 continue;
             }
-            let cost = TRAVERSAL_COST + (left_box.surface_area() * left_count as f64 + right_cost[i]) / area;
+            let cost = leaves.traversal_cost + (left_box.surface_area() * left_count as f64 + right_cost[i]) / area;
             if best.is_none_or(|(_, best_cost, _)| cost < best_cost) {
                 best = Some((i, cost, left_count));
             }
@@ -637,6 +658,32 @@ pub(crate) mod tests {
         assert!(compact.nodes.len() < bvh.nodes.len());
         for p in random_points(&mut rng, &boxes, 500) {
             assert_eq!(query(&compact, &boxes, p), query(&Bvh::build(&boxes).unwrap(), &boxes, p));
+        }
+    }
+
+    /// Wide leaves: up to WIDE_LEAF_SIZE primitives, fewer nodes than the default build over crowded
+    /// boxes, and queries that still find exactly the boxes holding the point.
+    #[test]
+    fn wide_builds_have_larger_leaves_and_the_same_queries() {
+        let mut rng = Pcg64::seed_from_u64(0x31de);
+        let crowded: Vec<Aabb> = (0..4000)
+            .map(|_| {
+                let c = Vec3::new(rng.random_range(0.0..20.0), rng.random_range(0.0..5.0), rng.random_range(0.0..10.0));
+                Aabb::new(c - 1.0, c + 1.0)
+            })
+            .collect();
+        for boxes in [crowded, random_boxes(&mut rng, 3000)] {
+            let (wide, narrow) = (Bvh::build_wide(&boxes).unwrap(), Bvh::build(&boxes).unwrap());
+            check_structure(&wide, &boxes);
+            let largest = wide.nodes.iter().filter(|n| n.is_leaf()).map(|n| n.leaf_range().len()).max().unwrap();
+            assert!(largest <= WIDE_LEAF_SIZE as usize, "a leaf of {largest}");
+            for p in random_points(&mut rng, &boxes, 300) {
+                check_point(&wide, &boxes, p);
+            }
+            if boxes.len() == 4000 {
+                assert!(largest > SAH_MAX_LEAF_SIZE as usize, "no leaf wider than the default's");
+                assert!(wide.nodes.len() * 2 < narrow.nodes.len(), "{} nodes wide, {} narrow", wide.nodes.len(), narrow.nodes.len());
+            }
         }
     }
 

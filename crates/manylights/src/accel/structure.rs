@@ -126,12 +126,12 @@ pub const OVERLAP_SAMPLES: usize = 4096;
 
 /// The mean number of boxes of its group holding a volume's box centre, over up to [`OVERLAP_SAMPLES`]
 /// volumes of the CPU-built groups (`builds`, one per range of `boxes`); 0 without any.
-fn centre_overlap(boxes: &[Aabb], ranges: &[Range<usize>], builds: &[Option<(Bvh, Option<EntryGrid>)>]) -> f32 {
+fn centre_overlap(boxes: &[Aabb], ranges: &[Range<usize>], builds: &[Option<Bvh>]) -> f32 {
     let built: usize = ranges.iter().zip(builds).filter(|(_, b)| b.is_some()).map(|(r, _)| r.len()).sum();
     let step = built.div_ceil(OVERLAP_SAMPLES).max(1);
     let (mut samples, mut holding) = (0usize, 0usize);
     for (range, build) in ranges.iter().zip(builds) {
-        let Some((bvh, _)) = build else { continue };
+        let Some(bvh) = build else { continue };
         let group = &boxes[range.clone()];
         for b in group.iter().step_by(step) {
             bvh.query_point(group, (b.min + b.max) * 0.5, |_| holding += 1);
@@ -224,6 +224,10 @@ pub struct Volumes<'a> {
     pub kind: VolumeKind,
     pub items: &'a [u8],
     pub boxes: &'a [Aabb],
+    /// The centre overlap ([`VolumeStructure::centre_overlap`]) from which the CPU-built groups get wide
+    /// leaves ([`Bvh::build_wide`]), for queries that share each leaf out among a subgroup's lanes;
+    /// `None`: never.
+    pub wide_leaves_from: Option<f32>,
     pub groups: &'a Groups,
     /// Volumes written on the GPU every frame, after the others: one more group, placed at identity
     /// and rebuilt on the GPU every frame (particle lights, `particles/`).
@@ -274,6 +278,8 @@ pub struct VolumeStructure {
     scene_indices: Vec<u32>,
     /// How many volumes' boxes hold a volume's centre, on average over its CPU-built group ([`Self::centre_overlap`]).
     centre_overlap: f32,
+    /// The CPU-built groups have wide leaves ([`Volumes::wide_leaves_from`]).
+    wide_leaves: bool,
     /// Puts the items in leaf order after GPU rebuilds (none when every group is built on the CPU).
     leaf_order: Option<LeafOrder>,
     /// Present for the clustered method; its buffers are bindings 4 and 5, placeholders otherwise.
@@ -314,7 +320,14 @@ impl VolumeStructure {
             bounds: lights.iter().map(ClusterBounds::of_light).collect(),
             frame_layout,
         });
-        let volumes = Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: None };
+        let volumes = Volumes {
+            kind: VolumeKind::Lights,
+            items: bytemuck::cast_slice(&items),
+            boxes: &boxes,
+            wide_leaves_from: None,
+            groups,
+            dynamic: None,
+        };
         Self::new(ctx, &volumes, build, clustering)
     }
 
@@ -333,8 +346,14 @@ impl VolumeStructure {
         let items: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
         let boxes: Vec<Aabb> = lights.iter().map(light_aabb).collect();
         let dynamic = DynamicGroup { count: particle_lights, bounds: particle_bounds, leaf_size };
-        let volumes =
-            Volumes { kind: VolumeKind::Lights, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: Some(dynamic) };
+        let volumes = Volumes {
+            kind: VolumeKind::Lights,
+            items: bytemuck::cast_slice(&items),
+            boxes: &boxes,
+            wide_leaves_from: None,
+            groups,
+            dynamic: Some(dynamic),
+        };
         Self::new(ctx, &volumes, build, None)
     }
 
@@ -353,7 +372,8 @@ impl VolumeStructure {
 
     /// The structure over a scene's decals; with clustered lists on `clusters`' grid when given.
     /// Decals name their materials' records from `decal_material_base` on
-    /// (`GpuScene::decal_material_base`).
+    /// (`GpuScene::decal_material_base`). Where their centre overlap reaches `wide_leaves_from`, the
+    /// CPU-built groups get wide leaves ([`Volumes::wide_leaves_from`]).
     pub fn for_decals(
         ctx: &GpuContext,
         decals: &[Decal],
@@ -361,6 +381,7 @@ impl VolumeStructure {
         build: BvhBuild,
         clusters: Option<(ClusterGrid, &wgpu::BindGroupLayout)>,
         decal_material_base: u32,
+        wide_leaves_from: Option<f32>,
     ) -> Result<Self> {
         let items: Vec<GpuDecal> = decals.iter().map(|d| GpuDecal::new(d, decal_material_base)).collect();
         let boxes: Vec<Aabb> = decals.iter().map(decal_aabb).collect();
@@ -369,7 +390,14 @@ impl VolumeStructure {
             bounds: decals.iter().map(ClusterBounds::of_decal).collect(),
             frame_layout,
         });
-        let volumes = Volumes { kind: VolumeKind::Decals, items: bytemuck::cast_slice(&items), boxes: &boxes, groups, dynamic: None };
+        let volumes = Volumes {
+            kind: VolumeKind::Decals,
+            items: bytemuck::cast_slice(&items),
+            boxes: &boxes,
+            wide_leaves_from,
+            groups,
+            dynamic: None,
+        };
         let mut structure = Self::new(ctx, &volumes, build, clustering)?;
         structure.layers = structure.scene_indices.iter().map(|&i| decals[i as usize].layer).collect();
         Ok(structure)
@@ -467,19 +495,30 @@ impl VolumeStructure {
         // CPU builds first: their entry grids' cells and covers follow the primitive indices in the
         // same array, within one budget of cells and cover words for all the groups.
         let grid_budget = entry_grid::GridBudget::for_structure(count);
-        let cpu_builds: Vec<Option<(Bvh, Option<EntryGrid>)>> = ranges
-            .iter()
-            .map(|range| {
-                let boxes = &volumes.boxes[range.clone()];
-                if build != BvhBuild::CpuOnce || boxes.is_empty() {
-                    return Ok(None);
-                }
-                let bvh = Bvh::build(boxes)?;
-                let grid = EntryGrid::build(&bvh, boxes, grid_budget);
-                Ok(Some((bvh, grid)))
+        let group_boxes = |range: &Range<usize>| &volumes.boxes[range.clone()];
+        let cpu_built = |range: &Range<usize>| build == BvhBuild::CpuOnce && !range.is_empty();
+        let mut trees: Vec<Option<Bvh>> =
+            ranges.iter().map(|range| cpu_built(range).then(|| Bvh::build(group_boxes(range))).transpose()).collect::<Result<_>>()?;
+        let centre_overlap = centre_overlap(volumes.boxes, &ranges, &trees);
+        // Crowded volumes whose queries share leaves out get wide leaves: a second SAH build (tens of
+        // milliseconds for 100k volumes; the entry grids, built after, take seconds).
+        let wide_leaves = volumes.wide_leaves_from.is_some_and(|from| trees.iter().any(Option::is_some) && centre_overlap >= from);
+        if wide_leaves {
+            trees = ranges
+                .iter()
+                .map(|range| cpu_built(range).then(|| Bvh::build_wide(group_boxes(range))).transpose())
+                .collect::<Result<_>>()?;
+        }
+        let cpu_builds: Vec<Option<(Bvh, Option<EntryGrid>)>> = trees
+            .into_iter()
+            .zip(&ranges)
+            .map(|(tree, range)| {
+                tree.map(|bvh| {
+                    let grid = EntryGrid::build(&bvh, group_boxes(range), grid_budget);
+                    (bvh, grid)
+                })
             })
-            .collect::<Result<_>>()?;
-        let centre_overlap = centre_overlap(volumes.boxes, &ranges, &cpu_builds);
+            .collect();
         // Each item's scene index, in the order the items are stored: a CPU-built group's in its
         // leaf order; the others' as the scene has them until their builds sort them.
         let scene_indices: Vec<u32> = ranges
@@ -647,6 +686,7 @@ impl VolumeStructure {
             layers: Vec::new(),
             scene_indices,
             centre_overlap,
+            wide_leaves,
             leaf_order,
             clusters,
             groups,
@@ -676,6 +716,12 @@ impl VolumeStructure {
     /// (`passes::query_walks`).
     pub fn centre_overlap(&self) -> f32 {
         self.centre_overlap
+    }
+
+    /// Whether the CPU-built groups have wide leaves ([`Volumes::wide_leaves_from`]): queries of this
+    /// structure must share its leaves out.
+    pub fn wide_leaves(&self) -> bool {
+        self.wide_leaves
     }
 
     /// Instances the shaders visit (those of non-empty groups).

@@ -302,8 +302,9 @@ pub struct ShadingMethods {
     /// (`accel/volume_query_subgroup.wgsl`), where that is faster (`passes::query_walks`).
     pub subgroups: bool,
     /// The decals crowd: their structure's [`centre_overlap`](crate::accel::VolumeStructure::centre_overlap)
-    /// reaches [`crate::passes::DENSE_DECAL_OVERLAP`], so their queries walk a subgroup at a time and
-    /// share each leaf's decals out among the lanes (`passes::query_walks`).
+    /// reaches [`crate::passes::DENSE_DECAL_OVERLAP`], so its CPU-built groups have wide leaves
+    /// ([`crate::accel::VolumeStructure::wide_leaves`]), and queries walk them a subgroup at a time,
+    /// sharing each leaf's decals out among the lanes (`passes::query_walks`).
     pub dense_decals: bool,
     /// A debug view is shown: the shading core counts its work (`DEBUG_VIEWS` in
     /// `shading/debug_view.wgsl`, a pipeline constant: `ShadingMethods::debug_views_constant`).
