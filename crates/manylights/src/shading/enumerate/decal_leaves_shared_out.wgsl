@@ -1,11 +1,12 @@
 // A leaf's decals for `decals_bvh.wgsl`, shared out among the lanes of a subgroup walking together
 // (dense decals, `passes::query_walks`), as the dense lights' leaves are (`lights_bvh.wgsl`): each
 // lane tests one decal of the leaf against the box around all the lanes' points, then every lane
-// takes the decals some lane kept, one after the other, through its own tests. A leaf's dozen box
-// tests take one round instead of one each in every lane, and each kept decal is read at one address
-// by the whole subgroup. With 100k decals of about a metre over Sponza this shaded 11 % faster than
-// every lane testing every decal, and slower where decals crowd less (BENCHMARKS.md, "Dense decals'
-// leaves shared out").
+// takes the decals some lane kept, one after the other, through its own tests. A subgroup's width of
+// box tests takes one round instead of one each in every lane, and each kept decal is read at one
+// address by the whole subgroup, so these decals' groups have wide leaves (`Bvh::build_wide`). With 100k
+// decals of about a metre over Sponza this shaded 11 % faster than every lane testing every decal,
+// 23 % with the wide leaves, and slower where decals crowd less (BENCHMARKS.md, "Dense decals' leaves
+// shared out", "Wide leaves for dense decals").
 
 // The lanes walking together (`VOLUMES_walk_lanes`), counted once: they all stay in the walk to its end.
 var<private> decal_lanes: vec3<u32>;
