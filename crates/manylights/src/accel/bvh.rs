@@ -38,10 +38,13 @@ pub const SAH_MAX_LEAF_SIZE: u32 = 16;
 /// Nodes with more primitives than this are split unless the SAH prefers a leaf.
 const MIN_SPLIT_SIZE: usize = 4;
 
-/// Leaves of [`Bvh::build_wide`] hold up to this many primitives, and its SAH counts a node visit as
-/// this many primitive tests: measured on the H100 with 100k decals shared out, leaves of up to 16,
-/// 32 and 64 (costs 3, 16 and 32) shaded in 1.083, 0.956 and 0.939 ms.
+/// Leaves of [`Bvh::build_wide`] hold up to this many primitives. Measured on the H100 with 100k decals
+/// shared out: leaves of up to 16, 32 and 64 (node costs 3, 16 and 32) shaded in 1.083, 0.956 and
+/// 0.939 ms (BENCHMARKS.md, "Wide leaves for dense decals").
 pub const WIDE_LEAF_SIZE: u32 = 64;
+
+/// The SAH cost of visiting a node in [`Bvh::build_wide`], in primitive tests: a subgroup sharing a
+/// leaf out tests a subgroup's width of primitives in one round.
 pub const WIDE_TRAVERSAL_COST: f64 = 32.0;
 
 /// SAH bins along the longest axis of the centroids' box.

@@ -129,14 +129,18 @@ pub const OVERLAP_SAMPLES: usize = 4096;
 fn centre_overlap(boxes: &[Aabb], ranges: &[Range<usize>], builds: &[Option<Bvh>]) -> f32 {
     let built: usize = ranges.iter().zip(builds).filter(|(_, b)| b.is_some()).map(|(r, _)| r.len()).sum();
     let step = built.div_ceil(OVERLAP_SAMPLES).max(1);
-    let (mut samples, mut holding) = (0usize, 0usize);
+    // Every step-th volume counted over all the CPU-built groups together, so many small groups
+    // take no more samples than one large one.
+    let (mut seen, mut samples, mut holding) = (0usize, 0usize, 0usize);
     for (range, build) in ranges.iter().zip(builds) {
         let Some(bvh) = build else { continue };
         let group = &boxes[range.clone()];
-        for b in group.iter().step_by(step) {
+        let first = (step - seen % step) % step;
+        for b in group.iter().skip(first).step_by(step) {
             bvh.query_point(group, (b.min + b.max) * 0.5, |_| holding += 1);
             samples += 1;
         }
+        seen += group.len();
     }
     if samples == 0 {
         0.0
@@ -276,7 +280,7 @@ pub struct VolumeStructure {
     /// groups' in leaf order; GPU-rebuilt groups' in scene order, as their copy into leaf order reads
     /// them (where they land changes with every build).
     scene_indices: Vec<u32>,
-    /// How many volumes' boxes hold a volume's centre, on average over its CPU-built group ([`Self::centre_overlap`]).
+    /// How many volumes' boxes hold a volume's centre, on average ([`Self::centre_overlap`]).
     centre_overlap: f32,
     /// The CPU-built groups have wide leaves ([`Volumes::wide_leaves_from`]).
     wide_leaves: bool,
@@ -499,7 +503,8 @@ impl VolumeStructure {
         let cpu_built = |range: &Range<usize>| build == BvhBuild::CpuOnce && !range.is_empty();
         let mut trees: Vec<Option<Bvh>> =
             ranges.iter().map(|range| cpu_built(range).then(|| Bvh::build(group_boxes(range))).transpose()).collect::<Result<_>>()?;
-        let centre_overlap = centre_overlap(volumes.boxes, &ranges, &trees);
+        // Measured only where it decides the leaves.
+        let centre_overlap = if volumes.wide_leaves_from.is_some() { centre_overlap(volumes.boxes, &ranges, &trees) } else { 0.0 };
         // Crowded volumes whose queries share leaves out get wide leaves: a second SAH build (tens of
         // milliseconds for 100k volumes; the entry grids, built after, take seconds).
         let wide_leaves = volumes.wide_leaves_from.is_some_and(|from| trees.iter().any(Option::is_some) && centre_overlap >= from);
@@ -710,16 +715,17 @@ impl VolumeStructure {
     }
 
     /// How many volumes' boxes hold a volume's centre, on average over up to [`OVERLAP_SAMPLES`] volumes
-    /// of its CPU-built groups (0 where every group is built on the GPU, or there are none): a
-    /// decal's centre lies on the surface it is projected on, so this is how crowded the point
-    /// queries' leaves are where decals show. Shading passes choose how decals walk by it
-    /// (`passes::query_walks`).
+    /// of its CPU-built groups: a decal's centre lies on the surface it is projected on, so this is
+    /// how crowded the point queries' leaves are where decals show. Measured where
+    /// [`Volumes::wide_leaves_from`] asks, against which it decides [`Self::wide_leaves`]; 0 where
+    /// not, where every group is built on the GPU, or where there are none.
     pub fn centre_overlap(&self) -> f32 {
         self.centre_overlap
     }
 
     /// Whether the CPU-built groups have wide leaves ([`Volumes::wide_leaves_from`]): queries of this
-    /// structure must share its leaves out.
+    /// structure should share its leaves out, which the renderer makes them do
+    /// (`ShadingMethods::dense_decals`, `passes::query_walks`); tested one by one, wide leaves are slow.
     pub fn wide_leaves(&self) -> bool {
         self.wide_leaves
     }
@@ -885,6 +891,26 @@ mod tests {
         assert!((gpu.scale - 2.0).abs() < 1e-6);
         group.entry_grid_header = Some(BvhNode::zeroed());
         assert_eq!(GpuVolumeInstance::new(t, &group).blas_root, 17 | ENTRY_GRID_FLAG);
+    }
+
+    /// The mean count of boxes holding a box's centre, within its own group, over CPU-built groups only,
+    /// sampled evenly across them.
+    #[test]
+    fn centre_overlap_counts_the_boxes_holding_each_centre_in_its_group() {
+        let at = |x: f32| Aabb::new(glam::Vec3::new(x, 0.0, 0.0), glam::Vec3::new(x + 1.0, 1.0, 1.0));
+        // Ten stacked boxes, a lone one, and ten more stacked in a group built on the GPU.
+        let boxes: Vec<Aabb> = std::iter::repeat_n(at(0.0), 10).chain([at(5.0)]).chain(std::iter::repeat_n(at(0.0), 10)).collect();
+        let ranges = [0..10, 10..11, 11..21];
+        let built = |range: &Range<usize>| Some(Bvh::build(&boxes[range.clone()]).unwrap());
+        let builds = [built(&ranges[0]), built(&ranges[1]), None];
+        assert_eq!(centre_overlap(&boxes, &ranges, &builds), (10.0 * 10.0 + 1.0) / 11.0);
+        assert_eq!(centre_overlap(&boxes, &ranges[1..2], &builds[1..2]), 1.0);
+        assert_eq!(centre_overlap(&boxes, &ranges[2..], &builds[2..]), 0.0);
+        // More one-box groups than samples: every group sampled holds its own box alone.
+        let many: Vec<Aabb> = (0..3 * OVERLAP_SAMPLES).map(|i| at(2.0 * i as f32)).collect();
+        let ranges: Vec<Range<usize>> = (0..many.len()).map(|i| i..i + 1).collect();
+        let builds: Vec<Option<Bvh>> = ranges.iter().map(|r| Some(Bvh::build(&many[r.clone()]).unwrap())).collect();
+        assert_eq!(centre_overlap(&many, &ranges, &builds), 1.0);
     }
 
     #[test]

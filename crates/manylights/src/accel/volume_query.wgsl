@@ -11,7 +11,8 @@
 // invocation's entry-grid cell, `VOLUMES_walk_covers()`, whether a cell naming several subtrees has
 // them walked one by one, or as one range from the first to the last, and `VOLUMES_walk_shared()`,
 // whether the subgroup walks as one (callers choose by it what to hold through the walk). For callers
-// that share a leaf's items out among the lanes walking together (`shading/enumerate/lights_bvh.wgsl`)
+// that share a leaf's items out among the lanes walking together (`shading/enumerate/lights_bvh.wgsl`,
+// `shading/enumerate/decal_leaves_shared_out.wgsl`)
 // it also defines `VOLUMES_walk_lanes()`, `VOLUMES_walk_bounds(p)`, `VOLUMES_walk_ballot(keep)` and
 // `VOLUMES_walk_lane_u32` / `_vec4(value, lane)`: one lane's trivial versions where each invocation
 // walks alone.
@@ -29,7 +30,8 @@
 //
 // The caller also defines `VOLUMES_query_entered(instance)`, called as the query enters an instance's
 // group, before any of its leaves: there it keeps what its tests need of the instance (lights: the
-// surface in the group's space; decals: the instance itself). The query keeps only the instance's
+// surface in the group's space; decals: the instance, the surface in the group's space walking
+// alone, and the box around the lanes' points sharing leaves out). The query keeps only the instance's
 // index: a copy of the whole instance held through every walk cost the shading passes more than the
 // callers' own state (BENCHMARKS.md, "The instance handed to the caller").
 //

@@ -297,7 +297,13 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
             let variants: Vec<_> =
                 ParticleMethod::ALL.iter().flat_map(|&p| flags.iter().flat_map(move |&r| flags.map(move |s| (p, r, s)))).collect();
             for (particles, reflections, light_shadows) in variants {
-                for (subgroups, dense_decals) in [(false, false), (true, false), (true, true)] {
+                // Dense decals change only the BVH's shader.
+                let densities: &[(bool, bool)] = if decals == DecalMethod::Bvh {
+                    &[(false, false), (true, false), (true, true)]
+                } else {
+                    &[(false, false), (true, false)]
+                };
+                for &(subgroups, dense_decals) in densities {
                     let methods = ShadingMethods {
                         lights,
                         decals,
@@ -394,7 +400,9 @@ mod tests {
         let shares_out = |desc: ShaderDesc| desc.compose().unwrap().contains("fn decal_box_meets_box(");
         assert_eq!(walks(visbuffer_shade::shader(crowded)), 1, "compute: the dense decals' walk");
         assert_eq!(walks(deferred_shade::shader(crowded)), 1);
-        assert!(shares_out(visbuffer_shade::shader(crowded)) && shares_out(forward_shade::shader(crowded)));
+        for shader in [visbuffer_shade::shader, deferred_shade::shader, forward_shade::shader, transparent_shade::shader] {
+            assert!(shares_out(shader(crowded)), "dense decals share their leaves out in every shading pass");
+        }
         assert!(!shares_out(forward_shade::shader(sparse)), "fragments: sparse decals' leaves go to every lane whole");
         assert_eq!(walks(visbuffer_shade::shader(ShadingMethods { subgroups: false, ..crowded })), 0);
         assert!(!shares_out(visbuffer_shade::shader(ShadingMethods { subgroups: false, ..crowded })));

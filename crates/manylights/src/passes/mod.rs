@@ -25,7 +25,8 @@ pub mod visbuffer_shade;
 
 /// A pass's shader that calls the shading core, composed with the WGSL modules of its methods
 /// (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION`, `$DECAL_ENUMERATION` and `$PARTICLE_LIGHTING`,
-/// the light modules `$LIGHT_SHADOWS`; the opaque surfaces' shading passes include `$REFLECTIONS`).
+/// the light modules `$LIGHT_SHADOWS`; the opaque surfaces' shading passes include `$REFLECTIONS`)
+/// and of its point queries' walks ([`query_walks`]: `$LIGHT_QUERY`, `$DECAL_QUERY`, `$DECAL_LEAVES`).
 pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: ShadingStage) -> ShaderDesc {
     let walks = query_walks(methods, stage);
     ShaderDesc::new(entry)
