@@ -500,19 +500,19 @@ impl VolumeStructure {
         // same array, within one budget of cells and cover words for all the groups.
         let grid_budget = entry_grid::GridBudget::for_structure(count);
         let group_boxes = |range: &Range<usize>| &volumes.boxes[range.clone()];
-        let cpu_built = |range: &Range<usize>| build == BvhBuild::CpuOnce && !range.is_empty();
-        let mut trees: Vec<Option<Bvh>> =
-            ranges.iter().map(|range| cpu_built(range).then(|| Bvh::build(group_boxes(range))).transpose()).collect::<Result<_>>()?;
+        // Each group's CPU-built tree, if it has one.
+        let cpu_trees = |builder: fn(&[Aabb]) -> Result<Bvh>| -> Result<Vec<Option<Bvh>>> {
+            let cpu_built = |range: &Range<usize>| build == BvhBuild::CpuOnce && !range.is_empty();
+            ranges.iter().map(|range| cpu_built(range).then(|| builder(group_boxes(range))).transpose()).collect()
+        };
+        let mut trees = cpu_trees(Bvh::build)?;
         // Measured only where it decides the leaves.
         let centre_overlap = if volumes.wide_leaves_from.is_some() { centre_overlap(volumes.boxes, &ranges, &trees) } else { 0.0 };
         // Crowded volumes whose queries share leaves out get wide leaves: a second SAH build (tens of
         // milliseconds for 100k volumes; the entry grids, built after, take seconds).
         let wide_leaves = volumes.wide_leaves_from.is_some_and(|from| trees.iter().any(Option::is_some) && centre_overlap >= from);
         if wide_leaves {
-            trees = ranges
-                .iter()
-                .map(|range| cpu_built(range).then(|| Bvh::build_wide(group_boxes(range))).transpose())
-                .collect::<Result<_>>()?;
+            trees = cpu_trees(Bvh::build_wide)?;
         }
         let cpu_builds: Vec<Option<(Bvh, Option<EntryGrid>)>> = trees
             .into_iter()

@@ -33,8 +33,9 @@ fn VOLUMES_walk_shared() -> bool {
 
 // A leaf's items shared out among the lanes walking together: each active lane takes one item, tests
 // it against the box around every lane's point, and the subgroup then processes only the items some
-// lane kept (`shading/enumerate/lights_bvh.wgsl`, `decal_leaves_shared_out.wgsl`). x: this lane's rank among the active lanes, y: how
-// many are active, z: how many words of a ballot hold them (one on subgroups of 32 lanes or fewer).
+// lane kept (`shading/enumerate/lights_bvh.wgsl`, `decal_leaves_shared_out.wgsl`). x: this lane's
+// rank among the active lanes, y: how many are active, z: how many words of a ballot hold them (one on
+// subgroups of 32 lanes or fewer).
 fn VOLUMES_walk_lanes() -> vec3<u32> {
     let lanes = subgroupBallot(true);
     let words = select(select(select(1u, 2u, lanes.y != 0u), 3u, lanes.z != 0u), 4u, lanes.w != 0u);
