@@ -11,6 +11,12 @@
 //! Vulkan backend uses, the initialisers are removed from the SPIR-V, and the module is passed through
 //! (`Features::PASSTHROUGH_SHADERS`). Anywhere else — another backend, or the feature withheld — wgpu
 //! compiles the WGSL as usual, with the same results.
+//!
+//! The words keep the WGSL's binding numbers, while wgpu's Vulkan backend numbers a group's
+//! descriptors by their rank among its layout's entries (wgpu-hal's `create_bind_group_layout`), and
+//! rewrites the bindings of the modules it compiles to match. The two agree only where each group's
+//! bindings are 0, 1, 2, … without a gap, as every shading pass's are (tested below): a pass binding
+//! 0–3 and 7 read a wrong descriptor at 7 here, on the H100, and the right one through wgpu.
 
 use crate::{Error, Result};
 
@@ -303,6 +309,33 @@ mod tests {
         assert!(!declares_variable("var<private> decal_layers_touched: u32;", "decal_layers"));
         assert!(!declares_variable("// var<private> decal_layers: u32;", "decal_layers"));
         assert!(declares_variable("    var stack_nodes: array<u32, RAY_STACK_SIZE>;", "stack_nodes"));
+    }
+
+    /// The words keep the WGSL's binding numbers, which must then be the ranks wgpu's Vulkan backend
+    /// gives the layouts' entries (module docs): 0, 1, 2, … in every group.
+    #[test]
+    fn shaders_passed_through_number_each_groups_bindings_from_zero_without_gaps() {
+        let mut checked = 0;
+        for desc in crate::gpu::shaders::all_shaders() {
+            let source = desc.compose().unwrap();
+            if !UNZEROED_VARIABLES.iter().any(|name| declares_variable(&source, name)) {
+                continue;
+            }
+            let module = naga::front::wgsl::parse_str(&source).unwrap();
+            let mut groups: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+            for (_, global) in module.global_variables.iter() {
+                if let Some(binding) = &global.binding {
+                    groups.entry(binding.group).or_default().push(binding.binding);
+                }
+            }
+            for (group, mut bindings) in groups {
+                bindings.sort_unstable();
+                let expected: Vec<u32> = (0..bindings.len() as u32).collect();
+                assert_eq!(bindings, expected, "{}: group {group}'s bindings", desc.entry);
+            }
+            checked += 1;
+        }
+        assert!(checked > 50, "only {checked} shaders checked");
     }
 
     #[test]
