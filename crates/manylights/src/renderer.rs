@@ -136,6 +136,7 @@ impl Renderer {
             subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
             // Known once the decals' structure is built, below.
             dense_decals: false,
+            decal_cell_lists: false,
             debug_views: config.debug_view != DebugView::Off,
         };
         // The triangles' hierarchy is built (on the CPU, once) only for frames that trace rays.
@@ -196,7 +197,7 @@ impl Renderer {
             // Dense decals' queries share their leaves out where the device has subgroups.
             (config.decal_method == DecalMethod::Bvh && methods.subgroups).then_some(crate::passes::DENSE_DECAL_OVERLAP),
         )?;
-        let methods = ShadingMethods { dense_decals: decals.wide_leaves(), ..methods };
+        let methods = ShadingMethods { dense_decals: decals.wide_leaves(), decal_cell_lists: decals.cell_lists(), ..methods };
         let setup = FrameSetup {
             methods,
             shadows: config.rays.sun_shadows,

@@ -69,26 +69,45 @@ fn demo_with_thousands_of_decals() {
     assert_decal_methods_agree(&scene, 128, 72, 0.0);
 }
 
-/// Decals crowded enough that their groups get wide leaves and shading walks them a subgroup at a time,
-/// sharing each leaf's decals out among the lanes (`passes::query_walks`, `decal_leaves_shared_out.wgsl`;
-/// lavapipe's subgroups have 8 lanes), still give the brute-force image, in compute passes and in
-/// fragments.
-#[test]
-fn dense_decals_shared_out_among_lanes_agree_with_brute_force() {
-    let mut scene = demo_scene();
-    generators::add_scattered_decals(&mut scene, &ScatterDecals { count: 3000, seed: 4, size: Some(1.5) }).unwrap();
+/// Renders `scene`'s crowded decals by brute force and through their structure in every pipeline, and
+/// requires the same image; the structure, built as the renderer builds it, must have wide leaves, and
+/// cell lists as `cell_lists` says.
+fn assert_dense_decals_agree(scene: &Scene, cell_lists: bool, time: f32) {
     let ctx = GpuContext::new().expect("a GPU adapter");
     assert!(ctx.features.contains(wgpu::Features::SUBGROUP), "the test needs an adapter with subgroup operations");
     let dense = Some(manylights::passes::DENSE_DECAL_OVERLAP);
     let structure = VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, BvhBuild::CpuOnce, None, 0, dense).unwrap();
     let overlap = structure.centre_overlap();
     assert!(structure.wide_leaves(), "{overlap} boxes hold a decal's centre: too few to count as dense");
-    assert!(decal_effect(&scene, 96, 54) > 1e-3, "the decals barely change the image");
+    assert_eq!(structure.cell_lists(), cell_lists);
+    assert!(decal_effect(scene, 96, 54) > 1e-3, "the decals barely change the image");
     for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
-        let render = |method| render_at(&scene, RenderConfig { pipeline, ..decal_config(128, 72, method, BvhBuild::CpuOnce) }, 0.0);
+        let render = |method| render_at(scene, RenderConfig { pipeline, ..decal_config(128, 72, method, BvhBuild::CpuOnce) }, time);
         let difference = max_abs_difference(&render(DecalMethod::Brute), &render(DecalMethod::Bvh));
         assert!(difference <= TOLERANCE, "{}: bvh differs from brute force by {difference}", pipeline.name());
     }
+}
+
+/// Decals crowded into one group placed once get cell lists (`accel/cell_lists.rs`), which shading
+/// reads instead of walking, each cell's list shared out among the lanes in that cell
+/// (`decals_bvh_cells.wgsl`; lavapipe's subgroups have 8 lanes): still the brute-force image, in
+/// compute passes and in fragments.
+#[test]
+fn dense_decals_read_from_cell_lists_agree_with_brute_force() {
+    let mut scene = demo_scene();
+    generators::add_scattered_decals(&mut scene, &ScatterDecals { count: 3000, seed: 4, size: Some(1.5) }).unwrap();
+    assert_dense_decals_agree(&scene, true, 0.0);
+}
+
+/// Crowded decals in spinning groups get wide leaves and no cell lists: shading walks them a subgroup
+/// at a time, sharing each leaf's decals out among the lanes (`passes::query_walks`,
+/// `decal_leaves_shared_out.wgsl`), and still gives the brute-force image.
+#[test]
+fn dense_grouped_decals_shared_out_among_lanes_agree_with_brute_force() {
+    let mut scene = demo_scene();
+    generators::add_scattered_decals(&mut scene, &ScatterDecals { count: 3000, seed: 4, size: Some(1.5) }).unwrap();
+    generators::group_for_animation(&mut scene, 6, 2).unwrap();
+    assert_dense_decals_agree(&scene, false, 0.7);
 }
 
 /// Wall-sized decals reach more froxels than one thread walks: the clustered build spreads them over

@@ -7,12 +7,14 @@
 //! query, which serve static groups and are the oracle for the GPU. `volumes.rs` bounds each light's
 //! and decal's volume. `lbvh.rs` builds BVHs on the GPU (Karras LBVH) in the same layout, and
 //! `leaf_order.rs` puts a rebuilt group's items in the order of its leaves.
-//! `entry_grid.rs` tells a query where to start in a CPU-built group's BVH.
+//! `entry_grid.rs` tells a query where to start in a CPU-built group's BVH, and `cell_lists.rs` lists
+//! what reaches each cell of a grid over a group of crowded volumes, which queries read instead.
 //! `structure.rs` is the two-level structure the shaders query (`accel/volume_query.wgsl`): a BVH
 //! per group of volumes and a top level over the groups' instances. `clusters.rs` builds the
 //! clustered method's per-froxel lists, the baseline the structures are compared against.
 
 pub mod bvh;
+pub mod cell_lists;
 pub mod clusters;
 pub mod entry_grid;
 pub mod lbvh;

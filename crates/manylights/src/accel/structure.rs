@@ -8,7 +8,8 @@
 //! `items` (lights or decals, group after group, each in its group's space and in its BVH's leaf
 //! order, so a group leaf names the range of items it holds), `nodes` (the top level first, then each
 //! group's entry-grid header node and BVH), `primitives` (the top level's instance indices, then each
-//! item's index in the scene, then the entry grids' cells and covers of CPU-built groups, `entry_grid.rs`) and
+//! item's index in the scene, then the CPU-built groups' entry grids, `entry_grid.rs`, or cell lists,
+//! `cell_lists.rs`) and
 //! `instances`. Sharing one node array between all BVHs keeps the binding count fixed; a structure
 //! over 1M volumes still stays under lavapipe's 128 MiB per binding.
 //!
@@ -23,6 +24,7 @@ use glam::Affine3A;
 
 use super::{
     bvh::{MAX_LEAF_SIZE, MAX_PRIMITIVES},
+    cell_lists::{self, CellLists},
     clusters::{ClusterBounds, ClusterGrid, ClusterLists},
     decal_aabb,
     entry_grid::{self, EntryGrid},
@@ -115,7 +117,7 @@ impl GpuVolumeInstance {
             world_from_group: affine_rows(&world_from_group),
             first_item: group.items.start,
             item_count: group.items.len() as u32,
-            blas_root: group.blas_root | if group.entry_grid_header.is_some() { ENTRY_GRID_FLAG } else { 0 },
+            blas_root: group.blas_root | group.grid.map_or(0, |g| g.flag),
             scale: world_from_group.matrix3.x_axis.length(),
         }
     }
@@ -149,21 +151,68 @@ fn centre_overlap(boxes: &[Aabb], ranges: &[Range<usize>], builds: &[Option<Bvh>
     }
 }
 
-/// The node before a group's root that describes its entry grid, read when a query enters the
-/// group: its corner (`min`), its first cell's index in the primitives array (`entry`), cells per unit
-/// length (`max`) and cells per axis, 10 bits each, x lowest (`skip`). Keep in sync with
-/// `entry_grid_cell` in `accel/bvh_types.wgsl`.
-fn entry_grid_header(grid: &EntryGrid, first_cell: u32) -> BvhNode {
-    BvhNode { min: grid.min.to_array(), entry: first_cell, max: grid.cells_per_unit.to_array(), skip: grid.packed_dims() }
+/// What a CPU-built group's queries read before its BVH, if anything: where to start in it, or the
+/// lists that replace it.
+enum GroupGrid {
+    Entry(EntryGrid),
+    Lists(CellLists),
+}
+
+impl GroupGrid {
+    /// Words of the primitive array it takes.
+    fn gpu_len(&self) -> usize {
+        match self {
+            GroupGrid::Entry(grid) => grid.gpu_len(),
+            GroupGrid::Lists(lists) => lists.gpu_len(),
+        }
+    }
+
+    /// Its words from word `first_cell` of the primitive array, for the group whose root is node
+    /// `blas_root` and first item `first_item`, and the header node that describes it: its corner
+    /// (`min`), its first cell's index in the primitives array (`entry`), cells per unit length (`max`)
+    /// and cells per axis, 10 bits each, x lowest (`skip`). Keep in sync with `entry_grid_cell` in
+    /// `accel/bvh_types.wgsl`.
+    fn gpu_words(&self, blas_root: u32, first_item: u32, first_cell: u32) -> (Vec<u32>, GridHeader) {
+        let (words, min, cells_per_unit, dims, flag) = match self {
+            GroupGrid::Entry(grid) => {
+                (grid.gpu_words(blas_root, first_cell), grid.min, grid.cells_per_unit, grid.packed_dims(), ENTRY_GRID_FLAG)
+            }
+            // No flag: a walk of the group ignores its lists and starts at its root.
+            GroupGrid::Lists(lists) => (lists.gpu_words(first_item, first_cell), lists.min, lists.cells_per_unit, lists.packed_dims(), 0),
+        };
+        let node = BvhNode { min: min.to_array(), entry: first_cell, max: cells_per_unit.to_array(), skip: dims };
+        (words, GridHeader { node, flag })
+    }
+}
+
+/// The node before a group's root that describes its entry grid or cell lists, and the flag set in its
+/// instances' `blas_root` for an entry grid, which walks start from.
+#[derive(Clone, Copy, Debug)]
+struct GridHeader {
+    node: BvhNode,
+    flag: u32,
+}
+
+/// Whether a decal's box, with rows `decal_from_group` (`GpuDecal`), may reach `cell`: along each of
+/// the decal's axes, the cell's centre lies within the decal's half-width plus the cell's reach
+/// (the decal's three separating axes; the cell's are its box's, which the caller has tested).
+fn decal_may_reach(decal_from_group: &[[f32; 4]; 3], cell: &Aabb) -> bool {
+    let centre = (cell.min + cell.max) * 0.5;
+    let half = (cell.max - cell.min) * 0.5;
+    decal_from_group.iter().all(|row| {
+        let axis = glam::Vec3::new(row[0], row[1], row[2]);
+        let reach = axis.abs().dot(half);
+        (axis.dot(centre) + row[3]).abs() <= 0.5 + reach + 1e-4 * (1.0 + reach)
+    })
 }
 
 /// A group's items and its BVH in the shared arrays.
 struct Group {
     items: Range<u32>,
     blas_root: u32,
-    /// The header of the entry grid queries start from (CPU-built groups), also stored as the node
-    /// before the root.
-    entry_grid_header: Option<BvhNode>,
+    /// The header of the entry grid queries start from, or of the cell lists they read (CPU-built
+    /// groups), also stored as the node before the root.
+    grid: Option<GridHeader>,
     /// Written on the GPU every frame (`Volumes::dynamic`).
     dynamic: bool,
     /// Bounds of the group's volumes, in its space: the top level's boxes are their images.
@@ -284,6 +333,8 @@ pub struct VolumeStructure {
     centre_overlap: f32,
     /// The CPU-built groups have wide leaves ([`Volumes::wide_leaves_from`]).
     wide_leaves: bool,
+    /// The lone group has cell lists ([`Self::cell_lists`]).
+    cell_lists: bool,
     /// Puts the items in leaf order after GPU rebuilds (none when every group is built on the CPU).
     leaf_order: Option<LeafOrder>,
     /// Present for the clustered method; its buffers are bindings 4 and 5, placeholders otherwise.
@@ -514,12 +565,35 @@ impl VolumeStructure {
         if wide_leaves {
             trees = cpu_trees(Bvh::build_wide)?;
         }
-        let cpu_builds: Vec<Option<(Bvh, Option<EntryGrid>)>> = trees
+        // A lone group placed once whose queries share wide leaves out gets cell lists where they fit,
+        // which shading reads in place of any walk (`VolumeStructure::cell_lists`).
+        let lone_group = instances.len() == 1 && dynamic.is_none();
+        let list_words_per_primitive = cell_lists::MAX_LIST_WORDS as f64 / count.max(1) as f64;
+        let cpu_builds: Vec<Option<(Bvh, Option<GroupGrid>)>> = trees
             .into_iter()
             .zip(&ranges)
             .map(|(tree, range)| {
                 tree.map(|bvh| {
-                    let grid = EntryGrid::build(&bvh, group_boxes(range), grid_budget);
+                    let lists = (wide_leaves && lone_group)
+                        .then(|| {
+                            let in_leaf_order: Vec<Aabb> =
+                                bvh.primitive_indices.iter().map(|&p| volumes.boxes[range.start + p as usize]).collect();
+                            let may_reach = |item: usize, cell: &Aabb| {
+                                volumes.kind != VolumeKind::Decals || {
+                                    let scene_index = range.start + bvh.primitive_indices[item] as usize;
+                                    let record: &GpuDecal = bytemuck::from_bytes(
+                                        &volumes.items[scene_index * std::mem::size_of::<GpuDecal>()..][..std::mem::size_of::<GpuDecal>()],
+                                    );
+                                    decal_may_reach(&record.decal_from_group, cell)
+                                }
+                            };
+                            CellLists::build(&in_leaf_order, &may_reach, (range.len() as f64 * list_words_per_primitive) as usize)
+                        })
+                        .flatten();
+                    let grid = match lists {
+                        Some(lists) => Some(GroupGrid::Lists(lists)),
+                        None => EntryGrid::build(&bvh, group_boxes(range), grid_budget).map(GroupGrid::Entry),
+                    };
                     (bvh, grid)
                 })
             })
@@ -544,15 +618,16 @@ impl VolumeStructure {
             )));
         }
         let cell_words: u64 = cpu_builds.iter().flatten().filter_map(|(_, g)| g.as_ref()).map(|g| g.gpu_len() as u64).sum();
+        let cell_lists = cpu_builds.iter().flatten().any(|(_, g)| matches!(g, Some(GroupGrid::Lists(_))));
         if primitive_count + cell_words > u64::from(entry_grid::CELL_COVER_OFFSET_MASK) {
             return Err(Error::InvalidScene(format!(
-                "{count} {label}s need {} words of primitive indices and entry grids, over the {} a structure addresses; use fewer {label}s",
+                "{count} {label}s need {} words of primitive indices, entry grids and cell lists, over the {} a structure addresses; use fewer {label}s",
                 primitive_count + cell_words,
                 entry_grid::CELL_COVER_OFFSET_MASK
             )));
         }
         let primitive_bytes = (primitive_count + cell_words) * 4;
-        fits("BVH primitives and entry grids", primitive_bytes)?;
+        fits("BVH primitives, entry grids and cell lists", primitive_bytes)?;
 
         let device = &ctx.device;
         use wgpu::BufferUsages as U;
@@ -600,16 +675,15 @@ impl VolumeStructure {
             let items_range = range.start as u32..range.end as u32;
             let boxes = &volumes.boxes[range.clone()];
             let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
-            let mut grid_header = None;
+            let mut grid_header: Option<GridHeader> = None;
             let builder = match cpu_build {
                 Some((bvh, grid)) => {
                     let group_nodes = relocate(&bvh, blas_root, items_range.start);
                     ctx.queue.write_buffer(&nodes, u64::from(blas_root) * 32, bytemuck::cast_slice(&group_nodes));
                     if let Some(grid) = grid {
-                        let cells = grid.gpu_words(blas_root, next_cell);
+                        let (cells, header) = grid.gpu_words(blas_root, items_range.start, next_cell);
                         ctx.queue.write_buffer(&primitives, u64::from(next_cell) * 4, bytemuck::cast_slice(&cells));
-                        let header = entry_grid_header(&grid, next_cell);
-                        ctx.queue.write_buffer(&nodes, u64::from(blas_root - 1) * 32, bytemuck::bytes_of(&header));
+                        ctx.queue.write_buffer(&nodes, u64::from(blas_root - 1) * 32, bytemuck::bytes_of(&header.node));
                         grid_header = Some(header);
                         next_cell += cells.len() as u32;
                     }
@@ -630,7 +704,7 @@ impl VolumeStructure {
                     Some(builder)
                 }
             };
-            groups.push(Group { items: items_range, blas_root, entry_grid_header: grid_header, dynamic: false, bounds, builder });
+            groups.push(Group { items: items_range, blas_root, grid: grid_header, dynamic: false, bounds, builder });
         }
         if let Some(d) = dynamic {
             let first = count as u32;
@@ -647,7 +721,7 @@ impl VolumeStructure {
             groups.push(Group {
                 items: first..first + d.count,
                 blas_root: dynamic_root,
-                entry_grid_header: None,
+                grid: None,
                 dynamic: true,
                 bounds: d.bounds,
                 builder: Some(builder),
@@ -692,6 +766,7 @@ impl VolumeStructure {
             scene_indices,
             centre_overlap,
             wide_leaves,
+            cell_lists,
             leaf_order,
             clusters,
             groups,
@@ -721,6 +796,14 @@ impl VolumeStructure {
     /// not, where every group is built on the GPU, or where there are none.
     pub fn centre_overlap(&self) -> f32 {
         self.centre_overlap
+    }
+
+    /// Whether the structure is one group, placed once, with cell lists (`cell_lists.rs`): its items
+    /// crowd and its queries share them out (`wide_leaves`), so shading reads the list of a point's
+    /// cell (`shading/enumerate/decals_bvh_cells.wgsl`) instead of walking. The group's BVH stays, for
+    /// its items' order and for walks of other passes, which start at its root.
+    pub fn cell_lists(&self) -> bool {
+        self.cell_lists
     }
 
     /// Whether the CPU-built groups have wide leaves ([`Volumes::wide_leaves_from`]): queries of this
@@ -791,7 +874,7 @@ impl VolumeStructure {
             return Err(Error::InvalidScene(format!("{} instance {i}: its bounds are not finite at time {time}", self.label)));
         }
         ctx.queue.write_buffer(&self.instance_buffer, 0, bytemuck::cast_slice(&gpu));
-        let first = GpuFirstInstance { instance: gpu[0], entry_grid_header: placed[0].1.entry_grid_header.unwrap_or_else(BvhNode::zeroed) };
+        let first = GpuFirstInstance { instance: gpu[0], entry_grid_header: placed[0].1.grid.map_or_else(BvhNode::zeroed, |g| g.node) };
         ctx.queue.write_buffer(&self.first_instance, 0, bytemuck::bytes_of(&first));
         match &mut self.top_level_builder {
             Some(builder) => {
@@ -880,7 +963,7 @@ mod tests {
             glam::Quat::from_rotation_y(0.5),
             glam::Vec3::new(1.0, 2.0, 3.0),
         );
-        let mut group = Group { items: 4..9, blas_root: 17, entry_grid_header: None, dynamic: false, bounds: Aabb::EMPTY, builder: None };
+        let mut group = Group { items: 4..9, blas_root: 17, grid: None, dynamic: false, bounds: Aabb::EMPTY, builder: None };
         let gpu = GpuVolumeInstance::new(t, &group);
         let apply =
             |rows: &[[f32; 4]; 3], p: glam::Vec3| glam::Vec3::from_array(rows.map(|r| glam::Vec4::from_array(r).dot(p.extend(1.0))));
@@ -889,8 +972,10 @@ mod tests {
         assert!((apply(&gpu.group_from_world, apply(&gpu.world_from_group, p)) - p).length() < 1e-5);
         assert_eq!((gpu.first_item, gpu.item_count, gpu.blas_root), (4, 5, 17));
         assert!((gpu.scale - 2.0).abs() < 1e-6);
-        group.entry_grid_header = Some(BvhNode::zeroed());
+        group.grid = Some(GridHeader { node: BvhNode::zeroed(), flag: ENTRY_GRID_FLAG });
         assert_eq!(GpuVolumeInstance::new(t, &group).blas_root, 17 | ENTRY_GRID_FLAG);
+        group.grid = Some(GridHeader { node: BvhNode::zeroed(), flag: 0 });
+        assert_eq!(GpuVolumeInstance::new(t, &group).blas_root, 17);
     }
 
     /// The mean count of boxes holding a box's centre, within its own group, over CPU-built groups only,

@@ -30,6 +30,8 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/enumerate/lights_bvh.wgsl", include_str!("../shading/enumerate/lights_bvh.wgsl")),
     ("shading/enumerate/decals_brute.wgsl", include_str!("../shading/enumerate/decals_brute.wgsl")),
     ("shading/enumerate/decals_bvh.wgsl", include_str!("../shading/enumerate/decals_bvh.wgsl")),
+    ("shading/enumerate/decals_bvh_cells.wgsl", include_str!("../shading/enumerate/decals_bvh_cells.wgsl")),
+    ("shading/decal_box.wgsl", include_str!("../shading/decal_box.wgsl")),
     ("shading/enumerate/decal_leaves_each.wgsl", include_str!("../shading/enumerate/decal_leaves_each.wgsl")),
     ("shading/enumerate/decal_leaves_shared_out.wgsl", include_str!("../shading/enumerate/decal_leaves_shared_out.wgsl")),
     ("shading/enumerate/lights_off.wgsl", include_str!("../shading/enumerate/lights_off.wgsl")),
@@ -297,13 +299,13 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
             let variants: Vec<_> =
                 ParticleMethod::ALL.iter().flat_map(|&p| flags.iter().flat_map(move |&r| flags.map(move |s| (p, r, s)))).collect();
             for (particles, reflections, light_shadows) in variants {
-                // Dense decals change only the BVH's shader.
-                let densities: &[(bool, bool)] = if decals == DecalMethod::Bvh {
-                    &[(false, false), (true, false), (true, true)]
+                // Dense decals, and their cell lists, change only the BVH's shader.
+                let densities: &[(bool, bool, bool)] = if decals == DecalMethod::Bvh {
+                    &[(false, false, false), (true, false, false), (true, true, false), (true, true, true)]
                 } else {
-                    &[(false, false), (true, false)]
+                    &[(false, false, false), (true, false, false)]
                 };
-                for &(subgroups, dense_decals) in densities {
+                for &(subgroups, dense_decals, decal_cell_lists) in densities {
                     let methods = ShadingMethods {
                         lights,
                         decals,
@@ -312,6 +314,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         light_shadows,
                         subgroups,
                         dense_decals,
+                        decal_cell_lists,
                         debug_views: false,
                     };
                     if decals.works_in(PipelineKind::Forward) {
@@ -342,7 +345,7 @@ mod tests {
             capabilities |= naga::valid::Capabilities::PRIMITIVE_INDEX;
         }
         // Subgroup built-ins need no `enable` in wgpu's WGSL (naga rejects the standard's).
-        if source.contains("subgroupAny(") {
+        if ["subgroupAny(", "subgroupBallot("].iter().any(|op| source.contains(op)) {
             capabilities |= naga::valid::Capabilities::SUBGROUP;
         }
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
@@ -406,6 +409,12 @@ mod tests {
         assert!(!shares_out(forward_shade::shader(sparse)), "fragments: sparse decals' leaves go to every lane whole");
         assert_eq!(walks(visbuffer_shade::shader(ShadingMethods { subgroups: false, ..crowded })), 0);
         assert!(!shares_out(visbuffer_shade::shader(ShadingMethods { subgroups: false, ..crowded })));
+        // Crowded decals with cell lists are read from them in every stage, never walked.
+        let listed = ShadingMethods { decal_cell_lists: true, ..crowded };
+        for shader in [visbuffer_shade::shader, deferred_shade::shader, forward_shade::shader, transparent_shade::shader] {
+            let source = shader(listed).compose().unwrap();
+            assert!(source.contains("fn decal_box_meets_box(") && !source.contains("fn decal_query_next_leaf("));
+        }
     }
 
     #[test]

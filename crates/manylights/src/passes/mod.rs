@@ -31,7 +31,7 @@ pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: 
     let walks = query_walks(methods, stage);
     ShaderDesc::new(entry)
         .with("LIGHT_ENUMERATION", methods.lights.enumeration_module())
-        .with("DECAL_ENUMERATION", methods.decals.enumeration_module())
+        .with("DECAL_ENUMERATION", decal_enumeration_module(methods))
         .with("PARTICLE_LIGHTING", methods.particles.lighting_module())
         .with("REFLECTIONS", if methods.reflections { "shading/reflections.wgsl" } else { "shading/reflections_off.wgsl" })
         .with("LIGHT_SHADOWS", if methods.light_shadows { "shading/light_shadows.wgsl" } else { "shading/light_shadows_off.wgsl" })
@@ -45,6 +45,16 @@ pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: 
                 "shading/enumerate/decal_leaves_each.wgsl"
             },
         )
+}
+
+/// The module that defines `apply_decals`: the decal method's, or, for `bvh` decals with cell lists
+/// where subgroups share them out, the one that reads the lists.
+fn decal_enumeration_module(methods: ShadingMethods) -> &'static str {
+    if methods.decals == crate::pipelines::DecalMethod::Bvh && methods.decal_cell_lists && methods.subgroups {
+        "shading/enumerate/decals_bvh_cells.wgsl"
+    } else {
+        methods.decals.enumeration_module()
+    }
 }
 
 /// The shader stage a pass shades in.

@@ -306,6 +306,10 @@ pub struct ShadingMethods {
     /// ([`crate::accel::VolumeStructure::wide_leaves`]), and queries walk them a subgroup at a time,
     /// sharing each leaf's decals out among the lanes (`passes::query_walks`).
     pub dense_decals: bool,
+    /// The decals' structure is one crowded group placed once, with cell lists
+    /// ([`crate::accel::VolumeStructure::cell_lists`]): `bvh` decals are read from the list of a
+    /// point's cell instead of walked (`shading/enumerate/decals_bvh_cells.wgsl`).
+    pub decal_cell_lists: bool,
     /// A debug view is shown: the shading core counts its work (`DEBUG_VIEWS` in
     /// `shading/debug_view.wgsl`, a pipeline constant: `ShadingMethods::debug_views_constant`).
     pub debug_views: bool,

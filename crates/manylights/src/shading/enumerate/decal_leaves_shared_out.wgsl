@@ -8,6 +8,8 @@
 // 23 % with the wide leaves, and slower where decals crowd less (BENCHMARKS.md, "Dense decals' leaves
 // shared out", "Wide leaves for dense decals").
 
+#include "shading/decal_box.wgsl"
+
 // The lanes walking together (`VOLUMES_walk_lanes`), counted once: they all stay in the walk to its end.
 var<private> decal_lanes: vec3<u32>;
 // The box around the lanes' points in the space of the instance the query is in.
@@ -34,22 +36,4 @@ fn decal_leaf(leaf: vec2<u32>) {
             }
         }
     }
-}
-
-// Whether the decal box with rows `decal_from_group` (`shading/decals.wgsl`) may overlap the box
-// [lo, hi]: along each of the decal's axes, the box's centre lies within the decal's half-width plus the
-// box's reach along that axis. The decal's three separating axes alone: a conservative test, since
-// each lane's own test decides, with a margin for the rounding of both tests that grows with the
-// coordinates' magnitude (small decals far from their group's origin).
-fn decal_box_meets_box(decal_from_group: mat3x4<f32>, lo: vec3<f32>, hi: vec3<f32>) -> bool {
-    let half = (hi - lo) * 0.5;
-    let middle = (lo + hi) * 0.5;
-    let span = abs(middle) + half;
-    let x = decal_from_group[0];
-    let y = decal_from_group[1];
-    let z = decal_from_group[2];
-    let centre = vec4<f32>(middle, 1.0) * decal_from_group;
-    let reach = vec3<f32>(dot(abs(x.xyz), half), dot(abs(y.xyz), half), dot(abs(z.xyz), half));
-    let magnitude = vec3<f32>(dot(abs(x.xyz), span) + abs(x.w), dot(abs(y.xyz), span) + abs(y.w), dot(abs(z.xyz), span) + abs(z.w));
-    return all(abs(centre) <= vec3<f32>(0.5) + reach + 1e-6 * (magnitude + 1.0));
 }

@@ -1,0 +1,58 @@
+// Decal enumeration through cell lists (`accel/cell_lists.rs`): where the decals are one crowded
+// group placed once (`VolumeStructure::cell_lists`), a grid over the group lists, per cell, every
+// decal that may reach it, and a point's query is its cell's list — no walk. A subgroup takes its lanes'
+// cells in turn: each cell's list is shared out among all the lanes as a leaf is
+// (`decal_leaves_shared_out.wgsl`), each lane testing one decal against the box around the points of
+// the lanes in that cell, and the decals some lane kept go, one after the other, through the tests
+// and blend of those lanes alone — a lane must see its own cell's list and no other, which names each
+// decal reaching its point once, in the items' order. Lanes of a subgroup mostly share a cell or two,
+// so the walk down the group's BVH, a chain of dependent loads node after node and leaf round after
+// leaf round, becomes a round or two per cell. `decal_accumulate` applies the exact box test, so the
+// result equals the brute-force loop's. Needs subgroup operations (the lists come with the walks that
+// share leaves out, `passes::query_walks`).
+#include "shading/decal_bindings.wgsl"
+#include "shading/decals.wgsl"
+#include "shading/decal_box.wgsl"
+
+fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
+    decal_blend_begin();
+    let instance = decal_first_instance.instance;
+    let point = instance_point_to_group(instance, s.position);
+    let world = decal_world_surface(s, dp);
+    // Helper lanes of fragment shaders (lavapipe) read storage as zero: an empty list.
+    let cell = entry_grid_cell(decal_first_instance.entry_grid_header, point);
+    let list = vec2<u32>(decal_primitives[cell], decal_primitives[cell + 1u]);
+    let lanes = subgroupExclusiveAdd(1u);
+    let lane_count = subgroupAdd(1u);
+    let outside = vec3<f32>(bitcast<f32>(0x7f800000u));
+    var pending = list.x < list.y;
+    loop {
+        let start = subgroupMin(select(BVH_END, list.x, pending));
+        if start == BVH_END {
+            break;
+        }
+        let mine = pending && list.x == start;
+        let end = subgroupMax(select(0u, list.y, mine));
+        // The box around the points of the lanes in this cell; others' (and points that are not
+        // finite) are left out.
+        let finite = mine && all(abs(point) < vec3<f32>(3e38));
+        let lo = subgroupMin(select(outside, point, finite));
+        let hi = subgroupMax(select(-outside, point, finite));
+        for (var first = start; first < end; first += lane_count) {
+            let at = first + lanes;
+            let index = decal_primitives[min(at, end - 1u)];
+            let kept = subgroupBallot(at < end && decal_box_meets_box(decals[index].decal_from_group, lo, hi));
+            for (var word = 0u; word < 4u; word += 1u) {
+                for (var bits = kept[word]; bits != 0u; bits &= bits - 1u) {
+                    // Shuffled while every lane is active, as the leaves' decals are.
+                    let decal = subgroupShuffle(index, word * 32u + firstTrailingBit(bits));
+                    if mine {
+                        decal_accumulate(decal, instance, point, decal_surface_in_group(world, instance));
+                    }
+                }
+            }
+        }
+        pending = pending && !mine;
+    }
+    return decal_blend_end(s);
+}
