@@ -24,6 +24,9 @@ pub struct Renderer {
     pub scene: GpuScene,
     pub config: RenderConfig,
     pipeline: FramePipeline,
+    /// What the shading passes were composed with, decided by the configuration, the device and the
+    /// structures built for the scene.
+    methods: ShadingMethods,
     lights: VolumeStructure,
     decals: VolumeStructure,
     /// Present when the scene has particles and a particle method lights them.
@@ -223,6 +226,7 @@ impl Renderer {
             scene: gpu_scene,
             config,
             pipeline,
+            methods,
             lights,
             decals,
             particles,
@@ -236,6 +240,11 @@ impl Renderer {
             previous_camera: None,
             validate_ray_hierarchy: false,
         })
+    }
+
+    /// The methods the shading passes were composed with.
+    pub fn shading_methods(&self) -> ShadingMethods {
+        self.methods
     }
 
     /// The ray hierarchy's sizes and CPU build times, when the frame traces rays.

@@ -82,8 +82,12 @@ fn assert_dense_decals_agree(scene: &Scene, cell_lists: bool, time: f32) {
     assert_eq!(structure.cell_lists(), cell_lists);
     assert!(decal_effect(scene, 96, 54) > 1e-3, "the decals barely change the image");
     for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
-        let render = |method| render_at(scene, RenderConfig { pipeline, ..decal_config(128, 72, method, BvhBuild::CpuOnce) }, time);
-        let difference = max_abs_difference(&render(DecalMethod::Brute), &render(DecalMethod::Bvh));
+        let config = |method| RenderConfig { pipeline, ..decal_config(128, 72, method, BvhBuild::CpuOnce) };
+        let mut bvh = renderer(scene, config(DecalMethod::Bvh));
+        assert_eq!(bvh.shading_methods().decal_cell_lists, cell_lists, "{}: shading reads the cell lists", pipeline.name());
+        bvh.time = time;
+        bvh.render(&scene.cameras[0]).expect("frame");
+        let difference = max_abs_difference(&render_at(scene, config(DecalMethod::Brute), time), &bvh.read_hdr().expect("hdr"));
         assert!(difference <= TOLERANCE, "{}: bvh differs from brute force by {difference}", pipeline.name());
     }
 }

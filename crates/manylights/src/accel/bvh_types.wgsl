@@ -37,8 +37,9 @@ struct VolumeInstance {
     scale: f32,
 }
 
-// Instance 0 and its group's entry-grid header (`accel/structure.rs`, `GpuFirstInstance`), in a uniform
-// buffer: a query over a lone instance starts from them without two dependent storage loads.
+// Instance 0 and its group's entry-grid or cell-list header (`accel/structure.rs`, `GpuFirstInstance`),
+// in a uniform buffer: a query over a lone instance starts from them without two dependent storage
+// loads.
 struct FirstInstance {
     instance: VolumeInstance,
     entry_grid_header: BvhNode,
@@ -60,8 +61,9 @@ fn entry_cell_cover_pairs(word: u32) -> vec2<u32> {
 }
 
 // The first word of the entry-grid cell holding the group-space point `p`, clamped into the grid (the
-// CPU's twin is `EntryGrid::cell_of`). `header` is the node before the group's root (`structure.rs`,
-// `entry_grid_header`): the grid's corner (min), its first cell in the primitives array (entry), cells
+// CPU's twin is `EntryGrid::cell_of`; cell lists, `accel/cell_lists.rs`, share the header and lookup,
+// their cells two words too: where the cell's list begins and ends). `header` is the node before the group's root (`structure.rs`,
+// `GroupGrid::gpu_words`): the grid's corner (min), its first cell in the primitives array (entry), cells
 // per unit length (max) and cells per axis, 10 bits each (skip). A cell is two words: the node to
 // start at and the node the query stops at, or, with ENTRY_CELL_COVER, where its cover's pairs are.
 fn entry_grid_cell(header: BvhNode, p: vec3<f32>) -> u32 {

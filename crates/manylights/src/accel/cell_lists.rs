@@ -28,11 +28,15 @@ const CELL_EDGE_PER_VOLUME: f32 = 0.75;
 /// Lists longer than this on average, over the cells that list anything, take more rounds than the
 /// walk they replace: such groups keep their entry grid.
 const MAX_MEAN_LIST: f64 = 128.0;
+/// Cells a try may visit per word of its budget (each volume visits the cells its box meets, which
+/// its own test may reject): large, thin, tilted volumes among small ones would otherwise make a
+/// build visit millions of cells each. 100k decals over Sponza visit about 3 per word.
+const MAX_VISITS_PER_WORD: usize = 16;
 /// Each try over the budget coarsens the cells by this much.
 const COARSER: f32 = 1.25;
 const MAX_TRIES: usize = 12;
 /// Most words of cells and lists a structure's groups hold together (32 MiB), shared out by their
-/// volumes: 100k ≈ 1 m decals over Sponza take about 7M at cells of a quarter metre.
+/// volumes: 100k ≈ 1 m decals over Sponza take 0.8M, 5.9M with cells a third as large.
 pub const MAX_LIST_WORDS: usize = 1 << 23;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -60,41 +64,44 @@ impl CellLists {
         if boxes.is_empty() || !(extent.is_finite() && bounds.min.is_finite()) {
             return None;
         }
+        if extent.max_element() <= 0.0 {
+            log::info!("no cell lists for {} volumes: they have no extent", boxes.len());
+            return None;
+        }
         let mut edges: Vec<f32> = boxes.iter().map(|b| (b.max - b.min).max_element()).collect();
         edges.sort_unstable_by(f32::total_cmp);
         let mut edge = (edges[edges.len() / 2] * CELL_EDGE_PER_VOLUME).max(extent.max_element() / MAX_CELLS_PER_AXIS as f32);
         for _ in 0..MAX_TRIES {
-            if edge > 0.0 {
-                let dims = (extent / edge).ceil().max(Vec3::ONE).min(Vec3::splat(MAX_CELLS_PER_AXIS as f32)).as_uvec3();
-                let cells = (dims.x * dims.y * dims.z) as usize;
-                if 2 * cells <= budget_words {
-                    if let Some(lists) = Self::fill(boxes, may_reach, bounds, dims, budget_words - 2 * cells) {
-                        let listing = lists.starts.windows(2).filter(|w| w[1] > w[0]).count().max(1);
-                        let mean = lists.items.len() as f64 / listing as f64;
-                        if mean > MAX_MEAN_LIST {
-                            log::info!("no cell lists for {} volumes: {mean:.0} a cell, over {MAX_MEAN_LIST}", boxes.len());
-                            return None;
-                        }
-                        log::info!(
-                            "cell lists for {} volumes: {}×{}×{} cells of {edge:.3}, {} entries, {:.1} a listing cell",
-                            boxes.len(),
-                            dims.x,
-                            dims.y,
-                            dims.z,
-                            lists.items.len(),
-                            mean
-                        );
-                        return Some(lists);
+            let dims = (extent / edge).ceil().max(Vec3::ONE).min(Vec3::splat(MAX_CELLS_PER_AXIS as f32)).as_uvec3();
+            let cells = (dims.x * dims.y * dims.z) as usize;
+            if 2 * cells <= budget_words {
+                if let Some(lists) = Self::fill(boxes, may_reach, bounds, dims, budget_words - 2 * cells) {
+                    let listing = lists.starts.windows(2).filter(|w| w[1] > w[0]).count().max(1);
+                    let mean = lists.items.len() as f64 / listing as f64;
+                    if mean > MAX_MEAN_LIST {
+                        log::info!("no cell lists for {} volumes: {mean:.0} a cell, over {MAX_MEAN_LIST}", boxes.len());
+                        return None;
                     }
+                    log::info!(
+                        "cell lists for {} volumes: {}×{}×{} cells of {edge:.3}, {} entries, {:.1} a listing cell",
+                        boxes.len(),
+                        dims.x,
+                        dims.y,
+                        dims.z,
+                        lists.items.len(),
+                        mean
+                    );
+                    return Some(lists);
                 }
             }
-            edge = if edge > 0.0 { edge * COARSER } else { extent.max_element() };
+            edge *= COARSER;
         }
-        log::info!("no cell lists for {} volumes: they exceed {budget_words} words", boxes.len());
+        log::info!("no cell lists for {} volumes: they exceed {budget_words} words, or visit too many cells", boxes.len());
         None
     }
 
-    /// The lists on the grid of `dims` cells over `bounds`, if they take at most `budget` entries.
+    /// The lists on the grid of `dims` cells over `bounds`, if they take at most `budget` entries and
+    /// visit at most [`MAX_VISITS_PER_WORD`] cells per entry of it.
     fn fill(boxes: &[Aabb], may_reach: &dyn Fn(usize, &Aabb) -> bool, bounds: Aabb, dims: UVec3, budget: usize) -> Option<CellLists> {
         let extent = bounds.max - bounds.min;
         let cells_per_unit = Vec3::select(extent.cmpgt(Vec3::ZERO), dims.as_vec3() / extent, Vec3::ZERO);
@@ -106,8 +113,11 @@ impl CellLists {
         let last = dims - UVec3::ONE;
         let cell_of = |p: Vec3| ((p - bounds.min) * cells_per_unit).floor().clamp(Vec3::ZERO, last.as_vec3()).as_uvec3();
         let mut pairs: Vec<(u32, u32)> = Vec::new();
+        let mut visits = budget.saturating_mul(MAX_VISITS_PER_WORD);
         for (item, b) in boxes.iter().enumerate() {
             let (lo, hi) = (cell_of(b.min - margin), cell_of(b.max + margin));
+            let cells = ((hi - lo + UVec3::ONE).as_u64vec3()).element_product();
+            visits = visits.checked_sub(usize::try_from(cells).ok()?)?;
             for z in lo.z..=hi.z {
                 for y in lo.y..=hi.y {
                     for x in lo.x..=hi.x {

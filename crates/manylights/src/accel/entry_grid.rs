@@ -58,7 +58,7 @@ impl GridBudget {
         }
     }
 }
-/// Cells per axis fit 10 bits each in the header node's `skip` (`structure.rs`, `entry_grid_header`).
+/// Cells per axis fit 10 bits each in the header node's `skip` (`structure.rs`, `GroupGrid::gpu_words`).
 pub const MAX_CELLS_PER_AXIS: u32 = 1023;
 
 /// Nodes the grid's build may visit per cell, on average, before it gives up on the grid (see

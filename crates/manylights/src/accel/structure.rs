@@ -95,7 +95,7 @@ pub struct GpuVolumeInstance {
     pub scale: f32,
 }
 
-/// Instance 0 and its group's entry-grid header (zero without one), in a uniform buffer: a query over
+/// Instance 0 and its group's entry-grid or cell-list header (zero without either), in a uniform buffer: a query over
 /// a lone instance starts from them without two dependent storage loads before its first node, which
 /// the fragment stage waits for (BENCHMARKS.md, "…, the lone instance in a uniform"). Keep in sync with
 /// `FirstInstance` in `accel/bvh_types.wgsl`.
@@ -202,6 +202,8 @@ fn decal_may_reach(decal_from_group: &[[f32; 4]; 3], cell: &Aabb) -> bool {
     decal_from_group.iter().all(|row| {
         let axis = glam::Vec3::new(row[0], row[1], row[2]);
         let reach = axis.abs().dot(half);
+        // A ten-thousandth of the decal and of the cell's reach, in decal units, for rounding: the
+        // coordinates are f32 around the group's origin, the test is conservative either way.
         (axis.dot(centre) + row[3]).abs() <= 0.5 + reach + 1e-4 * (1.0 + reach)
     })
 }
@@ -333,7 +335,7 @@ pub struct VolumeStructure {
     centre_overlap: f32,
     /// The CPU-built groups have wide leaves ([`Volumes::wide_leaves_from`]).
     wide_leaves: bool,
-    /// The lone group has cell lists ([`Self::cell_lists`]).
+    /// The structure's one placed group has cell lists ([`Self::cell_lists`]).
     cell_lists: bool,
     /// Puts the items in leaf order after GPU rebuilds (none when every group is built on the CPU).
     leaf_order: Option<LeafOrder>,
@@ -547,8 +549,9 @@ impl VolumeStructure {
         let stored_nodes = if build == BvhBuild::None && dynamic.is_none() { u64::from(top_level_nodes) } else { node_count };
         let node_bytes = stored_nodes * std::mem::size_of::<BvhNode>() as u64;
         fits("BVH nodes", node_bytes)?;
-        // CPU builds first: their entry grids' cells and covers follow the primitive indices in the
-        // same array, within one budget of cells and cover words for all the groups.
+        // CPU builds first: their entry grids' cells and covers, or cell lists, follow the primitive
+        // indices in the same array, within one budget of cells and cover words for all the groups
+        // (`GridBudget`) and one of list words (`cell_lists::MAX_LIST_WORDS`).
         let grid_budget = entry_grid::GridBudget::for_structure(count);
         let group_boxes = |range: &Range<usize>| &volumes.boxes[range.clone()];
         // Each group's CPU-built tree, if it has one.
@@ -565,27 +568,27 @@ impl VolumeStructure {
         if wide_leaves {
             trees = cpu_trees(Bvh::build_wide)?;
         }
-        // A lone group placed once whose queries share wide leaves out gets cell lists where they fit,
-        // which shading reads in place of any walk (`VolumeStructure::cell_lists`).
-        let lone_group = instances.len() == 1 && dynamic.is_none();
+        // Crowded decals that are one group placed once get cell lists where they fit, which shading
+        // reads in place of any walk (`VolumeStructure::cell_lists`). Only the placed group's: groups
+        // without an instance are never queried.
+        let listed_group =
+            (volumes.kind == VolumeKind::Decals && wide_leaves && instances.len() == 1 && dynamic.is_none()).then(|| instances[0].group);
         let list_words_per_primitive = cell_lists::MAX_LIST_WORDS as f64 / count.max(1) as f64;
         let cpu_builds: Vec<Option<(Bvh, Option<GroupGrid>)>> = trees
             .into_iter()
             .zip(&ranges)
-            .map(|(tree, range)| {
+            .enumerate()
+            .map(|(group, (tree, range))| {
                 tree.map(|bvh| {
-                    let lists = (wide_leaves && lone_group)
+                    let lists = (listed_group == Some(group))
                         .then(|| {
                             let in_leaf_order: Vec<Aabb> =
                                 bvh.primitive_indices.iter().map(|&p| volumes.boxes[range.start + p as usize]).collect();
                             let may_reach = |item: usize, cell: &Aabb| {
-                                volumes.kind != VolumeKind::Decals || {
-                                    let scene_index = range.start + bvh.primitive_indices[item] as usize;
-                                    let record: &GpuDecal = bytemuck::from_bytes(
-                                        &volumes.items[scene_index * std::mem::size_of::<GpuDecal>()..][..std::mem::size_of::<GpuDecal>()],
-                                    );
-                                    decal_may_reach(&record.decal_from_group, cell)
-                                }
+                                let at = (range.start + bvh.primitive_indices[item] as usize) * std::mem::size_of::<GpuDecal>();
+                                let record: GpuDecal =
+                                    bytemuck::pod_read_unaligned(&volumes.items[at..at + std::mem::size_of::<GpuDecal>()]);
+                                decal_may_reach(&record.decal_from_group, cell)
                             };
                             CellLists::build(&in_leaf_order, &may_reach, (range.len() as f64 * list_words_per_primitive) as usize)
                         })
@@ -618,7 +621,7 @@ impl VolumeStructure {
             )));
         }
         let cell_words: u64 = cpu_builds.iter().flatten().filter_map(|(_, g)| g.as_ref()).map(|g| g.gpu_len() as u64).sum();
-        let cell_lists = cpu_builds.iter().flatten().any(|(_, g)| matches!(g, Some(GroupGrid::Lists(_))));
+        let cell_lists = listed_group.is_some_and(|g| matches!(&cpu_builds[g], Some((_, Some(GroupGrid::Lists(_))))));
         if primitive_count + cell_words > u64::from(entry_grid::CELL_COVER_OFFSET_MASK) {
             return Err(Error::InvalidScene(format!(
                 "{count} {label}s need {} words of primitive indices, entry grids and cell lists, over the {} a structure addresses; use fewer {label}s",
@@ -976,6 +979,50 @@ mod tests {
         assert_eq!(GpuVolumeInstance::new(t, &group).blas_root, 17 | ENTRY_GRID_FLAG);
         group.grid = Some(GridHeader { node: BvhNode::zeroed(), flag: 0 });
         assert_eq!(GpuVolumeInstance::new(t, &group).blas_root, 17);
+    }
+
+    /// Cell lists pruned by `decal_may_reach` still list every decal holding a point, for small,
+    /// thin, tilted and scaled decals far from the origin, points sampled inside them and on their
+    /// corners; and the test prunes (tilted boxes' corners reach cells their boxes do not).
+    #[test]
+    fn cell_lists_pruned_by_the_decals_own_axes_keep_every_decal_holding_a_point() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        let far = glam::Vec3::new(3000.0, -200.0, 1200.0);
+        let decals: Vec<Decal> = (0..600)
+            .map(|_| {
+                let rotation = glam::Quat::from_euler(
+                    glam::EulerRot::XYZ,
+                    rng.random::<f32>() * 6.3,
+                    rng.random::<f32>() * 6.3,
+                    rng.random::<f32>() * 6.3,
+                );
+                let size = glam::Vec3::new(rng.random_range(0.05..2.0), rng.random_range(0.05..2.0), rng.random_range(0.01..0.5));
+                let centre = far + glam::Vec3::new(rng.random(), rng.random(), rng.random()) * 12.0;
+                Decal {
+                    world_from_decal: Affine3A::from_scale_rotation_translation(size, rotation, centre),
+                    material: 0,
+                    layer: 0,
+                    weight: 1.0,
+                }
+            })
+            .collect();
+        let boxes: Vec<Aabb> = decals.iter().map(decal_aabb).collect();
+        let rows: Vec<[[f32; 4]; 3]> = decals.iter().map(|d| GpuDecal::new(d, 0).decal_from_group).collect();
+        let pruned = CellLists::build(&boxes, &|item, cell| decal_may_reach(&rows[item], cell), 1 << 22).unwrap();
+        let unpruned = CellLists::build(&boxes, &|_, _| true, 1 << 22).unwrap();
+        assert_eq!(pruned.dims, unpruned.dims);
+        assert!(pruned.items.len() < unpruned.items.len() * 9 / 10, "{} of {} entries", pruned.items.len(), unpruned.items.len());
+        for (i, decal) in decals.iter().enumerate() {
+            let corners = (0..8).map(|c| glam::Vec3::new((c & 1) as f32, (c >> 1 & 1) as f32, (c >> 2) as f32) - 0.5);
+            let inside = (0..20).map(|_| glam::Vec3::new(rng.random(), rng.random(), rng.random()) - 0.5);
+            for local in corners.chain(inside) {
+                let p = decal.world_from_decal.transform_point3(local);
+                if crate::accel::decal_contains(decal, p) {
+                    assert!(pruned.list(p).contains(&(i as u32)), "decal {i} holds {p} but its cell does not list it");
+                }
+            }
+        }
     }
 
     /// The mean count of boxes holding a box's centre, within its own group, over CPU-built groups only,

@@ -19,9 +19,18 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
     let instance = decal_first_instance.instance;
     let point = instance_point_to_group(instance, s.position);
     let world = decal_world_surface(s, dp);
-    // Helper lanes of fragment shaders (lavapipe) read storage as zero: an empty list.
-    let cell = entry_grid_cell(decal_first_instance.entry_grid_header, point);
-    let list = vec2<u32>(decal_primitives[cell], decal_primitives[cell + 1u]);
+    // A point more than a cell outside the grid (a reflection's hit far away) lies in no decal, and
+    // one that is not finite in none that can be looked up: an empty list, rather than a border cell's
+    // list. Helper lanes of fragment shaders (lavapipe) read storage as zero: an empty list too.
+    let header = decal_first_instance.entry_grid_header;
+    let dims = (vec3<u32>(header.skip) >> vec3<u32>(0u, 10u, 20u)) & vec3<u32>(1023u);
+    let at_cell = (point - header.min) * header.max;
+    let inside = all(abs(point) < vec3<f32>(3e38)) && all(at_cell >= vec3<f32>(-1.0)) && all(at_cell <= vec3<f32>(dims + 1u));
+    let cell = entry_grid_cell(header, point);
+    var list = vec2<u32>(decal_primitives[cell], decal_primitives[cell + 1u]);
+    if !inside {
+        list = vec2<u32>(0u);
+    }
     let lanes = subgroupExclusiveAdd(1u);
     let lane_count = subgroupAdd(1u);
     let outside = vec3<f32>(bitcast<f32>(0x7f800000u));
@@ -33,21 +42,20 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
         }
         let mine = pending && list.x == start;
         let end = subgroupMax(select(0u, list.y, mine));
-        // The box around the points of the lanes in this cell; others' (and points that are not
-        // finite) are left out.
-        let finite = mine && all(abs(point) < vec3<f32>(3e38));
-        let lo = subgroupMin(select(outside, point, finite));
-        let hi = subgroupMax(select(-outside, point, finite));
+        // The box around the points of the lanes in this cell.
+        let lo = subgroupMin(select(outside, point, mine));
+        let hi = subgroupMax(select(-outside, point, mine));
         for (var first = start; first < end; first += lane_count) {
-            let at = first + lanes;
-            let index = decal_primitives[min(at, end - 1u)];
-            let kept = subgroupBallot(at < end && decal_box_meets_box(decals[index].decal_from_group, lo, hi));
+            let at = min(first + lanes, end - 1u);
+            let kept = subgroupBallot(first + lanes < end && decal_box_meets_box(decals[decal_primitives[at]].decal_from_group, lo, hi));
             for (var word = 0u; word < 4u; word += 1u) {
                 for (var bits = kept[word]; bits != 0u; bits &= bits - 1u) {
-                    // Shuffled while every lane is active, as the leaves' decals are.
-                    let decal = subgroupShuffle(index, word * 32u + firstTrailingBit(bits));
+                    // The list's slot, shuffled while every lane is active (as the leaves' decals
+                    // are), and its decal read by the lanes that take it: a lane that read its own as
+                    // zero (a helper) passes on the slot, not a wrong decal.
+                    let slot = subgroupShuffle(at, word * 32u + firstTrailingBit(bits));
                     if mine {
-                        decal_accumulate(decal, instance, point, decal_surface_in_group(world, instance));
+                        decal_accumulate(decal_primitives[slot], instance, point, decal_surface_in_group(world, instance));
                     }
                 }
             }
