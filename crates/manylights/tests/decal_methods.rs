@@ -18,7 +18,7 @@ use manylights::{
         self,
         demo::demo_scene,
         generators::{self, ScatterDecals, ScatterLights},
-        Decal, GroupInstance, Groups, Scene,
+        Decal, GroupInstance, Groups, Material, Scene, Texture, TextureRef, Wrap,
     },
 };
 
@@ -100,6 +100,43 @@ fn assert_dense_decals_agree(scene: &Scene, cell_lists: bool, time: f32) {
 fn dense_decals_read_from_cell_lists_agree_with_brute_force() {
     let mut scene = demo_scene();
     generators::add_scattered_decals(&mut scene, &ScatterDecals { count: 3000, seed: 4, size: Some(1.5) }).unwrap();
+    assert_dense_decals_agree(&scene, true, 0.0);
+}
+
+/// Cell lists run top layer first, and shading skips the decals of layers hidden by those above them:
+/// layers that leave no transmittance in albedo and none in normals (`decal_lowest_shown`). A third of
+/// these crowded decals are opaque with a normal map, hiding everything below them; a third are
+/// opaque without one, leaving the normals of the layers below showing; the rest are the stamps. Still
+/// the brute-force image.
+#[test]
+fn dense_decals_under_opaque_layers_agree_with_brute_force() {
+    let mut scene = demo_scene();
+    generators::add_scattered_decals(&mut scene, &ScatterDecals { count: 3000, seed: 5, size: Some(1.5) }).unwrap();
+    let n = Vec3::new(0.5, 0.3, 0.8).normalize();
+    let texel = ((n * 0.5 + 0.5) * 255.0).round();
+    scene.textures.push(Texture {
+        name: "tilted".into(),
+        width: 4,
+        height: 4,
+        rgba8: [texel.x as u8, texel.y as u8, texel.z as u8, 255].repeat(16),
+    });
+    let normal_map = TextureRef { texture: scene.textures.len() - 1, wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::ClampToEdge };
+    let opaque = |color: Vec3, normal_texture: Option<TextureRef>| Material {
+        base_color_factor: color.extend(1.0),
+        roughness_factor: 0.4,
+        normal_texture,
+        ..Default::default()
+    };
+    scene.materials.push(opaque(Vec3::new(0.9, 0.2, 0.1), Some(normal_map)));
+    scene.materials.push(opaque(Vec3::new(0.1, 0.3, 0.9), None));
+    let (hiding, flat) = (scene.materials.len() - 2, scene.materials.len() - 1);
+    for (i, decal) in scene.decals.iter_mut().enumerate() {
+        match i % 3 {
+            0 => decal.material = hiding,
+            1 => decal.material = flat,
+            _ => {}
+        }
+    }
     assert_dense_decals_agree(&scene, true, 0.0);
 }
 

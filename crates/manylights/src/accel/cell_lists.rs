@@ -9,7 +9,7 @@
 //!
 //! Built on the CPU with the group's BVH, in place of its entry grid (`entry_grid.rs`), for a structure
 //! of one group placed once whose queries share leaves out (`VolumeStructure::cell_lists`), where the
-//! lists fit a budget of words: cells three quarters of the volumes' typical size, coarsened until
+//! lists fit a budget of words: cells five eighths of the volumes' typical size, coarsened until
 //! they fit. `structure.rs` stores the cells and lists after the primitive indices and the grid's
 //! placement in the header node before the group's root, which shading reads from the lone instance's
 //! uniform; walks of other passes ignore the lists and start at the root.
@@ -21,10 +21,11 @@ use super::Aabb;
 
 /// Cell edge as a share of the volumes' median box edge. Finer cells list fewer volumes, but a
 /// subgroup's lanes then fall in more cells, each taken in turn; over Sponza, 100k ≈ 1 m decals (boxes
-/// of about 2 m) shaded in 0.996, 0.910, 0.895, 0.900 and 1.031 ms in the visibility buffer on the H100
-/// with cells of 0.25, 0.5, 0.75, 1 and 1.5 times that edge (29, 52, 78, 120 and 219 decals a cell),
-/// against 0.944 walking (BENCHMARKS.md, "Cell lists for crowded decals").
-const CELL_EDGE_PER_VOLUME: f32 = 0.75;
+/// of about 2 m) in lists sorted by layer, hidden layers skipped, shaded in 0.622, 0.606, 0.633, 0.653
+/// and 0.640 ms in the visibility buffer on the H100 with cells of 0.5, 0.625, 0.75, 0.875 and 1 times
+/// that edge (52, 66, 78, 95 and 120 decals a cell), against 0.911 walking (BENCHMARKS.md, "Cell
+/// lists in layer order").
+const CELL_EDGE_PER_VOLUME: f32 = 0.625;
 /// Lists longer than this on average, over the cells that list anything, take more rounds than the
 /// walk they replace: such groups keep their entry grid.
 const MAX_MEAN_LIST: f64 = 128.0;
@@ -39,6 +40,11 @@ const MAX_TRIES: usize = 12;
 /// volumes: 100k ≈ 1 m decals over Sponza take 0.8M, 5.9M with cells a third as large.
 pub const MAX_LIST_WORDS: usize = 1 << 23;
 
+/// A sorted list's entries hold their rank from this bit up (`decals_bvh_cells.wgsl`: a decal's layer
+/// with its index, so a kept decal is told hidden or not without reading its record).
+pub const RANK_SHIFT: u32 = 30;
+pub const MAX_RANK: u32 = 3;
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct CellLists {
     /// The grid's corner: the group's bounds' minimum.
@@ -48,8 +54,11 @@ pub struct CellLists {
     pub dims: UVec3,
     /// Where each cell's list begins in `items`, x fastest, and one more: where the last one ends.
     pub starts: Vec<u32>,
-    /// The volumes each cell lists, by their position in the group's items, ascending within a cell.
+    /// The volumes each cell lists, by their position in the group's items: ascending within a cell,
+    /// or as [`Self::sort_lists_by_rank`] orders them.
     pub items: Vec<u32>,
+    /// Each entry's rank, for lists sorted by rank; else empty.
+    pub ranks: Vec<u32>,
 }
 
 impl CellLists {
@@ -148,7 +157,17 @@ impl CellLists {
             items[next[cell as usize] as usize] = item;
             next[cell as usize] += 1;
         }
-        Some(CellLists { min: bounds.min, cells_per_unit, dims, starts, items })
+        Some(CellLists { min: bounds.min, cells_per_unit, dims, starts, items, ranks: Vec::new() })
+    }
+
+    /// Orders each cell's list by `rank` of its items (up to [`MAX_RANK`]), highest first, and by item
+    /// among equal ranks, and gives each entry its rank on the GPU: decals top layer first, the order
+    /// in which shading folds layers and skips hidden ones (`decals_bvh_cells.wgsl`).
+    pub fn sort_lists_by_rank(&mut self, rank: impl Fn(u32) -> u32) {
+        for w in self.starts.windows(2) {
+            self.items[w[0] as usize..w[1] as usize].sort_by_key(|&item| std::cmp::Reverse(rank(item)));
+        }
+        self.ranks = self.items.iter().map(|&item| rank(item).min(MAX_RANK)).collect();
     }
 
     /// The cell of `p` (clamped into the grid): the CPU twin of the WGSL lookup (`entry_grid_cell`).
@@ -171,11 +190,13 @@ impl CellLists {
 
     /// The lists as the GPU reads them from word `first_word` of the primitive array: per cell the
     /// words [start, end) of its list, then the lists, each item moved by `item_base` (the group's
-    /// first item in the structure).
+    /// first item in the structure), its rank if sorted by rank in the top bits ([`RANK_SHIFT`]).
+    /// Items and cells stay below 2²⁷ words (`entry_grid::CELL_COVER_OFFSET_MASK`).
     pub fn gpu_words(&self, item_base: u32, first_word: u32) -> Vec<u32> {
         let lists_at = first_word + 2 * (self.starts.len() - 1) as u32;
         let cells = self.starts.windows(2).flat_map(|w| [lists_at + w[0], lists_at + w[1]]);
-        cells.chain(self.items.iter().map(|&i| i + item_base)).collect()
+        let rank = |entry: usize| self.ranks.get(entry).map_or(0, |&r| r << RANK_SHIFT);
+        cells.chain(self.items.iter().enumerate().map(|(entry, &i)| (i + item_base) | rank(entry))).collect()
     }
 
     /// `dims` packed as the GPU reads them: 10 bits per axis, x lowest.
@@ -224,7 +245,7 @@ mod tests {
     #[test]
     fn the_callers_test_keeps_volumes_out_of_cells_they_cannot_reach() {
         // Volume 0, a box of 8 m around the origin, as a sphere of radius 2 in it; forty boxes of a
-        // metre beyond it make the cells 0.75 m, so the big box's corner cells are out of its reach.
+        // metre beyond it make the cells 0.625 m, so the big box's corner cells are out of its reach.
         let mut centres = vec![Vec3::ZERO];
         centres.extend((0..40).map(|i| Vec3::new(10.0 + i as f32 * 0.5, 0.0, 0.0)));
         let mut boxes = boxes_around(&centres, 0.5);
@@ -280,9 +301,29 @@ mod tests {
             dims: UVec3::new(3, 1, 1),
             starts: vec![0, 0, 2, 3],
             items: vec![4, 6, 5],
+            ranks: Vec::new(),
         };
         assert_eq!(lists.list(Vec3::new(1.5, 0.5, 0.5)), &[4, 6]);
         assert_eq!(lists.gpu_len(), 9);
         assert_eq!(lists.gpu_words(100, 1000), vec![1006, 1006, 1006, 1008, 1008, 1009, 104, 106, 105]);
+    }
+
+    #[test]
+    fn lists_sorted_by_rank_run_highest_first_in_item_order_and_carry_their_rank() {
+        let mut lists = CellLists {
+            min: Vec3::ZERO,
+            cells_per_unit: Vec3::ONE,
+            dims: UVec3::new(2, 1, 1),
+            starts: vec![0, 5, 7],
+            items: vec![1, 2, 3, 4, 5, 2, 6],
+            ranks: Vec::new(),
+        };
+        let rank = |item: u32| [0, 1, 0, 3, 1, 0, 2][item as usize];
+        lists.sort_lists_by_rank(rank);
+        assert_eq!(lists.items, vec![3, 1, 4, 2, 5, 6, 2]);
+        assert_eq!(lists.ranks, vec![3, 1, 1, 0, 0, 2, 0]);
+        let words = lists.gpu_words(10, 0);
+        let entries: Vec<(u32, u32)> = words[4..].iter().map(|w| (w & ((1 << RANK_SHIFT) - 1), w >> RANK_SHIFT)).collect();
+        assert_eq!(entries, vec![(13, 3), (11, 1), (14, 1), (12, 0), (15, 0), (16, 2), (12, 0)]);
     }
 }

@@ -38,7 +38,7 @@ use crate::{
         scene::{affine_rows, GpuDecal, GpuLight},
         GpuContext, GpuTimer,
     },
-    scene::{Decal, GroupInstance, Groups, Light},
+    scene::{Decal, GroupInstance, Groups, Light, DECAL_LAYERS},
     Error, Result,
 };
 
@@ -571,6 +571,7 @@ impl VolumeStructure {
         // Crowded decals that are one group placed once get cell lists where they fit, which shading
         // reads in place of any walk (`VolumeStructure::cell_lists`). Only the placed group's: groups
         // without an instance are never queried.
+        const _: () = assert!(DECAL_LAYERS - 1 <= cell_lists::MAX_RANK);
         let listed_group =
             (volumes.kind == VolumeKind::Decals && wide_leaves && instances.len() == 1 && dynamic.is_none()).then(|| instances[0].group);
         let list_words_per_primitive = cell_lists::MAX_LIST_WORDS as f64 / count.max(1) as f64;
@@ -584,13 +585,15 @@ impl VolumeStructure {
                         .then(|| {
                             let in_leaf_order: Vec<Aabb> =
                                 bvh.primitive_indices.iter().map(|&p| volumes.boxes[range.start + p as usize]).collect();
-                            let may_reach = |item: usize, cell: &Aabb| {
+                            let record = |item: usize| -> GpuDecal {
                                 let at = (range.start + bvh.primitive_indices[item] as usize) * std::mem::size_of::<GpuDecal>();
-                                let record: GpuDecal =
-                                    bytemuck::pod_read_unaligned(&volumes.items[at..at + std::mem::size_of::<GpuDecal>()]);
-                                decal_may_reach(&record.decal_from_group, cell)
+                                bytemuck::pod_read_unaligned(&volumes.items[at..at + std::mem::size_of::<GpuDecal>()])
                             };
-                            CellLists::build(&in_leaf_order, &may_reach, (range.len() as f64 * list_words_per_primitive) as usize)
+                            let may_reach = |item: usize, cell: &Aabb| decal_may_reach(&record(item).decal_from_group, cell);
+                            let mut lists =
+                                CellLists::build(&in_leaf_order, &may_reach, (range.len() as f64 * list_words_per_primitive) as usize)?;
+                            lists.sort_lists_by_rank(|item| record(item as usize).layer.min(DECAL_LAYERS - 1));
+                            Some(lists)
                         })
                         .flatten();
                     let grid = match lists {

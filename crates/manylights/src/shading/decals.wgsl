@@ -5,7 +5,9 @@
 //     c = (Σ cᵢ αᵢ wᵢ / Σ αᵢ wᵢ) (1 − Π (1 − αᵢ)) + c₀ Π (1 − αᵢ)
 //
 // where c₀ is the value below the layer. The enumeration modules (`shading/enumerate/decals_*.wgsl`)
-// call `decal_blend_begin`, `decal_accumulate` per candidate decal, and `decal_blend_end`.
+// call `decal_blend_begin`, `decal_accumulate` per candidate decal, and `decal_blend_end`. A layer
+// without transmittance in albedo and normals alike hides the layers below it exactly (their result
+// is multiplied by 0): modules that meet decals top layer first skip those (`decal_lowest_shown`).
 #include "shading/scene_bindings.wgsl"
 #include "shading/shading_input.wgsl"
 #include "shading/material.wgsl"
@@ -107,6 +109,9 @@ fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surf
     decal_layers[layer].metallic += roughness_metallic.y * aw;
     decal_layers[layer].alpha_weight += aw;
     decal_layers[layer].transmittance *= 1.0 - alpha;
+    if decal_layers[layer].transmittance == 0.0 {
+        decal_layers_touched |= 0x100u << layer;
+    }
 
     if materials[material].normal_layer != NO_TEXTURE {
         // The decal's tangent frame on the surface: its x axis made orthogonal to the surface normal,
@@ -123,7 +128,28 @@ fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surf
         decal_layers[layer].normal += decal_normal * aw;
         decal_layers[layer].normal_alpha_weight += aw;
         decal_layers[layer].normal_transmittance *= 1.0 - alpha;
+        if decal_layers[layer].normal_transmittance == 0.0 {
+            decal_layers_touched |= 0x10000u << layer;
+        }
     }
+}
+
+// For modules that meet decals top layer first: the lowest layer that decals met after those so far
+// may still show in. A layer is hidden where a layer above it leaves no transmittance in albedo and
+// one (the same or another) none in normals. Debug views count every decal.
+fn decal_lowest_shown() -> u32 {
+    let opaque = (vec2<u32>(decal_layers_touched) >> vec2<u32>(8u, 16u)) & vec2<u32>(0xffu);
+    let highest_opaque = firstLeadingBit(opaque);
+    return select(0u, min(highest_opaque.x, highest_opaque.y), all(opaque != vec2<u32>(0u)) && !DEBUG_VIEWS);
+}
+
+// `decal_accumulate` for modules that meet decals top layer first, `layer` being decal `index`'s:
+// skips hidden decals, and notes the layers that hide those below.
+fn decal_accumulate_top_down(index: u32, layer: u32, instance: VolumeInstance, local: vec3<f32>, surface: DecalSurface) {
+    if layer < decal_lowest_shown() {
+        return;
+    }
+    decal_accumulate(index, instance, local, surface);
 }
 
 // A decal material's base colour with alpha and its roughness and metallic, as `material.wgsl`'s for
@@ -153,7 +179,7 @@ fn decal_roughness_metallic(material: u32, g: UvGradients) -> vec2<f32> {
 // The surface with every accumulated layer blended over it, bottom to top.
 fn decal_blend_end(s: ShadingInput) -> ShadingInput {
     var out = s;
-    var touched = decal_layers_touched;
+    var touched = decal_layers_touched & 0xfu;
     while touched != 0u {
         // Lowest layer first: bottom to top.
         let layer = firstTrailingBit(touched);

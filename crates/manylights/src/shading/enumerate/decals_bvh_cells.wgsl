@@ -14,6 +14,15 @@
 #include "shading/decals.wgsl"
 #include "shading/decal_box.wgsl"
 
+// A list's entry: the decal's index, and its layer in the top bits (`cell_lists::RANK_SHIFT`).
+fn cell_entry_decal(entry: u32) -> u32 {
+    return entry & 0x3fffffffu;
+}
+
+fn cell_entry_layer(entry: u32) -> u32 {
+    return entry >> 30u;
+}
+
 fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
     decal_blend_begin();
     let instance = decal_first_instance.instance;
@@ -46,8 +55,17 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
         let lo = subgroupMin(select(outside, point, mine));
         let hi = subgroupMax(select(-outside, point, mine));
         for (var first = start; first < end; first += lane_count) {
+            // Lists run top layer first: once every lane in the cell has a layer that hides those
+            // below it, the rest of the list is hidden, and decals below the lowest layer any of them
+            // may still show are skipped.
+            let lowest = subgroupMin(select(DECAL_LAYERS, decal_lowest_shown(), mine));
             let at = min(first + lanes, end - 1u);
-            let kept = subgroupBallot(first + lanes < end && decal_box_meets_box(decals[decal_primitives[at]].decal_from_group, lo, hi));
+            let entry = decal_primitives[at];
+            let shown = first + lanes < end && cell_entry_layer(entry) >= lowest;
+            if !subgroupAny(shown) {
+                break;
+            }
+            let kept = subgroupBallot(shown && decal_box_meets_box(decals[cell_entry_decal(entry)].decal_from_group, lo, hi));
             for (var word = 0u; word < 4u; word += 1u) {
                 for (var bits = kept[word]; bits != 0u; bits &= bits - 1u) {
                     // The list's slot, shuffled while every lane is active (as the leaves' decals
@@ -55,7 +73,8 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
                     // zero (a helper) passes on the slot, not a wrong decal.
                     let slot = subgroupShuffle(at, word * 32u + firstTrailingBit(bits));
                     if mine {
-                        decal_accumulate(decal_primitives[slot], instance, point, decal_surface_in_group(world, instance));
+                        let kept_entry = decal_primitives[slot];
+                        decal_accumulate_top_down(cell_entry_decal(kept_entry), cell_entry_layer(kept_entry), instance, point, decal_surface_in_group(world, instance));
                     }
                 }
             }
