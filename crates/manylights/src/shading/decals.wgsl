@@ -35,7 +35,9 @@ struct DecalLayerSums {
 // Not zero-filled on Vulkan (`gpu/spirv.rs`, UNZEROED_VARIABLES): a layer is written when its bit
 // in `decal_layers_touched` is set, and read only after.
 var<private> decal_layers: array<DecalLayerSums, DECAL_LAYERS>;
-// Bit L set: layer L has sums. Most points are under no decal, and skip the layers entirely.
+// Bit L set: layer L has sums. Most points are under no decal, and skip the layers entirely. Bits
+// 8 + L and 16 + L: layer L's decals leave no transmittance in albedo, in normals
+// (`decal_lowest_shown`).
 var<private> decal_layers_touched: u32;
 
 fn decal_blend_begin() {
@@ -143,8 +145,8 @@ fn decal_lowest_shown() -> u32 {
     return select(0u, min(highest_opaque.x, highest_opaque.y), all(opaque != vec2<u32>(0u)) && !DEBUG_VIEWS);
 }
 
-// `decal_accumulate` for modules that meet decals top layer first, `layer` being decal `index`'s:
-// skips hidden decals, and notes the layers that hide those below.
+// `decal_accumulate` for modules that meet decals top layer first, `layer` being decal `index`'s (the
+// caller's copy, so that a hidden decal's record is not read): skips the decals of hidden layers.
 fn decal_accumulate_top_down(index: u32, layer: u32, instance: VolumeInstance, local: vec3<f32>, surface: DecalSurface) {
     if layer < decal_lowest_shown() {
         return;

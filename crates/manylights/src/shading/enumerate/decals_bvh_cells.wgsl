@@ -5,7 +5,9 @@
 // (`decal_leaves_shared_out.wgsl`), each lane testing one decal against the box around the points of
 // the lanes in that cell, and the decals some lane kept go, one after the other, through the tests
 // and blend of those lanes alone — a lane must see its own cell's list and no other, which names each
-// decal reaching its point once, in the items' order. Lanes of a subgroup mostly share a cell or two,
+// decal reaching its point once, top layer first and in the items' order within a layer, so that
+// decals of layers hidden at the point are skipped (`decal_accumulate_top_down`) and each layer's
+// sums add up in the walk's order. Lanes of a subgroup mostly share a cell or two,
 // so the walk down the group's BVH, a chain of dependent loads node after node and leaf round after
 // leaf round, becomes a round or two per cell. `decal_accumulate` applies the exact box test, so the
 // result equals the brute-force loop's. Needs subgroup operations (the lists come with the walks that
