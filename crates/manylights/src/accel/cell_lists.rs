@@ -23,7 +23,7 @@ use super::Aabb;
 /// subgroup's lanes then fall in more cells, each taken in turn; over Sponza, 100k ≈ 1 m decals (boxes
 /// of about 2 m) in lists sorted by layer, hidden layers skipped, shaded in 0.622, 0.606, 0.633, 0.653
 /// and 0.640 ms in the visibility buffer on the H100 with cells of 0.5, 0.625, 0.75, 0.875 and 1 times
-/// that edge (52, 66, 78, 95 and 120 decals a cell), against 0.911 walking (BENCHMARKS.md, "Cell
+/// that edge (52, 66, 78, 95 and 120 decals a cell), against 0.948 walking (BENCHMARKS.md, "Cell
 /// lists in layer order").
 const CELL_EDGE_PER_VOLUME: f32 = 0.625;
 /// Lists longer than this on average, over the cells that list anything, take more rounds than the
@@ -37,11 +37,13 @@ const MAX_VISITS_PER_WORD: usize = 16;
 const COARSER: f32 = 1.25;
 const MAX_TRIES: usize = 12;
 /// Most words of cells and lists a structure's groups hold together (32 MiB), shared out by their
-/// volumes: 100k ≈ 1 m decals over Sponza take 0.8M, 5.9M with cells a third as large.
+/// volumes: 100k ≈ 1 m decals over Sponza take 1.1M, 5.9M with cells of a quarter of their median
+/// box edge.
 pub const MAX_LIST_WORDS: usize = 1 << 23;
 
 /// A sorted list's entries hold their rank from this bit up (`decals_bvh_cells.wgsl`: a decal's layer
-/// with its index, so a kept decal is told hidden or not without reading its record).
+/// with its index, so a kept decal is told hidden or not without reading its record). Keep in sync
+/// with `cell_entry_decal` and `cell_entry_layer` there.
 pub const RANK_SHIFT: u32 = 30;
 pub const MAX_RANK: u32 = 3;
 
@@ -196,7 +198,11 @@ impl CellLists {
         let lists_at = first_word + 2 * (self.starts.len() - 1) as u32;
         let cells = self.starts.windows(2).flat_map(|w| [lists_at + w[0], lists_at + w[1]]);
         let rank = |entry: usize| self.ranks.get(entry).map_or(0, |&r| r << RANK_SHIFT);
-        cells.chain(self.items.iter().enumerate().map(|(entry, &i)| (i + item_base) | rank(entry))).collect()
+        let entry_word = |(entry, &item): (usize, &u32)| {
+            debug_assert!(item + item_base < 1 << RANK_SHIFT, "item {item} + {item_base} reaches the rank's bits");
+            (item + item_base) | rank(entry)
+        };
+        cells.chain(self.items.iter().enumerate().map(entry_word)).collect()
     }
 
     /// `dims` packed as the GPU reads them: 10 bits per axis, x lowest.

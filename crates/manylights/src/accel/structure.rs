@@ -193,6 +193,17 @@ struct GridHeader {
     flag: u32,
 }
 
+/// Cell lists over a group of decals (`boxes` and `records` by item): each cell lists the decals whose
+/// oriented box may reach it ([`decal_may_reach`]), top layer first and by item within a layer, each
+/// entry with its layer (`CellLists::sort_lists_by_rank`), as `decals_bvh_cells.wgsl` reads them.
+fn decal_cell_lists(boxes: &[Aabb], records: &[GpuDecal], budget_words: usize) -> Option<CellLists> {
+    let may_reach = |item: usize, cell: &Aabb| decal_may_reach(&records[item].decal_from_group, cell);
+    let mut lists = CellLists::build(boxes, &may_reach, budget_words)?;
+    let layers: Vec<u32> = records.iter().map(|r| r.layer.min(DECAL_LAYERS - 1)).collect();
+    lists.sort_lists_by_rank(|item| layers[item as usize]);
+    Some(lists)
+}
+
 /// Whether a decal's box, with rows `decal_from_group` (`GpuDecal`), may reach `cell`: along each of
 /// the decal's axes, the cell's centre lies within the decal's half-width plus the cell's reach
 /// (the decal's three separating axes; the cell's are its box's, which the caller has tested).
@@ -583,17 +594,17 @@ impl VolumeStructure {
                 tree.map(|bvh| {
                     let lists = (listed_group == Some(group))
                         .then(|| {
-                            let in_leaf_order: Vec<Aabb> =
-                                bvh.primitive_indices.iter().map(|&p| volumes.boxes[range.start + p as usize]).collect();
-                            let record = |item: usize| -> GpuDecal {
-                                let at = (range.start + bvh.primitive_indices[item] as usize) * std::mem::size_of::<GpuDecal>();
-                                bytemuck::pod_read_unaligned(&volumes.items[at..at + std::mem::size_of::<GpuDecal>()])
-                            };
-                            let may_reach = |item: usize, cell: &Aabb| decal_may_reach(&record(item).decal_from_group, cell);
-                            let mut lists =
-                                CellLists::build(&in_leaf_order, &may_reach, (range.len() as f64 * list_words_per_primitive) as usize)?;
-                            lists.sort_lists_by_rank(|item| record(item as usize).layer.min(DECAL_LAYERS - 1));
-                            Some(lists)
+                            let (boxes, records): (Vec<Aabb>, Vec<GpuDecal>) = bvh
+                                .primitive_indices
+                                .iter()
+                                .map(|&p| {
+                                    let at = (range.start + p as usize) * std::mem::size_of::<GpuDecal>();
+                                    let record: GpuDecal =
+                                        bytemuck::pod_read_unaligned(&volumes.items[at..at + std::mem::size_of::<GpuDecal>()]);
+                                    (volumes.boxes[range.start + p as usize], record)
+                                })
+                                .unzip();
+                            decal_cell_lists(&boxes, &records, (range.len() as f64 * list_words_per_primitive) as usize)
                         })
                         .flatten();
                     let grid = match lists {
@@ -986,9 +997,10 @@ mod tests {
 
     /// Cell lists pruned by `decal_may_reach` still list every decal holding a point, for small,
     /// thin, tilted and scaled decals far from the origin, points sampled inside them and on their
-    /// corners; and the test prunes (tilted boxes' corners reach cells their boxes do not).
+    /// corners; the test prunes (tilted boxes' corners reach cells their boxes do not); and each
+    /// cell's list runs top layer first, by item within a layer, its entries carrying their layers.
     #[test]
-    fn cell_lists_pruned_by_the_decals_own_axes_keep_every_decal_holding_a_point() {
+    fn decal_cell_lists_keep_every_decal_holding_a_point_top_layer_first() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
         let far = glam::Vec3::new(3000.0, -200.0, 1200.0);
@@ -1005,14 +1017,14 @@ mod tests {
                 Decal {
                     world_from_decal: Affine3A::from_scale_rotation_translation(size, rotation, centre),
                     material: 0,
-                    layer: 0,
+                    layer: rng.random_range(0..DECAL_LAYERS),
                     weight: 1.0,
                 }
             })
             .collect();
         let boxes: Vec<Aabb> = decals.iter().map(decal_aabb).collect();
-        let rows: Vec<[[f32; 4]; 3]> = decals.iter().map(|d| GpuDecal::new(d, 0).decal_from_group).collect();
-        let pruned = CellLists::build(&boxes, &|item, cell| decal_may_reach(&rows[item], cell), 1 << 22).unwrap();
+        let records: Vec<GpuDecal> = decals.iter().map(|d| GpuDecal::new(d, 0)).collect();
+        let pruned = decal_cell_lists(&boxes, &records, 1 << 22).unwrap();
         let unpruned = CellLists::build(&boxes, &|_, _| true, 1 << 22).unwrap();
         assert_eq!(pruned.dims, unpruned.dims);
         assert!(pruned.items.len() < unpruned.items.len() * 9 / 10, "{} of {} entries", pruned.items.len(), unpruned.items.len());
@@ -1025,6 +1037,20 @@ mod tests {
                     assert!(pruned.list(p).contains(&(i as u32)), "decal {i} holds {p} but its cell does not list it");
                 }
             }
+        }
+        let words = pruned.gpu_words(0, 0);
+        let lists_at = 2 * (pruned.starts.len() - 1);
+        for w in pruned.starts.windows(2) {
+            let entries = &words[lists_at + w[0] as usize..lists_at + w[1] as usize];
+            let listed: Vec<(u32, u32)> =
+                entries.iter().map(|&e| (e >> cell_lists::RANK_SHIFT, e & ((1 << cell_lists::RANK_SHIFT) - 1))).collect();
+            for &(layer, item) in &listed {
+                assert_eq!(layer, decals[item as usize].layer, "entry for decal {item} carries layer {layer}");
+            }
+            assert!(
+                listed.windows(2).all(|p| p[0].0 > p[1].0 || (p[0].0 == p[1].0 && p[0].1 < p[1].1)),
+                "list not top layer first: {listed:?}"
+            );
         }
     }
 

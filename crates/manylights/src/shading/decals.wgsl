@@ -5,9 +5,10 @@
 //     c = (Σ cᵢ αᵢ wᵢ / Σ αᵢ wᵢ) (1 − Π (1 − αᵢ)) + c₀ Π (1 − αᵢ)
 //
 // where c₀ is the value below the layer. The enumeration modules (`shading/enumerate/decals_*.wgsl`)
-// call `decal_blend_begin`, `decal_accumulate` per candidate decal, and `decal_blend_end`. A layer
-// without transmittance in albedo and normals alike hides the layers below it exactly (their result
-// is multiplied by 0): modules that meet decals top layer first skip those (`decal_lowest_shown`).
+// call `decal_blend_begin`, `decal_accumulate` per candidate decal, and `decal_blend_end`. Layers
+// above a point's that leave no transmittance in albedo and in normals hide it exactly (its result
+// is multiplied by 0): modules that meet decals top layer first skip such decals
+// (`decal_accumulate_top_down`).
 #include "shading/scene_bindings.wgsl"
 #include "shading/shading_input.wgsl"
 #include "shading/material.wgsl"
@@ -36,7 +37,7 @@ struct DecalLayerSums {
 // in `decal_layers_touched` is set, and read only after.
 var<private> decal_layers: array<DecalLayerSums, DECAL_LAYERS>;
 // Bit L set: layer L has sums. Most points are under no decal, and skip the layers entirely. Bits
-// 8 + L and 16 + L: layer L's decals leave no transmittance in albedo, in normals
+// 8 + L and 16 + L (DECAL_LAYERS ≤ 8): layer L's decals leave no transmittance in albedo, in normals
 // (`decal_lowest_shown`).
 var<private> decal_layers_touched: u32;
 
@@ -111,7 +112,8 @@ fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surf
     decal_layers[layer].metallic += roughness_metallic.y * aw;
     decal_layers[layer].alpha_weight += aw;
     decal_layers[layer].transmittance *= 1.0 - alpha;
-    if decal_layers[layer].transmittance == 0.0 {
+    // Opaque as `decal_blend_end` applies layers: with weight as well.
+    if decal_layers[layer].transmittance == 0.0 && decal_layers[layer].alpha_weight > 0.0 {
         decal_layers_touched |= 0x100u << layer;
     }
 
@@ -130,23 +132,25 @@ fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surf
         decal_layers[layer].normal += decal_normal * aw;
         decal_layers[layer].normal_alpha_weight += aw;
         decal_layers[layer].normal_transmittance *= 1.0 - alpha;
-        if decal_layers[layer].normal_transmittance == 0.0 {
+        if decal_layers[layer].normal_transmittance == 0.0 && decal_layers[layer].normal_alpha_weight > 0.0 {
             decal_layers_touched |= 0x10000u << layer;
         }
     }
 }
 
-// For modules that meet decals top layer first: the lowest layer that decals met after those so far
-// may still show in. A layer is hidden where a layer above it leaves no transmittance in albedo and
-// one (the same or another) none in normals. Debug views count every decal.
+// The lowest layer whose decals may still show at the point, given those accumulated so far: a layer
+// is hidden where a layer above it leaves no transmittance in albedo and one (the same or another)
+// none in normals, since `decal_blend_end` multiplies what is below those by 0 (exactly, for finite
+// values). It only rises as decals accumulate, so skipping the decals below it is exact in any order;
+// modules that meet decals top layer first skip the most. Debug views count every decal.
 fn decal_lowest_shown() -> u32 {
     let opaque = (vec2<u32>(decal_layers_touched) >> vec2<u32>(8u, 16u)) & vec2<u32>(0xffu);
     let highest_opaque = firstLeadingBit(opaque);
     return select(0u, min(highest_opaque.x, highest_opaque.y), all(opaque != vec2<u32>(0u)) && !DEBUG_VIEWS);
 }
 
-// `decal_accumulate` for modules that meet decals top layer first, `layer` being decal `index`'s (the
-// caller's copy, so that a hidden decal's record is not read): skips the decals of hidden layers.
+// `decal_accumulate` but for decals of layers hidden at the point, `layer` being decal `index`'s (the
+// caller's copy, so that a hidden decal's record is not read).
 fn decal_accumulate_top_down(index: u32, layer: u32, instance: VolumeInstance, local: vec3<f32>, surface: DecalSurface) {
     if layer < decal_lowest_shown() {
         return;
@@ -181,7 +185,7 @@ fn decal_roughness_metallic(material: u32, g: UvGradients) -> vec2<f32> {
 // The surface with every accumulated layer blended over it, bottom to top.
 fn decal_blend_end(s: ShadingInput) -> ShadingInput {
     var out = s;
-    var touched = decal_layers_touched & 0xfu;
+    var touched = decal_layers_touched & ((1u << DECAL_LAYERS) - 1u);
     while touched != 0u {
         // Lowest layer first: bottom to top.
         let layer = firstTrailingBit(touched);
@@ -197,7 +201,10 @@ fn decal_blend_end(s: ShadingInput) -> ShadingInput {
         if sums.normal_alpha_weight > 0.0 {
             let coverage = 1.0 - sums.normal_transmittance;
             let blended = sums.normal * (coverage / sums.normal_alpha_weight) + out.normal * sums.normal_transmittance;
-            out.normal = select(out.normal, normalize(blended), dot(blended, blended) > 1e-12);
+            // Where the layer's normals cancel out, the normal below stays, or the surface's own
+            // where the layer leaves nothing below showing (so that hidden layers stay hidden).
+            let kept = select(out.normal, s.normal, sums.normal_transmittance == 0.0);
+            out.normal = select(kept, normalize(blended), dot(blended, blended) > 1e-12);
         }
     }
     return out;

@@ -57,9 +57,9 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
         let lo = subgroupMin(select(outside, point, mine));
         let hi = subgroupMax(select(-outside, point, mine));
         for (var first = start; first < end; first += lane_count) {
-            // Lists run top layer first: once every lane in the cell has a layer that hides those
-            // below it, the rest of the list is hidden, and decals below the lowest layer any of them
-            // may still show are skipped.
+            // Decals below the lowest layer any lane in the cell may still show are skipped, and
+            // lists run top layer first: once a round holds none that any of them shows, the
+            // rounds after it hold none either.
             let lowest = subgroupMin(select(DECAL_LAYERS, decal_lowest_shown(), mine));
             let at = min(first + lanes, end - 1u);
             let entry = decal_primitives[at];
