@@ -60,6 +60,11 @@ fn entry_cell_cover_pairs(word: u32) -> vec2<u32> {
     return vec2<u32>(first, first + 2u * (((word >> 27u) & 15u) + 1u));
 }
 
+// Cells per axis of the grid `header` describes (`entry_grid_cell`).
+fn entry_grid_dims(header: BvhNode) -> vec3<u32> {
+    return (vec3<u32>(header.skip) >> vec3<u32>(0u, 10u, 20u)) & vec3<u32>(1023u);
+}
+
 // The first word of the entry-grid cell holding the group-space point `p`, clamped into the grid (the
 // CPU's twin is `EntryGrid::cell_of`; cell lists, `accel/cell_lists.rs`, share the header and lookup,
 // their cells two words too: where the cell's list begins and ends). `header` is the node before the group's root (`structure.rs`,
@@ -67,7 +72,7 @@ fn entry_cell_cover_pairs(word: u32) -> vec2<u32> {
 // per unit length (max) and cells per axis, 10 bits each (skip). A cell is two words: the node to
 // start at and the node the query stops at, or, with ENTRY_CELL_COVER, where its cover's pairs are.
 fn entry_grid_cell(header: BvhNode, p: vec3<f32>) -> u32 {
-    let dims = (vec3<u32>(header.skip) >> vec3<u32>(0u, 10u, 20u)) & vec3<u32>(1023u);
+    let dims = entry_grid_dims(header);
     let cell = vec3<u32>(clamp(floor((p - header.min) * header.max), vec3<f32>(0.0), vec3<f32>(dims - 1u)));
     return header.entry + 2u * ((cell.z * dims.y + cell.y) * dims.x + cell.x);
 }

@@ -34,9 +34,8 @@ fn apply_decals(s: ShadingInput, dp: PositionGradients) -> ShadingInput {
     // one that is not finite in none that can be looked up: an empty list, rather than a border cell's
     // list. Helper lanes of fragment shaders (lavapipe) read storage as zero: an empty list too.
     let header = decal_first_instance.entry_grid_header;
-    let dims = (vec3<u32>(header.skip) >> vec3<u32>(0u, 10u, 20u)) & vec3<u32>(1023u);
     let at_cell = (point - header.min) * header.max;
-    let inside = all(abs(point) < vec3<f32>(3e38)) && all(at_cell >= vec3<f32>(-1.0)) && all(at_cell <= vec3<f32>(dims + 1u));
+    let inside = all(abs(point) < vec3<f32>(3e38)) && all(at_cell >= vec3<f32>(-1.0)) && all(at_cell <= vec3<f32>(entry_grid_dims(header) + 1u));
     let cell = entry_grid_cell(header, point);
     var list = vec2<u32>(decal_primitives[cell], decal_primitives[cell + 1u]);
     if !inside {
