@@ -15,6 +15,7 @@
 #   scripts/bench-device.sh rays         ray-traced sun shadows and reflections on Sponza (issue 7)
 #   scripts/bench-device.sh post         the post chain's effects, alone and together, on Sponza (issue 7)
 #   scripts/bench-device.sh deform       Sponza's curtains waving: GPU deformation and BLAS refit (issue 7)
+#   scripts/bench-device.sh soak         10,000 frames of everything rebuilt per frame, memory sampled (issue 31)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -220,6 +221,15 @@ tests() {
   done
 }
 
+# 10,000 frames at 1080p with animated groups of lights and decals rebuilt on the GPU every frame and
+# 262,144 exact particle lights: process and GPU memory sampled once a second (scripts/soak.sh).
+soak() {
+  echo "== soak"
+  FRAMES=${SOAK_FRAMES:-10000}
+  scripts/soak.sh render $bin $sponza "$out/soak" "$FRAMES"
+  tail -n 3 "$out/soak/render-soak.log"
+}
+
 # The bench command's own report (bench.md, .json, .csv, plots) lands in the archive under bench-<set>/.
 bench() { # set name, then bench arguments
   local name=$1; shift
@@ -239,9 +249,10 @@ for set in "${@:-structures}"; do
     rays) rays ;;
     post) post ;;
     deform) deform ;;
+    soak) soak ;;
     table) bench table --sweeps none ;;
     sweeps) bench sweeps --scenes none ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles, exact, clipmap, rays, post or deform)" >&2; exit 2 ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles, exact, clipmap, rays, post, deform or soak)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

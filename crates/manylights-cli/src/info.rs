@@ -6,6 +6,7 @@ use manylights::{
     scene::generators::surface_points,
 };
 
+use crate::progress;
 use crate::scene_args::{describe_groups, SceneArgs};
 
 /// Surface points sampled (uniformly by area) for the overlap statistics.
@@ -24,6 +25,12 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     let ctx = GpuContext::new()?;
     println!("chosen: {}", ctx.describe());
     println!("features used: {:?}", ctx.features);
+    if let Some(limit) = ctx.loop_limit {
+        println!(
+            "  (this driver ends a shader's loops after {limit} iterations in all: brute force and clustered shading over more \
+             lights or decals are refused; Mesa 25's lavapipe has no such limit)"
+        );
+    }
     if !ctx.has_timestamps() {
         println!("  (no timestamp queries: --timings is unavailable on this adapter)");
     }
@@ -34,7 +41,7 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         ctx.limits.max_storage_buffer_binding_size / (1 << 20),
         ctx.limits.max_buffer_size / (1 << 20)
     );
-    let scene = args.load()?;
+    let scene = args.load(Some(&ctx))?;
     println!(
         "scene {}: {} triangles drawn, {} materials, {} textures",
         args.scene,
@@ -45,6 +52,7 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     println!("  lights: {} in {}", scene.lights.len(), describe_groups(&scene.light_groups, scene.lights.len()));
     println!("  decals: {} in {}", scene.decals.len(), describe_groups(&scene.decal_groups, scene.decals.len()));
     // What the enumeration's cost per pixel follows: volumes reaching a surface point.
+    let _step = progress::step("measuring how many lights and decals reach the surfaces");
     let points = surface_points(&scene, OVERLAP_SAMPLES, 1);
     if !points.is_empty() {
         let show = |what: &str, o: Overlap| {

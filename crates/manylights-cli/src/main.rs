@@ -3,6 +3,7 @@
 mod bench;
 mod info;
 mod particle_error;
+mod progress;
 mod render;
 mod scene_args;
 mod timing;

@@ -51,7 +51,8 @@ pub struct ParticleErrorArgs {
 type Frame = (Image<[f32; 4]>, Image<[u8; 4]>);
 
 pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
-    let scene = args.scene.load()?;
+    let ctx = GpuContext::new()?;
+    let scene = args.scene.load(Some(&ctx))?;
     if scene.particles.as_ref().is_none_or(|p| p.count == 0) {
         bail!("the scene has no particles; add them with --particles N (or a scene file's [particles])");
     }
@@ -59,7 +60,6 @@ pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
         bail!("--time {}: give a finite time ≥ 0 in seconds", args.time);
     }
     let camera = choose_camera(&scene, args.camera)?;
-    let ctx = GpuContext::new()?;
     let config = |particle_method| RenderConfig {
         width: args.width,
         height: args.height,

@@ -7,6 +7,7 @@ use clap::{Args, ValueEnum};
 use manylights::{
     accel::BvhBuild,
     config::{DebugView, RenderConfig, Tonemapper},
+    files::{OutputFormat, OutputPlan, StagedOutputs},
     gpu::GpuContext,
     image_io,
     particles::ParticleFilter,
@@ -17,6 +18,7 @@ use manylights::{
     scene::{Camera, Scene},
 };
 
+use crate::progress;
 use crate::scene_args::SceneArgs;
 use crate::timing::{FrameSamples, Stat};
 
@@ -98,7 +100,7 @@ pub struct RenderArgs {
     /// Maximum anisotropy of texture filtering (1 = trilinear, up to 16).
     #[arg(long, default_value_t = 8)]
     anisotropy: u16,
-    /// Output PNG (tonemapped, sRGB).
+    /// Output image (tonemapped, sRGB): .png, or .jpg / .jpeg.
     #[arg(short, long, default_value = "out.png")]
     output: PathBuf,
     /// Also write linear HDR radiance as OpenEXR.
@@ -381,14 +383,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if !(1..=MAX_FRAMES).contains(&args.frames) || args.warmup > MAX_FRAMES {
         bail!("--frames must be between 1 and {MAX_FRAMES} and --warmup at most {MAX_FRAMES} (got {} and {})", args.frames, args.warmup);
     }
-    // One file for two outputs: the second would silently replace the first.
-    let outputs = [Some(&args.output), args.exr.as_ref(), args.timings_json.as_ref()];
-    for (i, path) in outputs.iter().enumerate().filter_map(|(i, p)| Some((i, (*p)?))) {
-        if outputs[..i].contains(&Some(path)) {
-            bail!("{} is named for two outputs (-o, --exr, --timings-json); give each its own file", path.display());
-        }
+    // Every output is checked before the scene loads, and against its files once it has.
+    let mut outputs = OutputPlan::new();
+    let image_format = outputs.add("-o", &args.output, &OutputFormat::IMAGES)?;
+    if let Some(exr) = &args.exr {
+        outputs.add("--exr", exr, &[OutputFormat::Exr])?;
     }
-    let scene = args.scene.load()?;
+    if let Some(json) = &args.timings_json {
+        outputs.add("--timings-json", json, &[OutputFormat::Json])?;
+    }
+    let ctx = GpuContext::new()?;
+    let scene = args.scene.load(Some(&ctx))?;
+    outputs.check_inputs(&scene.source_files)?;
     let camera = choose_camera(&scene, args.camera)?;
     let hints = scene.particles.as_ref().map(|p| p.rendering).unwrap_or_default();
     let defaults = RenderConfig::default();
@@ -442,9 +448,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         debug_slice_height: args.debug_slice_height,
     };
 
-    let ctx = GpuContext::new()?;
     let device = ctx.describe();
-    let mut renderer = Renderer::new(ctx, &scene, config)?;
+    let mut renderer = {
+        let _step = progress::step("building the renderer (structures, shaders)");
+        Renderer::new(ctx, &scene, config)?
+    };
     if (args.timings || args.timings_json.is_some()) && !renderer.has_timestamps() {
         bail!("--timings needs GPU timestamp queries, which this adapter lacks ({device}); run without --timings");
     }
@@ -452,6 +460,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         bail!("--time {} must be a finite number of seconds", args.time);
     }
     renderer.time = args.time;
+    let _step = progress::step(format!("rendering {} frame(s) after {} warm-up", args.frames, args.warmup));
     let frames = match &args.camera_velocity {
         None => {
             renderer.render_frames(&camera, args.warmup)?;
@@ -478,17 +487,23 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
     };
 
-    image_io::save_png(&args.output, &renderer.read_ldr()?)?;
+    drop(_step);
+    // All written together at the end: a failure leaves every earlier file as it was.
+    let mut staged = StagedOutputs::new();
+    let encoded =
+        |path: &std::path::Path, bytes: image::ImageResult<Vec<u8>>| bytes.with_context(|| format!("cannot encode {}", path.display()));
+    staged.stage(&args.output, &encoded(&args.output, image_io::encode_ldr(&renderer.read_ldr()?, image_format))?)?;
     if let Some(exr) = &args.exr {
-        image_io::save_exr(exr, &renderer.read_hdr()?)?;
+        staged.stage(exr, &encoded(exr, image_io::encode_exr(&renderer.read_hdr()?))?)?;
     }
     let report = TimingReport::new(&frames);
-    if args.timings {
-        report.print(&device, args, &renderer, &scene);
-    }
     if let Some(path) = &args.timings_json {
         let json = report.to_json(&device, args, &renderer, &scene);
-        std::fs::write(path, serde_json::to_string_pretty(&json)?).with_context(|| format!("cannot write {}", path.display()))?;
+        staged.stage(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
+    }
+    staged.commit()?;
+    if args.timings {
+        report.print(&device, args, &renderer, &scene);
     }
     println!("wrote {}", args.output.display());
     Ok(())

@@ -2,11 +2,17 @@
 
 use anyhow::bail;
 use clap::Args;
-use manylights::scene::{
-    self,
-    generators::{ScatterDecals, ScatterLights, ScatterParticles, DEFAULT_ANIMATION_GROUPS},
-    Groups, Scene,
+use manylights::{
+    accel::{check_scene_capacity, VolumeKind},
+    gpu::GpuContext,
+    scene::{
+        self,
+        generators::{ScatterDecals, ScatterLights, ScatterParticles, DEFAULT_ANIMATION_GROUPS},
+        Groups, Scene,
+    },
 };
+
+use crate::progress;
 
 #[derive(Args, Clone)]
 pub struct SceneArgs {
@@ -41,7 +47,8 @@ pub struct SceneArgs {
 
 impl SceneArgs {
     /// Loads the scene and adds the scattered lights and decals, then groups them with --animate.
-    pub fn load(&self) -> anyhow::Result<Scene> {
+    /// With a device, counts it could not render are refused before they are generated.
+    pub fn load(&self, ctx: Option<&GpuContext>) -> anyhow::Result<Scene> {
         if let Some(size) = self.decal_size {
             let sizes = scene::generators::SCATTERED_DECAL_SIZES;
             if !sizes.contains(&size) {
@@ -51,7 +58,21 @@ impl SceneArgs {
         if self.groups == 0 {
             bail!("--groups 0: animation needs at least 1 group");
         }
-        let mut scene = if self.scene == "demo" { scene::demo::demo_scene() } else { scene::load_path(std::path::Path::new(&self.scene))? };
+        let mut scene = {
+            let _step = progress::step(format!("loading {}", self.scene));
+            if self.scene == "demo" {
+                scene::demo::demo_scene()
+            } else {
+                scene::load_path(std::path::Path::new(&self.scene))?
+            }
+        };
+        if let Some(ctx) = ctx {
+            // One instance slot at least: what the structures need beyond the volumes themselves.
+            VolumeKind::Lights.check_capacity(ctx, scene.lights.len() + self.lights as usize, 0, 1)?;
+            VolumeKind::Decals.check_capacity(ctx, scene.decals.len() + self.decals as usize, 0, 1)?;
+        }
+        let _step =
+            (self.lights > 0 || self.decals > 0 || self.particles > 0).then(|| progress::step("generating lights, decals and particles"));
         if self.lights > 0 {
             let params = ScatterLights { count: self.lights as usize, seed: self.seed, ..Default::default() };
             scene::generators::add_scattered_lights(&mut scene, &params)?;
@@ -73,6 +94,9 @@ impl SceneArgs {
         }
         if self.animate {
             scene::generators::group_for_animation(&mut scene, self.groups, self.seed)?;
+        }
+        if let Some(ctx) = ctx {
+            check_scene_capacity(ctx, &scene)?;
         }
         Ok(scene)
     }

@@ -17,6 +17,7 @@ use clap::Args;
 use glam::{Mat4, Vec3};
 use manylights::{
     config::{DebugView, RenderConfig},
+    files::{self, OutputFormat, OutputPlan},
     gpu::{context::instance, GpuContext, PassTimings},
     image_io,
     pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
@@ -50,13 +51,14 @@ pub struct ViewArgs {
     /// Quit after this many frames (for scripted runs), writing --screenshot if given.
     #[arg(long)]
     frames: Option<u64>,
-    /// With --frames: the last frame's image (without the panel), as a PNG.
+    /// With --frames: the last frame's image (without the panel), as .png, .jpg or .jpeg.
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
     /// A switch at a frame, as the panel would make it: FRAME:KEY=VALUE, KEY one of pipeline,
     /// light-method, decal-method, particle-method, shadows, reflections, bloom, depth-of-field,
     /// motion-blur, auto-exposure (on/off), vignette (0 to 1), debug-view (a --debug-view name), or
-    /// the scattered lights, decals or particles (a count: the scene is generated again). Repeatable.
+    /// the scattered lights, decals or particles (a count: the scene is generated again), or window
+    /// (WIDTHxHEIGHT: the window is resized). Repeatable.
     #[arg(long = "set", value_name = "FRAME:KEY=VALUE")]
     sets: Vec<String>,
 }
@@ -225,12 +227,26 @@ struct ScriptedSet {
     value: String,
 }
 
+/// The scripted switch that resizes the window rather than switching the renderer.
+const WINDOW_KEY: &str = "window";
+
 fn parse_set(text: &str) -> anyhow::Result<ScriptedSet> {
     let parsed = text.split_once(':').and_then(|(frame, rest)| Some((frame.parse().ok()?, rest.split_once('=')?)));
     let Some((frame, (key, value))) = parsed else { bail!("--set {text}: write FRAME:KEY=VALUE, e.g. 5:light-method=clustered") };
     // Checked now, so a bad switch fails before a window opens.
-    apply(&mut Switches::default(), &mut Counts { lights: 0, decals: 0, particles: 0 }, key, value)?;
+    if key == WINDOW_KEY {
+        parse_window_size(value)?;
+    } else {
+        apply(&mut Switches::default(), &mut Counts { lights: 0, decals: 0, particles: 0 }, key, value)?;
+    }
     Ok(ScriptedSet { frame, key: key.into(), value: value.into() })
+}
+
+/// A `window=WIDTHxHEIGHT` size, each side 1 to [`MAX_WINDOW_SIZE`].
+fn parse_window_size(value: &str) -> anyhow::Result<(u32, u32)> {
+    let size = value.split_once('x').and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)));
+    size.filter(|&(w, h)| (1..=MAX_WINDOW_SIZE).contains(&w) && (1..=MAX_WINDOW_SIZE).contains(&h))
+        .with_context(|| format!("{WINDOW_KEY}={value}: give WIDTHxHEIGHT, each 1 to {MAX_WINDOW_SIZE} pixels, e.g. 800x600"))
 }
 
 /// A free-flying camera: position, yaw about +Y and pitch, with the scene camera's lens.
@@ -258,6 +274,18 @@ impl FlyCamera {
             name: "fly".into(),
             world_from_view: Mat4::from_rotation_translation(rotation, self.position),
             projection: self.projection,
+        }
+    }
+}
+
+/// The first `manylights-screenshot-N.png` in `folder` after number `last` that does not exist yet
+/// (`last` moves on to it): a screenshot never replaces a file, an earlier session's included.
+fn free_screenshot_path(folder: &std::path::Path, last: &mut u32) -> PathBuf {
+    loop {
+        *last += 1;
+        let path = folder.join(format!("manylights-screenshot-{last}.png"));
+        if std::fs::symlink_metadata(&path).is_err() {
+            return path.strip_prefix(".").map_or(path.clone(), std::path::Path::to_path_buf);
         }
     }
 }
@@ -301,7 +329,8 @@ struct App {
     last_frame: std::time::Instant,
     timings: PassTimings,
     history: VecDeque<f64>,
-    /// A switch the renderer refused (shown in the panel), and the last screenshot written.
+    /// A switch the renderer refused (shown in the panel), and the number of the last screenshot
+    /// name tried.
     message: Option<String>,
     screenshots: u32,
     /// Set when the viewer must stop: `Err` ends the program with that error.
@@ -331,7 +360,12 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
              or headless under Xvfb (xvfb-run -a manylights view …), or use `manylights render` for images without a window"
         );
     }
-    let scene = args.scene.load()?;
+    let mut outputs = OutputPlan::new();
+    if let Some(path) = &args.screenshot {
+        outputs.add("--screenshot", path, &OutputFormat::IMAGES)?;
+    }
+    let scene = args.scene.load(None)?;
+    outputs.check_inputs(&scene.source_files)?;
     let camera = crate::render::choose_camera(&scene, args.camera)?;
     let counts = Counts { lights: args.scene.lights, decals: args.scene.decals, particles: args.scene.particles };
     let event_loop =
@@ -449,7 +483,7 @@ impl App {
     fn regenerate_scene(&mut self) -> anyhow::Result<()> {
         let Counts { lights, decals, particles } = self.wanted_counts;
         let args = SceneArgs { lights, decals, particles, ..self.args.scene.clone() };
-        match args.load() {
+        match args.load(self.gpu.as_ref().map(|g| &g.ctx)) {
             Ok(scene) => {
                 self.scene = scene;
                 self.message = None;
@@ -484,9 +518,15 @@ impl App {
         self.fly.position += step.normalize_or_zero() * speed;
     }
 
+    fn next_screenshot_path(&mut self) -> PathBuf {
+        free_screenshot_path(std::path::Path::new("."), &mut self.screenshots)
+    }
+
     fn screenshot(&mut self, path: &std::path::Path) -> anyhow::Result<()> {
         let renderer = self.gpu.as_ref().and_then(|g| g.renderer.as_ref()).context("no frame has been rendered yet")?;
-        image_io::save_png(path, &renderer.read_ldr()?)?;
+        let format = OutputFormat::from_path(path).unwrap_or(OutputFormat::Png);
+        let bytes = image_io::encode_ldr(&renderer.read_ldr()?, format).with_context(|| format!("cannot encode {}", path.display()))?;
+        files::write_atomic(path, &bytes)?;
         self.message = Some(format!("wrote {}", path.display()));
         println!("wrote {}", path.display());
         Ok(())
@@ -510,6 +550,14 @@ impl App {
             }
         };
         for (key, value) in due {
+            if key == WINDOW_KEY {
+                let (width, height) = parse_window_size(&value)?;
+                if let Some(gpu) = &self.gpu {
+                    // The window system answers with a Resized event, as for a user's drag.
+                    let _ = gpu.window.request_inner_size(winit::dpi::PhysicalSize::new(width, height));
+                }
+                continue;
+            }
             apply(&mut self.switches, &mut self.wanted_counts, &key, &value)?;
         }
         let mut regenerated = false;
@@ -633,8 +681,7 @@ impl App {
             self.fly = FlyCamera::from_camera(camera);
         }
         if want_screenshot {
-            self.screenshots += 1;
-            let path = PathBuf::from(format!("manylights-screenshot-{}.png", self.screenshots));
+            let path = self.next_screenshot_path();
             self.screenshot(&path)?;
         }
         self.frame += 1;
@@ -788,8 +835,7 @@ impl ApplicationHandler for App {
                             match code {
                                 KeyCode::Escape => self.stop(event_loop, Ok(())),
                                 KeyCode::F12 => {
-                                    self.screenshots += 1;
-                                    let path = PathBuf::from(format!("manylights-screenshot-{}.png", self.screenshots));
+                                    let path = self.next_screenshot_path();
                                     if let Err(e) = self.screenshot(&path) {
                                         self.message = Some(format!("screenshot failed: {e:#}"));
                                     }
@@ -826,5 +872,33 @@ impl ApplicationHandler for App {
         if let Some(gpu) = &self.gpu {
             gpu.window.request_redraw();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn screenshots_skip_names_already_taken() {
+        let dir = std::env::temp_dir().join(format!("manylights-screenshots-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for taken in [1, 2, 4] {
+            std::fs::write(dir.join(format!("manylights-screenshot-{taken}.png")), "an earlier session's").unwrap();
+        }
+        let mut last = 0;
+        let names: Vec<PathBuf> = (0..3).map(|_| free_screenshot_path(&dir, &mut last)).collect();
+        assert_eq!(names, [3, 5, 6].map(|n| dir.join(format!("manylights-screenshot-{n}.png"))));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn window_sizes_are_checked_when_the_script_is_read() {
+        assert_eq!(parse_window_size("800x600").unwrap(), (800, 600));
+        for bad in ["800", "0x600", "800x", "99999x10", "axb"] {
+            assert!(parse_window_size(bad).unwrap_err().to_string().contains("give WIDTHxHEIGHT"), "{bad}");
+        }
+        assert!(parse_set("3:window=640x360").is_ok());
+        assert!(parse_set("3:window=big").is_err());
     }
 }

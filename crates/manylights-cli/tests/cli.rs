@@ -214,9 +214,12 @@ fn negative_numbers_name_their_flag_and_outputs_need_files_of_their_own() {
     let err = failure(&["render", "--lights", "-1"]);
     assert!(err.contains("invalid value '-1' for '--lights"), "{err}");
     let dir = temp_dir("same_outputs");
-    let same = dir.join("same");
-    let err = failure(&["render", "-o", same.to_str().unwrap(), "--exr", same.to_str().unwrap()]);
-    assert!(err.contains("named for two outputs"), "{err}");
+    let same = dir.join("same.png");
+    let link = dir.join("same.exr");
+    let _ = std::fs::remove_file(&link);
+    std::os::unix::fs::symlink(&same, &link).unwrap();
+    let err = failure(&["render", "-o", same.to_str().unwrap(), "--exr", link.to_str().unwrap()]);
+    assert!(err.contains("-o and --exr name the same file"), "{err}");
     let err = failure(&["bench", "--scenes", "none,small-decals", "--sweeps", "none"]);
     assert!(err.contains("--scenes: `none`") && err.contains("alone"), "{err}");
 }
@@ -279,8 +282,8 @@ fn bad_animation_groups_are_refused() {
 #[test]
 fn decals_need_surfaces() {
     let dir = temp_dir("decals_without_surfaces");
-    let path = dir.join("empty.toml");
-    std::fs::write(&path, "").unwrap();
+    let path = dir.join("lamp.toml");
+    std::fs::write(&path, "[[lights]]\ntype = 'point'\nposition = [0, 1, 0]\nintensity = 1.0\n").unwrap();
     let err = failure(&["render", "--width", "64", "--height", "36", "--scene", path.to_str().unwrap(), "--decals", "5"]);
     assert!(err.contains("cannot scatter 5 decals") && err.contains("no triangles"), "{err}");
 }
@@ -544,8 +547,10 @@ fn the_viewer_ends_a_scripted_run_whose_switch_is_refused() {
 fn scene_file_ray_settings_yield_to_flags_and_bad_ones_name_their_key() {
     let dir = temp_dir("ray_scene");
     let scene = dir.join("rays.toml");
-    let write =
-        |rays: &str| std::fs::write(&scene, format!("[sun]\ndirection = [0.3, -1.0, 0.2]\nilluminance = 2.0\n[rays]\n{rays}")).unwrap();
+    let write = |rays: &str| {
+        let lamp = "[[lights]]\ntype = 'point'\nposition = [0, 1, 0]\nintensity = 1.0\n";
+        std::fs::write(&scene, format!("{lamp}[sun]\ndirection = [0.3, -1.0, 0.2]\nilluminance = 2.0\n[rays]\n{rays}")).unwrap()
+    };
     let json = dir.join("timings.json");
     let render = |extra: &[&str]| {
         let mut args = vec!["--scene", scene.to_str().unwrap(), "--timings-json", json.to_str().unwrap()];
@@ -577,4 +582,185 @@ fn scene_file_ray_settings_yield_to_flags_and_bad_ones_name_their_key() {
         }
         assert!(!err.contains("--"), "{bad}: a scene file's error names its key, not a flag: {err}");
     }
+}
+
+/// A failure that prints exactly one `error:` line (and maybe warnings) and exits 1.
+fn one_error_line(args: &[&str]) -> String {
+    let out = manylights(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(errors.len(), 1, "{args:?}: {stderr}");
+    assert!(stderr.lines().all(|l| l.starts_with("error:") || l.contains("WARN")), "{args:?}: {stderr}");
+    errors[0].to_owned()
+}
+
+/// Box.gltf beside its buffer and a small PNG the material reads: a scene whose inputs are files.
+fn textured_box(dir: &Path) -> PathBuf {
+    std::fs::copy(assets().join("box/Box0.bin"), dir.join("Box0.bin")).unwrap();
+    image::RgbaImage::from_pixel(8, 8, image::Rgba([200, 60, 40, 255])).save(dir.join("logo.png")).unwrap();
+    let mut gltf: serde_json::Value = serde_json::from_slice(&std::fs::read(assets().join("box/Box.gltf")).unwrap()).unwrap();
+    gltf["images"] = serde_json::json!([{ "uri": "logo.png" }]);
+    gltf["textures"] = serde_json::json!([{ "source": 0 }]);
+    gltf["materials"][0]["emissiveTexture"] = serde_json::json!({ "index": 0 });
+    let path = dir.join("box.gltf");
+    std::fs::write(&path, serde_json::to_vec(&gltf).unwrap()).unwrap();
+    path
+}
+
+#[test]
+fn outputs_are_checked_before_rendering_and_never_replace_an_input() {
+    let dir = temp_dir("output_checks");
+    let scene = textured_box(&dir);
+    let scene = scene.to_str().unwrap();
+    let keep = dir.join("keep.png");
+    let out = manylights(&["render", "--width", "64", "--height", "36", "-o", keep.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let before = std::fs::read(&keep).unwrap();
+    let small = ["render", "--scene", scene, "--width", "64", "--height", "36"];
+    fn with<'a>(small: &[&'a str], extra: &[&'a str]) -> Vec<&'a str> {
+        [small, extra].concat()
+    }
+    // Devices, unknown formats, missing folders and folders are refused before anything is drawn.
+    assert!(one_error_line(&with(&small, &["-o", "/dev/full"])).contains("this path has no extension"));
+    assert!(one_error_line(&with(&small, &["-o", "out.bmp"])).contains("-o writes .png, .jpg, .jpeg files"));
+    assert!(one_error_line(&with(&small, &["--timings-json", "t.txt"])).contains("--timings-json writes .json files"));
+    let err = one_error_line(&with(&small, &["-o", keep.to_str().unwrap(), "--exr", "/nonexistent/x.exr"]));
+    assert!(err.contains("the folder /nonexistent does not exist"), "{err}");
+    assert_eq!(std::fs::read(&keep).unwrap(), before, "a failed run left the earlier image as it was");
+    // An output may not be any file the scene is read from: its texture here.
+    let logo = dir.join("logo.png");
+    let logo_bytes = std::fs::read(&logo).unwrap();
+    let err = one_error_line(&with(&small, &["-o", logo.to_str().unwrap()]));
+    assert!(err.contains("would overwrite") && err.contains("logo.png"), "{err}");
+    assert_eq!(std::fs::read(&logo).unwrap(), logo_bytes);
+    // JPEG for .jpg, PNG for .png.
+    let jpeg = dir.join("out.jpg");
+    let out = manylights(&with(&small, &["-o", jpeg.to_str().unwrap()]));
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(image::ImageFormat::from_path(&jpeg).unwrap(), image::ImageFormat::Jpeg);
+    assert!(std::fs::read(&jpeg).unwrap().starts_with(&[0xFF, 0xD8, 0xFF]), "a JPEG file");
+}
+
+/// A file system that fills up mid-write (a 256 KiB tmpfs in a private mount namespace): the render
+/// fails with one error line and the image it would have replaced is still whole.
+#[test]
+fn a_full_disk_fails_the_render_and_keeps_the_earlier_image() {
+    if !Command::new("unshare").args(["-rm", "true"]).status().is_ok_and(|s| s.success()) {
+        eprintln!("skipped: needs `unshare -rm` (user and mount namespaces) to mount a small tmpfs");
+        return;
+    }
+    let dir = temp_dir("full_disk");
+    let mount = dir.join("small");
+    std::fs::create_dir_all(&mount).unwrap();
+    let bin = env!("CARGO_BIN_EXE_manylights");
+    let script = format!(
+        "set -e; mount -t tmpfs -o size=256k tmpfs '{m}'; cd '{m}'; \
+         '{bin}' render --width 64 --height 36 -o out.png >/dev/null; cp out.png before.png; \
+         head -c 190000 /dev/zero > filler; \
+         if '{bin}' render --lights 40 --width 320 --height 240 -o out.png 2>err.txt; then echo SUCCEEDED; fi; \
+         cat err.txt; cmp -s out.png before.png && echo INTACT; ls -a",
+        m = mount.display()
+    );
+    let out = Command::new("unshare").args(["-rm", "sh", "-c", &script]).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!stdout.contains("SUCCEEDED"), "the render reported success on a full disk: {stdout}");
+    assert!(stdout.contains("error: cannot write out.png: No space left on device"), "{stdout}");
+    assert!(stdout.contains("INTACT"), "the earlier image was replaced: {stdout}");
+    assert!(!stdout.contains(".partial"), "a temporary file was left: {stdout}");
+}
+
+#[test]
+fn malformed_and_endless_inputs_are_one_line_errors() {
+    let dir = temp_dir("hostile_inputs");
+    let gltf: serde_json::Value = serde_json::from_slice(&std::fs::read(assets().join("box/Box.gltf")).unwrap()).unwrap();
+    std::fs::copy(assets().join("box/Box0.bin"), dir.join("Box0.bin")).unwrap();
+    let write = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut json = gltf.clone();
+        edit(&mut json);
+        let path = dir.join(name);
+        std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+        path.to_str().unwrap().to_owned()
+    };
+    // An accessor index the glTF validator reads without checking.
+    let position = write("position99.gltf", &|j| j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 99.into());
+    for args in [&["render", "--scene", &position, "--width", "64", "--height", "36"][..], &["info", "--scene", &position]] {
+        let err = one_error_line(args);
+        assert!(err.contains("POSITION names accessor 99, and the file has 3 accessors"), "{err}");
+        assert!(err.contains("re-export the file from its authoring tool, or check it with the Khronos glTF Validator"), "{err}");
+    }
+    // Endless and enormous files are refused before they are read.
+    let zero = write("zero.gltf", &|j| j["buffers"][0]["uri"] = "/dev/zero".into());
+    assert!(one_error_line(&["info", "--scene", &zero]).contains("only regular files are read"));
+    let image = write("zero_image.gltf", &|j| {
+        j["images"] = serde_json::json!([{ "uri": "/dev/zero" }]);
+        j["textures"] = serde_json::json!([{ "source": 0 }]);
+    });
+    assert!(one_error_line(&["info", "--scene", &image]).contains("only regular files are read"));
+    let sparse = dir.join("sparse.bin");
+    std::fs::File::create(&sparse).unwrap().set_len(100 << 30).unwrap();
+    let huge = write("huge.gltf", &|j| {
+        j["buffers"][0]["uri"] = "sparse.bin".into();
+        j["buffers"][0]["byteLength"] = (100u64 << 30).into();
+    });
+    let started = std::time::Instant::now();
+    let err = one_error_line(&["info", "--scene", &huge]);
+    assert!(err.contains("100.0 GiB is over the 2.0 GiB"), "{err}");
+    assert!(started.elapsed().as_secs() < 30, "refused without reading");
+    // Emission outside glTF's range is refused; a huge strength renders white.
+    let negative = write("negative.gltf", &|j| j["materials"][0]["emissiveFactor"] = serde_json::json!([-3, -3, -3]));
+    let err = one_error_line(&["render", "--scene", &negative, "--width", "64", "--height", "36"]);
+    assert!(err.contains("emissiveFactor [-3.0, -3.0, -3.0] must be 0 to 1") && err.contains("KHR_materials_emissive_strength"), "{err}");
+    for (strength, tonemap) in [(1e30, "aces"), (3.4e38, "aces"), (3.4e38, "agx"), (3.4e38, "none")] {
+        let bright = write("bright.gltf", &|j| {
+            j["materials"][0]["emissiveFactor"] = serde_json::json!([1, 1, 1]);
+            j["materials"][0]["extensions"] = serde_json::json!({ "KHR_materials_emissive_strength": { "emissiveStrength": strength } });
+            j["extensionsUsed"] = serde_json::json!(["KHR_materials_emissive_strength"]);
+        });
+        let png = dir.join("bright.png");
+        let out = manylights(&[
+            "render",
+            "--scene",
+            &bright,
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--tonemap",
+            tonemap,
+            "-o",
+            png.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let image = image::open(&png).unwrap().into_rgb8();
+        let white = image.get_pixel(32, 18).0.iter().all(|&c| c >= 250);
+        assert!(white, "an emissive strength of {strength} through {tonemap} shows {:?}, not white", image.get_pixel(32, 18).0);
+    }
+}
+
+#[test]
+fn info_refuses_what_render_refuses_at_once() {
+    for args in [["info", "--decals", "16777216"], ["info", "--lights", "16777216"]] {
+        let started = std::time::Instant::now();
+        let err = one_error_line(&args);
+        assert!(err.contains("use fewer"), "{err}");
+        assert!(started.elapsed().as_secs() < 20, "{args:?} took {:?}", started.elapsed());
+    }
+}
+
+#[test]
+fn scene_file_mistakes_are_one_line_with_the_fix() {
+    let dir = temp_dir("scene_file_mistakes");
+    let write = |name: &str, bytes: &[u8]| {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        path.to_str().unwrap().to_owned()
+    };
+    let syntax = write("syntax.toml", b"exposure = 1.0\n[sun\n");
+    assert!(one_error_line(&["info", "--scene", &syntax]).contains("line 2, column"));
+    let latin1 = write("latin1.toml", b"# caf\xe9\n");
+    assert!(one_error_line(&["info", "--scene", &latin1]).contains("save it as UTF-8"));
+    let empty = write("empty.toml", b"");
+    assert!(one_error_line(&["info", "--scene", &empty]).contains("sets nothing to render"));
 }

@@ -10,6 +10,16 @@ pub enum Error {
     #[error("cannot read {path}: {error} (check that the path exists and is readable)")]
     Io { path: PathBuf, error: std::io::Error },
 
+    #[error("cannot read {path}: {reason}")]
+    Input { path: PathBuf, reason: String },
+
+    /// A third-party parser panicked on the file (`files::guard`): a check of ours is missing.
+    #[error(
+        "{path}: the {parser} failed on this file ({message}); the file is malformed: re-export it, or check it \
+         with a validator for its format"
+    )]
+    ParserPanic { path: PathBuf, parser: &'static str, message: String },
+
     #[error("{path}: not a valid glTF 2.0 file: {reason}")]
     Gltf { path: PathBuf, reason: String },
 
@@ -43,3 +53,8 @@ pub enum Error {
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// A third-party message on one line: its lines joined, outer whitespace trimmed.
+pub(crate) fn one_line(text: &str) -> String {
+    text.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ")
+}

@@ -7,6 +7,7 @@
 pub mod accel;
 pub mod config;
 pub mod error;
+pub mod files;
 pub mod gpu;
 pub mod image_io;
 pub mod particles;

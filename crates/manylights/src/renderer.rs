@@ -130,6 +130,7 @@ impl Renderer {
                 config.light_method.name()
             )));
         }
+        check_loop_limit(&ctx, scene, &config, light_particles.map_or(0, |p| p.count as usize))?;
         let methods = ShadingMethods {
             lights: config.light_method,
             decals: config.decal_method,
@@ -483,4 +484,35 @@ impl Renderer {
     fn image<T>(&self, pixels: Vec<T>) -> Image<T> {
         Image { width: self.config.width, height: self.config.height, pixels }
     }
+}
+
+/// Refuses frames whose brute-force or clustered loops a driver would cut short
+/// (`gpu::loop_limit`); warns where a BVH walk could be, which depends on the view.
+fn check_loop_limit(ctx: &GpuContext, scene: &Scene, config: &RenderConfig, light_particles: usize) -> Result<()> {
+    let Some(limit) = ctx.loop_limit else { return Ok(()) };
+    let looped = |loops: bool, count: usize| if loops { count } else { 0 };
+    let loops = [
+        (
+            "lights",
+            config.light_method.name(),
+            looped(matches!(config.light_method, LightMethod::Brute | LightMethod::Clustered), scene.lights.len()),
+        ),
+        (
+            "decals",
+            config.decal_method.name(),
+            looped(matches!(config.decal_method, DecalMethod::Brute | DecalMethod::Clustered), scene.decals.len()),
+        ),
+    ];
+    if let Some(problem) = crate::gpu::loop_limit::loop_limit_problem(Some(limit), &ctx.describe(), &loops) {
+        return Err(Error::InvalidConfig(problem));
+    }
+    let walked = scene.lights.len() + scene.decals.len() + light_particles;
+    if walked > limit as usize {
+        log::warn!(
+            "this driver ({}) ends a shader's loops after {limit} iterations in all: where a BVH walk meets more of the {walked} \
+             lights and decals at one point, some are left out; Mesa 25's lavapipe has no such limit",
+            ctx.describe()
+        );
+    }
+    Ok(())
 }

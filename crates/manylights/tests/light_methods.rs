@@ -201,3 +201,48 @@ fn an_instanced_group_lights_like_its_lights_copied_into_the_world() {
         assert!(difference <= TOLERANCE, "{}: max abs difference {difference} from the expanded lights", method.name());
     }
 }
+
+/// 70,000 lights that all reach every pixel of a wall: a loop over more than 65,535 of them, which an
+/// old lavapipe (Mesa before its loop limiter went) would end early. Brute force and the clustered
+/// lists (70,000 long in every froxel) must equal the BVH's walk, and the last lights must count:
+/// they are the bright ones. Where the driver does limit loops, brute force and clustered shading are
+/// refused instead, with the limit named.
+#[test]
+fn seventy_thousand_lights_on_one_point_are_all_shaded() {
+    const COUNT: usize = 70_000;
+    const DIM: usize = 65_535;
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(70);
+    let lights: Vec<Light> = (0..COUNT)
+        .map(|i| {
+            let position = Vec3::new(rng.random_range(-3.0..3.0), rng.random_range(-2.0..2.0), rng.random_range(1.0..3.0));
+            point_light(position, if i < DIM { 1e-4 } else { 1e-2 }, 30.0)
+        })
+        .collect();
+    let (scene, camera) = wall_scene(lights);
+    let (width, height) = (16, 9);
+    let ctx = manylights::gpu::GpuContext::new().expect("a GPU adapter");
+    let render = |scene: &Scene, method: LightMethod| {
+        manylights::renderer::Renderer::new(ctx.clone(), scene, config(width, height, method)).and_then(|mut r| {
+            r.render(&camera)?;
+            r.read_hdr()
+        })
+    };
+    if let Some(limit) = ctx.loop_limit {
+        for method in [LightMethod::Brute, LightMethod::Clustered] {
+            let refused = render(&scene, method).err().map(|e| e.to_string()).unwrap_or_default();
+            assert!(refused.contains(&format!("after {limit} iterations")), "{}: {refused}", method.name());
+        }
+        return;
+    }
+    let bvh = render(&scene, LightMethod::Bvh).expect("bvh");
+    for method in [LightMethod::Brute, LightMethod::Clustered] {
+        let image = render(&scene, method).expect("frame");
+        let difference = bvh.pixels.iter().zip(&image.pixels).map(|(a, b)| (a[0] - b[0]).abs() / a[0].max(1e-6)).fold(0.0, f32::max);
+        assert!(difference <= 1e-3, "{}: relative difference {difference} from bvh", method.name());
+    }
+    // The bright lights past the 65,535th carry most of the light: without them the wall is far darker.
+    let first = Scene { lights: scene.lights[..DIM].to_vec(), ..scene.clone() };
+    let dim = render(&first, LightMethod::Brute).expect("frame");
+    let centre = |image: &manylights::renderer::Image<[f32; 4]>| pixel(image, width / 2, height / 2)[0];
+    assert!(centre(&bvh) > 2.0 * centre(&dim), "all lights {} against the first {DIM} alone {}", centre(&bvh), centre(&dim));
+}

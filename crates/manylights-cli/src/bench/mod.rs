@@ -18,6 +18,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use manylights::{
     accel::BvhBuild,
     config::RenderConfig,
+    files::OutputPlan,
     gpu::GpuContext,
     pipelines::{DecalMethod, LightMethod, PipelineKind},
     scene::{
@@ -230,7 +231,14 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         bail!("nothing to run: --scenes none with --sweeps none, or no method applies to the scenes asked for");
     }
 
+    // The folder and its files are checked before the run, which may take a long time.
+    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
+    let mut outputs = OutputPlan::new();
+    for (name, format) in report::FILES {
+        outputs.add("--out", &args.out.join(name), &[format])?;
+    }
     let base = load_base_scene(args)?;
+    outputs.check_inputs(&base.source_files)?;
     let camera = choose_camera(&base, args.camera)?;
     let ctx = GpuContext::new()?;
     // Settings every configuration shares (resolution, texture options) fail here, not once per configuration.
@@ -240,7 +248,6 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if !ctx.has_timestamps() {
         bail!("the benchmark times passes with GPU timestamp queries, which this adapter lacks ({})", ctx.describe());
     }
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
     let info = RunInfo {
         device: ctx.info.name.clone(),
         driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info).trim().to_owned(),

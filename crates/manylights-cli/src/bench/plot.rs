@@ -2,9 +2,8 @@
 //! series per method, with the growth references: n log n for builds, the mean overlap for
 //! shading (both anchored at the bvh's measurement they are compared with).
 
-use std::path::Path;
-
 use anyhow::anyhow;
+use image::ImageEncoder;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -27,7 +26,8 @@ fn register_font() -> anyhow::Result<()> {
     ok.then_some(()).ok_or_else(|| anyhow!("the plot font failed to load"))
 }
 
-pub(crate) fn sweep(path: &Path, info: &RunInfo, sweep: SweepArg, rows: &[&Measurement]) -> anyhow::Result<()> {
+/// The sweep's plot as PNG bytes.
+pub(crate) fn sweep(info: &RunInfo, sweep: SweepArg, rows: &[&Measurement]) -> anyhow::Result<Vec<u8>> {
     register_font()?;
     let what = if sweep == SweepArg::Lights { "lights" } else { "decals" };
     let mut pixels = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
@@ -41,8 +41,11 @@ pub(crate) fn sweep(path: &Path, info: &RunInfo, sweep: SweepArg, rows: &[&Measu
         panel(&right, &format!("shading pass (ms) against {what}"), PassGroup::Shade, rows).map_err(plot_error)?;
         root.present().map_err(plot_error)?;
     }
-    let image = image::RgbImage::from_raw(WIDTH, HEIGHT, pixels).ok_or_else(|| anyhow!("plot buffer of the wrong size"))?;
-    image.save(path).map_err(|e| anyhow!("cannot write {}: {e}", path.display()))
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(&pixels, WIDTH, HEIGHT, image::ExtendedColorType::Rgb8)
+        .map_err(|e| anyhow!("encoding a plot: {e}"))?;
+    Ok(png)
 }
 
 fn plot_error(e: impl std::fmt::Display) -> anyhow::Error {

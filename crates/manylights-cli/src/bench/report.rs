@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use manylights::files::{OutputFormat, StagedOutputs};
 use manylights::pipelines::PipelineKind;
 use manylights::scene::paper_scenes::PaperScene;
 
@@ -23,28 +24,38 @@ const PAPER: [(&str, &str, Option<f64>, f64); 6] = [
     ("small-lights", "visbuffer", None, 10.8),
 ];
 
+/// The files a run may write into its folder, each with its format.
+pub(crate) const FILES: [(&str, OutputFormat); 5] = [
+    ("bench.json", OutputFormat::Json),
+    ("bench.csv", OutputFormat::Csv),
+    ("bench.md", OutputFormat::Markdown),
+    ("sweep-lights.png", OutputFormat::Png),
+    ("sweep-decals.png", OutputFormat::Png),
+];
+
+/// Writes the run's files together: a failure leaves every earlier file in the folder as it was.
 pub(crate) fn write_all(dir: &Path, info: &RunInfo, results: &[Measurement]) -> anyhow::Result<Vec<PathBuf>> {
-    let mut written = Vec::new();
-    let mut write = |name: &str, contents: String| -> anyhow::Result<()> {
-        let path = dir.join(name);
-        std::fs::write(&path, contents).with_context(|| format!("cannot write {}", path.display()))?;
-        written.push(path);
-        Ok(())
-    };
-    write("bench.json", serde_json::to_string_pretty(&json(info, results))?)?;
-    write("bench.csv", csv(info, results))?;
+    let mut files: Vec<(&str, Vec<u8>)> = vec![
+        ("bench.json", serde_json::to_string_pretty(&json(info, results))?.into_bytes()),
+        ("bench.csv", csv(info, results).into_bytes()),
+    ];
     let mut plots = Vec::new();
     for sweep in [SweepArg::Lights, SweepArg::Decals] {
         let rows: Vec<&Measurement> = results.iter().filter(|r| r.suite == Suite::Sweep(sweep)).collect();
         if !rows.is_empty() {
-            let name = format!("{}.png", Suite::Sweep(sweep).name());
-            plot::sweep(&dir.join(&name), info, sweep, &rows)?;
-            plots.push(name);
+            let name =
+                FILES.iter().map(|(name, _)| *name).find(|name| name.starts_with(Suite::Sweep(sweep).name())).context("a plot's name")?;
+            files.push((name, plot::sweep(info, sweep, &rows)?));
+            plots.push(name.to_owned());
         }
     }
-    write("bench.md", markdown(info, results, &plots))?;
-    written.extend(plots.iter().map(|p| dir.join(p)));
-    Ok(written)
+    files.push(("bench.md", markdown(info, results, &plots).into_bytes()));
+    let mut staged = StagedOutputs::new();
+    for (name, bytes) in &files {
+        staged.stage(&dir.join(name), bytes)?;
+    }
+    staged.commit()?;
+    Ok(files.iter().map(|(name, _)| dir.join(name)).collect())
 }
 
 fn json(info: &RunInfo, results: &[Measurement]) -> serde_json::Value {

@@ -234,6 +234,19 @@ struct Group {
     builder: Option<GpuLbvh>,
 }
 
+/// Checks that the scene's lights and decals, in their groups' instances, fit their structures on this
+/// device: what `Renderer::new` would refuse, without building anything.
+pub fn check_scene_capacity(ctx: &GpuContext, scene: &crate::scene::Scene) -> Result<()> {
+    for (kind, count, groups) in
+        [(VolumeKind::Lights, scene.lights.len(), &scene.light_groups), (VolumeKind::Decals, scene.decals.len(), &scene.decal_groups)]
+    {
+        let (ranges, instances) = groups.resolve(count);
+        let slots = instances.iter().filter(|i| !ranges[i.group].is_empty()).count().max(1) as u32;
+        kind.check_capacity(ctx, count, 0, slots)?;
+    }
+    Ok(())
+}
+
 /// What a structure holds; names its buffers and timer scopes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum VolumeKind {
@@ -264,6 +277,27 @@ impl VolumeKind {
                 clusters: "decal_cluster_build",
             },
         }
+    }
+
+    /// Checks, before anything is built, that `count` volumes, `dynamic_count` particle volumes and
+    /// `instance_slots` group instances fit one structure and their records one storage binding.
+    pub fn check_capacity(self, ctx: &GpuContext, count: usize, dynamic_count: u32, instance_slots: u32) -> Result<()> {
+        let label = self.label();
+        let primitive_count = u64::from(instance_slots) + count as u64 + u64::from(dynamic_count);
+        if primitive_count > MAX_PRIMITIVES as u64 {
+            let (particles, fewer) = if dynamic_count > 0 {
+                (format!(" (and {dynamic_count} particle {label}s)"), format!("{label}s or particles"))
+            } else {
+                (String::new(), format!("{label}s"))
+            };
+            return Err(Error::InvalidScene(format!(
+                "{count} {label}s{particles} and {instance_slots} instance slots; a structure holds at most {MAX_PRIMITIVES} volumes and instances: use fewer {fewer}"
+            )));
+        }
+        // Checked before the CPU builds, which take seconds for millions of volumes.
+        let item_bytes = (count as u64 + u64::from(dynamic_count)) * self.record_bytes() as u64;
+        ctx.check_storage_binding(&format!("{label} items"), item_bytes)
+            .map_err(|m| Error::InvalidScene(format!("{m}; use fewer {label}s")))
     }
 
     /// Bytes of one item's record (`GpuLight` or `GpuDecal`).
@@ -538,24 +572,13 @@ impl VolumeStructure {
         let dynamic_root = node_base + 1;
         node_base += 1 + (2 * dynamic_count).saturating_sub(1);
         let node_count = u64::from(node_base);
+        volumes.kind.check_capacity(ctx, count, dynamic_count, instance_slots)?;
         let primitive_count = u64::from(instance_slots) + count as u64 + u64::from(dynamic_count);
-        if primitive_count > MAX_PRIMITIVES as u64 {
-            let (particles, fewer) = if dynamic_count > 0 {
-                (format!(" (and {dynamic_count} particle {label}s)"), format!("{label}s or particles"))
-            } else {
-                (String::new(), format!("{label}s"))
-            };
-            return Err(Error::InvalidScene(format!(
-                "{count} {label}s{particles} and {instance_slots} instance slots; a structure holds at most {MAX_PRIMITIVES} volumes and instances: use fewer {fewer}"
-            )));
-        }
+        let item_bytes = volumes.items.len() as u64 + u64::from(dynamic_count) * volumes.kind.record_bytes() as u64;
         let fits = |what: &str, bytes: u64| {
             ctx.check_storage_binding(&format!("{label} {what}"), bytes)
                 .map_err(|m| Error::InvalidScene(format!("{m}; use fewer {label}s")))
         };
-        // Checked before the CPU builds, which take seconds for millions of volumes.
-        let item_bytes = volumes.items.len() as u64 + u64::from(dynamic_count) * volumes.kind.record_bytes() as u64;
-        fits("items", item_bytes)?;
         // Without group BVHs only the top level's nodes are written.
         let stored_nodes = if build == BvhBuild::None && dynamic.is_none() { u64::from(top_level_nodes) } else { node_count };
         let node_bytes = stored_nodes * std::mem::size_of::<BvhNode>() as u64;

@@ -34,6 +34,8 @@ pub struct GpuContext {
     /// Features requested from the device (a subset of `OPTIONAL_FEATURES`).
     pub features: wgpu::Features,
     pub limits: wgpu::Limits,
+    /// Iterations a shader's loops get in all, where the driver cuts them short (`gpu::loop_limit`).
+    pub loop_limit: Option<u32>,
     /// Errors the device reported outside an error scope; checked after each frame.
     errors: Arc<Mutex<Vec<String>>>,
 }
@@ -174,7 +176,12 @@ impl GpuContext {
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             sink.lock().unwrap_or_else(|p| p.into_inner()).push(e.to_string());
         }));
-        Ok(Self { adapter, device, queue, info, features, limits, errors })
+        let mut ctx = Self { adapter, device, queue, info, features, limits, loop_limit: None, errors };
+        // Only software rasterisers have been seen to cut loops short; a GPU is not probed.
+        if ctx.info.device_type == wgpu::DeviceType::Cpu {
+            ctx.loop_limit = super::loop_limit::probe(&ctx)?;
+        }
+        Ok(ctx)
     }
 
     pub fn has_timestamps(&self) -> bool {

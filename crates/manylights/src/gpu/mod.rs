@@ -4,6 +4,7 @@
 pub mod bindings;
 pub mod context;
 pub mod frame;
+pub mod loop_limit;
 pub mod readback;
 pub mod scene;
 pub mod shaders;

@@ -103,6 +103,9 @@ fn tonemap(@builtin(global_invocation_id) id: vec3<u32>) {
     if post.exposure.w > 0.0 {
         hdr *= vignette(pixel, post.exposure.w);
     }
+    // Every curve is white long before this, and the ACES fit squares its input: clamped, any
+    // finite radiance and exposure map to a finite colour.
+    hdr = min(hdr, vec3<f32>(65504.0));
     var mapped: vec3<f32>;
     switch frame.tonemapper {
         case TONEMAP_AGX: {

@@ -7,7 +7,7 @@
 //! transform. The first animation's node channels (translation, rotation, scale) become the scene's
 //! [`animation::Animation`] of the instances they move.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use ::gltf::accessor::{Accessor, DataType, Dimensions};
@@ -22,6 +22,7 @@ use super::{
     animation, tangents, AlphaMode, Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Projection, Scene, Sun, Texture,
     TextureRef, Vertex, Wrap, DEFAULT_LIGHT_CUTOFF,
 };
+use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::{Error, Result};
 
 /// Extensions a file may require; every other optional extension is ignored.
@@ -29,8 +30,21 @@ const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_e
 
 /// Loads a glTF 2.0 file and everything it references (buffers and images next to it).
 pub fn import(path: &Path) -> Result<Scene> {
-    let bytes = std::fs::read(path).map_err(|error| Error::Io { path: path.to_owned(), error })?;
-    let invalid = |reason: String| Error::Gltf { path: path.to_owned(), reason };
+    let budget = LoadBudget::new();
+    let mut scene = import_within(path, &budget)?;
+    scene.source_files = budget.files();
+    Ok(scene)
+}
+
+/// [`import`] within a load's budget, which also records the files read.
+pub(crate) fn import_within(path: &Path, budget: &LoadBudget) -> Result<Scene> {
+    let bytes = files::read_input(path, InputKind::Gltf, None, budget)?;
+    guard::contain_panics(|| import_bytes(path, bytes, budget))
+        .unwrap_or_else(|message| Err(Error::ParserPanic { path: path.to_owned(), parser: "glTF reader", message }))
+}
+
+fn import_bytes(path: &Path, bytes: Vec<u8>, budget: &LoadBudget) -> Result<Scene> {
+    let invalid = |reason: String| gltf_error(path, reason);
     if bytes.is_empty() {
         return Err(invalid("the file is empty".into()));
     }
@@ -41,26 +55,72 @@ pub fn import(path: &Path) -> Result<Scene> {
     // Parsed without validation first: the gltf crate reports an unsupported required extension as
     // a generic validation failure, and this check names it.
     let ::gltf::Gltf { document, blob } = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(parse_reason(e)))?;
+    drop(bytes);
     check_required_extensions(path, &document)?;
     let version = &document.as_json().asset.version;
     if version.split('.').next() != Some("2") {
         return Err(invalid(format!("asset.version is \"{version}\": only glTF 2.x files can be read")));
     }
-    let document = Document::from_json(document.into_json()).map_err(|e| invalid(e.to_string()))?;
+    check_before_validation(document.as_json()).map_err(&invalid)?;
+    let document = Document::from_json(document.into_json()).map_err(|e| invalid(validation_reason(e)))?;
 
-    check_sources(&document).map_err(invalid)?;
+    check_sources(&document).map_err(&invalid)?;
 
     let base = path.parent().unwrap_or(Path::new("."));
-    let buffers = load_buffers(&document, base, blob).map_err(invalid)?;
-    check_views(&document, &buffers).map_err(invalid)?;
-    let textures = decode_images(&document, base, &buffers).map_err(invalid)?;
-    let scene = build_scene(&document, &buffers, textures).map_err(invalid)?;
+    let buffers = load_buffers(path, &document, base, blob, budget)?;
+    check_views(&document, &buffers).map_err(&invalid)?;
+    let textures = decode_images(path, &document, base, &buffers, budget)?;
+    let scene = build_scene(&document, &buffers, textures).map_err(&invalid)?;
     // The scene's own checks (cameras, indices, …), named by the file they came from.
     scene.validate().map_err(|e| match e {
         Error::InvalidScene(reason) => invalid(reason),
         e => e,
     })?;
     Ok(scene)
+}
+
+/// A glTF file's error; a reason that does not say how to fix it gets the way every malformed file
+/// is fixed.
+fn gltf_error(path: &Path, reason: String) -> Error {
+    let reason = crate::error::one_line(&reason);
+    let reason = if reason.contains("; ") {
+        reason
+    } else {
+        format!("{reason}; re-export the file from its authoring tool, or check it with the Khronos glTF Validator")
+    };
+    Error::Gltf { path: path.to_owned(), reason }
+}
+
+/// Checks what the gltf crate's validation reads without checking: a primitive's POSITION accessor,
+/// which it indexes directly.
+fn check_before_validation(json: &::gltf::json::Root) -> Result<(), String> {
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            for (semantic, accessor) in &primitive.attributes {
+                if accessor.value() >= json.accessors.len() {
+                    return Err(format!(
+                        "mesh {m} primitive {p}: {} names accessor {}, and the file has {} accessors",
+                        semantic.to_string(),
+                        accessor.value(),
+                        json.accessors.len()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The validator's first complaint, with where to look.
+fn validation_reason(error: ::gltf::Error) -> String {
+    match error {
+        ::gltf::Error::Validation(errors) => {
+            let shown: Vec<String> = errors.iter().take(3).map(|(path, e)| format!("{path}: {e}")).collect();
+            let more = if errors.len() > 3 { format!(" (and {} more)", errors.len() - 3) } else { String::new() };
+            format!("{}{more}; fix these fields or re-export the file", shown.join("; "))
+        }
+        e => e.to_string(),
+    }
 }
 
 /// The parser's reason, with the detail its GLB messages leave out.
@@ -87,22 +147,77 @@ fn check_required_extensions(path: &Path, document: &Document) -> Result<()> {
     }
 }
 
-/// Like `gltf::import_buffers`, with errors that say which buffer failed.
-fn load_buffers(document: &Document, base: &Path, mut blob: Option<Vec<u8>>) -> Result<Vec<buffer::Data>, String> {
+/// Where a URI's bytes come from.
+enum UriSource<'a> {
+    /// A `data:` URI's media type (if any) and base64 payload.
+    Data {
+        media_type: Option<&'a str>,
+        base64: &'a str,
+    },
+    File(PathBuf),
+}
+
+/// Resolves a URI as the gltf crate does: `data:`, `file:` and relative paths (percent-decoded).
+fn resolve_uri<'a>(uri: &'a str, base: &Path) -> Result<UriSource<'a>, String> {
+    if let Some(rest) = uri.strip_prefix("data:") {
+        return Ok(match rest.split_once(";base64,") {
+            Some((media_type, base64)) => UriSource::Data { media_type: Some(media_type), base64 },
+            None => UriSource::Data { media_type: None, base64: rest },
+        });
+    }
+    if let Some(path) = uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:")) {
+        return Ok(UriSource::File(PathBuf::from(path)));
+    }
+    if uri.contains(':') {
+        return Err(format!("URI `{uri}` has a scheme manylights cannot read; give a relative path, a file: or a data: URI"));
+    }
+    let decoded = percent_decode(uri).ok_or_else(|| format!("URI `{uri}` does not percent-decode to UTF-8"))?;
+    Ok(UriSource::File(base.join(decoded)))
+}
+
+/// A data URI's bytes, counted against the load's budget.
+fn decode_data_uri(base64: &str, gltf: &Path, budget: &LoadBudget) -> Result<Vec<u8>> {
+    budget.take_input(base64.len() as u64 / 4 * 3, gltf)?;
+    ::base64::decode(base64).map_err(|e| gltf_error(gltf, format!("a data URI is not valid base64: {e}")))
+}
+
+/// Reads every buffer: the GLB binary chunk, data URIs, or files up to their declared byte length.
+fn load_buffers(
+    gltf: &Path,
+    document: &Document,
+    base: &Path,
+    mut blob: Option<Vec<u8>>,
+    budget: &LoadBudget,
+) -> Result<Vec<buffer::Data>> {
+    let invalid = |reason: String| gltf_error(gltf, reason);
     document
         .buffers()
         .map(|buffer| {
-            let what = match buffer.source() {
-                buffer::Source::Bin => "the GLB binary chunk".to_owned(),
-                buffer::Source::Uri(uri) if uri.starts_with("data:") => "a data URI".to_owned(),
-                buffer::Source::Uri(uri) => format!("`{uri}`"),
+            let length = buffer.length();
+            let (what, mut data) = match buffer.source() {
+                buffer::Source::Bin => {
+                    let what = "the GLB binary chunk".to_owned();
+                    let data =
+                        blob.take().ok_or_else(|| invalid(format!("buffer {} ({what}): the file has no binary chunk", buffer.index())))?;
+                    (what, data)
+                }
+                buffer::Source::Uri(uri) => match resolve_uri(uri, base).map_err(|e| invalid(format!("buffer {}: {e}", buffer.index())))? {
+                    UriSource::Data { base64, .. } => ("a data URI".to_owned(), decode_data_uri(base64, gltf, budget)?),
+                    UriSource::File(file) => {
+                        (format!("`{uri}`"), files::read_input(&file, InputKind::Buffer, Some(length as u64), budget)?)
+                    }
+                },
             };
-            let data = buffer::Data::from_source_and_blob(buffer.source(), Some(base), &mut blob)
-                .map_err(|e| format!("buffer {} ({what}): {e}", buffer.index()))?;
-            if data.len() < buffer.length() {
-                return Err(format!("buffer {} ({what}) has {} bytes, the file declares {}", buffer.index(), data.len(), buffer.length()));
+            if data.len() < length {
+                return Err(invalid(format!(
+                    "buffer {} ({what}) has {} bytes, the file declares {length}; the file is truncated or its byteLength is wrong",
+                    buffer.index(),
+                    data.len()
+                )));
             }
-            Ok(data)
+            // As the gltf crate pads them.
+            data.resize(data.len().next_multiple_of(4), 0);
+            Ok(buffer::Data(data))
         })
         .collect()
 }
@@ -122,7 +237,7 @@ fn check_sources(document: &Document) -> Result<(), String> {
     let uris = json.buffers.iter().filter_map(|b| b.uri.as_deref());
     let uris = uris.chain(json.images.iter().filter_map(|i| i.uri.as_deref()));
     for uri in uris.filter(|u| !u.starts_with("data:")) {
-        if !percent_decodes_to_utf8(uri) {
+        if percent_decode(uri).is_none() {
             return Err(format!("URI `{uri}` does not percent-decode to UTF-8"));
         }
     }
@@ -144,7 +259,9 @@ fn check_sources(document: &Document) -> Result<(), String> {
     Ok(())
 }
 
-fn percent_decodes_to_utf8(uri: &str) -> bool {
+/// A relative URI's path: `%XX` escapes decoded (a `%` without two hex digits after it stays), or
+/// `None` when the result is not UTF-8.
+fn percent_decode(uri: &str) -> Option<String> {
     let mut bytes = Vec::with_capacity(uri.len());
     let mut rest = uri.as_bytes();
     while let Some((&first, tail)) = rest.split_first() {
@@ -161,7 +278,7 @@ fn percent_decodes_to_utf8(uri: &str) -> bool {
             }
         }
     }
-    String::from_utf8(bytes).is_ok()
+    String::from_utf8(bytes).ok()
 }
 
 /// Checks that every buffer view lies inside its buffer: the gltf crate slices images out of them
@@ -183,17 +300,20 @@ fn check_views(document: &Document, buffers: &[buffer::Data]) -> Result<(), Stri
 }
 
 /// Decodes every image to an RGBA8 texture, on all cores: PNG decoding dominates loading Sponza.
-fn decode_images(document: &Document, base: &Path, buffers: &[buffer::Data]) -> Result<Vec<Texture>, String> {
+fn decode_images(gltf: &Path, document: &Document, base: &Path, buffers: &[buffer::Data], budget: &LoadBudget) -> Result<Vec<Texture>> {
     let images: Vec<_> = document.images().collect();
     let workers = std::thread::available_parallelism().map_or(1, usize::from).min(images.len());
     let next = AtomicUsize::new(0);
-    let mut decoded: Vec<(usize, Result<Texture, String>)> = std::thread::scope(|s| {
+    let mut decoded: Vec<(usize, Result<Texture>)> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..workers)
             .map(|_| {
                 s.spawn(|| {
                     let mut done = Vec::new();
                     while let Some(image) = images.get(next.fetch_add(1, Ordering::Relaxed)) {
-                        done.push((image.index(), decode_image(image, base, buffers)));
+                        // Each worker guards its own decoding: a guard holds for its thread only.
+                        let texture = guard::contain_panics(|| decode_image(gltf, image, base, buffers, budget))
+                            .unwrap_or_else(|message| Err(Error::ParserPanic { path: gltf.to_owned(), parser: "image decoder", message }));
+                        done.push((image.index(), texture));
                     }
                     done
                 })
@@ -205,29 +325,84 @@ fn decode_images(document: &Document, base: &Path, buffers: &[buffer::Data]) -> 
     decoded.into_iter().map(|(_, texture)| texture).collect()
 }
 
-fn decode_image(image: &::gltf::Image, base: &Path, buffers: &[buffer::Data]) -> Result<Texture, String> {
-    let uri = match image.source() {
+/// PNG or JPEG, as the gltf crate chooses: the media type, else the file's extension, else its first
+/// bytes.
+fn image_format(media_type: Option<&str>, uri: Option<&str>, bytes: &[u8]) -> Option<image::ImageFormat> {
+    use image::ImageFormat::{Jpeg, Png};
+    let by_media_type = match media_type {
+        Some("image/png") => Some(Png),
+        Some("image/jpeg") => Some(Jpeg),
+        _ => None,
+    };
+    let by_extension = || match uri?.rsplit('.').next()?.to_ascii_lowercase().as_str() {
+        "png" => Some(Png),
+        "jpg" | "jpeg" => Some(Jpeg),
+        _ => None,
+    };
+    let by_content = || image::guess_format(bytes).ok().filter(|f| matches!(f, Png | Jpeg));
+    by_media_type.or_else(|| media_type.is_none().then(by_extension).flatten()).or_else(by_content)
+}
+
+fn decode_image(gltf: &Path, image: &::gltf::Image, base: &Path, buffers: &[buffer::Data], budget: &LoadBudget) -> Result<Texture> {
+    let file_uri = match image.source() {
         ::gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => Some(uri),
         _ => None,
     };
     // A file name is the most recognisable label; embedded images fall back to their name or index.
-    let name =
-        uri.map(|u| u.rsplit('/').next().unwrap_or(u)).or(image.name()).map_or_else(|| format!("image {}", image.index()), str::to_owned);
-    let data = ::gltf::image::Data::from_source(image.source(), Some(base), buffers).map_err(|e| {
-        let hint = match &e {
-            ::gltf::Error::Image(image::ImageError::Limits(_)) => {
-                format!(": the image is too large to decode (the decoder allows {} MiB); give a smaller one", super::IMAGE_DECODE_LIMIT_MIB)
-            }
-            _ => String::new(),
-        };
-        format!("image {} ({name}): {e}{hint}", image.index())
-    })?;
-    Ok(Texture { name, width: data.width, height: data.height, rgba8: to_rgba8(data) })
+    let name = file_uri
+        .map(|u| u.rsplit('/').next().unwrap_or(u))
+        .or(image.name())
+        .map_or_else(|| format!("image {}", image.index()), str::to_owned);
+    let invalid = |reason: String| gltf_error(gltf, format!("image {} ({name}): {reason}", image.index()));
+    let (bytes, media_type, uri): (std::borrow::Cow<[u8]>, Option<&str>, Option<&str>) = match image.source() {
+        ::gltf::image::Source::View { view, mime_type } => {
+            let data = &buffers[view.buffer().index()].0;
+            (data[view.offset()..view.offset() + view.length()].into(), Some(mime_type), None)
+        }
+        ::gltf::image::Source::Uri { uri, mime_type } => match resolve_uri(uri, base).map_err(&invalid)? {
+            UriSource::Data { media_type, base64 } => (decode_data_uri(base64, gltf, budget)?.into(), media_type.or(mime_type), None),
+            UriSource::File(file) => (files::read_input(&file, InputKind::Image, None, budget)?.into(), mime_type, Some(uri)),
+        },
+    };
+    let format =
+        image_format(media_type, uri, &bytes).ok_or_else(|| invalid("not a PNG or JPEG image; convert it to PNG or JPEG".to_owned()))?;
+    let decoded = decode_limited(&bytes, format, budget).map_err(invalid)?;
+    Ok(Texture { name, width: decoded.width, height: decoded.height, rgba8: to_rgba8(decoded) })
+}
+
+/// Decodes an image under the decoder's allocation limit and the load's budget for decoded images.
+pub(crate) fn decode_limited(bytes: &[u8], format: image::ImageFormat, budget: &LoadBudget) -> Result<::gltf::image::Data, String> {
+    use image::{DynamicImage, ImageDecoder};
+    let too_large = |e: image::ImageError| match e {
+        image::ImageError::Limits(_) => {
+            format!("{e}: the image is too large to decode (the decoder allows {} MiB); give a smaller one", super::IMAGE_DECODE_LIMIT_MIB)
+        }
+        e => crate::error::one_line(&e.to_string()),
+    };
+    let decoder = image::ImageReader::with_format(std::io::Cursor::new(bytes), format).into_decoder().map_err(too_large)?;
+    let (width, height) = decoder.dimensions();
+    budget.take_decoded(u64::from(width) * u64::from(height) * 4)?;
+    let image = DynamicImage::from_decoder(decoder).map_err(too_large)?;
+    use ::gltf::image::Format::*;
+    let format = match image {
+        DynamicImage::ImageLuma8(_) => R8,
+        DynamicImage::ImageLumaA8(_) => R8G8,
+        DynamicImage::ImageRgb8(_) => R8G8B8,
+        DynamicImage::ImageRgba8(_) => R8G8B8A8,
+        DynamicImage::ImageLuma16(_) => R16,
+        DynamicImage::ImageLumaA16(_) => R16G16,
+        DynamicImage::ImageRgb16(_) => R16G16B16,
+        DynamicImage::ImageRgba16(_) => R16G16B16A16,
+        DynamicImage::ImageRgb32F(_) => R32G32B32FLOAT,
+        DynamicImage::ImageRgba32F(_) => R32G32B32A32FLOAT,
+        other => return Err(format!("pixel format {:?} is not supported; save the image as 8- or 16-bit RGB(A)", other.color())),
+    };
+    Ok(::gltf::image::Data { format, width, height, pixels: image.into_bytes() })
 }
 
 /// Expands any decoded pixel format to 8-bit RGBA: grey replicates to RGB, missing alpha is opaque,
 /// 16-bit and float channels are rescaled to 0..=255.
-fn to_rgba8(data: ::gltf::image::Data) -> Vec<u8> {
+pub(crate) fn to_rgba8(data: ::gltf::image::Data) -> Vec<u8> {
     use ::gltf::image::Format::*;
     let (channels, size) = match data.format {
         R8G8B8A8 => return data.pixels,
@@ -260,7 +435,7 @@ fn to_rgba8(data: ::gltf::image::Data) -> Vec<u8> {
 }
 
 fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Texture>) -> Result<Scene, String> {
-    let mut materials: Vec<Material> = document.materials().map(|m| material(&m)).collect();
+    let mut materials: Vec<Material> = document.materials().map(|m| material(&m)).collect::<Result<_, _>>()?;
     // Primitives without a material use the glTF default material, appended only when needed.
     let default_material = materials.len();
     let meshes = document.meshes().map(|m| mesh(&m, buffers, default_material)).collect::<Result<Vec<_>, _>>()?;
@@ -441,11 +616,25 @@ fn place_light(scene: &mut Scene, light: &::gltf::khr_lights_punctual::Light, wo
     scene.lights.push(Light { kind, position: world.transform_point3(Vec3::ZERO), direction, color, intensity, range, cast_shadows: true });
 }
 
-fn material(m: &::gltf::Material) -> Material {
+fn material(m: &::gltf::Material) -> Result<Material, String> {
     let name = m.name().map_or_else(|| format!("material {}", m.index().unwrap_or_default()), str::to_owned);
+    let named = m.name().map_or_else(|| name.clone(), |n| format!("material {} ({n})", m.index().unwrap_or_default()));
+    // glTF bounds the factor to 0..1 and leaves brightness to the extension, which may be as bright
+    // as it likes; a factor outside would otherwise render black or white without a word.
+    let emissive_factor = m.emissive_factor();
+    if !emissive_factor.iter().all(|c| (0.0..=1.0).contains(c)) {
+        return Err(format!(
+            "{named}: emissiveFactor {emissive_factor:?} must be 0 to 1 in each component; for brighter emission keep it \
+             within 0 to 1 and add KHR_materials_emissive_strength"
+        ));
+    }
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    if !(strength.is_finite() && strength >= 0.0) {
+        return Err(format!("{named}: KHR_materials_emissive_strength {strength} must be finite and ≥ 0; give a strength ≥ 0"));
+    }
     let pbr = m.pbr_metallic_roughness();
     let texture = |info: Option<::gltf::texture::Info>| info.map(|i| texture_ref(&i.texture(), i.tex_coord(), &name));
-    Material {
+    Ok(Material {
         base_color_factor: Vec4::from(pbr.base_color_factor()),
         base_color_texture: texture(pbr.base_color_texture()),
         metallic_factor: pbr.metallic_factor(),
@@ -453,7 +642,7 @@ fn material(m: &::gltf::Material) -> Material {
         metallic_roughness_texture: texture(pbr.metallic_roughness_texture()),
         normal_texture: m.normal_texture().map(|t| texture_ref(&t.texture(), t.tex_coord(), &name)),
         normal_scale: m.normal_texture().map_or(1.0, |t| t.scale()),
-        emissive_factor: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
+        emissive_factor: Vec3::from(emissive_factor) * strength,
         emissive_texture: texture(m.emissive_texture()),
         alpha_mode: match m.alpha_mode() {
             ::gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
@@ -462,7 +651,7 @@ fn material(m: &::gltf::Material) -> Material {
         },
         double_sided: m.double_sided(),
         name,
-    }
+    })
 }
 
 fn texture_ref(texture: &::gltf::Texture, tex_coord: u32, material: &str) -> TextureRef {
@@ -1047,7 +1236,8 @@ mod tests {
 
     #[test]
     fn uris_that_would_panic_the_loader_are_errors() {
-        assert!(percent_decodes_to_utf8("a%20b%C3%A9.png") && percent_decodes_to_utf8("100%.png"));
+        assert_eq!(percent_decode("a%20b%C3%A9.png").as_deref(), Some("a bé.png"));
+        assert_eq!(percent_decode("100%.png").as_deref(), Some("100%.png"));
         let dir = temp_dir("gltf_uri");
         let path = dir.join("uri.gltf");
         let json = r#"{"asset": {"version": "2.0"}, "buffers": [{"uri": "%FF.bin", "byteLength": 4}]}"#;

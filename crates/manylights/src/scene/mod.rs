@@ -377,6 +377,8 @@ pub struct Scene {
     pub animation: Option<animation::Animation>,
     /// Meshes deformed every frame (`deform`), at most one deformer per mesh.
     pub deformers: Vec<deform::Deformer>,
+    /// The files the scene was read from (canonical paths), which no output may overwrite.
+    pub source_files: Vec<std::path::PathBuf>,
 }
 
 impl Default for Scene {
@@ -398,6 +400,7 @@ impl Default for Scene {
             ray_hints: crate::rays::RayHints::default(),
             animation: None,
             deformers: Vec::new(),
+            source_files: Vec::new(),
         }
     }
 }
@@ -469,6 +472,8 @@ impl Scene {
             d.wave.validate().map_err(|m| crate::Error::InvalidScene(format!("deformer {i} ({}): {m}", self.meshes[d.mesh].name)))?;
         }
         for (mi, m) in self.materials.iter().enumerate() {
+            let named = if m.name == format!("material {mi}") { m.name.clone() } else { format!("material {mi} ({})", m.name) };
+            validate_material(m).map_err(|reason| crate::Error::InvalidScene(format!("{named}: {reason}")))?;
             for t in [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture].into_iter().flatten() {
                 if t.texture >= self.textures.len() {
                     return err(format!("material {mi} ({}): texture {} does not exist", m.name, t.texture));
@@ -501,6 +506,30 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// Checks a material's factors: colours and fractions within 0 to 1, emission finite and ≥ 0 (as
+/// bright as it likes), scales finite. The message names the field and its allowed range.
+pub fn validate_material(m: &Material) -> Result<(), String> {
+    let unit = |x: f32| (0.0..=1.0).contains(&x);
+    if !m.base_color_factor.to_array().into_iter().all(unit) {
+        return Err(format!("base colour factor {:?} must be 0 to 1 in each component", m.base_color_factor.to_array()));
+    }
+    if !unit(m.metallic_factor) || !unit(m.roughness_factor) {
+        return Err(format!("metallic factor {} and roughness factor {} must be 0 to 1", m.metallic_factor, m.roughness_factor));
+    }
+    if !(m.emissive_factor.is_finite() && m.emissive_factor.min_element() >= 0.0) {
+        return Err(format!("emission {:?} must be finite and ≥ 0 in each component", m.emissive_factor.to_array()));
+    }
+    if !m.normal_scale.is_finite() {
+        return Err(format!("normal scale {} must be finite", m.normal_scale));
+    }
+    if let AlphaMode::Mask { cutoff } = m.alpha_mode {
+        if !(cutoff.is_finite() && cutoff >= 0.0) {
+            return Err(format!("alpha cutoff {cutoff} must be finite and ≥ 0"));
+        }
+    }
+    Ok(())
 }
 
 /// Checks one light; the message says which field is wrong.

@@ -116,21 +116,46 @@ use super::{
     validate_decal, validate_light, Camera, Decal, Light, LightKind, Material, Scene, Sun, Texture, TextureRef, Wrap, DECAL_LAYERS,
     DEFAULT_LIGHT_CUTOFF,
 };
+use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::rays::{RayHints, SunShadows};
 use crate::{Error, Result};
 
 /// Loads a TOML scene file and the glTF it references.
 pub fn load(path: &Path) -> Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|error| Error::Io { path: path.to_owned(), error })?;
-    let invalid = |reason: String| Error::SceneFile { path: path.to_owned(), reason };
-    let file: SceneFile = toml::from_str(&text).map_err(|e| invalid(e.to_string().trim_end().to_owned()))?;
+    let budget = LoadBudget::new();
+    let invalid = |reason: String| Error::SceneFile { path: path.to_owned(), reason: crate::error::one_line(&reason) };
+    let bytes = files::read_input(path, InputKind::SceneFile, None, &budget)?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| invalid(format!("the file is not UTF-8 text (byte {} is not); save it as UTF-8", e.utf8_error().valid_up_to())))?;
+    let file: SceneFile = guard::contain_panics(|| toml::from_str(&text))
+        .map_err(|message| Error::ParserPanic { path: path.to_owned(), parser: "TOML reader", message })?
+        .map_err(|e| invalid(toml_reason(&e, &text)))?;
+    if file.is_empty() {
+        return Err(invalid(
+            "the file sets nothing to render; give it `gltf = \"model.gltf\"`, or [[lights]], [[decals]] and a [camera] (see scenes/)"
+                .into(),
+        ));
+    }
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut scene = match &file.gltf {
-        Some(gltf) => super::gltf::import(&dir.join(gltf))?,
+        Some(gltf) => super::gltf::import_within(&dir.join(gltf), &budget)?,
         None => Scene::default(),
     };
-    file.apply(&mut scene, dir).map_err(invalid)?;
+    file.apply(&mut scene, dir, &budget).map_err(invalid)?;
+    scene.source_files = budget.files();
     Ok(scene)
+}
+
+/// A TOML error on one line: where, what, and the offending line.
+fn toml_reason(error: &toml::de::Error, text: &str) -> String {
+    let message = error.message().trim_end().replace('\n', "; ");
+    let Some(span) = error.span() else { return message };
+    let start = span.start.min(text.len());
+    let line = text[..start].matches('\n').count() + 1;
+    let column = start - text[..start].rfind('\n').map_or(0, |i| i + 1) + 1;
+    let source = text.lines().nth(line - 1).unwrap_or("").trim();
+    let source: String = source.chars().take(60).collect();
+    format!("line {line}, column {column}: {message} (in `{source}`)")
 }
 
 fn white() -> [f32; 3] {
@@ -407,9 +432,20 @@ struct AnimateSpec {
 }
 
 impl SceneFile {
+    /// Whether the file gives nothing to see: no glTF, lights, decals or particles.
+    fn is_empty(&self) -> bool {
+        self.gltf.is_none()
+            && self.lights.is_empty()
+            && self.scatter_lights.is_empty()
+            && self.decals.is_empty()
+            && self.scatter_decals.is_empty()
+            && self.large_decals.is_empty()
+            && self.particles.is_none()
+    }
+
     /// Applies the file's settings on top of the loaded glTF, resolving image paths against `dir`;
     /// errors are reasons for `Error::SceneFile`.
-    fn apply(&self, scene: &mut Scene, dir: &Path) -> Result<(), String> {
+    fn apply(&self, scene: &mut Scene, dir: &Path, budget: &LoadBudget) -> Result<(), String> {
         if let Some(exposure) = self.exposure {
             scene.exposure = exposure;
         }
@@ -433,7 +469,7 @@ impl SceneFile {
         for (i, spec) in self.scatter_lights.iter().enumerate() {
             generators::add_scattered_lights(scene, &spec.to_params()).map_err(|e| format!("scatter_lights {i}: {}", inner_message(e)))?;
         }
-        let mut decal_materials = DecalMaterials::new(dir);
+        let mut decal_materials = DecalMaterials::new(dir, budget);
         for (i, spec) in self.decals.iter().enumerate() {
             let decal = spec.to_decal(scene, &mut decal_materials).and_then(|d| validate_decal(&d, scene.materials.len()).map(|()| d));
             scene.decals.push(decal.map_err(|m| format!("decal {i}: {m}"))?);
@@ -504,10 +540,18 @@ impl CameraSpec {
         if !(position.is_finite() && target.is_finite()) {
             return Err("position and target must be finite".into());
         }
-        let forward = (target - position).normalize_or_zero();
+        if position.abs().max(target.abs()).max_element() > MAX_CAMERA_COORDINATE {
+            return Err(format!(
+                "position {position} and target {target} must lie within {MAX_CAMERA_COORDINATE:e} m of the origin, where 32-bit \
+                 floats still resolve a metre; move the camera (and the scene) nearer the origin"
+            ));
+        }
+        if target == position {
+            return Err("target equals position; give a target the camera looks towards".into());
+        }
         // The camera's up is +Y, so it cannot look straight up or down.
-        if forward.cross(Vec3::Y).length() < 1e-4 {
-            return Err("target must differ from position, and not lie straight above or below it".into());
+        if (target - position).normalize_or_zero().cross(Vec3::Y).length() < 1e-4 {
+            return Err("target lies straight above or below position, and the camera's up is +Y; move the target sideways".into());
         }
         if !(yfov_degrees > 0.0 && yfov_degrees < 180.0) {
             return Err(format!("yfov_degrees {yfov_degrees} must lie strictly between 0 and 180"));
@@ -518,6 +562,9 @@ impl CameraSpec {
         Ok(Camera::look_at("scene file", position, target, yfov_degrees.to_radians(), near))
     }
 }
+
+/// How far from the origin a scene file's camera may stand, in metres.
+const MAX_CAMERA_COORDINATE: f32 = 1e7;
 
 impl LightSpec {
     fn to_light(&self) -> Result<Light, String> {
@@ -632,13 +679,14 @@ type DecalMaterialKey = (usize, Option<usize>, Option<usize>, [u32; 6]);
 /// combination of images and factors made into one material.
 struct DecalMaterials<'a> {
     dir: &'a Path,
+    budget: &'a LoadBudget,
     textures: HashMap<PathBuf, usize>,
     materials: HashMap<DecalMaterialKey, usize>,
 }
 
 impl<'a> DecalMaterials<'a> {
-    fn new(dir: &'a Path) -> Self {
-        Self { dir, textures: HashMap::new(), materials: HashMap::new() }
+    fn new(dir: &'a Path, budget: &'a LoadBudget) -> Self {
+        Self { dir, budget, textures: HashMap::new(), materials: HashMap::new() }
     }
 
     fn material(&mut self, scene: &mut Scene, spec: &DecalSpec) -> Result<usize, String> {
@@ -671,31 +719,30 @@ impl<'a> DecalMaterials<'a> {
         if let Some(&index) = self.textures.get(&path) {
             return Ok(index);
         }
-        scene.textures.push(load_image(&path).map_err(|m| format!("{key} image {m}"))?);
+        scene.textures.push(load_image(&path, self.budget).map_err(|m| format!("{key} image {m}"))?);
         self.textures.insert(path, scene.textures.len() - 1);
         Ok(scene.textures.len() - 1)
     }
 }
 
 /// Decodes a PNG, JPEG or EXR file to RGBA8; the message starts with the path.
-fn load_image(path: &Path) -> Result<Texture, String> {
-    let reader = image::ImageReader::open(path)
-        .and_then(image::ImageReader::with_guessed_format)
-        .map_err(|e| format!("{}: cannot read it: {e} (check that the path exists and is readable)", path.display()))?;
-    let image = reader.decode().map_err(|e| match e {
-        image::ImageError::Limits(_) => {
-            let size = image::image_dimensions(path).map_or_else(|_| "its size".to_owned(), |(w, h)| format!("{w}×{h} pixels"));
-            format!(
-                "{}: {size} is too large to decode (the decoder allows {} MiB); give a smaller image",
-                path.display(),
-                super::IMAGE_DECODE_LIMIT_MIB
-            )
-        }
-        e => format!("{}: not a readable PNG, JPEG or EXR image: {e}", path.display()),
+fn load_image(path: &Path, budget: &LoadBudget) -> Result<Texture, String> {
+    let bytes = files::read_input(path, InputKind::Image, None, budget).map_err(|e| match e {
+        Error::Io { error, .. } => format!("{}: cannot read it: {error} (check that the path exists and is readable)", path.display()),
+        Error::Input { reason, .. } => format!("{}: {reason}", path.display()),
+        e => e.to_string(),
     })?;
+    let format = image::guess_format(&bytes)
+        .ok()
+        .filter(|f| matches!(f, image::ImageFormat::Png | image::ImageFormat::Jpeg | image::ImageFormat::OpenExr))
+        .ok_or_else(|| {
+            format!("{}: not a readable PNG, JPEG or EXR image (its bytes are none of these); convert it to one of those", path.display())
+        })?;
+    let decoded = guard::contain_panics(|| super::gltf::decode_limited(&bytes, format, budget))
+        .unwrap_or_else(|message| Err(format!("the image decoder failed on it ({message}); re-save the image")))
+        .map_err(|e| format!("{}: not a readable PNG, JPEG or EXR image: {e}", path.display()))?;
     let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-    let rgba = image.into_rgba8();
-    Ok(Texture { name, width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
+    Ok(Texture { name, width: decoded.width, height: decoded.height, rgba8: super::gltf::to_rgba8(decoded) })
 }
 
 #[cfg(test)]
@@ -813,10 +860,38 @@ intensity = [1.0, 2.0]
     }
 
     #[test]
-    fn empty_file_is_an_empty_scene() {
-        let scene = load_text("empty", "").unwrap();
-        assert!(scene.instances.is_empty() && scene.lights.is_empty() && scene.cameras.is_empty());
-        assert_eq!(scene.exposure, 1.0);
+    fn a_file_with_nothing_to_render_is_an_error() {
+        for text in ["", "# nothing\n", "exposure = 2.0\n[sun]\ndirection = [0, -1, 0]\nilluminance = 3.0\n"] {
+            let reason = reason(load_text("empty", text));
+            assert!(reason.contains("sets nothing to render") && reason.contains("gltf ="), "{reason}");
+        }
+        let lights_only = load_text("lights_only", "[[lights]]\ntype = 'point'\nposition = [0, 1, 0]\nintensity = 1.0\n").unwrap();
+        assert_eq!((lights_only.lights.len(), lights_only.exposure), (1, 1.0));
+    }
+
+    #[test]
+    fn look_at_cameras_that_cannot_look_say_why() {
+        let camera = |position: &str, target: &str| {
+            let light = "[[lights]]\ntype = 'point'\nposition = [0, 1, 0]\nintensity = 1.0\n";
+            reason(load_text("look_at", &format!("{light}[camera]\nposition = {position}\ntarget = {target}\n")))
+        };
+        let far = camera("[3e38, 0, 0]", "[-3e38, 0, 0]");
+        assert!(far.contains("within 1e7 m of the origin") && !far.contains("equals"), "{far}");
+        assert!(camera("[1, 2, 3]", "[1, 2, 3]").contains("target equals position"));
+        assert!(camera("[1, 2, 3]", "[1, 5, 3]").contains("straight above or below"));
+    }
+
+    #[test]
+    fn toml_errors_fit_one_line_and_text_must_be_utf8() {
+        let syntax = reason(load_text("toml_syntax", "exposure = 1.0\n[sun\ndirection = [0, -1, 0]\n"));
+        assert!(!syntax.contains('\n') && syntax.starts_with("line 2, column") && syntax.contains("`[sun`"), "{syntax}");
+        let unknown = reason(load_text("toml_unknown", "exposur = 1.0\n"));
+        assert!(!unknown.contains('\n') && unknown.contains("line 1") && unknown.contains("exposur"), "{unknown}");
+        let dir = temp_dir("toml_latin1");
+        let path = dir.join("scene.toml");
+        std::fs::write(&path, b"# caf\xe9\ngltf = 'x.gltf'\n").unwrap();
+        let latin1 = reason(load(&path));
+        assert!(latin1.contains("not UTF-8 text (byte 5") && latin1.contains("save it as UTF-8"), "{latin1}");
     }
 
     #[test]
@@ -869,7 +944,8 @@ intensity = [1.0, 2.0]
 
     #[test]
     fn invalid_globals_and_scatter_settings_are_scene_file_errors() {
-        assert!(reason(load_text("exposure", "exposure = 0.0\n")).contains("exposure must be finite and > 0"));
+        let light = "[[lights]]\ntype = 'point'\nposition = [0, 1, 0]\nintensity = 1.0\n";
+        assert!(reason(load_text("exposure", &format!("exposure = 0.0\n{light}"))).contains("exposure must be finite and > 0"));
         let scatter = reason(load_text("scatter", "[[scatter_lights]]\ncount = 4\n"));
         assert!(scatter.starts_with("scatter_lights 0:") && scatter.contains("no triangles"), "{scatter}");
     }
@@ -1061,7 +1137,8 @@ roughness_metallic = "decals/rm.png"
         let defaults = load(&path).unwrap();
         assert_eq!(defaults.light_groups.sizes.len(), generators::DEFAULT_ANIMATION_GROUPS);
 
-        let zero = reason(load_text("animate_zero", "[animate]\ngroups = 0\n"));
+        let zero =
+            reason(load_text("animate_zero", "[[lights]]\ntype = 'point'\nposition = [0, 1, 0]\nintensity = 1.0\n[animate]\ngroups = 0\n"));
         assert!(zero.starts_with("animate:") && zero.contains("at least 1"), "{zero}");
         let unknown = reason(load_text("animate_unknown", "[animate]\nspeed = 2\n"));
         assert!(unknown.contains("unknown field `speed`"), "{unknown}");

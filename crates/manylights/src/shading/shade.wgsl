@@ -11,6 +11,11 @@
 #include "$PARTICLE_LIGHTING"
 #include "shading/debug_view.wgsl"
 
+// The most radiance a point sends: far above any light a scene means, and far enough below the
+// largest float that the sums and blends after shading stay finite (a glTF emissive strength may be
+// as large as any float).
+const MAX_RADIANCE: f32 = 1e30;
+
 // Outgoing radiance towards the viewer; `sun_visibility` is the fraction of the sun the point sees
 // (`shading/sun_shadow*.wgsl`).
 fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
@@ -23,7 +28,7 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
     }
     radiance += shade_local_lights(s);
     let particles = shade_particle_lights(s);
-    radiance += particles;
+    radiance = min(radiance + particles, vec3<f32>(MAX_RADIANCE));
     if !DEBUG_VIEWS {
         return radiance;
     }
