@@ -66,7 +66,7 @@ case $mode in
     # The viewer runs under xvfb-run's shell: sample the viewer itself.
     pid=""
     for _ in $(seq 100); do
-      pid=$(pgrep -n -f "$bin view" || true)
+      pid=$(pgrep -n -f "^$bin view" || true)
       [ -n "$pid" ] && break
       sleep 0.1
     done

@@ -52,9 +52,11 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     println!("  lights: {} in {}", scene.lights.len(), describe_groups(&scene.light_groups, scene.lights.len()));
     println!("  decals: {} in {}", scene.decals.len(), describe_groups(&scene.decal_groups, scene.decals.len()));
     // What the enumeration's cost per pixel follows: volumes reaching a surface point.
-    let _step = progress::step("measuring how many lights and decals reach the surfaces");
+    let step = progress::step("measuring how many lights and decals reach the surfaces");
     let points = surface_points(&scene, OVERLAP_SAMPLES, 1);
-    if !points.is_empty() {
+    let overlaps = if points.is_empty() { None } else { Some((light_overlap(&scene, &points)?, decal_overlap(&scene, &points)?)) };
+    drop(step);
+    if let Some((lights, decals)) = overlaps {
         let show = |what: &str, o: Overlap| {
             println!(
                 "  {what} reaching a surface point: mean {:.2}, max {} ({:.1} % of points reached by any; {OVERLAP_SAMPLES} points)",
@@ -63,8 +65,8 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
                 o.covered * 100.0
             )
         };
-        show("lights", light_overlap(&scene, &points)?);
-        show("decals", decal_overlap(&scene, &points)?);
+        show("lights", lights);
+        show("decals", decals);
     }
     Ok(())
 }

@@ -522,11 +522,17 @@ impl App {
         free_screenshot_path(std::path::Path::new("."), &mut self.screenshots)
     }
 
-    fn screenshot(&mut self, path: &std::path::Path) -> anyhow::Result<()> {
+    /// Writes the frame to `path`: a new file for F12 and the panel's button (a name found free), the
+    /// file `--screenshot` named (checked before the window opened) otherwise.
+    fn screenshot(&mut self, path: &std::path::Path, new: bool) -> anyhow::Result<()> {
         let renderer = self.gpu.as_ref().and_then(|g| g.renderer.as_ref()).context("no frame has been rendered yet")?;
         let format = OutputFormat::from_path(path).unwrap_or(OutputFormat::Png);
         let bytes = image_io::encode_ldr(&renderer.read_ldr()?, format).with_context(|| format!("cannot encode {}", path.display()))?;
-        files::write_atomic(path, &bytes)?;
+        if new {
+            files::write::write_new(path, &bytes)?;
+        } else {
+            files::write_atomic(path, &bytes)?;
+        }
         self.message = Some(format!("wrote {}", path.display()));
         println!("wrote {}", path.display());
         Ok(())
@@ -682,12 +688,12 @@ impl App {
         }
         if want_screenshot {
             let path = self.next_screenshot_path();
-            self.screenshot(&path)?;
+            self.screenshot(&path, true)?;
         }
         self.frame += 1;
         if self.args.frames.is_some_and(|n| self.frame >= n) {
             if let Some(path) = self.args.screenshot.clone() {
-                self.screenshot(&path)?;
+                self.screenshot(&path, false)?;
             }
             self.stop(event_loop, Ok(()));
         }
@@ -836,7 +842,7 @@ impl ApplicationHandler for App {
                                 KeyCode::Escape => self.stop(event_loop, Ok(())),
                                 KeyCode::F12 => {
                                     let path = self.next_screenshot_path();
-                                    if let Err(e) = self.screenshot(&path) {
+                                    if let Err(e) = self.screenshot(&path, true) {
                                         self.message = Some(format!("screenshot failed: {e:#}"));
                                     }
                                 }

@@ -283,6 +283,7 @@ fn mutated_inputs_load_or_fail_with_one_line_never_a_panic() {
     );
     assert!(failures.is_empty(), "{} of the mutants failed:\n{}", failures.len(), failures.join("\n"));
     assert!(loaded > 0 && loaded < inputs.len() * CASES_PER_INPUT, "the mutations both break and keep some inputs ({loaded} loaded)");
+    assert_eq!(rendered, RENDERED, "loaded mutants were rendered");
 }
 
 #[test]

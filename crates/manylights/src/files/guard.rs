@@ -37,7 +37,7 @@ fn install_hook() {
 fn describe(info: &PanicHookInfo) -> String {
     let payload = info.payload();
     let message = payload.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| payload.downcast_ref::<String>().cloned());
-    let message = message.unwrap_or_else(|| "a panic".to_owned());
+    let message = crate::error::one_line(&message.unwrap_or_else(|| "a panic".to_owned()));
     match info.location() {
         Some(at) => format!("{message}, at {}:{}", at.file(), at.line()),
         None => message,

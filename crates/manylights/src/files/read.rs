@@ -1,9 +1,10 @@
 //! Bounded reads of scene inputs.
 //!
-//! A scene load holds at most [`MAX_LOAD_INPUT_BYTES`] of file data and [`MAX_LOAD_DECODED_BYTES`] of
-//! decoded images (each image at most `IMAGE_DECODE_LIMIT_MIB` while it decodes), whatever the files
-//! say about themselves: sizes are checked against caps before a byte is read, and reads stop at the
-//! cap even if the file grows meanwhile.
+//! A scene load holds at most [`MAX_LOAD_INPUT_BYTES`] of file data, [`MAX_LOAD_DECODED_BYTES`] of
+//! decoded images (each image at most `IMAGE_DECODE_LIMIT_MIB` while it decodes) and
+//! [`MAX_LOAD_GEOMETRY_BYTES`] of vertices and indices, whatever the files say about themselves: sizes
+//! are checked against caps before a byte is read or a buffer allocated, and reads stop at the cap
+//! even if the file grows meanwhile.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -19,14 +20,18 @@ const GIB: u64 = 1 << 30;
 pub const MAX_LOAD_INPUT_BYTES: u64 = 4 * GIB;
 /// All decoded image bytes (RGBA8) one scene load may hold.
 pub const MAX_LOAD_DECODED_BYTES: u64 = 4 * GIB;
+/// All vertices and indices one scene load may build (a small file's accessors can name billions).
+pub const MAX_LOAD_GEOMETRY_BYTES: u64 = 4 * GIB;
 
 /// What an input is, which sets its size cap and how errors name it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum InputKind {
     /// A TOML scene file.
     SceneFile,
-    /// A `.gltf` (JSON) or `.glb` file.
-    Gltf,
+    /// A `.gltf` file: JSON, which parses into many times its size, so capped lower.
+    GltfJson,
+    /// A `.glb` file: binary chunks and a JSON chunk (capped like a `.gltf`).
+    Glb,
     /// A glTF buffer (`.bin`), read up to its declared byte length.
     Buffer,
     /// An encoded image (PNG, JPEG).
@@ -38,7 +43,8 @@ impl InputKind {
     pub const fn cap(self) -> u64 {
         match self {
             InputKind::SceneFile => 16 * MIB,
-            InputKind::Gltf => 2 * GIB,
+            InputKind::GltfJson => 256 * MIB,
+            InputKind::Glb => 2 * GIB,
             InputKind::Buffer => 2 * GIB,
             InputKind::Image => 256 * MIB,
         }
@@ -47,7 +53,8 @@ impl InputKind {
     fn what(self) -> &'static str {
         match self {
             InputKind::SceneFile => "a scene file",
-            InputKind::Gltf => "a glTF file",
+            InputKind::GltfJson => "a .gltf file (use .glb for large binary data)",
+            InputKind::Glb => "a .glb file",
             InputKind::Buffer => "a glTF buffer",
             InputKind::Image => "an image",
         }

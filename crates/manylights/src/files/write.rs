@@ -67,10 +67,9 @@ pub fn check_output(path: &Path, flag: &str, accepted: &[OutputFormat]) -> Resul
         let given = path.extension().map_or_else(|| "no extension".to_owned(), |e| format!(".{}", e.to_string_lossy()));
         output_error(path, format!("{flag} writes {} files, and this path has {given}; give a path ending in one of those", listed()))
     })?;
-    if path.file_name().is_none() {
-        return Err(output_error(path, format!("{flag} needs a file name, not a folder")));
-    }
-    let folder = folder_of(path);
+    // A link is written through: the file it names, existing or not, is what is checked.
+    let target = through_links(path);
+    let folder = folder_of(&target);
     match std::fs::metadata(folder) {
         Ok(m) if m.is_dir() => {}
         Ok(_) => return Err(output_error(path, format!("{} is not a folder; give a path in an existing folder", folder.display()))),
@@ -78,7 +77,10 @@ pub fn check_output(path: &Path, flag: &str, accepted: &[OutputFormat]) -> Resul
             return Err(output_error(path, format!("the folder {} does not exist; create it first or give another path", folder.display())))
         }
     }
-    match std::fs::metadata(path) {
+    match std::fs::metadata(&target) {
+        Ok(m) if m.is_file() && m.permissions().readonly() => {
+            return Err(output_error(path, "it is read-only; make it writable (chmod u+w) or give another path".to_owned()))
+        }
         Ok(m) if m.is_file() => {}
         Ok(m) if m.is_dir() => return Err(output_error(path, format!("it is a folder; give {flag} a file path"))),
         Ok(_) => {
@@ -197,11 +199,19 @@ impl StagedOutputs {
         let prefix = format!(".{name}.");
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix).suffix(".partial");
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::PermissionsExt;
+        match std::fs::metadata(&target) {
+            // A replaced file keeps its permissions.
+            Ok(existing) => {
+                builder.permissions(existing.permissions());
+            }
             // What a plain create gives (0666 less the umask), not the temporary file's private 0600.
-            builder.permissions(std::fs::Permissions::from_mode(0o666));
+            #[cfg(unix)]
+            Err(_) => {
+                use std::os::unix::fs::PermissionsExt;
+                builder.permissions(std::fs::Permissions::from_mode(0o666));
+            }
+            #[cfg(not(unix))]
+            Err(_) => {}
         }
         let mut file = builder.tempfile_in(folder_of(&target)).map_err(fail)?;
         // Through the plain file, whose errors are the OS's own.
@@ -212,11 +222,12 @@ impl StagedOutputs {
         Ok(())
     }
 
-    /// Renames every staged file over its target.
+    /// Renames every staged file over its target. Renames are what a file system does reliably;
+    /// should one still fail, the targets renamed before it hold their new contents.
     pub fn commit(self) -> Result<()> {
         let mut folders = Vec::new();
         for (target, file) in self.staged {
-            file.persist(&target).map_err(|e| output_error(&target, e.error.to_string()))?;
+            file.persist(&target).map_err(|e| output_error(&target, format!("{}; give a path you can write to", e.error)))?;
             folders.push(folder_of(&target).to_owned());
         }
         // The renames themselves reach the disk with their folders.
@@ -235,6 +246,16 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut staged = StagedOutputs::new();
     staged.stage(path, bytes)?;
     staged.commit()
+}
+
+/// Writes a new file whole or not at all, failing if something appears at `path` meanwhile.
+pub fn write_new(path: &Path, bytes: &[u8]) -> Result<()> {
+    let mut staged = StagedOutputs::new();
+    staged.stage(path, bytes)?;
+    for (target, file) in staged.staged {
+        file.persist_noclobber(&target).map_err(|e| output_error(&target, format!("{}; give another path", e.error)))?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -267,9 +288,22 @@ mod tests {
         std::fs::write(dir.join("file"), "").unwrap();
         refuse(&dir.join("file/x.png"), "is not a folder");
         assert_eq!(check_output(&dir.join("fine.JPG"), "-o", images).unwrap(), OutputFormat::Jpeg);
-        // The probe leaves nothing behind.
+        let locked = dir.join("locked.png");
+        std::fs::write(&locked, "").unwrap();
+        let mut permissions = std::fs::metadata(&locked).unwrap().permissions();
+        permissions.set_readonly(true);
+        std::fs::set_permissions(&locked, permissions).unwrap();
+        refuse(&locked, "it is read-only");
+        #[cfg(unix)]
+        {
+            // A link into a missing folder is checked where it writes.
+            let link = dir.join("away.png");
+            std::os::unix::fs::symlink(dir.join("missing/away.png"), &link).unwrap();
+            refuse(&link, "does not exist; create it first");
+        }
+        // The probe leaves nothing behind: the folders, the files and the link made here only.
         let left: Vec<_> = std::fs::read_dir(&*dir).unwrap().map(|e| e.unwrap().file_name()).collect();
-        assert_eq!(left.len(), 2, "{left:?}");
+        assert_eq!(left.len(), if cfg!(unix) { 4 } else { 3 }, "{left:?}");
     }
 
     #[test]

@@ -82,8 +82,21 @@ pub fn scatter_lights(scene: &Scene, params: &ScatterLights) -> Result<Vec<Light
 /// Appends [`scatter_lights`] to the scene's lights, which must not be grouped yet.
 pub fn add_scattered_lights(scene: &mut Scene, params: &ScatterLights) -> Result<()> {
     check_ungrouped(&scene.light_groups, "lights")?;
+    check_total("lights", scene.lights.len(), params.count, MAX_SCATTERED_LIGHTS)?;
     let lights = scatter_lights(scene, params)?;
     scene.lights.extend(lights);
+    Ok(())
+}
+
+/// Many scatterers (a scene file's entries, then the command line's) may not add up past what one
+/// call may make: the structures hold no more, and generating them would take minutes.
+fn check_total(what: &str, existing: usize, count: usize, max: usize) -> Result<()> {
+    if existing.saturating_add(count) > max {
+        return Err(Error::InvalidConfig(format!(
+            "{count} more {what} would make {}, over the {max} a scene may have; scatter fewer",
+            existing.saturating_add(count)
+        )));
+    }
     Ok(())
 }
 
@@ -197,6 +210,7 @@ pub fn surface_points(scene: &Scene, count: usize, seed: u64) -> Vec<Vec3> {
 /// procedural decal materials ([`decal_textures`]), which are added the first time only.
 pub fn add_scattered_decals(scene: &mut Scene, params: &ScatterDecals) -> Result<()> {
     check_decals(params)?;
+    check_total("decals", scene.decals.len(), params.count, MAX_SCATTERED_DECALS)?;
     add_decals_with_builtin_materials(scene, params.count, |scene, materials| scatter_decals(scene, params, materials))
 }
 

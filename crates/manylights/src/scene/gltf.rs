@@ -38,7 +38,8 @@ pub fn import(path: &Path) -> Result<Scene> {
 
 /// [`import`] within a load's budget, which also records the files read.
 pub(crate) fn import_within(path: &Path, budget: &LoadBudget) -> Result<Scene> {
-    let bytes = files::read_input(path, InputKind::Gltf, None, budget)?;
+    let kind = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) { InputKind::Glb } else { InputKind::GltfJson };
+    let bytes = files::read_input(path, kind, None, budget)?;
     guard::contain_panics(|| import_bytes(path, bytes, budget))
         .unwrap_or_else(|message| Err(Error::ParserPanic { path: path.to_owned(), parser: "glTF reader", message }))
 }
@@ -51,6 +52,17 @@ fn import_bytes(path: &Path, bytes: Vec<u8>, budget: &LoadBudget) -> Result<Scen
     // The parser reads anything without the GLB magic as JSON, and would report a JSON syntax error.
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) && !bytes.starts_with(b"glTF") {
         return Err(invalid("a .glb file starts with the bytes `glTF`, and this one does not: it is corrupt or not a GLB file".into()));
+    }
+    // A GLB's JSON chunk (its length after the 12-byte header) is held to what a .gltf may hold.
+    if let Some(json_length) = bytes.get(12..16).filter(|_| bytes.starts_with(b"glTF")) {
+        let json_length = u64::from(u32::from_le_bytes([json_length[0], json_length[1], json_length[2], json_length[3]]));
+        if json_length > InputKind::GltfJson.cap() {
+            return Err(invalid(format!(
+                "its JSON chunk declares {}, over the {} manylights parses; give a smaller scene",
+                files::read::human_bytes(json_length),
+                files::read::human_bytes(InputKind::GltfJson.cap())
+            )));
+        }
     }
     // Parsed without validation first: the gltf crate reports an unsupported required extension as
     // a generic validation failure, and this check names it.
@@ -65,6 +77,7 @@ fn import_bytes(path: &Path, bytes: Vec<u8>, budget: &LoadBudget) -> Result<Scen
     let document = Document::from_json(document.into_json()).map_err(|e| invalid(validation_reason(e)))?;
 
     check_sources(&document).map_err(&invalid)?;
+    check_geometry_size(&document).map_err(&invalid)?;
 
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = load_buffers(path, &document, base, blob, budget)?;
@@ -77,6 +90,40 @@ fn import_bytes(path: &Path, bytes: Vec<u8>, budget: &LoadBudget) -> Result<Scen
         e => e,
     })?;
     Ok(scene)
+}
+
+/// Checks, before anything is read, what the meshes and animations expand to: accessors may name
+/// billions of elements (a sparse one without a buffer view costs no bytes in the file), and strips,
+/// fans and flat shading multiply them.
+fn check_geometry_size(document: &Document) -> Result<(), String> {
+    let vertex = std::mem::size_of::<Vertex>() as u64;
+    let mut bytes = 0u64;
+    for mesh in document.meshes() {
+        for p in mesh.primitives() {
+            let vertices = p.get(&Semantic::Positions).map_or(0, |a| a.count() as u64);
+            let indices = p.indices().map_or(vertices, |a| a.count() as u64);
+            let triangle_corners = if matches!(p.mode(), Mode::TriangleStrip | Mode::TriangleFan) { indices * 3 } else { indices };
+            // Read attributes (up to 4 of 16 bytes), the vertices, the index list, and flat shading's
+            // vertex per corner.
+            let attributes = vertices * (4 * 16 + vertex);
+            let flat = if p.get(&Semantic::Normals).is_none() { triangle_corners * vertex } else { 0 };
+            bytes = bytes.saturating_add(attributes).saturating_add(triangle_corners * 8).saturating_add(flat);
+        }
+    }
+    for animation in document.animations() {
+        for channel in animation.channels() {
+            let sampler = channel.sampler();
+            bytes = bytes.saturating_add((sampler.input().count() as u64 + sampler.output().count() as u64) * 16);
+        }
+    }
+    if bytes > files::read::MAX_LOAD_GEOMETRY_BYTES {
+        return Err(format!(
+            "its accessors expand to {} of vertices, indices and keyframes, over the {} one scene may hold; give a smaller scene",
+            files::read::human_bytes(bytes),
+            files::read::human_bytes(files::read::MAX_LOAD_GEOMETRY_BYTES)
+        ));
+    }
+    Ok(())
 }
 
 /// A glTF file's error; a reason that does not say how to fix it gets the way every malformed file
@@ -256,6 +303,19 @@ fn check_sources(document: &Document) -> Result<(), String> {
     if let Some(accessor) = document.accessors().find(|a| a.count() == 0) {
         return Err(format!("accessor {} has count 0", accessor.index()));
     }
+    // The gltf crate's sparse reader underflows on a count of 0 and reads past the accessor beyond it.
+    for accessor in document.accessors() {
+        if let Some(sparse) = accessor.sparse() {
+            if sparse.count() == 0 || sparse.count() > accessor.count() {
+                return Err(format!(
+                    "accessor {}: sparse count {} must be 1 to the accessor's count {}",
+                    accessor.index(),
+                    sparse.count(),
+                    accessor.count()
+                ));
+            }
+        }
+    }
     Ok(())
 }
 
@@ -379,9 +439,14 @@ pub(crate) fn decode_limited(bytes: &[u8], format: image::ImageFormat, budget: &
         }
         e => crate::error::one_line(&e.to_string()),
     };
-    let decoder = image::ImageReader::with_format(std::io::Cursor::new(bytes), format).into_decoder().map_err(too_large)?;
+    let mut decoder = image::ImageReader::with_format(std::io::Cursor::new(bytes), format).into_decoder().map_err(too_large)?;
     let (width, height) = decoder.dimensions();
-    budget.take_decoded(u64::from(width) * u64::from(height) * 4)?;
+    // As `ImageReader::decode` checks, before the decoder allocates: the decoded image within the
+    // decoder's limit, and it and its RGBA8 copy within the load's budget.
+    let mut limits = image::Limits::default();
+    limits.reserve(decoder.total_bytes()).map_err(too_large)?;
+    decoder.set_limits(limits).map_err(too_large)?;
+    budget.take_decoded(decoder.total_bytes().saturating_add(u64::from(width) * u64::from(height) * 4))?;
     let image = DynamicImage::from_decoder(decoder).map_err(too_large)?;
     use ::gltf::image::Format::*;
     let format = match image {
@@ -534,12 +599,16 @@ fn node_animation(document: &Document, buffers: &[buffer::Data], hierarchy: &Hie
 fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Result<Hierarchy, String> {
     let mut cameras = Vec::new();
     let mut hierarchy = Hierarchy { nodes: Vec::new(), index_of: vec![None; node_count], instance_nodes: Vec::new() };
-    let mut stack: Vec<(Node, Mat4, usize, Option<usize>)> = root.nodes().map(|n| (n, Mat4::IDENTITY, 0, None)).collect();
+    let mut stack: Vec<(Node, Mat4, Option<usize>)> = root.nodes().map(|n| (n, Mat4::IDENTITY, None)).collect();
     stack.reverse();
-    while let Some((node, parent, depth, parent_index)) = stack.pop() {
-        // Validation does not rule out cycles; a path longer than the node count must contain one.
-        if depth > node_count {
-            return Err(format!("node {} is its own ancestor: the node hierarchy has a cycle", node.index()));
+    while let Some((node, parent, parent_index)) = stack.pop() {
+        // Validation rules out neither cycles nor nodes with two parents, and either would place a
+        // node again and again (a shared child at every level doubles the walk).
+        if hierarchy.index_of[node.index()].is_some() {
+            return Err(format!(
+                "node {} is reached twice: the node hierarchy has a cycle or a node with two parents, and glTF nodes form trees",
+                node.index()
+            ));
         }
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
         let world = parent * local;
@@ -560,7 +629,7 @@ fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Re
             place_light(scene, &light, world);
         }
         let first_child = stack.len();
-        stack.extend(node.children().map(|child| (child, world, depth + 1, Some(index))));
+        stack.extend(node.children().map(|child| (child, world, Some(index))));
         stack[first_child..].reverse();
     }
     // Ordered like the file's `cameras` array, so "camera N" means the same thing in both.
@@ -973,6 +1042,39 @@ mod tests {
         std::fs::write(&path, json).unwrap();
         let result = import(&path);
         assert!(matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("cycle")), "{result:?}");
+        // Forty nodes each listing the next twice: 2⁴⁰ placements if shared children were walked.
+        let nodes: Vec<String> = (0..40).map(|i| format!("{{\"children\": [{}, {}]}}", i + 1, i + 1)).chain(["{}".into()]).collect();
+        let json = format!(r#"{{"asset": {{"version": "2.0"}}, "nodes": [{}], "scenes": [{{"nodes": [0]}}]}}"#, nodes.join(", "));
+        std::fs::write(&path, json).unwrap();
+        let result = import(&path);
+        assert!(matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("node 40 is reached twice")), "{result:?}");
+    }
+
+    #[test]
+    fn accessors_and_images_that_would_exhaust_memory_are_refused() {
+        let dir = temp_dir("gltf_huge");
+        let path = dir.join("huge.gltf");
+        // Two billion positions from a sparse accessor with no buffer view: 16 bytes in the file.
+        let json = r#"{"asset": {"version": "2.0"},
+            "buffers": [{"uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAAAAAA==", "byteLength": 16}],
+            "bufferViews": [{"buffer": 0, "byteLength": 4}, {"buffer": 0, "byteOffset": 4, "byteLength": 12}],
+            "accessors": [{"componentType": 5126, "type": "VEC3", "count": 2000000000, "min": [0, 0, 0], "max": [0, 0, 0],
+                "sparse": {"count": 1, "indices": {"bufferView": 0, "componentType": 5125}, "values": {"bufferView": 1}}}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}]}"#;
+        std::fs::write(&path, json).unwrap();
+        let result = import(&path);
+        assert!(matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("over the 4.0 GiB one scene may hold")), "{result:?}");
+        let zero_sparse = json.replace(r#""sparse": {"count": 1"#, r#""sparse": {"count": 0"#);
+        std::fs::write(&path, zero_sparse).unwrap();
+        let result = import(&path);
+        assert!(matches!(&result, Err(Error::Gltf { reason, .. }) if reason.contains("sparse count 0")), "{result:?}");
+        // A small JPEG whose header claims 30000 × 30000 pixels is refused before it is decoded.
+        let mut jpeg = Vec::new();
+        image::RgbImage::new(8, 8).write_to(&mut std::io::Cursor::new(&mut jpeg), image::ImageFormat::Jpeg).unwrap();
+        let sof = jpeg.windows(2).position(|w| w == [0xFF, 0xC0]).expect("a baseline JPEG's frame header");
+        jpeg[sof + 5..sof + 9].copy_from_slice(&[0x75, 0x30, 0x75, 0x30]);
+        let e = decode_limited(&jpeg, image::ImageFormat::Jpeg, &LoadBudget::new()).unwrap_err();
+        assert!(e.contains("too large to decode"), "{e}");
     }
 
     #[test]
