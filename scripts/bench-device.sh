@@ -24,7 +24,7 @@ export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 export XDG_RUNTIME_DIR=/tmp
 out=/tmp/bench
 mkdir -p "$out" "${OUT:-/tmp/out}"
-bin=.bench/manylights
+bin=${BIN:-.bench/manylights}
 sponza=.bench/sponza_lite/Sponza.gltf
 # The paper's small lights: scattered over Sponza with ranges of 0.1–0.3 m.
 for n in 28000 100000 1000000; do

@@ -41,7 +41,7 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         ctx.limits.max_storage_buffer_binding_size / (1 << 20),
         ctx.limits.max_buffer_size / (1 << 20)
     );
-    let scene = args.load(Some(&ctx))?;
+    let (scene, _) = args.load(Some(&ctx))?;
     println!(
         "scene {}: {} triangles drawn, {} materials, {} textures",
         args.scene,

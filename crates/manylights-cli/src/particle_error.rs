@@ -5,14 +5,13 @@
 use anyhow::bail;
 use clap::Args;
 use manylights::{
-    config::RenderConfig,
     gpu::GpuContext,
-    pipelines::{DecalMethod, LightMethod, ParticleMethod},
     renderer::{Image, Renderer},
     scene::Scene,
+    settings::{DecalMethod, LightMethod, ParticleFilter, ParticleMethod, PipelineKind, RenderConfig},
 };
 
-use crate::render::{choose_camera, ParticleFilterArg, PipelineArg};
+use crate::render::choose_camera;
 use crate::scene_args::SceneArgs;
 
 #[derive(Args)]
@@ -25,8 +24,8 @@ pub struct ParticleErrorArgs {
     height: u32,
     #[arg(long)]
     camera: Option<usize>,
-    #[arg(long, value_enum, default_value_t = PipelineArg::Visbuffer)]
-    pipeline: PipelineArg,
+    #[arg(long, value_enum, default_value_t = PipelineKind::Visbuffer)]
+    pipeline: PipelineKind,
     /// Scene time of the compared frame, in seconds.
     #[arg(long, default_value_t = 1.0)]
     time: f32,
@@ -34,8 +33,8 @@ pub struct ParticleErrorArgs {
     #[arg(long, value_delimiter = ',', default_values_t = [1.0, 0.5, 0.25])]
     voxel_sizes: Vec<f32>,
     /// Filters to compare, comma-separated.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [ParticleFilterArg::Trilinear, ParticleFilterArg::Tricubic])]
-    filters: Vec<ParticleFilterArg>,
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [ParticleFilter::Trilinear, ParticleFilter::Tricubic])]
+    filters: Vec<ParticleFilter>,
     /// Samples per shading point to compare, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [1, 8])]
     samples: Vec<u32>,
@@ -52,7 +51,7 @@ type Frame = (Image<[f32; 4]>, Image<[u8; 4]>);
 
 pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
     let ctx = GpuContext::new()?;
-    let scene = args.scene.load(Some(&ctx))?;
+    let (scene, _) = args.scene.load(Some(&ctx))?;
     if scene.particles.as_ref().is_none_or(|p| p.count == 0) {
         bail!("the scene has no particles; add them with --particles N (or a scene file's [particles])");
     }
@@ -63,7 +62,7 @@ pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
     let config = |particle_method| RenderConfig {
         width: args.width,
         height: args.height,
-        pipeline: args.pipeline.into(),
+        pipeline: args.pipeline,
         light_method: LightMethod::Bvh,
         decal_method: DecalMethod::Bvh,
         particle_method,
@@ -83,13 +82,13 @@ pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
                 for &samples in &args.samples {
                     let setting = RenderConfig {
                         particle_voxel_size: voxel,
-                        particle_filter: filter.into(),
+                        particle_filter: filter,
                         particle_samples: samples,
                         particle_cascades: cascades,
                         particle_cascade_resolution: args.cascade_resolution,
                         ..config(ParticleMethod::Grid)
                     };
-                    setting.validate(&ctx)?;
+                    setting.validate(&ctx.device_limits())?;
                     settings.push(setting);
                 }
             }

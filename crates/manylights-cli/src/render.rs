@@ -3,19 +3,17 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use manylights::{
-    accel::BvhBuild,
-    config::{DebugView, RenderConfig, Tonemapper},
     files::{OutputFormat, OutputPlan, StagedOutputs},
     gpu::GpuContext,
     image_io,
-    particles::ParticleFilter,
-    pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
-    post::{AutoExposure, Bloom, DepthOfField, MotionBlur, PostSettings},
-    rays::{RaySettings, SunShadows, MAX_REFLECTION_BOUNCES},
     renderer::{FrameTiming, Renderer},
     scene::{Camera, Scene},
+    settings::{
+        AutoExposure, Bloom, BvhBuild, DebugView, DecalMethod, DepthOfField, LightMethod, MotionBlur, ParticleFilter, ParticleMethod,
+        ParticleOverlay, PipelineKind, PostSettings, RayOverlay, RaySettings, RenderConfig, SunShadows, Tonemapper, MAX_REFLECTION_BOUNCES,
+    },
 };
 
 use crate::progress;
@@ -39,35 +37,35 @@ pub struct RenderArgs {
     camera: Option<usize>,
     /// Frame graph: visibility buffer (shading in compute), deferred (G-buffer, lighting in compute)
     /// or forward (depth prepass, shading in fragments).
-    #[arg(long, value_enum, default_value_t = PipelineArg::Visbuffer)]
-    pipeline: PipelineArg,
+    #[arg(long, value_enum, default_value_t = PipelineKind::Visbuffer)]
+    pipeline: PipelineKind,
     /// How shading finds the local lights reaching a point: none (sun and ambient only), loop over
     /// all, point queries in a BVH, or per-froxel lists built every frame (clustered shading).
-    #[arg(long, value_enum, default_value_t = LightMethodArg::Brute)]
-    light_method: LightMethodArg,
+    #[arg(long, value_enum, default_value_t = LightMethod::Brute)]
+    light_method: LightMethod,
     /// How the light BVH is built (with --light-method bvh): once on the CPU, or every frame on the GPU.
-    #[arg(long, value_enum, default_value_t = BvhBuildArg::CpuOnce)]
-    light_bvh_build: BvhBuildArg,
+    #[arg(long, value_enum, default_value_t = BvhBuild::CpuOnce)]
+    light_bvh_build: BvhBuild,
     /// How shading finds the decals covering a point: none, loop over all, point queries in a BVH,
     /// per-froxel lists built every frame (clustered shading), or decal boxes rasterised into the
     /// G-buffer (deferred decals, --pipeline deferred only).
-    #[arg(long, value_enum, default_value_t = DecalMethodArg::Brute)]
-    decal_method: DecalMethodArg,
+    #[arg(long, value_enum, default_value_t = DecalMethod::Brute)]
+    decal_method: DecalMethod,
     /// How the decal BVH is built (with --decal-method bvh): once on the CPU, or every frame on the GPU.
-    #[arg(long, value_enum, default_value_t = BvhBuildArg::CpuOnce)]
-    decal_bvh_build: BvhBuildArg,
+    #[arg(long, value_enum, default_value_t = BvhBuild::CpuOnce)]
+    decal_bvh_build: BvhBuild,
     /// How particle lights (--particles, or a scene file's [particles]) light the scene: not at all,
     /// through the 3D textures they are splatted into every frame, or exactly, as point lights in the
     /// lights' BVH rebuilt every frame (with --light-method bvh). [default: the scene file's, or grid]
     #[arg(long, value_enum)]
-    particle_method: Option<ParticleMethodArg>,
+    particle_method: Option<ParticleMethod>,
     /// Edge of the particle grid's voxels, in metres. [default: the scene file's, or 1]
     #[arg(long, allow_negative_numbers = true)]
     particle_voxel_size: Option<f32>,
     /// How shading reads the particle grid: the voxel the point is in, the eight around it, or a cubic
     /// B-spline over 64 (smooth across voxel faces). [default: the scene file's, or trilinear]
     #[arg(long, value_enum)]
-    particle_filter: Option<ParticleFilterArg>,
+    particle_filter: Option<ParticleFilter>,
     /// Points around each shading point, within half a voxel, whose grid light is averaged
     /// (supersampling; 1 = the point alone). [default: the scene file's, or 1]
     #[arg(long)]
@@ -84,13 +82,13 @@ pub struct RenderArgs {
     rays: RayArgs,
     #[command(flatten)]
     post: PostArgs,
-    #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
-    tonemap: TonemapArg,
+    #[arg(long, value_enum, default_value_t = Tonemapper::Aces)]
+    tonemap: Tonemapper,
     /// Show, instead of radiance, a heat map of the lights reaching each point, of the light method's
     /// work (BVH nodes visited, cluster occupancy, lights tested) or of the decals covering it, the
     /// particle lights' radiance alone, or a horizontal slice through the particle grid.
-    #[arg(long, value_enum, default_value_t = DebugViewArg::Off)]
-    debug_view: DebugViewArg,
+    #[arg(long, value_enum, default_value_t = DebugView::Off)]
+    debug_view: DebugView,
     /// Height in metres of the particle-grid-slice debug view's plane. [default: a metre below the eye]
     #[arg(long, allow_negative_numbers = true)]
     debug_slice_height: Option<f32>,
@@ -210,7 +208,7 @@ pub(crate) struct RayArgs {
     /// Sun shadows by rays from every pixel: none, one ray to the sun's centre, or rays to points of
     /// its disc (--shadow-rays) and a spatial filter. [default: the scene file's, or off]
     #[arg(long, value_enum)]
-    shadows: Option<ShadowsArg>,
+    shadows: Option<SunShadows>,
     /// The sun's angular diameter in degrees: the width of soft shadows' penumbrae. [default: the
     /// scene file's, or 0.53]
     #[arg(long, allow_negative_numbers = true)]
@@ -236,147 +234,26 @@ pub(crate) struct RayArgs {
     light_shadow_rays: Option<u32>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub(crate) enum DebugViewArg {
-    Off,
-    LightsReaching,
-    LightWork,
-    DecalsCovering,
-    ParticleLight,
-    ParticleGridSlice,
-}
-
-impl From<DebugViewArg> for DebugView {
-    fn from(arg: DebugViewArg) -> Self {
-        match arg {
-            DebugViewArg::Off => DebugView::Off,
-            DebugViewArg::LightsReaching => DebugView::LightsReaching,
-            DebugViewArg::LightWork => DebugView::LightWork,
-            DebugViewArg::DecalsCovering => DebugView::DecalsCovering,
-            DebugViewArg::ParticleLight => DebugView::ParticleLight,
-            DebugViewArg::ParticleGridSlice => DebugView::ParticleGridSlice,
-        }
-    }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub(crate) enum ShadowsArg {
-    Off,
-    Hard,
-    Soft,
-}
-
-impl From<ShadowsArg> for SunShadows {
-    fn from(arg: ShadowsArg) -> Self {
-        match arg {
-            ShadowsArg::Off => SunShadows::Off,
-            ShadowsArg::Hard => SunShadows::Hard,
-            ShadowsArg::Soft => SunShadows::Soft,
-        }
-    }
-}
-
 impl RayArgs {
-    /// The command line's choices over the scene file's, over the defaults.
-    pub(crate) fn settings(&self, scene: &Scene) -> anyhow::Result<RaySettings> {
-        let hints = scene.ray_hints;
-        let defaults = RaySettings::default();
+    /// The command line's choices over `file`'s (the scene file's `[rays]`), over the defaults.
+    pub(crate) fn settings(&self, file: &RayOverlay) -> anyhow::Result<RaySettings> {
         let reflection_bounces = match (self.reflections, self.bounces) {
             (true, Some(0)) => {
                 bail!("--bounces 0 would trace no reflections: give 1 to {MAX_REFLECTION_BOUNCES}, or leave out --reflections")
             }
-            (true, bounces) => bounces.or(hints.reflection_bounces.filter(|&b| b > 0)).unwrap_or(1),
-            (false, _) => hints.reflection_bounces.unwrap_or(defaults.reflection_bounces),
+            (true, bounces) => Some(bounces.or(file.reflection_bounces.filter(|&b| b > 0)).unwrap_or(1)),
+            (false, _) => None,
         };
-        Ok(RaySettings {
-            sun_shadows: self.shadows.map(Into::into).or(hints.sun_shadows).unwrap_or(defaults.sun_shadows),
-            sun_angle_degrees: self.sun_angle.or(hints.sun_angle_degrees).unwrap_or(defaults.sun_angle_degrees),
-            shadow_rays: self.shadow_rays.or(hints.shadow_rays).unwrap_or(defaults.shadow_rays),
+        let command_line = RayOverlay {
+            sun_shadows: self.shadows,
+            sun_angle_degrees: self.sun_angle,
+            shadow_rays: self.shadow_rays,
             reflection_bounces,
-            reflection_roughness: self.reflection_roughness.or(hints.reflection_roughness).unwrap_or(defaults.reflection_roughness),
-            light_shadow_rays: self.light_shadow_rays.or(hints.light_shadow_rays).unwrap_or(defaults.light_shadow_rays),
-        })
+            reflection_roughness: self.reflection_roughness,
+            light_shadow_rays: self.light_shadow_rays,
+        };
+        Ok(command_line.over(*file).settings())
     }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub(crate) enum PipelineArg {
-    Visbuffer,
-    Deferred,
-    Forward,
-}
-
-impl From<PipelineArg> for PipelineKind {
-    fn from(arg: PipelineArg) -> Self {
-        match arg {
-            PipelineArg::Visbuffer => PipelineKind::Visbuffer,
-            PipelineArg::Deferred => PipelineKind::Deferred,
-            PipelineArg::Forward => PipelineKind::Forward,
-        }
-    }
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum LightMethodArg {
-    Off,
-    Brute,
-    Bvh,
-    Clustered,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum DecalMethodArg {
-    Off,
-    Brute,
-    Bvh,
-    Clustered,
-    DeferredDecals,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum ParticleMethodArg {
-    Off,
-    Grid,
-    Bvh,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub(crate) enum ParticleFilterArg {
-    Nearest,
-    Trilinear,
-    Tricubic,
-}
-
-impl From<ParticleFilterArg> for ParticleFilter {
-    fn from(arg: ParticleFilterArg) -> Self {
-        match arg {
-            ParticleFilterArg::Nearest => ParticleFilter::Nearest,
-            ParticleFilterArg::Trilinear => ParticleFilter::Trilinear,
-            ParticleFilterArg::Tricubic => ParticleFilter::Tricubic,
-        }
-    }
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum BvhBuildArg {
-    CpuOnce,
-    GpuEveryFrame,
-}
-
-impl From<BvhBuildArg> for BvhBuild {
-    fn from(arg: BvhBuildArg) -> Self {
-        match arg {
-            BvhBuildArg::CpuOnce => BvhBuild::CpuOnce,
-            BvhBuildArg::GpuEveryFrame => BvhBuild::GpuEveryFrame,
-        }
-    }
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum TonemapArg {
-    Aces,
-    Agx,
-    None,
 }
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
@@ -393,60 +270,36 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         outputs.add("--timings-json", json, &[OutputFormat::Json])?;
     }
     let ctx = GpuContext::new()?;
-    let scene = args.scene.load(Some(&ctx))?;
+    let (scene, overlay) = args.scene.load(Some(&ctx))?;
     outputs.check_inputs(&scene.source_files)?;
     let camera = choose_camera(&scene, args.camera)?;
-    let hints = scene.particles.as_ref().map(|p| p.rendering).unwrap_or_default();
-    let defaults = RenderConfig::default();
+    let particles = ParticleOverlay {
+        method: args.particle_method,
+        voxel_size: args.particle_voxel_size,
+        filter: args.particle_filter,
+        samples: args.particle_samples,
+        cascades: args.particle_cascades,
+        cascade_resolution: args.particle_cascade_resolution,
+    };
     let config = RenderConfig {
         width: args.width,
         height: args.height,
-        pipeline: args.pipeline.into(),
-        light_method: match args.light_method {
-            LightMethodArg::Off => LightMethod::Off,
-            LightMethodArg::Brute => LightMethod::Brute,
-            LightMethodArg::Bvh => LightMethod::Bvh,
-            LightMethodArg::Clustered => LightMethod::Clustered,
-        },
-        light_bvh_build: args.light_bvh_build.into(),
-        decal_method: match args.decal_method {
-            DecalMethodArg::Off => DecalMethod::Off,
-            DecalMethodArg::Brute => DecalMethod::Brute,
-            DecalMethodArg::Bvh => DecalMethod::Bvh,
-            DecalMethodArg::Clustered => DecalMethod::Clustered,
-            DecalMethodArg::DeferredDecals => DecalMethod::DeferredDecals,
-        },
-        decal_bvh_build: args.decal_bvh_build.into(),
-        // The command line first, then the scene file, then the defaults.
-        particle_method: args
-            .particle_method
-            .map(|m| match m {
-                ParticleMethodArg::Off => ParticleMethod::Off,
-                ParticleMethodArg::Grid => ParticleMethod::Grid,
-                ParticleMethodArg::Bvh => ParticleMethod::Bvh,
-            })
-            .or(hints.method)
-            .unwrap_or(defaults.particle_method),
-        particle_voxel_size: args.particle_voxel_size.or(hints.voxel_size).unwrap_or(defaults.particle_voxel_size),
-        particle_filter: args.particle_filter.map(Into::into).or(hints.filter).unwrap_or(defaults.particle_filter),
-        particle_samples: args.particle_samples.or(hints.samples).unwrap_or(defaults.particle_samples),
-        particle_cascades: args.particle_cascades.or(hints.cascades).unwrap_or(defaults.particle_cascades),
-        particle_cascade_resolution: args
-            .particle_cascade_resolution
-            .or(hints.cascade_resolution)
-            .unwrap_or(defaults.particle_cascade_resolution),
-        tonemapper: match args.tonemap {
-            TonemapArg::Aces => Tonemapper::Aces,
-            TonemapArg::Agx => Tonemapper::Agx,
-            TonemapArg::None => Tonemapper::None,
-        },
+        pipeline: args.pipeline,
+        light_method: args.light_method,
+        light_bvh_build: args.light_bvh_build,
+        decal_method: args.decal_method,
+        decal_bvh_build: args.decal_bvh_build,
+        tonemapper: args.tonemap,
         max_texture_size: args.texture_size,
         anisotropy: args.anisotropy,
-        rays: args.rays.settings(&scene)?,
+        rays: args.rays.settings(&overlay.rays)?,
         post: args.post.settings(),
-        debug_view: args.debug_view.into(),
+        debug_view: args.debug_view,
         debug_slice_height: args.debug_slice_height,
-    };
+        ..RenderConfig::default()
+    }
+    // The command line first, then the scene file, then the defaults.
+    .with_particles(particles.over(overlay.particles));
 
     let device = ctx.describe();
     let mut renderer = {

@@ -10,6 +10,7 @@ use manylights::{
         generators::{ScatterDecals, ScatterLights, ScatterParticles, DEFAULT_ANIMATION_GROUPS},
         Groups, Scene,
     },
+    settings::SettingsOverlay,
 };
 
 use crate::progress;
@@ -46,9 +47,10 @@ pub struct SceneArgs {
 }
 
 impl SceneArgs {
-    /// Loads the scene and adds the scattered lights and decals, then groups them with --animate.
-    /// With a device, counts it could not render are refused before they are generated.
-    pub fn load(&self, ctx: Option<&GpuContext>) -> anyhow::Result<Scene> {
+    /// Loads the scene and adds the scattered lights and decals, then groups them with --animate;
+    /// returns it with the scene file's settings overlay. With a device, counts it could not render
+    /// are refused before they are generated.
+    pub fn load(&self, ctx: Option<&GpuContext>) -> anyhow::Result<(Scene, SettingsOverlay)> {
         if let Some(size) = self.decal_size {
             let sizes = scene::generators::SCATTERED_DECAL_SIZES;
             if !sizes.contains(&size) {
@@ -58,12 +60,12 @@ impl SceneArgs {
         if self.groups == 0 {
             bail!("--groups 0: animation needs at least 1 group");
         }
-        let mut scene = {
+        let (mut scene, overlay) = {
             let _step = progress::step(format!("loading {}", self.scene));
             if self.scene == "demo" {
-                scene::demo::demo_scene()
+                (scene::demo::demo_scene(), SettingsOverlay::default())
             } else {
-                scene::load_path(std::path::Path::new(&self.scene))?
+                scene::load(std::path::Path::new(&self.scene))?
             }
         };
         if let Some(ctx) = ctx {
@@ -98,7 +100,7 @@ impl SceneArgs {
         if let Some(ctx) = ctx {
             check_scene_capacity(ctx, &scene)?;
         }
-        Ok(scene)
+        Ok((scene, overlay))
     }
 }
 

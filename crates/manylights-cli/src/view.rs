@@ -16,15 +16,15 @@ use anyhow::{bail, Context};
 use clap::Args;
 use glam::{Mat4, Vec3};
 use manylights::{
-    config::{DebugView, RenderConfig},
     files::{self, OutputFormat, OutputPlan},
     gpu::{context::instance, GpuContext, PassTimings},
     image_io,
-    pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
-    post::{AutoExposure, Bloom, DepthOfField, MotionBlur},
-    rays::SunShadows,
     renderer::Renderer,
     scene::{Camera, Projection, Scene},
+    settings::{
+        AutoExposure, Bloom, DebugView, DecalMethod, DepthOfField, LightMethod, MotionBlur, Named, ParticleMethod, PipelineKind,
+        RenderConfig, SunShadows,
+    },
 };
 use winit::{
     application::ApplicationHandler,
@@ -99,10 +99,6 @@ impl Default for Switches {
     }
 }
 
-const LIGHT_METHODS: [LightMethod; 4] = LightMethod::ALL;
-const DECAL_METHODS: [DecalMethod; 5] =
-    [DecalMethod::Off, DecalMethod::Brute, DecalMethod::Bvh, DecalMethod::Clustered, DecalMethod::DeferredDecals];
-
 impl Switches {
     fn config(&self, (width, height): (u32, u32)) -> RenderConfig {
         let mut config = RenderConfig {
@@ -133,41 +129,12 @@ impl Switches {
             _ => bail!("{key}={value}: give on or off"),
         };
         match key {
-            "pipeline" => {
-                self.pipeline = *PipelineKind::ALL
-                    .iter()
-                    .find(|p| p.name() == value)
-                    .with_context(|| format!("pipeline={value}: give visbuffer, deferred or forward"))?
-            }
-            "light-method" => {
-                self.light_method = *LIGHT_METHODS
-                    .iter()
-                    .find(|m| m.name() == value)
-                    .with_context(|| format!("light-method={value}: give off, brute, bvh or clustered"))?
-            }
-            "decal-method" => {
-                self.decal_method = *DECAL_METHODS
-                    .iter()
-                    .find(|m| m.name() == value)
-                    .with_context(|| format!("decal-method={value}: give off, brute, bvh, clustered or deferred-decals"))?
-            }
-            "particle-method" => {
-                self.particle_method = *ParticleMethod::ALL
-                    .iter()
-                    .find(|m| m.name() == value)
-                    .with_context(|| format!("particle-method={value}: give off, grid or bvh"))?
-            }
-            "debug-view" => {
-                self.debug_view = *DebugView::ALL.iter().find(|v| v.name() == value).with_context(|| {
-                    format!("debug-view={value}: give off, lights-reaching, light-work, decals-covering, particle-light or particle-grid-slice")
-                })?
-            }
-            "shadows" => {
-                self.shadows = *SunShadows::ALL
-                    .iter()
-                    .find(|s| s.name() == value)
-                    .with_context(|| format!("shadows={value}: give off, hard or soft"))?
-            }
+            "pipeline" => self.pipeline = choose(key, value)?,
+            "light-method" => self.light_method = choose(key, value)?,
+            "decal-method" => self.decal_method = choose(key, value)?,
+            "particle-method" => self.particle_method = choose(key, value)?,
+            "debug-view" => self.debug_view = choose(key, value)?,
+            "shadows" => self.shadows = choose(key, value)?,
             "reflections" => self.reflections = on()?,
             "bloom" => self.bloom = on()?,
             "depth-of-field" => self.depth_of_field = on()?,
@@ -187,6 +154,11 @@ impl Switches {
         }
         Ok(())
     }
+}
+
+/// The option `value` names, for the switch `key`; the message lists the names.
+fn choose<T: Named>(key: &str, value: &str) -> anyhow::Result<T> {
+    T::named(value).with_context(|| format!("{key}={value}: give {}", T::choices("")))
 }
 
 /// The scattered lights, decals and particles the scene is generated with (`SceneArgs`): changing
@@ -364,7 +336,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.screenshot {
         outputs.add("--screenshot", path, &OutputFormat::IMAGES)?;
     }
-    let scene = args.scene.load(None)?;
+    let (scene, _) = args.scene.load(None)?;
     outputs.check_inputs(&scene.source_files)?;
     let camera = crate::render::choose_camera(&scene, args.camera)?;
     let counts = Counts { lights: args.scene.lights, decals: args.scene.decals, particles: args.scene.particles };
@@ -484,7 +456,7 @@ impl App {
         let Counts { lights, decals, particles } = self.wanted_counts;
         let args = SceneArgs { lights, decals, particles, ..self.args.scene.clone() };
         match args.load(self.gpu.as_ref().map(|g| &g.ctx)) {
-            Ok(scene) => {
+            Ok((scene, _)) => {
                 self.scene = scene;
                 self.message = None;
                 self.counts = self.wanted_counts;
@@ -718,12 +690,12 @@ fn panel(
         }
     });
     egui::ComboBox::from_label("lights").selected_text(switches.light_method.name()).show_ui(ui, |ui| {
-        for m in LIGHT_METHODS {
+        for m in LightMethod::ALL {
             ui.selectable_value(&mut switches.light_method, m, m.name());
         }
     });
     egui::ComboBox::from_label("decals").selected_text(switches.decal_method.name()).show_ui(ui, |ui| {
-        for m in DECAL_METHODS {
+        for m in DecalMethod::ALL {
             ui.selectable_value(&mut switches.decal_method, m, m.name());
         }
     });

@@ -7,7 +7,7 @@ use image::error::{ParameterError, ParameterErrorKind};
 use image::{ImageEncoder, ImageError, ImageResult};
 
 use crate::files::OutputFormat;
-use crate::renderer::Image;
+use crate::gpu::readback::Image;
 
 /// JPEG quality: high enough that the encoding's blocks do not show on smooth gradients.
 const JPEG_QUALITY: u8 = 95;

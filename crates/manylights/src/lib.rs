@@ -1,11 +1,13 @@
 //! manylights: real-time rendering of many lights and decals through GPU-built acceleration structures.
 //!
-//! Data flows one way: [`scene`] (CPU scene) → [`gpu::GpuScene`] (uploaded buffers and textures) →
-//! [`passes`] (one file per pass, WGSL beside it) → an image. [`pipelines`] holds the frame graphs that
-//! order the passes; [`renderer::Renderer`] ties a device, a scene and a pipeline together.
+//! Modules are layers, each importing only those below it (`tests/layering.rs` checks):
+//! [`settings`] (what the caller chose) → [`scene`] (CPU scene) → [`gpu`] (device, uploaded
+//! [`gpu::GpuScene`]) → [`plan`] (what to build, decided before anything is built) → [`accel`],
+//! [`rays`], [`particles`] (structures built from the plan) → [`passes`] and [`post`] (one file per
+//! pass, WGSL beside it) → [`pipelines`] (the frame graphs) → [`renderer::Renderer`], which ties a
+//! device, a scene and a pipeline together.
 
 pub mod accel;
-pub mod config;
 pub mod error;
 pub mod files;
 pub mod gpu;
@@ -13,9 +15,11 @@ pub mod image_io;
 pub mod particles;
 pub mod passes;
 pub mod pipelines;
+pub mod plan;
 pub mod post;
 pub mod rays;
 pub mod renderer;
 pub mod scene;
+pub mod settings;
 
 pub use error::{Error, Result};

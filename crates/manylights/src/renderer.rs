@@ -4,17 +4,21 @@
 use glam::Vec3;
 
 use crate::{
-    accel::{clusters::ClusterGrid, structure::dynamic_group_leaf_size, VolumeStructure},
-    config::{DebugView, RenderConfig},
-    gpu::{readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
+    accel::VolumeStructure,
+    gpu::{cluster_grid::ClusterGrid, readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
     particles::{ParticleGrid, ParticleSystem, ParticleVolume},
-    passes::{deform::Deform, query_walks, ShadingStage},
-    pipelines::{DecalMethod, FrameInputs, FramePipeline, FrameSetup, LightMethod, ParticleMethod, ShadingMethods},
+    passes::{deform::Deform, FrameInputs},
+    pipelines::{FramePipeline, FrameSetup},
+    plan::{Capabilities, FramePlan, Measurements, ParticlePlan, ShadingMethods, StructurePlan},
     post::PostFrame,
     rays::{refit::BlasRefit, RayStructure, RayStructureStats},
+    scene::ParticleSettings,
     scene::{Aabb, Camera, Scene},
+    settings::{DecalMethod, LightMethod, RenderConfig},
     Error, Result,
 };
+
+pub use crate::gpu::readback::Image;
 
 /// Time between frames rendered back to back: animated groups move by this much per frame.
 pub const FRAME_INTERVAL: f32 = 1.0 / 60.0;
@@ -89,119 +93,68 @@ impl FrameTiming {
     }
 }
 
-/// A read-back image, rows top to bottom.
-#[derive(Clone, Debug)]
-pub struct Image<T> {
-    pub width: u32,
-    pub height: u32,
-    pub pixels: Vec<T>,
-}
-
 impl Renderer {
     pub fn new(ctx: GpuContext, scene: &Scene, config: RenderConfig) -> Result<Self> {
-        config.validate(&ctx)?;
+        config.validate(&ctx.device_limits())?;
         // Before anything is built from it (the ray hierarchy, the light and decal structures).
         scene.validate()?;
+        let caps = Capabilities { subgroups: ctx.features.contains(wgpu::Features::SUBGROUP) };
+        let stats = crate::accel::overlap::scene_statistics(scene, Measurements::for_settings(&config, caps))?;
+        let plan = FramePlan::resolve(&config, caps, &stats)?;
         let particle_settings = scene.particles.as_ref().filter(|s| s.count > 0);
+        let light_particles = particle_settings.filter(|_| matches!(plan.particles, ParticlePlan::Lights(_)));
+        check_loop_limit(&ctx, scene, &config, light_particles.map_or(0, |p| p.count as usize))?;
         let grid_particles = match particle_settings {
-            Some(settings) if config.particle_method == ParticleMethod::Grid => {
-                // The scene's bounds and a particle's reach around them: voxel centres on both sides of
-                // every surface, so trilinear sampling at a surface blends both.
-                let max_dimension = ctx.limits.max_texture_dimension_3d;
-                let volume = match config.particle_cascades {
-                    0 => {
-                        let bounds = scene.bounds();
-                        let reach = Vec3::splat(settings.radius.1);
-                        let covered = Aabb::new(bounds.min - reach, bounds.max + reach);
-                        ParticleVolume::World(ParticleGrid::covering(&covered, config.particle_voxel_size, max_dimension)?)
-                    }
-                    cascades => {
-                        ParticleVolume::clipmap(config.particle_voxel_size, config.particle_cascade_resolution, cascades, max_dimension)?
-                    }
-                };
-                Some(ParticleSystem::new(&ctx, settings, volume)?)
+            Some(settings) if plan.particles == ParticlePlan::Grid => {
+                Some(ParticleSystem::new(&ctx, settings, particle_volume(&ctx, scene, settings, &config)?)?)
             }
             _ => None,
         };
-        let light_particles = particle_settings.filter(|_| config.particle_method == ParticleMethod::Bvh);
-        if light_particles.is_some() && config.light_method != LightMethod::Bvh {
-            return Err(Error::InvalidConfig(format!(
-                "--particle-method bvh makes the particles lights in the lights' BVH, which --light-method {} does not read; use --light-method bvh",
-                config.light_method.name()
-            )));
-        }
-        check_loop_limit(&ctx, scene, &config, light_particles.map_or(0, |p| p.count as usize))?;
-        let methods = ShadingMethods {
-            lights: config.light_method,
-            decals: config.decal_method,
-            particles: config.particle_method,
-            reflections: config.rays.reflection_bounces > 0,
-            light_shadows: config.rays.light_shadow_rays > 0,
-            subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
-            // Known once the decals' structure is built, below.
-            dense_decals: false,
-            decal_cell_lists: false,
-            debug_views: config.debug_view != DebugView::Off,
-        };
         // The triangles' hierarchy is built (on the CPU, once) only for frames that trace rays.
-        let rays = config.rays.traces_rays().then(|| RayStructure::build(scene)).transpose()?;
+        let rays = plan.traces_rays.then(|| RayStructure::build(scene)).transpose()?;
+        // Without one, the scene binds a hierarchy no ray meets.
+        let no_rays = RayStructure::unused();
         let gpu_scene = GpuScene::upload(
             &ctx,
             scene,
             config.max_texture_size,
             effective_anisotropy(&ctx, &config),
             grid_particles.as_ref().and_then(ParticleSystem::grid_textures),
-            rays.as_ref(),
+            rays.as_ref().filter(|r| !r.nodes.is_empty()).unwrap_or(&no_rays).buffers(),
         )?;
-        // Only `bvh` walks the structures' BVHs. Clustered lists and deferred decals read the items in
-        // the CPU-built BVH's leaf order, which keeps neighbours together in memory (as `bvh` has
-        // them, so the methods compare fairly); brute force and off build nothing.
-        let build = |uses_bvh: bool, reads_items_in_order: bool, asked| match (uses_bvh, reads_items_in_order) {
-            (true, _) => asked,
-            (false, true) => crate::accel::BvhBuild::CpuOnce,
-            (false, false) => crate::accel::BvhBuild::None,
-        };
         // Clustered lists are built every frame only where the method reads them.
         let grid = ClusterGrid::for_resolution(config.width, config.height);
-        let clusters = |clustered: bool| clustered.then_some((grid, &gpu_scene.bind_group_layout));
-        let light_build =
-            build(config.light_method == LightMethod::Bvh, config.light_method == LightMethod::Clustered, config.light_bvh_build);
-        let (lights, particles) = match light_particles {
-            Some(settings) => {
+        let clusters = |structure: &StructurePlan| structure.clustered.then_some((grid, &gpu_scene.bind_group_layout));
+        let (lights, particles) = match (light_particles, plan.particles) {
+            (Some(settings), ParticlePlan::Lights(leaves)) => {
                 let lights = VolumeStructure::for_lights_and_particles(
                     &ctx,
                     &scene.lights,
                     &scene.light_groups,
-                    light_build,
+                    plan.lights.build,
                     settings.count,
                     settings.bounds(),
-                    // Leaves to suit how shading walks them (the same in every stage).
-                    dynamic_group_leaf_size(query_walks(methods, ShadingStage::Compute).lights),
+                    leaves,
                 )?;
                 let targets = lights.dynamic_group().ok_or_else(|| Error::Gpu("the particle lights' group is missing".into()))?;
                 let particles = ParticleSystem::with_lights(&ctx, settings, targets)?;
                 (lights, Some(particles))
             }
-            None => {
-                let clustered = clusters(config.light_method == LightMethod::Clustered);
-                (VolumeStructure::for_lights(&ctx, &scene.lights, &scene.light_groups, light_build, clustered)?, grid_particles)
+            _ => {
+                let lights =
+                    VolumeStructure::for_lights(&ctx, &scene.lights, &scene.light_groups, plan.lights.build, clusters(&plan.lights))?;
+                (lights, grid_particles)
             }
         };
         let decals = VolumeStructure::for_decals(
             &ctx,
             &scene.decals,
             &scene.decal_groups,
-            build(
-                config.decal_method == DecalMethod::Bvh,
-                matches!(config.decal_method, DecalMethod::Clustered | DecalMethod::DeferredDecals),
-                config.decal_bvh_build,
-            ),
-            clusters(config.decal_method == DecalMethod::Clustered),
+            &plan.decals,
+            clusters(&plan.decals),
             gpu_scene.decal_material_base,
-            // Dense decals' queries share their leaves out where the device has subgroups.
-            (config.decal_method == DecalMethod::Bvh && methods.subgroups).then_some(crate::passes::DENSE_DECAL_OVERLAP),
         )?;
-        let methods = ShadingMethods { dense_decals: decals.wide_leaves(), decal_cell_lists: decals.cell_lists(), ..methods };
+        let methods = plan.shading_methods(decals.cell_lists());
         let setup = FrameSetup {
             methods,
             shadows: config.rays.sun_shadows,
@@ -278,7 +231,13 @@ impl Renderer {
             }
             rays.place(&motion.transforms, parity)?;
         }
-        self.scene.move_instances(&self.ctx.queue, &moved, &previous, &motion.primitive_counts, self.rays.as_ref());
+        self.scene.move_instances(
+            &self.ctx.queue,
+            &moved,
+            &previous,
+            &motion.primitive_counts,
+            self.rays.as_ref().map(RayStructure::buffers),
+        );
         Ok(())
     }
 
@@ -329,7 +288,7 @@ impl Renderer {
         let mut uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.constants, self.config.tonemapper);
         uniforms.light_instance_count = self.lights.instance_count();
         uniforms.decal_instance_count = self.decals.instance_count();
-        (uniforms.ray_options, uniforms.ray_settings) = self.config.rays.uniforms(camera, self.config.height);
+        (uniforms.ray_options, uniforms.ray_settings) = crate::gpu::frame::ray_uniforms(&self.config.rays, camera, self.config.height);
         uniforms.debug_view = self.config.debug_view.uniform(self.config.debug_slice_height.unwrap_or(camera.position().y - 1.0));
         if let Some(particles) = &self.particles {
             if let (Some(volume), Some(scales)) = (particles.volume(), particles.scales()) {
@@ -483,6 +442,22 @@ impl Renderer {
 
     fn image<T>(&self, pixels: Vec<T>) -> Image<T> {
         Image { width: self.config.width, height: self.config.height, pixels }
+    }
+}
+
+/// Where the particle grid lies: over the scene's bounds and a particle's reach around them (voxel
+/// centres on both sides of every surface, so trilinear sampling at a surface blends both), or in
+/// camera-centred cascades.
+fn particle_volume(ctx: &GpuContext, scene: &Scene, settings: &ParticleSettings, config: &RenderConfig) -> Result<ParticleVolume> {
+    let max_dimension = ctx.limits.max_texture_dimension_3d;
+    match config.particle_cascades {
+        0 => {
+            let bounds = scene.bounds();
+            let reach = Vec3::splat(settings.radius.1);
+            let covered = Aabb::new(bounds.min - reach, bounds.max + reach);
+            Ok(ParticleVolume::World(ParticleGrid::covering(&covered, config.particle_voxel_size, max_dimension)?))
+        }
+        cascades => ParticleVolume::clipmap(config.particle_voxel_size, config.particle_cascade_resolution, cascades, max_dimension),
     }
 }
 

@@ -6,8 +6,9 @@
 
 use glam::{Affine3A, Quat, Vec3};
 use manylights::{
-    accel::{light_contains, volume_query_probe_shader, BvhBuild, VolumeStructure, CPU_TOP_LEVEL_MAX_INSTANCES},
+    accel::{light_contains, volume_query_probe_shader, VolumeStructure, CPU_TOP_LEVEL_MAX_INSTANCES},
     gpu::{readback, shaders, GpuContext},
+    plan::GroupBuild,
     scene::{GroupInstance, Groups, Light, LightKind, Spin},
 };
 use rand::{Rng, SeedableRng};
@@ -42,7 +43,7 @@ fn gpu_query(
     ctx: &GpuContext,
     lights: &[Light],
     groups: &Groups,
-    (build, subgroups): (BvhBuild, bool),
+    (build, subgroups): (GroupBuild, bool),
     time: f32,
     points: &[Vec3],
 ) -> Vec<[u32; 4]> {
@@ -172,7 +173,7 @@ fn check(ctx: &GpuContext, lights: &[Light], groups: &Groups, time: f32, rng: &m
     let mut reached = 0;
     for (points, name) in [(&scattered, "scattered"), (&clustered, "clustered")] {
         let expected: Vec<[u32; 4]> = points.iter().map(|p| cpu_oracle(lights, groups, time, *p)).collect();
-        for build in [BvhBuild::CpuOnce, BvhBuild::GpuEveryFrame] {
+        for build in [GroupBuild::CpuOnce, GroupBuild::GpuEveryFrame] {
             for subgroups in [false, true] {
                 let gpu = gpu_query(ctx, lights, groups, (build, subgroups), time, points);
                 for ((p, got), expected) in points.iter().zip(&gpu).zip(&expected) {

@@ -1,4 +1,4 @@
-//! Debug views (`config::DebugView`): the heat map of lights reaching each point equals the count a
+//! Debug views (`settings::DebugView`): the heat map of lights reaching each point equals the count a
 //! CPU finds for the wall point a pixel shows, in every light method and pipeline; brute force's work
 //! is every light at every point, the BVH's its own node count; the decals covering a point are
 //! counted as the CPU counts them by every decal method.
@@ -8,10 +8,10 @@ mod common;
 use common::*;
 use glam::{Affine3A, Vec3, Vec4};
 use manylights::{
-    config::{heat_map, DebugView, RenderConfig},
-    pipelines::{DecalMethod, LightMethod, PipelineKind},
     renderer::Image,
     scene::{Decal, Material},
+    settings::{heat_map, DebugView, RenderConfig},
+    settings::{DecalMethod, LightMethod, PipelineKind},
 };
 
 const SIZE: (u32, u32) = (96, 54);

@@ -9,10 +9,11 @@ use std::path::PathBuf;
 use common::*;
 use glam::{Affine3A, Quat, Vec3};
 use manylights::{
-    accel::{clusters::ClusterGrid, BvhBuild, VolumeStructure},
-    config::RenderConfig,
+    accel::overlap,
+    accel::VolumeStructure,
+    gpu::cluster_grid::ClusterGrid,
     gpu::GpuContext,
-    pipelines::{DecalMethod, LightMethod, PipelineKind},
+    plan::{Capabilities, FramePlan, GroupBuild, Measurements, StructurePlan},
     renderer::{Image, Renderer},
     scene::{
         self,
@@ -20,6 +21,9 @@ use manylights::{
         generators::{self, ScatterDecals, ScatterLights},
         Decal, GroupInstance, Groups, Material, Scene, Texture, TextureRef, Wrap,
     },
+    settings::BvhBuild,
+    settings::RenderConfig,
+    settings::{DecalMethod, LightMethod, PipelineKind},
 };
 
 const TOLERANCE: f32 = 1e-3;
@@ -75,9 +79,12 @@ fn demo_with_thousands_of_decals() {
 fn assert_dense_decals_agree(scene: &Scene, cell_lists: bool, time: f32) {
     let ctx = GpuContext::new().expect("a GPU adapter");
     assert!(ctx.features.contains(wgpu::Features::SUBGROUP), "the test needs an adapter with subgroup operations");
-    let dense = Some(manylights::passes::DENSE_DECAL_OVERLAP);
-    let structure = VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, BvhBuild::CpuOnce, None, 0, dense).unwrap();
-    let overlap = structure.centre_overlap();
+    let config = decal_config(128, 72, DecalMethod::Bvh, BvhBuild::CpuOnce);
+    let caps = Capabilities { subgroups: true };
+    let stats = overlap::scene_statistics(scene, Measurements::for_settings(&config, caps)).unwrap();
+    let plan = FramePlan::resolve(&config, caps, &stats).unwrap();
+    let structure = VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, &plan.decals, None, 0).unwrap();
+    let overlap = stats.decal_centre_overlap.expect("measured for bvh decals on a device with subgroups");
     assert!(structure.wide_leaves(), "{overlap} boxes hold a decal's centre: too few to count as dense");
     assert_eq!(structure.cell_lists(), cell_lists);
     assert!(decal_effect(scene, 96, 54) > 1e-3, "the decals barely change the image");
@@ -267,14 +274,15 @@ fn decals_keep_their_layers_in_leaf_order_and_gpu_rebuilds_refuse_cpu_ordered_us
     let frame_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
     let grid = ClusterGrid::for_resolution(64, 36);
     let structure = |build, clustered: bool| {
-        VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, build, clustered.then_some((grid, &frame_layout)), 0, None)
+        let plan = StructurePlan { build, clustered, wide_leaves: false, cell_lists: false };
+        VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, &plan, clustered.then_some((grid, &frame_layout)), 0)
     };
-    let message = structure(BvhBuild::GpuEveryFrame, true).err().expect("clustered lists over GPU rebuilds are an error").to_string();
+    let message = structure(GroupBuild::GpuEveryFrame, true).err().expect("clustered lists over GPU rebuilds are an error").to_string();
     assert!(message.contains("clustered") && message.contains("once on the CPU"), "{message}");
-    let rebuilt = structure(BvhBuild::GpuEveryFrame, false).expect("a GPU-rebuilt structure");
+    let rebuilt = structure(GroupBuild::GpuEveryFrame, false).expect("a GPU-rebuilt structure");
     let message = rebuilt.pairs_in_layer_order().expect_err("layer order over GPU rebuilds is an error").to_string();
     assert!(message.contains("layer order") && message.contains("once on the CPU"), "{message}");
-    let built = structure(BvhBuild::CpuOnce, false).unwrap();
+    let built = structure(GroupBuild::CpuOnce, false).unwrap();
     let mut stored: Vec<u32> = built.scene_indices().to_vec();
     assert!(stored.iter().enumerate().any(|(i, &s)| s != i as u32), "the decals are not reordered: the test would prove nothing");
     let (pairs, ranges) = built.pairs_in_layer_order().expect("layer order of a CPU-built structure");

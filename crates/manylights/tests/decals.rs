@@ -10,9 +10,9 @@ mod common;
 use common::*;
 use glam::{Affine3A, Quat, Vec3, Vec4};
 use manylights::{
-    config::RenderConfig,
-    pipelines::{DecalMethod, LightMethod},
     scene::{Camera, Decal, Material, Scene, Texture, TextureRef, Wrap},
+    settings::RenderConfig,
+    settings::{DecalMethod, LightMethod},
 };
 
 /// The methods that blend through the shading core's formula: `off` applies no decals, and deferred

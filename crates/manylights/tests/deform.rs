@@ -10,14 +10,14 @@ mod common;
 use common::*;
 use glam::{Mat4, Quat, Vec3, Vec4};
 use manylights::{
-    config::RenderConfig,
-    pipelines::{LightMethod, PipelineKind},
-    rays::{RaySettings, SunShadows},
     renderer::FRAME_INTERVAL,
     scene::{
         deform::{Deformer, Wave},
         Camera, Instance, Material, Mesh, Primitive, Scene, Sun, Vertex,
     },
+    settings::RenderConfig,
+    settings::{LightMethod, PipelineKind},
+    settings::{RaySettings, SunShadows},
 };
 
 /// A square sheet of `n`×`n` cells in the XY plane, facing +Z, from −1 to 1.

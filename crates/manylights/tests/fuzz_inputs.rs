@@ -260,7 +260,7 @@ fn mutated_inputs_load_or_fail_with_one_line_never_a_panic() {
                     if rendered < RENDERED && case % (CASES_PER_INPUT / 2) == 1 && mutant != input.bytes {
                         rendered += 1;
                         let camera = scene.cameras.first().cloned().unwrap_or_else(|| scene::Camera::framing(&scene.bounds()));
-                        let config = common::config(32, 18, manylights::pipelines::LightMethod::Bvh);
+                        let config = common::config(32, 18, manylights::settings::LightMethod::Bvh);
                         watchdog.begin(format!("{} case {case}, rendered", input.name));
                         let drawn = catch_unwind(AssertUnwindSafe(|| {
                             Renderer::new(ctx.clone(), &scene, config).and_then(|mut r| r.render_frames(&camera, 1).map(|_| ()))

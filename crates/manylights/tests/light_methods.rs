@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use common::*;
 use glam::{Affine3A, Quat, Vec3};
 use manylights::{
-    accel::BvhBuild,
-    config::RenderConfig,
-    pipelines::LightMethod,
     scene::{self, demo::demo_scene, generators::ScatterLights, GroupInstance, Groups, Light, LightKind, Scene, Spin},
+    settings::BvhBuild,
+    settings::LightMethod,
+    settings::RenderConfig,
 };
 use rand::{Rng, SeedableRng};
 

@@ -7,13 +7,15 @@ mod common;
 use common::*;
 use glam::{Mat4, UVec3, Vec3};
 use manylights::{
-    accel::BvhBuild,
-    config::RenderConfig,
     gpu::GpuContext,
-    particles::{ParticleFilter, ParticleGrid, ParticleSettings, ParticleSystem, ParticleVolume},
-    pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
+    particles::{ParticleGrid, ParticleSystem, ParticleVolume},
     renderer::Image,
+    scene::ParticleSettings,
     scene::{Aabb, Light, LightKind},
+    settings::BvhBuild,
+    settings::ParticleFilter,
+    settings::RenderConfig,
+    settings::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
 };
 
 fn settings(count: u32) -> ParticleSettings {
@@ -206,7 +208,8 @@ fn bad_particle_settings_are_clear_errors() {
     assert!(err.contains("emitter"), "{err}");
     let err = ParticleSettings { radius: (1.0, 0.5), ..settings(10) }.validate().unwrap_err().to_string();
     assert!(err.contains("radius"), "{err}");
-    let err = ParticleSettings { count: manylights::particles::MAX_PARTICLES + 1, ..settings(10) }.validate().unwrap_err().to_string();
+    let err =
+        ParticleSettings { count: manylights::scene::particles::MAX_PARTICLES + 1, ..settings(10) }.validate().unwrap_err().to_string();
     assert!(err.contains("exceed the maximum"), "{err}");
     for (voxel, resolution, cascades, expected) in [
         (0.5, 32, 0, "at least 1 particle cascade"),
@@ -229,7 +232,7 @@ fn bad_particle_settings_are_clear_errors() {
     // groups overflow it: an error before anything is allocated.
     let lights = (0..255).map(|i| point_light(Vec3::new(0.01 * i as f32, 0.0, 1.0), 1.0, 1.0)).collect();
     let (mut scene, _) = wall_scene(lights);
-    scene.particles = Some(ParticleSettings { count: manylights::particles::MAX_PARTICLES, ..settings(10) });
+    scene.particles = Some(ParticleSettings { count: manylights::scene::particles::MAX_PARTICLES, ..settings(10) });
     let exact =
         RenderConfig { particle_method: ParticleMethod::Bvh, decal_method: DecalMethod::Off, ..config(SIZE.0, SIZE.1, LightMethod::Bvh) };
     let err = manylights::renderer::Renderer::new(ctx, &scene, exact).err().expect("too many lights").to_string();

@@ -6,11 +6,11 @@ mod common;
 
 use common::*;
 use manylights::{
-    config::RenderConfig,
-    pipelines::{DecalMethod, LightMethod, PipelineKind},
-    rays::RaySettings,
     renderer::Image,
     scene::{demo::demo_scene, generators, generators::ScatterDecals, generators::ScatterLights, Scene},
+    settings::RaySettings,
+    settings::RenderConfig,
+    settings::{DecalMethod, LightMethod, PipelineKind},
 };
 
 const TOLERANCE: f32 = 1e-3;

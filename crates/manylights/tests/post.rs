@@ -11,14 +11,14 @@ mod common;
 use common::*;
 use glam::{Mat4, Quat, Vec3, Vec4};
 use manylights::{
-    config::{RenderConfig, Tonemapper},
-    pipelines::{LightMethod, PipelineKind},
-    post::{AutoExposure, Bloom, DepthOfField, MotionBlur, PostSettings},
     renderer::{Image, FRAME_INTERVAL},
     scene::{
         animation::{Animation, Channel, Interpolation, Node, Property, Trs},
         Camera, Instance, Material, Scene,
     },
+    settings::{AutoExposure, Bloom, DepthOfField, MotionBlur, PostSettings},
+    settings::{LightMethod, PipelineKind},
+    settings::{RenderConfig, Tonemapper},
 };
 
 /// Metres per pixel at z = 0 seen from the test camera (4 m away, 60° vertical field of view, 144 rows).

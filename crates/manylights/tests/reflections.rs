@@ -8,12 +8,12 @@ mod common;
 use common::*;
 use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
 use manylights::{
-    config::RenderConfig,
-    particles::ParticleSettings,
-    pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
-    rays::RaySettings,
     renderer::Image,
+    scene::ParticleSettings,
     scene::{Camera, Decal, Instance, Light, Material, Scene},
+    settings::RaySettings,
+    settings::RenderConfig,
+    settings::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
 };
 
 const WIDTH: u32 = 96;

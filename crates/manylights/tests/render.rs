@@ -8,8 +8,8 @@ use std::path::PathBuf;
 use common::*;
 use glam::Vec3;
 use manylights::gpu::GpuContext;
-use manylights::pipelines::LightMethod;
 use manylights::scene::{demo::demo_scene, Camera, Light, LightKind, Texture, TextureRef, Wrap};
+use manylights::settings::LightMethod;
 
 fn demo_frame() -> (manylights::renderer::Image<[u8; 4]>, manylights::renderer::Image<[f32; 4]>) {
     let scene = demo_scene();

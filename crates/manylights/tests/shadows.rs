@@ -8,14 +8,14 @@ mod common;
 use common::*;
 use glam::{Mat4, Quat, Vec3, Vec4};
 use manylights::{
-    config::RenderConfig,
-    pipelines::{LightMethod, PipelineKind},
-    rays::{RaySettings, SunShadows},
     renderer::Image,
     scene::{
         animation::{Animation, Channel, Interpolation, Node, Property, Trs},
         AlphaMode, Camera, Instance, Material, Mesh, Primitive, Projection, Scene, Sun, Vertex,
     },
+    settings::RenderConfig,
+    settings::{LightMethod, PipelineKind},
+    settings::{RaySettings, SunShadows},
 };
 
 const WIDTH: u32 = 128;

@@ -8,11 +8,11 @@ mod common;
 use common::*;
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use manylights::{
-    config::RenderConfig,
     gpu::GpuContext,
-    pipelines::{DecalMethod, LightMethod, PipelineKind},
     renderer::{Image, Renderer},
     scene::{demo::demo_scene, generators, generators::ScatterLights, AlphaMode, Camera, Decal, Instance, Material, Scene},
+    settings::RenderConfig,
+    settings::{DecalMethod, LightMethod, PipelineKind},
 };
 
 const TOLERANCE: f32 = 1e-3;

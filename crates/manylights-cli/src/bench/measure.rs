@@ -5,11 +5,10 @@ use std::time::Instant;
 
 use manylights::{
     accel::overlap,
-    config::RenderConfig,
     gpu::GpuContext,
-    pipelines::{DecalMethod, LightMethod},
     renderer::{FrameTiming, Renderer},
     scene::{generators, Camera, Scene},
+    settings::{DecalMethod, LightMethod, RenderConfig},
 };
 
 use super::Suite;

@@ -16,20 +16,18 @@ use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use manylights::{
-    accel::BvhBuild,
-    config::RenderConfig,
     files::OutputPlan,
     gpu::GpuContext,
-    pipelines::{DecalMethod, LightMethod, PipelineKind},
     scene::{
         self,
         generators::{self, ScatterDecals, ScatterLights},
         paper_scenes::{PaperScene, SMALL_LIGHT_RANGE},
         Camera, Scene,
     },
+    settings::{BvhBuild, DecalMethod, LightMethod, Named, PipelineKind, RenderConfig},
 };
 
-use crate::render::{choose_camera, PipelineArg};
+use crate::render::choose_camera;
 use measure::{Measurement, Plan};
 
 /// Sponza from the shared assets, where the repository's own scene files find it.
@@ -63,14 +61,14 @@ pub struct BenchArgs {
     warmup: Option<u32>,
     /// The paper's scenes to run, comma-separated, or `none` [default: all].
     #[arg(long, value_enum, value_delimiter = ',')]
-    scenes: Vec<SceneArg>,
+    scenes: Vec<SceneChoice>,
     /// Pipelines of the table, comma-separated [default: all].
     #[arg(long, value_enum, value_delimiter = ',')]
-    pipelines: Vec<PipelineArg>,
+    pipelines: Vec<PipelineKind>,
     /// Methods of the table, comma-separated; each runs where it applies (deferred decals: decal
     /// scenes in the deferred pipeline) [default: all]. `off` gives each pipeline's baseline row.
     #[arg(long, value_enum, value_delimiter = ',')]
-    methods: Vec<MethodArg>,
+    methods: Vec<DecalMethod>,
     /// Scaling sweeps to run, comma-separated, or `none` [default: lights,decals].
     #[arg(long, value_enum, value_delimiter = ',')]
     sweeps: Vec<SweepArg>,
@@ -79,8 +77,8 @@ pub struct BenchArgs {
     #[arg(long)]
     sweep_max: Option<u32>,
     /// Pipeline of the sweeps.
-    #[arg(long, value_enum, default_value_t = PipelineArg::Visbuffer)]
-    sweep_pipeline: PipelineArg,
+    #[arg(long, value_enum, default_value_t = PipelineKind::Visbuffer)]
+    sweep_pipeline: PipelineKind,
     /// A configuration whose first two frames each take longer than this on the GPU is reported over
     /// the cap and not timed further (brute force on large counts); in a sweep, larger counts of that
     /// method are skipped.
@@ -98,24 +96,6 @@ pub struct BenchArgs {
     /// Folder for bench.md, bench.json, bench.csv and the sweep plots (created if missing).
     #[arg(short, long, default_value = "bench-results")]
     out: PathBuf,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum SceneArg {
-    LargeDecals,
-    SmallDecals,
-    ManyDecals,
-    SmallLights,
-    None,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub(crate) enum MethodArg {
-    Off,
-    Brute,
-    Bvh,
-    Clustered,
-    DeferredDecals,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -210,7 +190,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if !(1..=crate::render::MAX_FRAMES).contains(&frames) || warmup > crate::render::MAX_FRAMES {
         bail!("--frames must be between 1 and {} and --warmup at most that (got {frames} and {warmup})", crate::render::MAX_FRAMES);
     }
-    if args.scenes.len() > 1 && args.scenes.contains(&SceneArg::None) {
+    if args.scenes.len() > 1 && args.scenes.contains(&SceneChoice(None)) {
         bail!("--scenes: `none` runs no scene, so give it alone, not with others");
     }
     if args.sweeps.len() > 1 && args.sweeps.contains(&SweepArg::None) {
@@ -243,7 +223,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let ctx = GpuContext::new()?;
     // Settings every configuration shares (resolution, texture options) fail here, not once per configuration.
     for job in &jobs {
-        job.config.validate(&ctx)?;
+        job.config.validate(&ctx.device_limits())?;
     }
     if !ctx.has_timestamps() {
         bail!("the benchmark times passes with GPU timestamp queries, which this adapter lacks ({})", ctx.describe());
@@ -299,27 +279,10 @@ fn load_base_scene(args: &BenchArgs) -> anyhow::Result<Scene> {
 /// The configurations asked for, in the order they run: the table (baselines, then each paper scene
 /// by pipeline and method), then the sweeps (by count, then method).
 fn plan_jobs(args: &BenchArgs, sweep_max: u32) -> Vec<Job> {
-    let pipelines: Vec<PipelineKind> =
-        if args.pipelines.is_empty() { PipelineKind::ALL.to_vec() } else { dedup(&args.pipelines).into_iter().map(Into::into).collect() };
-    let methods = if args.methods.is_empty() {
-        vec![MethodArg::Off, MethodArg::Brute, MethodArg::Bvh, MethodArg::Clustered, MethodArg::DeferredDecals]
-    } else {
-        dedup(&args.methods)
-    };
-    let scenes: Vec<PaperScene> = if args.scenes.is_empty() {
-        PaperScene::ALL.to_vec()
-    } else {
-        dedup(&args.scenes)
-            .into_iter()
-            .filter_map(|s| match s {
-                SceneArg::LargeDecals => Some(PaperScene::LargeDecals),
-                SceneArg::SmallDecals => Some(PaperScene::SmallDecals),
-                SceneArg::ManyDecals => Some(PaperScene::ManyDecals),
-                SceneArg::SmallLights => Some(PaperScene::SmallLights),
-                SceneArg::None => None,
-            })
-            .collect()
-    };
+    let pipelines: Vec<PipelineKind> = if args.pipelines.is_empty() { PipelineKind::ALL.to_vec() } else { dedup(&args.pipelines) };
+    let methods = if args.methods.is_empty() { DecalMethod::ALL.to_vec() } else { dedup(&args.methods) };
+    let scenes: Vec<PaperScene> =
+        if args.scenes.is_empty() { PaperScene::ALL.to_vec() } else { dedup(&args.scenes).into_iter().filter_map(|s| s.0).collect() };
     let config = |pipeline, light_method, decal_method, bvh_build| RenderConfig {
         width: args.width,
         height: args.height,
@@ -334,7 +297,7 @@ fn plan_jobs(args: &BenchArgs, sweep_max: u32) -> Vec<Job> {
     };
 
     let mut jobs = Vec::new();
-    if !scenes.is_empty() && methods.contains(&MethodArg::Off) {
+    if !scenes.is_empty() && methods.contains(&DecalMethod::Off) {
         for &pipeline in &pipelines {
             let config = config(pipeline, LightMethod::Off, DecalMethod::Off, BvhBuild::CpuOnce);
             jobs.push(Job { suite: Suite::Table, scene_name: "base".into(), make_scene: SceneRecipe::Base, config });
@@ -342,10 +305,10 @@ fn plan_jobs(args: &BenchArgs, sweep_max: u32) -> Vec<Job> {
     }
     for &paper in &scenes {
         for &pipeline in &pipelines {
-            for &method in methods.iter().filter(|&&m| m != MethodArg::Off) {
+            for &method in methods.iter().filter(|&&m| m != DecalMethod::Off) {
                 let (light_method, decal_method) = match (paper.has_decals(), method) {
-                    (true, m) => (LightMethod::Off, decal_method(m)),
-                    (false, MethodArg::DeferredDecals) => continue,
+                    (true, m) => (LightMethod::Off, m),
+                    (false, DecalMethod::DeferredDecals) => continue,
                     (false, m) => (light_method(m), DecalMethod::Off),
                 };
                 if !decal_method.works_in(pipeline) {
@@ -361,16 +324,13 @@ fn plan_jobs(args: &BenchArgs, sweep_max: u32) -> Vec<Job> {
         let mut count = SWEEP_START;
         while count <= sweep_max {
             // The BVH is rebuilt on the GPU every frame, as clustered lists are: build times compare.
-            for method in [MethodArg::Bvh, MethodArg::Clustered, MethodArg::Brute] {
+            for method in [DecalMethod::Bvh, DecalMethod::Clustered, DecalMethod::Brute] {
                 let (config, make_scene) = match sweep {
                     SweepArg::Lights => (
-                        config(args.sweep_pipeline.into(), light_method(method), DecalMethod::Off, BvhBuild::GpuEveryFrame),
+                        config(args.sweep_pipeline, light_method(method), DecalMethod::Off, BvhBuild::GpuEveryFrame),
                         SceneRecipe::SweepLights(count),
                     ),
-                    _ => (
-                        config(args.sweep_pipeline.into(), LightMethod::Off, decal_method(method), BvhBuild::GpuEveryFrame),
-                        SceneRecipe::SweepDecals(count),
-                    ),
+                    _ => (config(args.sweep_pipeline, LightMethod::Off, method, BvhBuild::GpuEveryFrame), SceneRecipe::SweepDecals(count)),
                 };
                 jobs.push(Job { suite: Suite::Sweep(sweep), scene_name: count.to_string(), make_scene, config });
             }
@@ -390,22 +350,25 @@ fn dedup<T: PartialEq + Copy>(items: &[T]) -> Vec<T> {
     out
 }
 
-fn light_method(method: MethodArg) -> LightMethod {
-    match method {
-        MethodArg::Off | MethodArg::DeferredDecals => LightMethod::Off,
-        MethodArg::Brute => LightMethod::Brute,
-        MethodArg::Bvh => LightMethod::Bvh,
-        MethodArg::Clustered => LightMethod::Clustered,
-    }
+/// The light method of a bench method's name (decal methods name the superset): off for those
+/// only decals have.
+fn light_method(method: DecalMethod) -> LightMethod {
+    LightMethod::named(method.name()).unwrap_or(LightMethod::Off)
 }
 
-fn decal_method(method: MethodArg) -> DecalMethod {
-    match method {
-        MethodArg::Off => DecalMethod::Off,
-        MethodArg::Brute => DecalMethod::Brute,
-        MethodArg::Bvh => DecalMethod::Bvh,
-        MethodArg::Clustered => DecalMethod::Clustered,
-        MethodArg::DeferredDecals => DecalMethod::DeferredDecals,
+/// The paper's scenes, or `none`, for `--scenes`: spelled as `PaperScene` spells them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct SceneChoice(Option<PaperScene>);
+
+impl ValueEnum for SceneChoice {
+    fn value_variants<'a>() -> &'a [Self] {
+        static CHOICES: std::sync::LazyLock<Vec<SceneChoice>> =
+            std::sync::LazyLock::new(|| PaperScene::ALL.iter().map(|&s| SceneChoice(Some(s))).chain([SceneChoice(None)]).collect());
+        &CHOICES
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.0.map_or("none", PaperScene::name)))
     }
 }
 

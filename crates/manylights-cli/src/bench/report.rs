@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use manylights::files::{OutputFormat, StagedOutputs};
-use manylights::pipelines::PipelineKind;
 use manylights::scene::paper_scenes::PaperScene;
+use manylights::settings::PipelineKind;
 
 use super::measure::{Measurement, Outcome, PassGroup};
 use super::{plot, RunInfo, Suite, SweepArg};

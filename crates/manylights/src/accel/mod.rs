@@ -28,7 +28,7 @@ pub use bvh::{Bvh, BvhNode, END, LEAF, MAX_DEPTH, MAX_LEAF_SIZE};
 
 /// The test probe of the point query (`volume_query_probe.wgsl`), walked per subgroup or per invocation.
 pub fn volume_query_probe_shader(subgroups: bool) -> crate::gpu::shaders::ShaderDesc {
-    crate::gpu::shaders::ShaderDesc::new("accel/volume_query_probe.wgsl").with("LIGHT_QUERY", crate::passes::volume_query_module(subgroups))
+    crate::gpu::shaders::ShaderDesc::new("accel/volume_query_probe.wgsl").with("LIGHT_QUERY", crate::plan::volume_query_module(subgroups))
 }
-pub use structure::{check_scene_capacity, BvhBuild, VolumeKind, VolumeStructure, Volumes, CPU_TOP_LEVEL_MAX_INSTANCES};
+pub use structure::{check_scene_capacity, VolumeKind, VolumeStructure, Volumes, CPU_TOP_LEVEL_MAX_INSTANCES};
 pub use volumes::{decal_aabb, decal_contains, light_aabb, light_contains, Aabb};

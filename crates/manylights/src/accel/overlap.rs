@@ -2,9 +2,12 @@
 //! per pixel follows this number rather than the volume count (each reached volume is shaded or
 //! sampled), so benchmarks state it beside their timings (`manylights info`).
 
+use std::ops::Range;
+
 use glam::Vec3;
 
 use super::{decal_aabb, decal_contains, light_aabb, light_contains, Aabb, Bvh};
+use crate::plan::{Measurements, SceneStatistics};
 use crate::scene::{Groups, Scene};
 use crate::Result;
 
@@ -28,6 +31,55 @@ pub fn light_overlap(scene: &Scene, points: &[Vec3]) -> Result<Overlap> {
 pub fn decal_overlap(scene: &Scene, points: &[Vec3]) -> Result<Overlap> {
     let boxes: Vec<Aabb> = scene.decals.iter().map(decal_aabb).collect();
     overlap(&boxes, &scene.decal_groups, points, |i, p| decal_contains(&scene.decals[i], p))
+}
+
+/// Volumes [`centre_overlap`] samples, evenly spread over the groups.
+pub const OVERLAP_SAMPLES: usize = 4096;
+
+/// The mean number of boxes of its group holding a volume's box centre, over up to [`OVERLAP_SAMPLES`]
+/// volumes of the groups that have a BVH (`builds`, one per range of `boxes`); 0 without any. A
+/// decal's centre lies on the surface it is projected on, so this is how crowded the point queries'
+/// leaves are where decals show.
+pub fn centre_overlap(boxes: &[Aabb], ranges: &[Range<usize>], builds: &[Option<Bvh>]) -> f32 {
+    let built: usize = ranges.iter().zip(builds).filter(|(_, b)| b.is_some()).map(|(r, _)| r.len()).sum();
+    let step = built.div_ceil(OVERLAP_SAMPLES).max(1);
+    // Every step-th volume counted over all the CPU-built groups together, so many small groups
+    // take no more samples than one large one.
+    let (mut seen, mut samples, mut holding) = (0usize, 0usize, 0usize);
+    for (range, build) in ranges.iter().zip(builds) {
+        let Some(bvh) = build else { continue };
+        let group = &boxes[range.clone()];
+        let first = (step - seen % step) % step;
+        for b in group.iter().skip(first).step_by(step) {
+            bvh.query_point(group, (b.min + b.max) * 0.5, |_| holding += 1);
+            samples += 1;
+        }
+        seen += group.len();
+    }
+    if samples == 0 {
+        0.0
+    } else {
+        holding as f32 / samples as f32
+    }
+}
+
+/// The statistics the frame plan reads (`plan::FramePlan::resolve`), measuring only what
+/// `measurements` asks.
+pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<SceneStatistics> {
+    let (ranges, instances) = scene.decal_groups.resolve(scene.decals.len());
+    let decal_centre_overlap = if measurements.decal_centre_overlap {
+        let boxes: Vec<Aabb> = scene.decals.iter().map(decal_aabb).collect();
+        let builds =
+            ranges.iter().map(|r| (!r.is_empty()).then(|| Bvh::build(&boxes[r.clone()])).transpose()).collect::<Result<Vec<_>>>()?;
+        Some(centre_overlap(&boxes, &ranges, &builds))
+    } else {
+        None
+    };
+    Ok(SceneStatistics {
+        particles: scene.particles.as_ref().map_or(0, |p| p.count),
+        placed_decal_groups: instances.iter().filter(|i| !ranges[i.group].is_empty()).count(),
+        decal_centre_overlap,
+    })
 }
 
 /// Counts, per point, the items whose box holds it and that `contains` accepts; each group is
@@ -92,5 +144,23 @@ mod tests {
         };
         let o = decal_overlap(&scene, &points).unwrap();
         assert_eq!((o.max, o.mean, o.covered), (2, 4.0 / 3.0, 1.0));
+    }
+
+    #[test]
+    fn centre_overlap_counts_the_boxes_holding_each_centre_in_its_group() {
+        let at = |x: f32| Aabb::new(glam::Vec3::new(x, 0.0, 0.0), glam::Vec3::new(x + 1.0, 1.0, 1.0));
+        // Ten stacked boxes, a lone one, and ten more stacked in a group built on the GPU.
+        let boxes: Vec<Aabb> = std::iter::repeat_n(at(0.0), 10).chain([at(5.0)]).chain(std::iter::repeat_n(at(0.0), 10)).collect();
+        let ranges = [0..10, 10..11, 11..21];
+        let built = |range: &Range<usize>| Some(Bvh::build(&boxes[range.clone()]).unwrap());
+        let builds = [built(&ranges[0]), built(&ranges[1]), None];
+        assert_eq!(centre_overlap(&boxes, &ranges, &builds), (10.0 * 10.0 + 1.0) / 11.0);
+        assert_eq!(centre_overlap(&boxes, &ranges[1..2], &builds[1..2]), 1.0);
+        assert_eq!(centre_overlap(&boxes, &ranges[2..], &builds[2..]), 0.0);
+        // More one-box groups than samples: every group sampled holds its own box alone.
+        let many: Vec<Aabb> = (0..3 * OVERLAP_SAMPLES).map(|i| at(2.0 * i as f32)).collect();
+        let ranges: Vec<Range<usize>> = (0..many.len()).map(|i| i..i + 1).collect();
+        let builds: Vec<Option<Bvh>> = ranges.iter().map(|r| Some(Bvh::build(&many[r.clone()]).unwrap())).collect();
+        assert_eq!(centre_overlap(&many, &ranges, &builds), 1.0);
     }
 }

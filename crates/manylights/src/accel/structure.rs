@@ -25,7 +25,7 @@ use glam::Affine3A;
 use super::{
     bvh::{MAX_LEAF_SIZE, MAX_PRIMITIVES},
     cell_lists::{self, CellLists},
-    clusters::{ClusterBounds, ClusterGrid, ClusterLists},
+    clusters::{ClusterBounds, ClusterLists},
     decal_aabb,
     entry_grid::{self, EntryGrid},
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
@@ -35,9 +35,11 @@ use super::{
 use crate::{
     gpu::{
         bindings,
+        cluster_grid::ClusterGrid,
         scene::{affine_rows, GpuDecal, GpuLight},
         GpuContext, GpuTimer,
     },
+    plan::{DynamicLeaves, GroupBuild, StructurePlan},
     scene::{Decal, GroupInstance, Groups, Light, DECAL_LAYERS},
     Error, Result,
 };
@@ -46,38 +48,6 @@ use crate::{
 /// and uploaded with the instances, which takes microseconds; a GPU build has a fixed cost of its
 /// passes (0.18 ms for 16 instances on an H100). Above it, the GPU builds the top level.
 pub const CPU_TOP_LEVEL_MAX_INSTANCES: usize = 1024;
-
-/// The leaves of the dynamic group (particle lights, rebuilt every frame), by how its queries walk
-/// (`passes::query_walks`). Particles crowd, so hundreds reach each lit point, and a walk over
-/// one-light leaves visits about twenty nodes per light it finds; bigger leaves trade node visits for
-/// range tests. Walking alone, an invocation tests every light of a leaf it reaches: 1M particles
-/// shaded in 41.6 ms at 16 and 81.4 at 1 (before leaves named their items directly; BENCHMARKS.md,
-/// "Subgroup walks, particle leaves and finer entry grids"). Walking as a subgroup, each lane
-/// tests one light of a leaf against the box around all the lanes' points, and the lanes then share
-/// only the lights some lane kept (`shading/enumerate/lights_bvh.wgsl`), so a leaf's size costs a
-/// few box tests per lane: on the H100, 1M particles shaded in 12.5 ms at 16, 10.2 at 32, 9.3 at 64
-/// and 8.6 at 128, the most a leaf holds (BENCHMARKS.md, "Leaves shared out").
-pub fn dynamic_group_leaf_size(subgroup_walks: bool) -> u32 {
-    if subgroup_walks {
-        MAX_LEAF_SIZE
-    } else {
-        16
-    }
-}
-
-/// Where and when the groups' BVHs are built.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum BvhBuild {
-    /// Once, on the CPU (binned SAH): for groups whose volumes do not change.
-    #[default]
-    CpuOnce,
-    /// Every frame, on the GPU (LBVH), as groups whose volumes change need: timed as
-    /// `<label>_blas_build`.
-    GpuEveryFrame,
-    /// Never: the items in the scene's order with their instances, for methods that read only those,
-    /// in any order (brute force, off). Millions of volumes then cost no build at all.
-    None,
-}
 
 /// Keep in sync with `VolumeInstance` in `accel/bvh_types.wgsl`.
 #[repr(C)]
@@ -120,34 +90,6 @@ impl GpuVolumeInstance {
             blas_root: group.blas_root | group.grid.map_or(0, |g| g.flag),
             scale: world_from_group.matrix3.x_axis.length(),
         }
-    }
-}
-
-/// Volumes [`VolumeStructure::centre_overlap`] samples, evenly spread over the CPU-built groups.
-pub const OVERLAP_SAMPLES: usize = 4096;
-
-/// The mean number of boxes of its group holding a volume's box centre, over up to [`OVERLAP_SAMPLES`]
-/// volumes of the CPU-built groups (`builds`, one per range of `boxes`); 0 without any.
-fn centre_overlap(boxes: &[Aabb], ranges: &[Range<usize>], builds: &[Option<Bvh>]) -> f32 {
-    let built: usize = ranges.iter().zip(builds).filter(|(_, b)| b.is_some()).map(|(r, _)| r.len()).sum();
-    let step = built.div_ceil(OVERLAP_SAMPLES).max(1);
-    // Every step-th volume counted over all the CPU-built groups together, so many small groups
-    // take no more samples than one large one.
-    let (mut seen, mut samples, mut holding) = (0usize, 0usize, 0usize);
-    for (range, build) in ranges.iter().zip(builds) {
-        let Some(bvh) = build else { continue };
-        let group = &boxes[range.clone()];
-        let first = (step - seen % step) % step;
-        for b in group.iter().skip(first).step_by(step) {
-            bvh.query_point(group, (b.min + b.max) * 0.5, |_| holding += 1);
-            samples += 1;
-        }
-        seen += group.len();
-    }
-    if samples == 0 {
-        0.0
-    } else {
-        holding as f32 / samples as f32
     }
 }
 
@@ -324,10 +266,11 @@ pub struct Volumes<'a> {
     pub kind: VolumeKind,
     pub items: &'a [u8],
     pub boxes: &'a [Aabb],
-    /// The centre overlap ([`VolumeStructure::centre_overlap`]) from which the CPU-built groups get wide
-    /// leaves ([`Bvh::build_wide`]), for queries that share each leaf out among a subgroup's lanes;
-    /// `None`: never.
-    pub wide_leaves_from: Option<f32>,
+    /// The CPU-built groups get wide leaves ([`Bvh::build_wide`]), for queries that share each leaf
+    /// out among a subgroup's lanes (`plan::StructurePlan::wide_leaves`).
+    pub wide_leaves: bool,
+    /// The one placed group gets cell lists where they fit (`plan::StructurePlan::cell_lists`).
+    pub cell_lists: bool,
     pub groups: &'a Groups,
     /// Volumes written on the GPU every frame, after the others: one more group, placed at identity
     /// and rebuilt on the GPU every frame (particle lights, `particles/`).
@@ -340,8 +283,8 @@ pub struct DynamicGroup {
     pub count: u32,
     /// Bounds every one of its boxes stays within (its place in the top level).
     pub bounds: Aabb,
-    /// The most boxes a leaf of its LBVH holds ([`dynamic_group_leaf_size`]).
-    pub leaf_size: u32,
+    /// How many boxes a leaf of its LBVH holds.
+    pub leaves: DynamicLeaves,
 }
 
 /// Where GPU passes write a [`DynamicGroup`]'s volumes each frame: their boxes into `boxes`, before
@@ -376,9 +319,7 @@ pub struct VolumeStructure {
     /// groups' in leaf order; GPU-rebuilt groups' in scene order, as their copy into leaf order reads
     /// them (where they land changes with every build).
     scene_indices: Vec<u32>,
-    /// How many volumes' boxes hold a volume's centre, on average ([`Self::centre_overlap`]).
-    centre_overlap: f32,
-    /// The CPU-built groups have wide leaves ([`Volumes::wide_leaves_from`]).
+    /// The CPU-built groups have wide leaves ([`Volumes::wide_leaves`]).
     wide_leaves: bool,
     /// The structure's one placed group has cell lists ([`Self::cell_lists`]).
     cell_lists: bool,
@@ -412,7 +353,7 @@ impl VolumeStructure {
         ctx: &GpuContext,
         lights: &[Light],
         groups: &Groups,
-        build: BvhBuild,
+        build: GroupBuild,
         clusters: Option<(ClusterGrid, &wgpu::BindGroupLayout)>,
     ) -> Result<Self> {
         let items: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
@@ -426,7 +367,8 @@ impl VolumeStructure {
             kind: VolumeKind::Lights,
             items: bytemuck::cast_slice(&items),
             boxes: &boxes,
-            wide_leaves_from: None,
+            wide_leaves: false,
+            cell_lists: false,
             groups,
             dynamic: None,
         };
@@ -435,24 +377,25 @@ impl VolumeStructure {
 
     /// The structure over a scene's lights and `particle_lights` point lights more, which a GPU pass
     /// writes every frame ([`dynamic_group`](Self::dynamic_group)) within `particle_bounds`, in leaves
-    /// of up to `leaf_size` ([`dynamic_group_leaf_size`]).
+    /// with `leaves` as the plan says (`plan::dynamic_leaves`).
     pub fn for_lights_and_particles(
         ctx: &GpuContext,
         lights: &[Light],
         groups: &Groups,
-        build: BvhBuild,
+        build: GroupBuild,
         particle_lights: u32,
         particle_bounds: Aabb,
-        leaf_size: u32,
+        leaves: DynamicLeaves,
     ) -> Result<Self> {
         let items: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
         let boxes: Vec<Aabb> = lights.iter().map(light_aabb).collect();
-        let dynamic = DynamicGroup { count: particle_lights, bounds: particle_bounds, leaf_size };
+        let dynamic = DynamicGroup { count: particle_lights, bounds: particle_bounds, leaves };
         let volumes = Volumes {
             kind: VolumeKind::Lights,
             items: bytemuck::cast_slice(&items),
             boxes: &boxes,
-            wide_leaves_from: None,
+            wide_leaves: false,
+            cell_lists: false,
             groups,
             dynamic: Some(dynamic),
         };
@@ -472,18 +415,16 @@ impl VolumeStructure {
         })
     }
 
-    /// The structure over a scene's decals; with clustered lists on `clusters`' grid when given.
-    /// Decals name their materials' records from `decal_material_base` on
-    /// (`GpuScene::decal_material_base`). Where their centre overlap reaches `wide_leaves_from`, the
-    /// CPU-built groups get wide leaves ([`Volumes::wide_leaves_from`]).
+    /// The structure over a scene's decals, built as `plan` says; with clustered lists on `clusters`'
+    /// grid when given. Decals name their materials' records from `decal_material_base` on
+    /// (`GpuScene::decal_material_base`).
     pub fn for_decals(
         ctx: &GpuContext,
         decals: &[Decal],
         groups: &Groups,
-        build: BvhBuild,
+        plan: &StructurePlan,
         clusters: Option<(ClusterGrid, &wgpu::BindGroupLayout)>,
         decal_material_base: u32,
-        wide_leaves_from: Option<f32>,
     ) -> Result<Self> {
         let items: Vec<GpuDecal> = decals.iter().map(|d| GpuDecal::new(d, decal_material_base)).collect();
         let boxes: Vec<Aabb> = decals.iter().map(decal_aabb).collect();
@@ -496,11 +437,12 @@ impl VolumeStructure {
             kind: VolumeKind::Decals,
             items: bytemuck::cast_slice(&items),
             boxes: &boxes,
-            wide_leaves_from,
+            wide_leaves: plan.wide_leaves,
+            cell_lists: plan.cell_lists,
             groups,
             dynamic: None,
         };
-        let mut structure = Self::new(ctx, &volumes, build, clustering)?;
+        let mut structure = Self::new(ctx, &volumes, plan.build, clustering)?;
         structure.layers = structure.scene_indices.iter().map(|&i| decals[i as usize].layer).collect();
         Ok(structure)
     }
@@ -534,7 +476,7 @@ impl VolumeStructure {
         Ok((pairs, ranges))
     }
 
-    pub fn new(ctx: &GpuContext, volumes: &Volumes, build: BvhBuild, clustering: Option<Clustering>) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, volumes: &Volumes, build: GroupBuild, clustering: Option<Clustering>) -> Result<Self> {
         let label = volumes.kind.label();
         let count = volumes.boxes.len();
         if volumes.items.len() != count * volumes.kind.record_bytes() {
@@ -580,7 +522,7 @@ impl VolumeStructure {
                 .map_err(|m| Error::InvalidScene(format!("{m}; use fewer {label}s")))
         };
         // Without group BVHs only the top level's nodes are written.
-        let stored_nodes = if build == BvhBuild::None && dynamic.is_none() { u64::from(top_level_nodes) } else { node_count };
+        let stored_nodes = if build == GroupBuild::None && dynamic.is_none() { u64::from(top_level_nodes) } else { node_count };
         let node_bytes = stored_nodes * std::mem::size_of::<BvhNode>() as u64;
         fits("BVH nodes", node_bytes)?;
         // CPU builds first: their entry grids' cells and covers, or cell lists, follow the primitive
@@ -590,24 +532,19 @@ impl VolumeStructure {
         let group_boxes = |range: &Range<usize>| &volumes.boxes[range.clone()];
         // Each group's CPU-built tree, if it has one.
         let cpu_trees = |builder: fn(&[Aabb]) -> Result<Bvh>| -> Result<Vec<Option<Bvh>>> {
-            let cpu_built = |range: &Range<usize>| build == BvhBuild::CpuOnce && !range.is_empty();
+            let cpu_built = |range: &Range<usize>| build == GroupBuild::CpuOnce && !range.is_empty();
             ranges.iter().map(|range| cpu_built(range).then(|| builder(group_boxes(range))).transpose()).collect()
         };
-        let mut trees = cpu_trees(Bvh::build)?;
-        // Measured only where it decides the leaves.
-        let centre_overlap = if volumes.wide_leaves_from.is_some() { centre_overlap(volumes.boxes, &ranges, &trees) } else { 0.0 };
-        // Crowded volumes whose queries share leaves out get wide leaves: a second SAH build (tens of
-        // milliseconds for 100k volumes; the entry grids, built after, take seconds).
-        let wide_leaves = volumes.wide_leaves_from.is_some_and(|from| trees.iter().any(Option::is_some) && centre_overlap >= from);
-        if wide_leaves {
-            trees = cpu_trees(Bvh::build_wide)?;
-        }
+        // Crowded volumes whose queries share leaves out get wide leaves.
+        let trees = cpu_trees(if volumes.wide_leaves { Bvh::build_wide } else { Bvh::build })?;
+        let wide_leaves = volumes.wide_leaves && trees.iter().any(Option::is_some);
         // Crowded decals that are one group placed once get cell lists where they fit, which shading
         // reads in place of any walk (`VolumeStructure::cell_lists`). Only the placed group's: groups
         // without an instance are never queried.
         const _: () = assert!(DECAL_LAYERS - 1 <= cell_lists::MAX_RANK);
         let listed_group =
-            (volumes.kind == VolumeKind::Decals && wide_leaves && instances.len() == 1 && dynamic.is_none()).then(|| instances[0].group);
+            (volumes.kind == VolumeKind::Decals && volumes.cell_lists && wide_leaves && instances.len() == 1 && dynamic.is_none())
+                .then(|| instances[0].group);
         let list_words_per_primitive = cell_lists::MAX_LIST_WORDS as f64 / count.max(1) as f64;
         let cpu_builds: Vec<Option<(Bvh, Option<GroupGrid>)>> = trees
             .into_iter()
@@ -651,7 +588,7 @@ impl VolumeStructure {
                 }
             })
             .collect();
-        let rebuilt_on_gpu = build == BvhBuild::GpuEveryFrame && ranges.iter().any(|range| !range.is_empty());
+        let rebuilt_on_gpu = build == GroupBuild::GpuEveryFrame && ranges.iter().any(|range| !range.is_empty());
         if rebuilt_on_gpu && clustering.is_some() {
             return Err(Error::InvalidConfig(format!(
                 "clustered lists bin the {label}s in the order the CPU stores them, which GPU rebuilds change every frame; build the {label}s' BVH once on the CPU"
@@ -729,7 +666,7 @@ impl VolumeStructure {
                     }
                     None
                 }
-                None if boxes.is_empty() || build == BvhBuild::None => None,
+                None if boxes.is_empty() || build == GroupBuild::None => None,
                 None => {
                     let target = LbvhTarget {
                         nodes: nodes.clone(),
@@ -756,7 +693,10 @@ impl VolumeStructure {
                 item_base: first,
                 leaf_base: first,
             };
-            let mut builder = GpuLbvh::with_target(ctx, d.count, target)?.with_max_leaf_size(d.leaf_size);
+            let mut builder = GpuLbvh::with_target(ctx, d.count, target)?.with_max_leaf_size(match d.leaves {
+                DynamicLeaves::Widest => MAX_LEAF_SIZE,
+                DynamicLeaves::AtMost(size) => size,
+            });
             builder.set_gpu_boxes(&ctx.queue, d.count, &d.bounds)?;
             groups.push(Group {
                 items: first..first + d.count,
@@ -804,7 +744,6 @@ impl VolumeStructure {
             items,
             layers: Vec::new(),
             scene_indices,
-            centre_overlap,
             wide_leaves,
             cell_lists,
             leaf_order,
@@ -829,15 +768,6 @@ impl VolumeStructure {
         &self.scene_indices
     }
 
-    /// How many volumes' boxes hold a volume's centre, on average over up to [`OVERLAP_SAMPLES`] volumes
-    /// of its CPU-built groups: a decal's centre lies on the surface it is projected on, so this is
-    /// how crowded the point queries' leaves are where decals show. Measured where
-    /// [`Volumes::wide_leaves_from`] asks, against which it decides [`Self::wide_leaves`]; 0 where
-    /// not, where every group is built on the GPU, or where there are none.
-    pub fn centre_overlap(&self) -> f32 {
-        self.centre_overlap
-    }
-
     /// Whether the structure is one group, placed once, with cell lists (`cell_lists.rs`): its items
     /// crowd and its queries share them out (`wide_leaves`), so shading reads the list of a point's
     /// cell (`shading/enumerate/decals_bvh_cells.wgsl`) instead of walking. The group's BVH stays, for
@@ -846,9 +776,9 @@ impl VolumeStructure {
         self.cell_lists
     }
 
-    /// Whether the CPU-built groups have wide leaves ([`Volumes::wide_leaves_from`]): queries of this
-    /// structure should share its leaves out, which the renderer makes them do
-    /// (`ShadingMethods::dense_decals`, `passes::query_walks`); tested one by one, wide leaves are slow.
+    /// Whether the CPU-built groups have wide leaves ([`Volumes::wide_leaves`]): queries of this
+    /// structure should share its leaves out, as the plan makes them (`plan::query_walks`); tested
+    /// one by one, wide leaves are slow.
     pub fn wide_leaves(&self) -> bool {
         self.wide_leaves
     }
@@ -1079,24 +1009,6 @@ mod tests {
 
     /// The mean count of boxes holding a box's centre, within its own group, over CPU-built groups only,
     /// sampled evenly across them.
-    #[test]
-    fn centre_overlap_counts_the_boxes_holding_each_centre_in_its_group() {
-        let at = |x: f32| Aabb::new(glam::Vec3::new(x, 0.0, 0.0), glam::Vec3::new(x + 1.0, 1.0, 1.0));
-        // Ten stacked boxes, a lone one, and ten more stacked in a group built on the GPU.
-        let boxes: Vec<Aabb> = std::iter::repeat_n(at(0.0), 10).chain([at(5.0)]).chain(std::iter::repeat_n(at(0.0), 10)).collect();
-        let ranges = [0..10, 10..11, 11..21];
-        let built = |range: &Range<usize>| Some(Bvh::build(&boxes[range.clone()]).unwrap());
-        let builds = [built(&ranges[0]), built(&ranges[1]), None];
-        assert_eq!(centre_overlap(&boxes, &ranges, &builds), (10.0 * 10.0 + 1.0) / 11.0);
-        assert_eq!(centre_overlap(&boxes, &ranges[1..2], &builds[1..2]), 1.0);
-        assert_eq!(centre_overlap(&boxes, &ranges[2..], &builds[2..]), 0.0);
-        // More one-box groups than samples: every group sampled holds its own box alone.
-        let many: Vec<Aabb> = (0..3 * OVERLAP_SAMPLES).map(|i| at(2.0 * i as f32)).collect();
-        let ranges: Vec<Range<usize>> = (0..many.len()).map(|i| i..i + 1).collect();
-        let builds: Vec<Option<Bvh>> = ranges.iter().map(|r| Some(Bvh::build(&many[r.clone()]).unwrap())).collect();
-        assert_eq!(centre_overlap(&many, &ranges, &builds), 1.0);
-    }
-
     #[test]
     fn relocation_offsets_children_and_leaves() {
         let boxes: Vec<Aabb> = (0..20).map(|i| Aabb::new(glam::Vec3::splat(i as f32), glam::Vec3::splat(i as f32 + 0.5))).collect();

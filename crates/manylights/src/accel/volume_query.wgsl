@@ -4,7 +4,7 @@
 // naming its bindings `VOLUMES_nodes`, `VOLUMES_primitives`, `VOLUMES_instances` and
 // `VOLUMES_first_instance`, so lights and decals each get their own cursor. Enumeration modules
 // include it through a walk module, which decides how invocations walk together
-// (`passes::volume_query_module`): `accel/volume_query_invocation.wgsl`, each invocation alone, or
+// (`plan::volume_query_module`): `accel/volume_query_invocation.wgsl`, each invocation alone, or
 // `accel/volume_query_subgroup.wgsl`, a whole subgroup together. A walk module defines
 // `VOLUMES_walk_any(inside)`, whether to enter a node whose box holds (`inside`) or not this
 // invocation's point, `VOLUMES_walk_cells(start, stop)`, the range of nodes to walk for this

@@ -4,7 +4,7 @@
 // goes to every lane, whose tight tests reject the items around other lanes' points. Neighbouring pixels
 // need nearly the same nodes, so this costs about one lane's walk, with one load per node for the
 // whole subgroup; lanes walking alone visit the same nodes at different times, each load a separate
-// memory transaction. Passes use it where it is faster (`passes::query_walks`).
+// memory transaction. Passes use it where it is faster (`plan::query_walks`).
 #include "accel/volume_query.wgsl" with VOLUMES=VOLUMES
 
 fn VOLUMES_walk_any(inside: bool) -> bool {

@@ -16,7 +16,7 @@ const REQUIRED_STORAGE_BUFFERS: u32 = 19;
 /// Features the renderer uses when the adapter has them; none is required by every scene.
 /// `primitive_index` lets the visibility raster draw indexed; `float32_blendable` lets transparent
 /// surfaces blend into the f32 HDR image (scenes with them need it); `subgroups` let passes walk BVHs
-/// a subgroup at a time where that is faster (`passes::query_walks`).
+/// a subgroup at a time where that is faster (`plan::query_walks`).
 const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::PRIMITIVE_INDEX)
     .union(wgpu::Features::FLOAT32_BLENDABLE)
@@ -92,6 +92,15 @@ pub fn list_adapters() -> Vec<AdapterSummary> {
 }
 
 impl GpuContext {
+    /// The limits the settings are checked against (`RenderConfig::validate`).
+    pub fn device_limits(&self) -> crate::settings::DeviceLimits {
+        crate::settings::DeviceLimits {
+            max_texture_dimension_2d: self.limits.max_texture_dimension_2d,
+            max_texture_dimension_3d: self.limits.max_texture_dimension_3d,
+            max_buffer_size: self.limits.max_buffer_size,
+        }
+    }
+
     /// Whether `bytes` of `what` fit one storage binding; if not, "the {what} take N MiB, over this
     /// GPU's storage binding limit of M MiB", for the caller to end with the fix.
     pub fn check_storage_binding(&self, what: &str, bytes: u64) -> std::result::Result<(), String> {

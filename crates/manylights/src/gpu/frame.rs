@@ -1,9 +1,9 @@
 //! Per-frame constants: camera matrices, viewport, sun, ambient and the tonemapper.
 
+use super::cluster_grid::ClusterGrid;
 use crate::{
-    accel::clusters::ClusterGrid,
-    config::Tonemapper,
-    scene::{Aabb, Camera},
+    scene::{Aabb, Camera, Projection},
+    settings::{RaySettings, Tonemapper, MAX_PARTICLE_CASCADES},
 };
 
 /// Keep in sync with `FrameUniforms` in `shading/types.wgsl`.
@@ -34,13 +34,13 @@ pub struct FrameUniforms {
     pub particle_volume: [u32; 4],
     pub particle_filter: [u32; 4],
     pub particle_texture_unscale: [f32; 4],
-    pub particle_cascades: [[f32; 4]; crate::particles::MAX_PARTICLE_CASCADES as usize],
-    /// Ray-traced effects (`rays::RaySettings::uniforms`), set by the renderer: sun shadow mode,
+    pub particle_cascades: [[f32; 4]; MAX_PARTICLE_CASCADES as usize],
+    /// Ray-traced effects ([`ray_uniforms`]), set by the renderer: sun shadow mode,
     /// shadow rays per pixel, reflection bounces; the sun's angular radius, the reflection roughness
     /// threshold, a pixel's spread angle and its width at the camera.
     pub ray_options: [u32; 4],
     pub ray_settings: [f32; 4],
-    /// The debug view (`config::DebugView`) and the count its heat map tops out at; zero: none.
+    /// The debug view (`settings::DebugView`) and the count its heat map tops out at; zero: none.
     pub debug_view: [u32; 4],
 }
 
@@ -81,10 +81,22 @@ impl FrameUniforms {
             particle_volume: [0; 4],
             particle_filter: [0; 4],
             particle_texture_unscale: [1.0; 4],
-            particle_cascades: [[0.0; 4]; crate::particles::MAX_PARTICLE_CASCADES as usize],
+            particle_cascades: [[0.0; 4]; MAX_PARTICLE_CASCADES as usize],
             ray_options: [0; 4],
             ray_settings: [0.0; 4],
             debug_view: [0; 4],
         }
     }
+}
+
+/// The frame uniforms' `ray_options` and `ray_settings` (`shading/types.wgsl`), for a camera
+/// rendering `height` pixel rows.
+pub fn ray_uniforms(rays: &RaySettings, camera: &Camera, height: u32) -> ([u32; 4], [f32; 4]) {
+    // A pixel's cone: its width at the camera (orthographic) and its spread angle (perspective).
+    let (spread, width) = match camera.projection {
+        Projection::Perspective { yfov, .. } => (2.0 * (yfov * 0.5).tan() / height as f32, 0.0),
+        Projection::Orthographic { ymag, .. } => (0.0, 2.0 * ymag / height as f32),
+    };
+    let options = [rays.sun_shadows as u32, rays.shadow_rays, rays.reflection_bounces, rays.light_shadow_rays];
+    (options, [(rays.sun_angle_degrees * 0.5).to_radians(), rays.reflection_roughness, spread, width])
 }

@@ -2,6 +2,7 @@
 //! shader composition (and, for a few shaders, their SPIR-V). Passes build on these; nothing here knows about a particular pipeline.
 
 pub mod bindings;
+pub mod cluster_grid;
 pub mod context;
 pub mod frame;
 pub mod loop_limit;

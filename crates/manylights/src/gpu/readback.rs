@@ -60,3 +60,11 @@ pub fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture, bytes_per_pixel: 
     let padded: Vec<u8> = map_buffer(ctx, &buffer, 0, size)?;
     Ok(padded.chunks_exact(padded_row as usize).flat_map(|row| &row[..row_bytes as usize]).copied().collect())
 }
+
+/// A read-back image, rows top to bottom.
+#[derive(Clone, Debug)]
+pub struct Image<T> {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<T>,
+}

@@ -13,7 +13,6 @@ use super::{
     FrameUniforms, GpuContext,
 };
 use crate::{
-    rays::RayStructure,
     scene::{AlphaMode, Decal, Light, LightKind, Material, Scene, TextureRef, Wrap},
     Error, Result,
 };
@@ -231,14 +230,14 @@ impl GpuScene {
     /// Uploads `scene`. `max_texture_size` caps the layer size of the texture arrays; `anisotropy` is
     /// the sampler's maximum anisotropy (1 = trilinear); `particle_grids` are the particle system's
     /// colour and direction textures, bound for shading (1×1×1 placeholders without particles);
-    /// `rays` is the scene's ray-tracing hierarchy, for ray-traced effects (without it, an empty one).
+    /// `rays` is the scene's ray-tracing hierarchy, for ray-traced effects (`rays::RayStructure`).
     pub fn upload(
         ctx: &GpuContext,
         scene: &Scene,
         max_texture_size: u32,
         anisotropy: u16,
         particle_grids: Option<[&wgpu::Texture; 2]>,
-        rays: Option<&RayStructure>,
+        rays: RayBuffers,
     ) -> Result<Self> {
         scene.validate()?;
         let device = &ctx.device;
@@ -336,14 +335,12 @@ impl GpuScene {
             moving_draws[first..first + scene.meshes[scene.instances[instance].mesh].primitives.len()].fill(true);
         }
         let material_buffer = storage_buffer(device, "materials", &materials, limit, wgpu::BufferUsages::empty())?;
-        let no_rays = RayStructure::unused();
-        let rays = rays.filter(|r| !r.nodes.is_empty()).unwrap_or(&no_rays);
         // The top level and the instances are rewritten when instances move (`move_instances`).
         // Deformed meshes' BLASes are refitted on the GPU (`rays/refit.rs`); tests read them back.
         let copy = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
-        let ray_node_buffer = storage_buffer(device, "ray hierarchy nodes", &rays.nodes, limit, copy)?;
-        let ray_triangle_buffer = storage_buffer(device, "ray triangles", &rays.triangles, limit, copy)?;
-        let ray_instance_buffer = storage_buffer(device, "ray instances", &rays.instances, limit, copy)?;
+        let ray_node_buffer = storage_records(device, "ray hierarchy nodes", rays.nodes, limit, copy)?;
+        let ray_triangle_buffer = storage_records(device, "ray triangles", rays.triangles, limit, copy)?;
+        let ray_instance_buffer = storage_records(device, "ray instances", rays.instances, limit, copy)?;
         let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
             size: std::mem::size_of::<FrameUniforms>() as u64,
@@ -442,8 +439,8 @@ impl GpuScene {
     /// instances' transforms a frame interval earlier (for motion blur; empty when no pass reads them),
     /// `primitive_counts` each instance's primitive count (its draws). Rewrites their draws, previous
     /// transforms, their commands' centres (draw order) and mirroring (winding) and, when the frame
-    /// traces rays,
-    /// the rays' top level and instances from `rays` (already placed with the same transforms). The
+    /// traces rays, the rays' top level and instances from `rays` (already placed with the same
+    /// transforms). The
     /// writes land before the next submitted frame and after the ones already submitted, so every
     /// frame draws and traces one consistent placement.
     pub fn move_instances(
@@ -452,7 +449,7 @@ impl GpuScene {
         moved: &[(usize, glam::Mat4)],
         previous: &[(usize, glam::Mat4)],
         primitive_counts: &[usize],
-        rays: Option<&RayStructure>,
+        rays: Option<RayBuffers>,
     ) {
         for &(instance, world_from_local) in previous {
             let first = self.instance_first_draw[instance];
@@ -482,9 +479,9 @@ impl GpuScene {
             let offset = (range.start * std::mem::size_of::<GpuDraw>()) as u64;
             queue.write_buffer(&self.draw_buffer, offset, bytemuck::cast_slice(&self.draws[range]));
         }
-        if let Some(rays) = rays.filter(|r| !r.instances.is_empty()) {
-            queue.write_buffer(&self.ray_node_buffer, 0, bytemuck::cast_slice(&rays.nodes[..rays.tlas_node_count]));
-            queue.write_buffer(&self.ray_instance_buffer, 0, bytemuck::cast_slice(&rays.instances));
+        if let Some(rays) = rays.filter(|r| !r.instances.bytes.is_empty()) {
+            queue.write_buffer(&self.ray_node_buffer, 0, &rays.nodes.bytes[..rays.top_level_nodes * rays.nodes.record_size]);
+            queue.write_buffer(&self.ray_instance_buffer, 0, rays.instances.bytes);
         }
     }
 
@@ -529,6 +526,29 @@ fn draw_transforms(world_from_local: &glam::Mat4) -> ([[f32; 4]; 4], [[f32; 4]; 
     (world_from_local.to_cols_array_2d(), columns.map(|c| c.to_array()))
 }
 
+/// Records of one kind as bytes, with the size of one record.
+#[derive(Clone, Copy, Debug)]
+pub struct Records<'a> {
+    pub bytes: &'a [u8],
+    pub record_size: usize,
+}
+
+impl<'a> Records<'a> {
+    pub fn of<T: bytemuck::Pod>(records: &'a [T]) -> Self {
+        Self { bytes: bytemuck::cast_slice(records), record_size: std::mem::size_of::<T>() }
+    }
+}
+
+/// The scene's ray hierarchy as its bindings hold it (`rays::RayStructure::buffers`): the nodes, the
+/// top level's `top_level_nodes` first, the triangles and the instances.
+#[derive(Clone, Copy, Debug)]
+pub struct RayBuffers<'a> {
+    pub nodes: Records<'a>,
+    pub top_level_nodes: usize,
+    pub triangles: Records<'a>,
+    pub instances: Records<'a>,
+}
+
 /// A read-only storage buffer, also usable as `usage`; empty arrays get one zeroed element because
 /// bindings cannot be empty.
 fn storage_buffer<T: bytemuck::Pod>(
@@ -538,7 +558,11 @@ fn storage_buffer<T: bytemuck::Pod>(
     limit: u64,
     usage: wgpu::BufferUsages,
 ) -> Result<wgpu::Buffer> {
-    let bytes = std::mem::size_of_val(data) as u64;
+    storage_records(device, label, Records::of(data), limit, usage)
+}
+
+fn storage_records(device: &wgpu::Device, label: &str, records: Records, limit: u64, usage: wgpu::BufferUsages) -> Result<wgpu::Buffer> {
+    let bytes = records.bytes.len() as u64;
     if bytes > limit {
         return Err(Error::InvalidScene(format!(
             "the scene's {label} take {:.1} MiB, over this GPU's storage binding limit of {:.1} MiB; use a smaller scene or a GPU with a larger limit",
@@ -546,11 +570,11 @@ fn storage_buffer<T: bytemuck::Pod>(
             limit as f64 / 1048576.0
         )));
     }
-    let zero = [T::zeroed()];
-    let contents: &[T] = if data.is_empty() { &zero } else { data };
+    let zero = vec![0; records.record_size];
+    let contents = if records.bytes.is_empty() { &zero } else { records.bytes };
     Ok(device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
-        contents: bytemuck::cast_slice(contents),
+        contents,
         usage: wgpu::BufferUsages::STORAGE | usage,
     }))
 }

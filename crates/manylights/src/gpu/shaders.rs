@@ -259,79 +259,6 @@ pub fn create_stage_module(
     }
 }
 
-/// Every shader the renderer builds, with every substitution it uses: the naga test validates each.
-pub fn all_shaders() -> Vec<ShaderDesc> {
-    let mut shaders = vec![
-        ShaderDesc::new("passes/visbuffer_raster_indexed.wgsl"),
-        ShaderDesc::new("passes/visbuffer_raster_pulled.wgsl"),
-        ShaderDesc::new("passes/deform.wgsl"),
-        ShaderDesc::new("rays/refit.wgsl"),
-        ShaderDesc::new("post/velocity.wgsl"),
-        ShaderDesc::new("post/velocity_raster.wgsl"),
-        ShaderDesc::new("post/depth_of_field.wgsl"),
-        ShaderDesc::new("post/motion_blur.wgsl"),
-        ShaderDesc::new("post/exposure.wgsl"),
-        ShaderDesc::new("post/bloom.wgsl"),
-        ShaderDesc::new("post/tonemap.wgsl"),
-        crate::accel::volume_query_probe_shader(false),
-        crate::accel::volume_query_probe_shader(true),
-        ShaderDesc::new("accel/lbvh.wgsl"),
-        ShaderDesc::new("accel/leaf_order.wgsl"),
-        ShaderDesc::new("accel/radix_sort.wgsl"),
-        ShaderDesc::new("accel/cluster_build.wgsl"),
-        ShaderDesc::new("passes/deferred_decals.wgsl"),
-        ShaderDesc::new("passes/depth_prepass.wgsl"),
-        ShaderDesc::new("passes/gbuffer_raster.wgsl"),
-        ShaderDesc::new("particles/motion.wgsl"),
-        ShaderDesc::new("particles/splat.wgsl"),
-        ShaderDesc::new("particles/lights.wgsl"),
-        ShaderDesc::new("rays/trace_probe.wgsl"),
-        ShaderDesc::new("passes/ray_shadows.wgsl"),
-        ShaderDesc::new("passes/shadow_filter.wgsl"),
-    ];
-    use crate::pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind, ShadingMethods};
-    for lights in LightMethod::ALL {
-        for decals in DecalMethod::ALL {
-            // Every particle method (`Bvh` lights with the particles' lights, which subgroups walk
-            // together), with and without reflections, lamp shadows and subgroup walks, and with
-            // sparse and dense decals.
-            let flags = [false, true];
-            let variants: Vec<_> =
-                ParticleMethod::ALL.iter().flat_map(|&p| flags.iter().flat_map(move |&r| flags.map(move |s| (p, r, s)))).collect();
-            for (particles, reflections, light_shadows) in variants {
-                // Dense decals, and their cell lists, change only the BVH's shader.
-                let densities: &[(bool, bool, bool)] = if decals == DecalMethod::Bvh {
-                    &[(false, false, false), (true, false, false), (true, true, false), (true, true, true)]
-                } else {
-                    &[(false, false, false), (true, false, false)]
-                };
-                for &(subgroups, dense_decals, decal_cell_lists) in densities {
-                    let methods = ShadingMethods {
-                        lights,
-                        decals,
-                        particles,
-                        reflections,
-                        light_shadows,
-                        subgroups,
-                        dense_decals,
-                        decal_cell_lists,
-                        debug_views: false,
-                    };
-                    if decals.works_in(PipelineKind::Forward) {
-                        shaders.push(crate::passes::forward_shade::shader(methods));
-                    }
-                    shaders.push(crate::passes::transparent_shade::shader(methods));
-                    if decals.works_in(PipelineKind::Visbuffer) {
-                        shaders.push(crate::passes::visbuffer_shade::shader(methods));
-                    }
-                    shaders.push(crate::passes::deferred_shade::shader(methods));
-                }
-            }
-        }
-    }
-    shaders
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -355,7 +282,7 @@ mod tests {
 
     #[test]
     fn every_shader_parses_and_validates() {
-        for desc in all_shaders() {
+        for desc in crate::passes::catalogue::all_shaders() {
             validate(&desc);
         }
     }
@@ -363,7 +290,7 @@ mod tests {
     #[test]
     fn every_embedded_file_is_used() {
         let mut used = HashSet::new();
-        for desc in all_shaders() {
+        for desc in crate::passes::catalogue::all_shaders() {
             let mut seen = HashSet::new();
             desc.append(desc.entry, None, &mut String::new(), &mut seen, &mut Vec::new()).unwrap();
             used.extend(seen.into_iter().map(|key| key.split(" with ").next().unwrap().to_string()));
@@ -387,7 +314,8 @@ mod tests {
     #[test]
     fn passes_walk_a_subgroup_at_a_time_where_it_pays() {
         use crate::passes::{deferred_shade, forward_shade, transparent_shade, visbuffer_shade};
-        use crate::pipelines::{DecalMethod, LightMethod, ParticleMethod, ShadingMethods};
+        use crate::plan::ShadingMethods;
+        use crate::settings::{DecalMethod, LightMethod, ParticleMethod};
         let sparse = ShadingMethods { lights: LightMethod::Bvh, decals: DecalMethod::Bvh, subgroups: true, ..Default::default() };
         let dense = ShadingMethods { particles: ParticleMethod::Bvh, ..sparse };
         let walks = |desc: ShaderDesc| desc.compose().unwrap().matches("subgroupAny(").count();
@@ -431,7 +359,8 @@ mod tests {
 
     #[test]
     fn templates_are_instantiated_once_per_value() {
-        use crate::pipelines::{DecalMethod, LightMethod, ShadingMethods};
+        use crate::plan::ShadingMethods;
+        use crate::settings::{DecalMethod, LightMethod};
         let methods = ShadingMethods { lights: LightMethod::Bvh, decals: DecalMethod::Bvh, ..Default::default() };
         let source = crate::passes::visbuffer_shade::shader(methods).compose().unwrap();
         assert_eq!(source.matches("fn light_query_next_leaf(").count(), 1);

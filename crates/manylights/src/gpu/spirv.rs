@@ -270,7 +270,8 @@ mod tests {
 
     #[test]
     fn the_decal_layers_lose_their_zeroing_and_nothing_else_changes() {
-        use crate::pipelines::{DecalMethod, LightMethod, ShadingMethods};
+        use crate::plan::ShadingMethods;
+        use crate::settings::{DecalMethod, LightMethod};
         let methods = ShadingMethods { lights: LightMethod::Bvh, decals: DecalMethod::Bvh, subgroups: true, ..Default::default() };
         let source = crate::passes::visbuffer_shade::shader(methods).compose().unwrap();
         assert_initialisers_removed(&source, naga::ShaderStage::Compute, "visbuffer_shade", &[("DEBUG_VIEWS", 1.0)], 1);
@@ -286,7 +287,7 @@ mod tests {
     /// Every shader variant whose SPIR-V this module writes and passes through: its entry, WGSL and
     /// parsed module.
     fn passed_through_shaders() -> Vec<(&'static str, String, naga::Module)> {
-        crate::gpu::shaders::all_shaders()
+        crate::passes::catalogue::all_shaders()
             .into_iter()
             .map(|desc| (desc.entry, desc.compose().unwrap()))
             .filter(|(_, source)| UNZEROED_VARIABLES.iter().any(|name| declares_variable(source, name)))

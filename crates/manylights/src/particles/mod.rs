@@ -25,111 +25,39 @@ use glam::{UVec3, Vec3};
 
 use crate::accel::structure::DynamicTargets;
 use crate::gpu::{bindings, readback, shaders::ShaderDesc, GpuContext, GpuTimer};
-use crate::scene::Aabb;
+use crate::scene::{Aabb, ParticleSettings};
+use crate::settings::particles::{check_cascade_resolution, check_cascades, check_voxel_size};
+use crate::settings::{Spelling, MAX_PARTICLE_CASCADES};
 use crate::{Error, Result};
 
-/// Most particles one system holds (about 2²⁴: as many as one row of 65535 workgroups of 256 threads,
-/// which the exact method's LBVH build dispatches): their lights take 32 bytes each.
-pub const MAX_PARTICLES: u32 = 65535 * 256;
 /// Most fixed-point steps per unit of the splat's sums: contributions are rounded (dithered) to 1/1024 at
 /// best. Crowded or bright particles get fewer ([`SplatScales`]), so no voxel's i32 sum can wrap.
 pub const MAX_SPLAT_SCALE: f32 = 1024.0;
 /// Most voxels one particle may splat into (32³): beyond, the splat's cost per particle is out of
 /// proportion to the light it carries, and a million particles would stall the GPU.
 pub const MAX_SPLAT_VOXELS: u64 = 32 * 32 * 32;
-/// Most cascades of a clipmap ([`ParticleVolume::Clipmap`]).
-pub const MAX_PARTICLE_CASCADES: u32 = 8;
-/// Most jittered points one shading point samples the grid at (`RenderConfig::particle_samples`).
-pub const MAX_PARTICLE_SAMPLES: u32 = 64;
-
-/// How shading reads the grid; the paper's remedies for its blocks are the filters past nearest, and
-/// supersampling (`RenderConfig::particle_samples`). Keep in sync with `PARTICLE_FILTER_*` in
-/// `shading/types.wgsl`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
-pub enum ParticleFilter {
-    /// The voxel the point lies in.
-    Nearest = 0,
-    /// The eight voxels around the point, by the hardware.
-    #[default]
-    Trilinear = 1,
-    /// A cubic B-spline over the 64 voxels around it, as eight trilinear taps (Sigg & Hadwiger 2005):
-    /// smooth across voxel faces, slightly blurred.
-    Tricubic = 2,
-}
-
-impl ParticleFilter {
-    pub fn name(self) -> &'static str {
-        match self {
-            ParticleFilter::Nearest => "nearest",
-            ParticleFilter::Trilinear => "trilinear",
-            ParticleFilter::Tricubic => "tricubic",
-        }
-    }
-}
-
 /// Threads per workgroup of the per-particle passes.
 const WORKGROUP: u32 = 256;
 const VOXEL_WORKGROUP: u32 = 4;
 
-/// How a scene file asks for its particles to be rendered; each unset field, and each one a
-/// command-line flag overrides, falls back to `RenderConfig`'s.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ParticleRendering {
-    pub method: Option<crate::pipelines::ParticleMethod>,
-    pub voxel_size: Option<f32>,
-    pub filter: Option<ParticleFilter>,
-    pub samples: Option<u32>,
-    pub cascades: Option<u32>,
-    pub cascade_resolution: Option<u32>,
-}
-
-/// The particles of a scene: how many, their emitters, and how they move and shine.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ParticleSettings {
-    pub count: u32,
-    pub seed: u32,
-    /// Launch points (world space) with their launch speed in m/s; particle `i` uses emitter
-    /// `i % emitters.len()`.
-    pub emitters: Vec<(Vec3, f32)>,
-    /// Seconds a particle flies before it is launched again, uniform in [min, max] per particle.
-    pub lifetime: (f32, f32),
-    /// Light radius (range) in metres, uniform in [min, max] per launch.
-    pub radius: (f32, f32),
-    /// Intensity (candela) of the brightest channel; colours are saturated hues.
-    pub intensity: f32,
-    /// Downward acceleration, m/s².
-    pub gravity: f32,
-    /// Turn about the emitter's vertical axis, radians per second of flight.
-    pub swirl: f32,
-    /// Launch directions lie within this angle of +Y, in degrees.
-    pub cone_degrees: f32,
-    /// The scene file's rendering choices for them.
-    pub rendering: ParticleRendering,
-}
-
-impl Default for ParticleSettings {
-    fn default() -> Self {
-        Self {
-            count: 0,
-            seed: 1,
-            emitters: Vec::new(),
-            lifetime: (2.0, 4.0),
-            radius: (0.5, 1.5),
-            intensity: 0.2,
-            gravity: 3.0,
-            swirl: 1.0,
-            cone_degrees: 25.0,
-            rendering: ParticleRendering::default(),
-        }
+/// The motion pass's parameters for `settings` at `time`.
+fn gpu_params(settings: &ParticleSettings, time: f32, row_threads: u32) -> GpuParticleParams {
+    GpuParticleParams {
+        count: settings.count,
+        emitter_count: settings.emitters.len().max(1) as u32,
+        seed: settings.seed,
+        row_threads,
+        time,
+        gravity: settings.gravity,
+        swirl: settings.swirl,
+        cos_cone: settings.cone_degrees.to_radians().cos(),
+        lifetime_min: settings.lifetime.0,
+        lifetime_max: settings.lifetime.1,
+        radius_min: settings.radius.0,
+        radius_max: settings.radius.1,
+        intensity: settings.intensity,
+        _pad: [0.0; 3],
     }
-}
-
-/// One particle at one time: a point light.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ParticleLight {
-    pub position: Vec3,
-    pub radius: f32,
-    pub color: Vec3,
 }
 
 /// Keep in sync with `ParticleParams` in `particles/types.wgsl`.
@@ -175,116 +103,6 @@ struct GpuParticleVolume {
     cascades: [[f32; 4]; MAX_PARTICLE_CASCADES as usize],
 }
 
-/// PCG hash, as `pcg` in `motion.wgsl`.
-fn pcg(v: u32) -> u32 {
-    let state = v.wrapping_mul(747796405).wrapping_add(2891336453);
-    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
-    (word >> 22) ^ word
-}
-
-impl ParticleSettings {
-    /// Checks what the GPU relies on; errors name the setting and the fix.
-    pub fn validate(&self) -> Result<()> {
-        let invalid = |m: String| Err(Error::InvalidConfig(format!("particles: {m}")));
-        if self.count > MAX_PARTICLES {
-            return invalid(format!("{} particles exceed the maximum of {MAX_PARTICLES}", self.count));
-        }
-        if self.count > 0 && self.emitters.is_empty() {
-            return invalid("particles need at least one emitter".into());
-        }
-        if let Some((p, s)) = self.emitters.iter().find(|(p, s)| !p.is_finite() || !s.is_finite() || *s < 0.0) {
-            return invalid(format!("emitter at {p} with speed {s}: positions must be finite and speeds finite and ≥ 0"));
-        }
-        let range = |name: &str, (min, max): (f32, f32), low: f32| {
-            if min.is_finite() && max.is_finite() && min > low && min <= max {
-                Ok(())
-            } else {
-                invalid(format!("{name} [{min}, {max}] must be finite with {low} < min ≤ max"))
-            }
-        };
-        range("lifetime", self.lifetime, 0.0)?;
-        range("radius", self.radius, 0.0)?;
-        for (name, value) in [("intensity", self.intensity), ("gravity", self.gravity), ("swirl", self.swirl)] {
-            if !value.is_finite() {
-                return invalid(format!("{name} {value} must be finite"));
-            }
-        }
-        if !(self.intensity >= 0.0 && (0.0..=180.0).contains(&self.cone_degrees)) {
-            return invalid(format!("intensity {} must be ≥ 0 and the cone {}° within 0–180°", self.intensity, self.cone_degrees));
-        }
-        Ok(())
-    }
-
-    /// A uniform value in [0, 1), as `random01` in `motion.wgsl`.
-    fn random01(&self, particle: u32, generation: u32, k: u32) -> f32 {
-        let h = pcg(pcg(pcg(particle ^ self.seed).wrapping_add(generation)).wrapping_add(k));
-        (h >> 8) as f32 * (1.0 / 16_777_216.0)
-    }
-
-    /// Particle `i`'s light at `time` seconds: the CPU twin of `particle_motion`.
-    pub fn particle_at(&self, i: u32, time: f32) -> ParticleLight {
-        let (emitter, emitter_speed) = self.emitters[i as usize % self.emitters.len()];
-        let mix = |(a, b): (f32, f32), t: f32| a + (b - a) * t;
-        let lifetime = mix(self.lifetime, self.random01(i, 0, 0));
-        let clock = time + lifetime * self.random01(i, 0, 1);
-        let generation = (clock / lifetime).floor() as u32;
-        // Rounding can put the difference a hair outside the lifetime.
-        let age = (clock - generation as f32 * lifetime).clamp(0.0, lifetime);
-        let angle = std::f32::consts::TAU * self.random01(i, generation, 2);
-        let cos_tilt = mix((1.0, self.cone_degrees.to_radians().cos()), self.random01(i, generation, 3));
-        let sin_tilt = (1.0 - cos_tilt * cos_tilt).max(0.0).sqrt();
-        let speed = emitter_speed * mix((0.6, 1.0), self.random01(i, generation, 4));
-        let velocity = Vec3::new(angle.cos() * sin_tilt, cos_tilt, angle.sin() * sin_tilt) * speed;
-        let offset = velocity * age - Vec3::new(0.0, 0.5 * self.gravity * age * age, 0.0);
-        let (sin, cos) = (self.swirl * age).sin_cos();
-        let offset = Vec3::new(offset.x * cos - offset.z * sin, offset.y, offset.x * sin + offset.z * cos);
-        let hue = self.random01(i, generation, 6);
-        ParticleLight {
-            position: emitter + offset,
-            radius: mix(self.radius, self.random01(i, generation, 5)),
-            color: hue_color(hue) * self.intensity,
-        }
-    }
-
-    /// Bounds every particle light stays within, at any time: the emitters' bounds grown by the
-    /// furthest flight (launch speed and gravity over the longest lifetime) and the largest radius.
-    pub fn bounds(&self) -> Aabb {
-        let speed = self.emitters.iter().map(|(_, s)| *s).fold(0.0f32, f32::max);
-        let t = self.lifetime.1;
-        let reach = Vec3::splat(speed * t + 0.5 * self.gravity.abs() * t * t + self.radius.1);
-        let (low, high) = self.emitters.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), (p, _)| (l.min(*p), h.max(*p)));
-        Aabb::new(low - reach, high + reach)
-    }
-
-    fn gpu_params(&self, time: f32, row_threads: u32) -> GpuParticleParams {
-        GpuParticleParams {
-            count: self.count,
-            emitter_count: self.emitters.len().max(1) as u32,
-            seed: self.seed,
-            row_threads,
-            time,
-            gravity: self.gravity,
-            swirl: self.swirl,
-            cos_cone: self.cone_degrees.to_radians().cos(),
-            lifetime_min: self.lifetime.0,
-            lifetime_max: self.lifetime.1,
-            radius_min: self.radius.0,
-            radius_max: self.radius.1,
-            intensity: self.intensity,
-            _pad: [0.0; 3],
-        }
-    }
-}
-
-/// As `hue_color` in `motion.wgsl`.
-fn hue_color(hue: f32) -> Vec3 {
-    let channel = |n: f32| {
-        let k = (n + hue * 6.0) % 6.0;
-        1.0 - k.min(4.0 - k).clamp(0.0, 1.0)
-    };
-    Vec3::new(channel(5.0), channel(3.0), channel(1.0))
-}
-
 /// One voxel grid particles are splatted into (a cascade): voxel (i, j, k) is centred on
 /// `origin + (ijk + 0.5) × voxel_size`, one voxel per `voxel_size` of world (1 m by default).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -294,20 +112,12 @@ pub struct ParticleGrid {
     pub dims: UVec3,
 }
 
-fn check_voxel_size(voxel_size: f32) -> Result<()> {
-    if voxel_size.is_finite() && voxel_size > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::InvalidConfig(format!("particle voxel size {voxel_size} must be a finite length > 0, in metres")))
-    }
-}
-
 impl ParticleGrid {
     /// The grid of `voxel_size` covering `bounds`; errors when the size is not a positive finite
     /// length or the grid would exceed `max_dimension` voxels along an axis (the device's 3D texture
     /// limit).
     pub fn covering(bounds: &Aabb, voxel_size: f32, max_dimension: u32) -> Result<Self> {
-        check_voxel_size(voxel_size)?;
+        check_voxel_size(voxel_size, Spelling::Flag)?;
         if !bounds.is_valid() {
             return Err(Error::InvalidConfig("the particle grid needs finite bounds to cover".into()));
         }
@@ -349,25 +159,6 @@ impl ParticleGrid {
     }
 }
 
-/// Fewest voxels per axis of a clipmap cascade: a point that the finer cascade's edge hands over lies
-/// deep enough in the coarser one (past its own blend band) that the switch leaves no seam.
-pub const MIN_CASCADE_RESOLUTION: u32 = 24;
-
-/// Checks a clipmap's cascade count (0, one grid over the scene, allowed) and resolution.
-pub fn check_clipmap(resolution: u32, cascades: u32) -> Result<()> {
-    if cascades > MAX_PARTICLE_CASCADES {
-        return Err(Error::InvalidConfig(format!(
-            "{cascades} particle cascades: give 1 to {MAX_PARTICLE_CASCADES}, or 0 for one grid over the scene"
-        )));
-    }
-    if resolution < MIN_CASCADE_RESOLUTION || !resolution.is_multiple_of(2) {
-        return Err(Error::InvalidConfig(format!(
-            "particle cascade resolution {resolution}: give an even number of voxels per axis, at least {MIN_CASCADE_RESOLUTION}"
-        )));
-    }
-    Ok(())
-}
-
 /// Where the particle grid lies: its cascades, all of the same voxel count, stacked along z in the
 /// textures (cascade k's voxels follow cascade k − 1's in the sums, x fastest).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -383,11 +174,12 @@ impl ParticleVolume {
     /// A clipmap, checked against the device's 3D texture limit (`max_dimension`): its cascades stack
     /// `resolution × cascades` voxels along z.
     pub fn clipmap(voxel_size: f32, resolution: u32, cascades: u32, max_dimension: u32) -> Result<Self> {
-        check_voxel_size(voxel_size)?;
+        check_voxel_size(voxel_size, Spelling::Flag)?;
         if cascades == 0 {
             return Err(Error::InvalidConfig("a clipmap needs at least 1 particle cascade".into()));
         }
-        check_clipmap(resolution, cascades)?;
+        check_cascades(cascades, Spelling::Flag)?;
+        check_cascade_resolution(resolution, Spelling::Flag)?;
         if u64::from(resolution) * u64::from(cascades) > u64::from(max_dimension) {
             return Err(Error::InvalidConfig(format!(
                 "{cascades} particle cascades of {resolution}³ voxels stack {} voxels along z, over this GPU's 3D texture limit of {max_dimension}; use fewer cascades or a lower resolution",
@@ -661,7 +453,7 @@ impl ParticleSystem {
     /// lights' dynamic group (within `particle_motion`).
     pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, time: f32, eye: Vec3) {
         let (x, y) = self.dispatch();
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&self.settings.gpu_params(time, x * WORKGROUP)));
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&gpu_params(&self.settings, time, x * WORKGROUP)));
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("particle_motion"),

@@ -1,16 +1,17 @@
 //! Deferred lighting in compute (`deferred_shade.wgsl`): G-buffer and depth in, decals and lights
 //! through the shading core, HDR radiance out.
 
+use super::FrameInputs;
 use crate::accel::VolumeStructure;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::passes::ray_shadows::{self, RayShadows};
 use crate::passes::visbuffer_shade::HDR_FORMAT;
-use crate::pipelines::{FrameInputs, ShadingMethods};
+use crate::plan::ShadingMethods;
 use crate::Result;
 
 /// The shader for a set of shading methods.
 pub fn shader(methods: ShadingMethods) -> ShaderDesc {
-    super::shading_core_shader("passes/deferred_shade.wgsl", methods, super::ShadingStage::Compute)
+    super::shading_core_shader("passes/deferred_shade.wgsl", methods, crate::plan::ShadingStage::Compute)
 }
 
 pub struct DeferredShade {

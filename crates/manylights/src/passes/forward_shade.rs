@@ -5,17 +5,18 @@
 
 use std::collections::HashMap;
 
+use super::FrameInputs;
 use super::{visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
 use crate::accel::VolumeStructure;
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::passes::ray_shadows::{self, RayShadows};
-use crate::pipelines::{FrameInputs, ShadingMethods};
+use crate::plan::ShadingMethods;
 use crate::Result;
 
 /// The shader for a set of shading methods.
 pub fn shader(methods: ShadingMethods) -> ShaderDesc {
-    super::shading_core_shader("passes/forward_shade.wgsl", methods, super::ShadingStage::Fragment)
+    super::shading_core_shader("passes/forward_shade.wgsl", methods, crate::plan::ShadingStage::Fragment)
 }
 
 pub struct ForwardShade {

@@ -4,13 +4,16 @@
 
 use std::collections::HashMap;
 
+use crate::accel::VolumeStructure;
 use crate::gpu::{
     scene::{DrawCommand, RasterState},
     shaders::ShaderDesc,
     GpuScene,
 };
-use crate::pipelines::ShadingMethods;
+use crate::plan::{query_walks, volume_query_module, ShadingMethods, ShadingStage};
 
+#[cfg(test)]
+pub mod catalogue;
 pub mod deferred_decals;
 pub mod deferred_shade;
 pub mod deform;
@@ -30,9 +33,9 @@ pub mod visbuffer_shade;
 pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: ShadingStage) -> ShaderDesc {
     let walks = query_walks(methods, stage);
     ShaderDesc::new(entry)
-        .with("LIGHT_ENUMERATION", methods.lights.enumeration_module())
-        .with("DECAL_ENUMERATION", decal_enumeration_module(methods))
-        .with("PARTICLE_LIGHTING", methods.particles.lighting_module())
+        .with("LIGHT_ENUMERATION", methods.light_enumeration_module())
+        .with("DECAL_ENUMERATION", methods.decal_enumeration_module())
+        .with("PARTICLE_LIGHTING", methods.particle_lighting_module())
         .with("REFLECTIONS", if methods.reflections { "shading/reflections.wgsl" } else { "shading/reflections_off.wgsl" })
         .with("LIGHT_SHADOWS", if methods.light_shadows { "shading/light_shadows.wgsl" } else { "shading/light_shadows_off.wgsl" })
         .with("LIGHT_QUERY", volume_query_module(walks.lights))
@@ -47,65 +50,14 @@ pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: 
         )
 }
 
-/// The module that defines `apply_decals`: the decal method's, or, for `bvh` decals with cell lists
-/// where subgroups share them out, the one that reads the lists.
-fn decal_enumeration_module(methods: ShadingMethods) -> &'static str {
-    if methods.decals == crate::pipelines::DecalMethod::Bvh && methods.decal_cell_lists && methods.subgroups {
-        "shading/enumerate/decals_bvh_cells.wgsl"
-    } else {
-        methods.decals.enumeration_module()
-    }
-}
-
-/// The shader stage a pass shades in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ShadingStage {
-    Compute,
-    Fragment,
-}
-
-/// Which structures a pass's point queries walk a subgroup at a time (where the device has subgroup
-/// operations), as measured on the H100 (BENCHMARKS.md, "Subgroup walks", "Dense decals' leaves shared
-/// out"): a walk shared by the subgroup loads each node once for all its lanes, but lanes that need
-/// nothing wait for it, and each item any lane finds is processed in a round of its own. It pays for
-/// dense lights (particles as exact lights: hundreds reach every point) in every stage, for decals in
-/// fragments, whose lanes walking alone diverge most, and for dense decals in compute, whose leaves the
-/// lanes then share out, each testing one decal against the box around all their points; not for
-/// sparse lights, nor for sparse decals in compute.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct QueryWalks {
-    pub lights: bool,
-    pub decals: bool,
-    /// The decals' leaves are shared out among the lanes (`shading/enumerate/decal_leaves_shared_out.wgsl`);
-    /// otherwise each lane tests every decal of the leaves it gets (`decal_leaves_each.wgsl`).
-    pub decal_leaves_shared_out: bool,
-}
-
-/// From how many boxes hold a decal's centre, on average ([`crate::accel::VolumeStructure::centre_overlap`]),
-/// decals count as dense ([`ShadingMethods::dense_decals`]). Over Sponza, ≈ 1 m decals give 20.5 at
-/// 50,000 decals, where sharing their leaves out shaded as fast as walking alone (0.689 against 0.692
-/// ms in the visibility buffer on the H100), and 28.1 at 70,000, where it was 5 % faster; 100 decals
-/// give 1.0, which shared out were 12 % slower in fragments (BENCHMARKS.md, "Dense decals' leaves
-/// shared out").
-pub const DENSE_DECAL_OVERLAP: f32 = 24.0;
-
-pub fn query_walks(methods: ShadingMethods, stage: ShadingStage) -> QueryWalks {
-    let dense_lights = methods.particles == crate::pipelines::ParticleMethod::Bvh;
-    let dense_decals = methods.subgroups && methods.dense_decals;
-    QueryWalks {
-        lights: methods.subgroups && dense_lights,
-        decals: dense_decals || (methods.subgroups && stage == ShadingStage::Fragment),
-        decal_leaves_shared_out: dense_decals,
-    }
-}
-
-/// A point query module: walked by a whole subgroup, or by each invocation alone.
-pub fn volume_query_module(subgroups: bool) -> &'static str {
-    if subgroups {
-        "accel/volume_query_subgroup.wgsl"
-    } else {
-        "accel/volume_query_invocation.wgsl"
-    }
+/// What a frame reads besides its pipeline's own images: the scene, the light and decal structures
+/// (bound as groups 2 and 3 by the shading passes), and the eye, which orders draws front to back.
+#[derive(Clone, Copy)]
+pub struct FrameInputs<'a> {
+    pub scene: &'a GpuScene,
+    pub lights: &'a VolumeStructure,
+    pub decals: &'a VolumeStructure,
+    pub eye: glam::Vec3,
 }
 
 /// Workgroup edge of the 2D compute passes (`@workgroup_size(8, 8)` in their WGSL).

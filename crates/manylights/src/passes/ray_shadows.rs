@@ -4,7 +4,7 @@
 
 use super::shadow_filter::ShadowFilter;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
-use crate::rays::SunShadows;
+use crate::settings::SunShadows;
 use crate::Result;
 
 /// Per pixel, the fraction of the sun visible (0 to 1) and the mean distance to the blockers rays met.
@@ -107,7 +107,7 @@ pub fn shading_mask_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu:
 }
 
 fn mask(device: &wgpu::Device, label: &str, width: u32, height: u32) -> wgpu::Texture {
-    crate::pipelines::target(
+    crate::gpu::textures::target(
         device,
         label,
         width,

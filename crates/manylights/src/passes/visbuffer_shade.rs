@@ -1,9 +1,10 @@
 //! Visibility-buffer resolve and shading in compute. See `visbuffer_shade.wgsl`.
 
+use super::FrameInputs;
 use crate::accel::VolumeStructure;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::passes::ray_shadows::{self, RayShadows};
-use crate::pipelines::{FrameInputs, ShadingMethods};
+use crate::plan::ShadingMethods;
 use crate::Result;
 
 /// f32 rather than f16: methods are compared in linear HDR to 1e-3, finer than f16 steps above 1.
@@ -11,7 +12,7 @@ pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 /// The shader for a set of shading methods.
 pub fn shader(methods: ShadingMethods) -> ShaderDesc {
-    super::shading_core_shader("passes/visbuffer_shade.wgsl", methods, super::ShadingStage::Compute)
+    super::shading_core_shader("passes/visbuffer_shade.wgsl", methods, crate::plan::ShadingStage::Compute)
 }
 
 pub struct VisbufferShade {

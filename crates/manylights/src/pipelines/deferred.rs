@@ -30,7 +30,9 @@ use crate::passes::{
 };
 use crate::post::PostChain;
 use crate::{
-    pipelines::{DecalMethod, FrameInputs, FrameSetup, FrameTargets},
+    passes::FrameInputs,
+    pipelines::{FrameSetup, FrameTargets},
+    settings::DecalMethod,
     Result,
 };
 

@@ -27,7 +27,8 @@ use crate::passes::{
 };
 use crate::post::PostChain;
 use crate::{
-    pipelines::{FrameInputs, FrameSetup, FrameTargets},
+    passes::FrameInputs,
+    pipelines::{FrameSetup, FrameTargets},
     Result,
 };
 

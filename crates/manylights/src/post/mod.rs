@@ -22,163 +22,16 @@ pub mod velocity;
 
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::scene::{Camera, Projection};
+use crate::settings::{PostSettings, POST_TILE};
 use crate::{Error, Result};
 
 /// The images between post passes: 32-bit float like the HDR image, so a pixel an effect leaves
 /// alone passes through exactly.
 pub const POST_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
-/// Edge of the tiles depth of field and motion blur find their reach over (`POST_TILE` in WGSL).
-const TILE: u32 = 16;
-
-/// Most samples per pixel of motion blur; the largest circle of confusion's radius and the longest
-/// motion blur, in pixels: the gathers search the 3×3 tiles around a pixel, so nothing beyond a tile
-/// (depth of field's radius) or two (motion blur's ±½ length) could reach it.
-pub const MAX_MOTION_BLUR_SAMPLES: u32 = 64;
-pub const MAX_COC_RADIUS: f32 = TILE as f32;
-pub const MAX_MOTION_BLUR_LENGTH: f32 = 2.0 * TILE as f32;
 /// Sensor height of the thin lens depth of field models: 35 mm film's 24 mm, so f-numbers and focus
 /// behave as on a full-frame camera with the view's field of view.
 pub const SENSOR_HEIGHT: f32 = 0.024;
-
-/// Exposure measured from the image every frame (`exposure.wgsl`), instead of the scene's fixed one.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AutoExposure {
-    /// Stops above (+) or below (−) mapping the image's mean luminance to middle grey.
-    pub compensation_ev: f32,
-    /// How fast the exposure follows the measurement, per second (the first frame takes it at once):
-    /// after 1 / speed seconds it has moved 63 % of the way.
-    pub adaptation_speed: f32,
-}
-
-impl Default for AutoExposure {
-    fn default() -> Self {
-        Self { compensation_ev: 0.0, adaptation_speed: 3.0 }
-    }
-}
-
-/// Bloom (`bloom.wgsl`): the blurred image's share of the result.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Bloom {
-    pub intensity: f32,
-}
-
-impl Default for Bloom {
-    fn default() -> Self {
-        Self { intensity: 0.05 }
-    }
-}
-
-/// Depth of field of a thin lens (`depth_of_field.wgsl`) with the view's field of view on a
-/// 24 mm-high sensor.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DepthOfField {
-    /// Distance in focus, in metres; `None` focuses on what the image's centre shows.
-    pub focus_distance: Option<f32>,
-    /// Focal length over aperture diameter: lower is shallower.
-    pub f_number: f32,
-    /// Largest circle of confusion's radius, in pixels.
-    pub max_radius: f32,
-}
-
-impl Default for DepthOfField {
-    fn default() -> Self {
-        Self { focus_distance: None, f_number: 2.8, max_radius: 16.0 }
-    }
-}
-
-/// Motion blur (`motion_blur.wgsl`) from per-pixel velocities (`velocity.wgsl`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MotionBlur {
-    /// Shutter time as a fraction of the frame interval (0.5: a 180° shutter).
-    pub shutter: f32,
-    /// Samples per pixel along the blur.
-    pub samples: u32,
-    /// Longest blur, in pixels.
-    pub max_length: f32,
-}
-
-impl Default for MotionBlur {
-    fn default() -> Self {
-        Self { shutter: 0.5, samples: 16, max_length: 32.0 }
-    }
-}
-
-/// Which post effects a frame runs, and how. Tonemapping is always on (`RenderConfig::tonemapper`
-/// picks its curve, `None` clamps).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PostSettings {
-    pub auto_exposure: Option<AutoExposure>,
-    pub bloom: Option<Bloom>,
-    pub depth_of_field: Option<DepthOfField>,
-    pub motion_blur: Option<MotionBlur>,
-    /// Natural vignetting's strength: 0 none, 1 the cos⁴ law of a real lens.
-    pub vignette: f32,
-}
-
-impl PostSettings {
-    /// Checks every setting; messages name the command-line flag.
-    pub fn validate(&self) -> Result<()> {
-        let invalid = |m: String| Err(Error::InvalidConfig(m));
-        let in_range = |v: f32, low: f32, high: f32| v.is_finite() && v >= low && v <= high;
-        if !in_range(self.vignette, 0.0, 1.0) {
-            return invalid(format!("vignette strength {} must be between 0 (none) and 1 (the cos⁴ law) (--vignette)", self.vignette));
-        }
-        if let Some(auto) = self.auto_exposure {
-            if !in_range(auto.compensation_ev, -16.0, 16.0) {
-                return invalid(format!(
-                    "exposure compensation {} EV must be between -16 and 16 (--exposure-compensation)",
-                    auto.compensation_ev
-                ));
-            }
-            if !in_range(auto.adaptation_speed, 0.0, 1000.0) || auto.adaptation_speed == 0.0 {
-                return invalid(format!(
-                    "exposure adaptation speed {} per second must be above 0 and at most 1000 (--exposure-adaptation)",
-                    auto.adaptation_speed
-                ));
-            }
-        }
-        if let Some(bloom) = self.bloom {
-            if !in_range(bloom.intensity, 0.0, 1.0) || bloom.intensity == 0.0 {
-                return invalid(format!("bloom intensity {} must be above 0 and at most 1 (--bloom-intensity)", bloom.intensity));
-            }
-        }
-        if let Some(dof) = self.depth_of_field {
-            if let Some(focus) = dof.focus_distance {
-                if !(focus.is_finite() && focus > 0.0) {
-                    return invalid(format!("focus distance {focus} m must be a finite distance above 0 (--focus-distance)"));
-                }
-            }
-            if !in_range(dof.f_number, 0.1, 1000.0) {
-                return invalid(format!("f-number {} must be between 0.1 and 1000 (--f-number)", dof.f_number));
-            }
-            if !in_range(dof.max_radius, 1.0, MAX_COC_RADIUS) {
-                return invalid(format!(
-                    "largest circle of confusion {} px must be between 1 and {MAX_COC_RADIUS} pixels in radius (--max-coc)",
-                    dof.max_radius
-                ));
-            }
-        }
-        if let Some(blur) = self.motion_blur {
-            if !in_range(blur.shutter, 0.0, 1.0) || blur.shutter == 0.0 {
-                return invalid(format!("shutter {} must be above 0 and at most 1 frame interval (--shutter)", blur.shutter));
-            }
-            if !(1..=MAX_MOTION_BLUR_SAMPLES).contains(&blur.samples) {
-                return invalid(format!(
-                    "{} motion blur samples: give 1 to {MAX_MOTION_BLUR_SAMPLES} (--motion-blur-samples)",
-                    blur.samples
-                ));
-            }
-            if !in_range(blur.max_length, 1.0, MAX_MOTION_BLUR_LENGTH) {
-                return invalid(format!(
-                    "longest motion blur {} px must be between 1 and {MAX_MOTION_BLUR_LENGTH} pixels (--max-motion-blur)",
-                    blur.max_length
-                ));
-            }
-        }
-        Ok(())
-    }
-}
 
 /// The chain's per-frame constants. Keep in sync with `PostUniforms` in `post/post_types.wgsl`.
 #[repr(C)]
@@ -257,14 +110,14 @@ impl PostUniforms {
 
 /// The tiles over a `width`×`height` image.
 fn tile_count(width: u32, height: u32) -> (u32, u32) {
-    (width.div_ceil(TILE), height.div_ceil(TILE))
+    (width.div_ceil(POST_TILE), height.div_ceil(POST_TILE))
 }
 
 /// An image of one texel per tile, written by a tile pass and read by its gather.
 fn tile_image(device: &wgpu::Device, label: &str, format: wgpu::TextureFormat, (width, height): (u32, u32)) -> wgpu::TextureView {
     let (columns, rows) = tile_count(width, height);
     let usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING;
-    crate::pipelines::target(device, label, columns, rows, format, usage).create_view(&Default::default())
+    crate::gpu::textures::target(device, label, columns, rows, format, usage).create_view(&Default::default())
 }
 
 /// A pass in two dispatches of one shader — a reduction per 16×16 tile, then a per-pixel gather that
@@ -313,7 +166,7 @@ impl TiledGather {
 /// An intermediate image of the chain.
 fn post_image(device: &wgpu::Device, label: &str, (width, height): (u32, u32)) -> wgpu::TextureView {
     let usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING;
-    crate::pipelines::target(device, label, width, height, POST_FORMAT, usage).create_view(&Default::default())
+    crate::gpu::textures::target(device, label, width, height, POST_FORMAT, usage).create_view(&Default::default())
 }
 
 /// The post passes a pipeline built for its settings, in order, and what they share.
@@ -376,7 +229,7 @@ impl PostChain {
         };
         let motion_blur = match settings.motion_blur {
             Some(_) => {
-                let velocity_image = crate::pipelines::target(
+                let velocity_image = crate::gpu::textures::target(
                     device,
                     "velocity",
                     size.0,

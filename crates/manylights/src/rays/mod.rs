@@ -21,149 +21,10 @@ use glam::{Affine3A, Vec3};
 
 use crate::{
     accel::{Bvh, BvhNode},
+    gpu::scene::{RayBuffers, Records},
     scene::{Aabb, AlphaMode, Scene},
     Error, Result,
 };
-
-/// How the sun's shadows are made. Keep the discriminants in sync with `RAY_SHADOWS_*` in
-/// `shading/types.wgsl`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum SunShadows {
-    /// The sun lights every surface facing it.
-    #[default]
-    Off = 0,
-    /// One ray per pixel towards the sun's centre (`passes/ray_shadows.rs`).
-    Hard = 1,
-    /// Rays to points of the sun's disc, jittered per pixel, then a depth-aware spatial filter
-    /// (`passes/shadow_filter.rs`): penumbrae from the sun's angular size.
-    Soft = 2,
-}
-
-impl SunShadows {
-    pub const ALL: [SunShadows; 3] = [SunShadows::Off, SunShadows::Hard, SunShadows::Soft];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            SunShadows::Off => "off",
-            SunShadows::Hard => "hard",
-            SunShadows::Soft => "soft",
-        }
-    }
-}
-
-/// Most rays per pixel towards the sun's disc, and most reflection bounces.
-pub const MAX_SHADOW_RAYS: u32 = 64;
-pub const MAX_REFLECTION_BOUNCES: u32 = 8;
-
-/// The ray-traced effects a frame renders, and their budgets.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RaySettings {
-    pub sun_shadows: SunShadows,
-    /// The sun's angular diameter in degrees (the real sun's is about 0.53): the penumbrae of soft
-    /// shadows.
-    pub sun_angle_degrees: f32,
-    /// Rays per pixel towards the sun's disc with soft shadows, 1 to [`MAX_SHADOW_RAYS`].
-    pub shadow_rays: u32,
-    /// Reflection bounces traced from glossy surfaces, 0 (no reflections) to
-    /// [`MAX_REFLECTION_BOUNCES`]: each hit is shaded by the shading core and, if glossy itself,
-    /// reflects again.
-    pub reflection_bounces: u32,
-    /// Surfaces whose perceptual roughness is below this reflect (fading out over the last quarter).
-    pub reflection_roughness: f32,
-    /// Shadow rays each shading point may trace towards local lights that cast shadows
-    /// (`Light::cast_shadows`), 0 (none) to [`MAX_SHADOW_RAYS`]: lights beyond the budget, in the
-    /// order the light method enumerates them, light the point unshadowed.
-    pub light_shadow_rays: u32,
-}
-
-impl Default for RaySettings {
-    fn default() -> Self {
-        Self {
-            sun_shadows: SunShadows::Off,
-            sun_angle_degrees: 0.53,
-            shadow_rays: 4,
-            reflection_bounces: 0,
-            reflection_roughness: 0.3,
-            light_shadow_rays: 0,
-        }
-    }
-}
-
-/// A scene file's choices of ray-traced effects (`[rays]`), each taken unless the caller (the command
-/// line) makes its own.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RayHints {
-    pub sun_shadows: Option<SunShadows>,
-    pub sun_angle_degrees: Option<f32>,
-    pub shadow_rays: Option<u32>,
-    pub reflection_bounces: Option<u32>,
-    pub reflection_roughness: Option<f32>,
-    pub light_shadow_rays: Option<u32>,
-}
-
-impl RayHints {
-    /// The hints over the defaults.
-    pub fn settings(&self) -> RaySettings {
-        let defaults = RaySettings::default();
-        RaySettings {
-            sun_shadows: self.sun_shadows.unwrap_or(defaults.sun_shadows),
-            sun_angle_degrees: self.sun_angle_degrees.unwrap_or(defaults.sun_angle_degrees),
-            shadow_rays: self.shadow_rays.unwrap_or(defaults.shadow_rays),
-            reflection_bounces: self.reflection_bounces.unwrap_or(defaults.reflection_bounces),
-            reflection_roughness: self.reflection_roughness.unwrap_or(defaults.reflection_roughness),
-            light_shadow_rays: self.light_shadow_rays.unwrap_or(defaults.light_shadow_rays),
-        }
-    }
-}
-
-impl RaySettings {
-    /// Whether any effect traces rays, so the scene needs its ray hierarchy.
-    pub fn traces_rays(&self) -> bool {
-        self.sun_shadows != SunShadows::Off || self.reflection_bounces > 0 || self.light_shadow_rays > 0
-    }
-
-    /// Checks every setting; messages name the command-line flag.
-    pub fn validate(&self) -> Result<()> {
-        let invalid = |m: String| Err(Error::InvalidConfig(m));
-        if !(self.sun_angle_degrees.is_finite() && (0.0..=90.0).contains(&self.sun_angle_degrees)) {
-            return invalid(format!("sun angle {}° must be between 0 and 90 degrees (--sun-angle)", self.sun_angle_degrees));
-        }
-        if !(1..=MAX_SHADOW_RAYS).contains(&self.shadow_rays) {
-            return invalid(format!("{} shadow rays per pixel: give 1 to {MAX_SHADOW_RAYS} (--shadow-rays)", self.shadow_rays));
-        }
-        if self.light_shadow_rays > MAX_SHADOW_RAYS {
-            return invalid(format!(
-                "{} shadow rays per point towards lights: give 0 (none) to {MAX_SHADOW_RAYS} (--light-shadow-rays)",
-                self.light_shadow_rays
-            ));
-        }
-        if self.reflection_bounces > MAX_REFLECTION_BOUNCES {
-            return invalid(format!(
-                "{} reflection bounces: give 0 (no reflections) to {MAX_REFLECTION_BOUNCES} (--bounces)",
-                self.reflection_bounces
-            ));
-        }
-        if !(self.reflection_roughness.is_finite() && self.reflection_roughness > 0.0 && self.reflection_roughness <= 1.0) {
-            return invalid(format!(
-                "reflection roughness threshold {} must be above 0 and at most 1 (--reflection-roughness)",
-                self.reflection_roughness
-            ));
-        }
-        Ok(())
-    }
-
-    /// The frame uniforms' `ray_options` and `ray_settings` (`shading/types.wgsl`), for a camera
-    /// rendering `height` pixel rows.
-    pub fn uniforms(&self, camera: &crate::scene::Camera, height: u32) -> ([u32; 4], [f32; 4]) {
-        // A pixel's cone: its width at the camera (orthographic) and its spread angle (perspective).
-        let (spread, width) = match camera.projection {
-            crate::scene::Projection::Perspective { yfov, .. } => (2.0 * (yfov * 0.5).tan() / height as f32, 0.0),
-            crate::scene::Projection::Orthographic { ymag, .. } => (0.0, 2.0 * ymag / height as f32),
-        };
-        let options = [self.sun_shadows as u32, self.shadow_rays, self.reflection_bounces, self.light_shadow_rays];
-        (options, [(self.sun_angle_degrees * 0.5).to_radians(), self.reflection_roughness, spread, width])
-    }
-}
 
 /// Set in `RayTriangle::draw_offset` when the triangle's material is alpha-masked: a candidate hit
 /// is kept only where the material's alpha reaches its cutoff.
@@ -458,6 +319,16 @@ impl RayStructure {
     /// empty): one leaf, at the origin, of the zeroed instance the upload pads empty arrays with; its
     /// zero map stops every ray at the origin, where the root (also its BLAS) holds the zeroed
     /// triangle, which has no area. A walk through it ends after that one test.
+    /// The hierarchy as the scene's bindings hold it (`GpuScene::upload`).
+    pub fn buffers(&self) -> RayBuffers<'_> {
+        RayBuffers {
+            nodes: Records::of(&self.nodes),
+            top_level_nodes: self.tlas_node_count,
+            triangles: Records::of(&self.triangles),
+            instances: Records::of(&self.instances),
+        }
+    }
+
     pub fn unused() -> Self {
         let leaf = BvhNode { min: [0.0; 3], max: [0.0; 3], entry: BvhNode::leaf_entry(0, 1), skip: crate::accel::END };
         Self { nodes: vec![leaf], ..Default::default() }

@@ -383,7 +383,7 @@ pub struct ScatterParticles {
 impl ScatterParticles {
     /// `count` particles from `emitters` emitters, with the default radius.
     pub fn new(count: u32, seed: u64, emitters: usize) -> Self {
-        Self { count, seed, emitters, radius: crate::particles::ParticleSettings::default().radius }
+        Self { count, seed, emitters, radius: super::ParticleSettings::default().radius }
     }
 }
 
@@ -407,7 +407,7 @@ pub fn add_particles(scene: &mut Scene, params: &ScatterParticles) -> Result<()>
             params.emitters
         )));
     }
-    let mut settings = crate::particles::ParticleSettings {
+    let mut settings = super::ParticleSettings {
         count: params.count,
         seed: params.seed as u32 ^ (params.seed >> 32) as u32,
         radius: params.radius,

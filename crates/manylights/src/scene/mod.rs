@@ -14,6 +14,7 @@ pub mod demo;
 pub mod generators;
 pub mod gltf;
 pub mod paper_scenes;
+pub mod particles;
 pub mod scene_file;
 mod tangents;
 
@@ -21,8 +22,11 @@ use std::path::Path;
 
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 
+use crate::settings::SettingsOverlay;
+
 pub use aabb::Aabb;
 pub use camera::{Camera, Projection};
+pub use particles::ParticleSettings;
 
 /// What the image decoder (the `image` crate's default limits) may allocate for one image, in MiB.
 pub const IMAGE_DECODE_LIMIT_MIB: u64 = 512;
@@ -32,14 +36,20 @@ pub const IMAGE_DECODE_LIMIT_MIB: u64 = 512;
 pub const DEFAULT_LIGHT_CUTOFF: f32 = 0.01;
 
 /// Loads a scene file, choosing the loader from the extension: `.gltf`/`.glb` (glTF 2.0) or `.toml`
-/// (a [`scene_file`] that may reference a glTF and add lights).
-pub fn load_path(path: &Path) -> crate::Result<Scene> {
+/// (a [`scene_file`] that may reference a glTF and add lights), with what a scene file asks of the
+/// renderer (`[rays]`, `[particles]`' rendering keys) as an overlay on the settings.
+pub fn load(path: &Path) -> crate::Result<(Scene, SettingsOverlay)> {
     let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match extension.as_deref() {
-        Some("gltf" | "glb") => self::gltf::import(path),
+        Some("gltf" | "glb") => Ok((self::gltf::import(path)?, SettingsOverlay::default())),
         Some("toml") => scene_file::load(path),
         _ => Err(crate::Error::InvalidConfig(format!("{}: unknown scene type; expected .gltf, .glb or .toml", path.display()))),
     }
+}
+
+/// [`load`]'s scene alone, for callers that render with settings of their own.
+pub fn load_path(path: &Path) -> crate::Result<Scene> {
+    load(path).map(|(scene, _)| scene)
 }
 
 /// One vertex, laid out exactly as the shaders read it (`shading/types.wgsl`, `Vertex`).
@@ -179,7 +189,7 @@ pub struct Light {
     /// Distance where the glTF window function reaches zero.
     pub range: f32,
     /// Whether shading traces a shadow ray towards it (within the frame's per-point budget,
-    /// `rays::RaySettings::light_shadow_rays`).
+    /// `settings::RaySettings::light_shadow_rays`).
     pub cast_shadows: bool,
 }
 
@@ -370,9 +380,7 @@ pub struct Scene {
     /// Linear scale applied to radiance before tonemapping.
     pub exposure: f32,
     /// Moving particle lights (`particles/`), if any.
-    pub particles: Option<crate::particles::ParticleSettings>,
-    /// The scene file's choice of ray-traced effects, for the renderer's caller to apply.
-    pub ray_hints: crate::rays::RayHints,
+    pub particles: Option<ParticleSettings>,
     /// Node animation moving mesh instances (glTF animations), if any.
     pub animation: Option<animation::Animation>,
     /// Meshes deformed every frame (`deform`), at most one deformer per mesh.
@@ -397,7 +405,6 @@ impl Default for Scene {
             ambient: Vec3::splat(0.03),
             exposure: 1.0,
             particles: None,
-            ray_hints: crate::rays::RayHints::default(),
             animation: None,
             deformers: Vec::new(),
             source_files: Vec::new(),

@@ -10,32 +10,23 @@ use crate::Result;
 /// Range of the paper's small lights, in metres (glTF's unit), uniform between the two.
 pub const SMALL_LIGHT_RANGE: (f32, f32) = (0.1, 0.3);
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PaperScene {
-    /// Decals over whole walls and floors: the largest flat surfaces, one decal each.
-    LargeDecals,
-    /// 100 small decals (the generator's default size: about one metre on Sponza) on surface points,
-    /// facing out along the normal.
-    SmallDecals,
-    /// 100,000 of the same.
-    ManyDecals,
-    /// 28,000 point lights of 0.1–0.3 m range just above surface points.
-    SmallLights,
+crate::named_enum! {
+    /// One of the paper's scenes, named as on the command line and in result files.
+    pub enum PaperScene {
+        /// Decals over whole walls and floors: the largest flat surfaces, one decal each.
+        #[default]
+        LargeDecals = "large-decals",
+        /// 100 small decals (the generator's default size: about one metre on Sponza) on surface
+        /// points, facing out along the normal.
+        SmallDecals = "small-decals",
+        /// 100,000 of the same.
+        ManyDecals = "many-decals",
+        /// 28,000 point lights of 0.1–0.3 m range just above surface points.
+        SmallLights = "small-lights",
+    }
 }
 
 impl PaperScene {
-    pub const ALL: [PaperScene; 4] = [Self::LargeDecals, Self::SmallDecals, Self::ManyDecals, Self::SmallLights];
-
-    /// A short name for the command line and result files.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::LargeDecals => "large-decals",
-            Self::SmallDecals => "small-decals",
-            Self::ManyDecals => "many-decals",
-            Self::SmallLights => "small-lights",
-        }
-    }
-
     /// The row label of the paper's table.
     pub fn label(self) -> &'static str {
         match self {

@@ -68,7 +68,7 @@
 //! count = 6               # required: one per plane, largest first
 //! seed = 1                # default 1: picks their built-in materials
 //!
-//! [particles]             # moving particle lights (particles::ParticleSettings, generators::add_particles)
+//! [particles]             # moving particle lights (scene::ParticleSettings, generators::add_particles)
 //! count = 262144          # required
 //! seed = 1                # default 1
 //! emitters = 16           # default 16: on seeded upward-facing surface points
@@ -82,7 +82,7 @@
 //! cascades = 4            # camera-centred clipmap cascades (0: one grid over the scene), likewise
 //! cascade_resolution = 64 # voxels per axis of each cascade, likewise
 //!
-//! [rays]                  # ray-traced effects (rays::RaySettings), unless the command line says
+//! [rays]                  # ray-traced effects (settings::RaySettings), unless the command line says
 //! shadows = "soft"        # the sun's: "off", "hard" (one ray per pixel) or "soft"; default "off"
 //! sun_angle = 0.53        # the sun's angular diameter in degrees (soft shadows); default 0.53
 //! shadow_rays = 4         # rays per pixel towards the sun's disc (soft shadows), 1 to 64; default 4
@@ -117,11 +117,11 @@ use super::{
     DEFAULT_LIGHT_CUTOFF,
 };
 use crate::files::{self, guard, InputKind, LoadBudget};
-use crate::rays::{RayHints, SunShadows};
+use crate::settings::{ParticleOverlay, RayOverlay, SettingsOverlay, Spelling};
 use crate::{Error, Result};
 
-/// Loads a TOML scene file and the glTF it references.
-pub fn load(path: &Path) -> Result<Scene> {
+/// Loads a TOML scene file and the glTF it references, with the file's choices of how to render it.
+pub fn load(path: &Path) -> Result<(Scene, SettingsOverlay)> {
     let budget = LoadBudget::new();
     let invalid = |reason: String| Error::SceneFile { path: path.to_owned(), reason: crate::error::one_line(&reason) };
     let bytes = files::read_input(path, InputKind::SceneFile, None, &budget)?;
@@ -141,9 +141,9 @@ pub fn load(path: &Path) -> Result<Scene> {
         Some(gltf) => super::gltf::import_within(&dir.join(gltf), &budget)?,
         None => Scene::default(),
     };
-    file.apply(&mut scene, dir, &budget).map_err(invalid)?;
+    let overlay = file.apply(&mut scene, dir, &budget).map_err(invalid)?;
     scene.source_files = budget.files();
-    Ok(scene)
+    Ok((scene, overlay))
 }
 
 /// A TOML error on one line: where, what, and the offending line.
@@ -232,17 +232,9 @@ struct RaysSpec {
 }
 
 impl RaysSpec {
-    fn to_hints(&self) -> Result<RayHints, String> {
-        let sun_shadows = match self.shadows.as_deref() {
-            None => None,
-            Some(name) => Some(
-                SunShadows::ALL
-                    .into_iter()
-                    .find(|s| s.name() == name)
-                    .ok_or_else(|| format!("shadows {name:?}: use \"off\", \"hard\" or \"soft\""))?,
-            ),
-        };
-        let hints = RayHints {
+    fn overlay(&self) -> Result<RayOverlay, String> {
+        let sun_shadows = self.shadows.as_deref().map(str::parse).transpose().map_err(|e| format!("shadows {e}"))?;
+        let overlay = RayOverlay {
             sun_shadows,
             sun_angle_degrees: self.sun_angle,
             shadow_rays: self.shadow_rays,
@@ -250,19 +242,8 @@ impl RaysSpec {
             reflection_roughness: self.reflection_roughness,
             light_shadow_rays: self.light_shadow_rays,
         };
-        // The command line's flag names mean nothing in a scene file: say which key is wrong.
-        hints.settings().validate().map_err(|e| {
-            let message = inner_message(e);
-            let keys = [
-                ("--sun-angle", "sun_angle"),
-                ("--shadow-rays", "shadow_rays"),
-                ("--bounces", "reflections"),
-                ("--reflection-roughness", "reflection_roughness"),
-                ("--light-shadow-rays", "light_shadow_rays"),
-            ];
-            keys.iter().fold(message, |m, (flag, key)| m.replace(flag, key))
-        })?;
-        Ok(hints)
+        overlay.settings().validate(Spelling::Key).map_err(inner_message)?;
+        Ok(overlay)
     }
 }
 
@@ -381,46 +362,25 @@ struct ParticlesSpec {
 }
 
 impl ParticlesSpec {
-    fn apply(&self, scene: &mut Scene) -> Result<(), String> {
+    /// Adds the particles to `scene`; returns the file's choices of how to render them.
+    fn apply(&self, scene: &mut Scene) -> Result<ParticleOverlay, String> {
         let mut params = ScatterParticles::new(self.count, self.seed.unwrap_or(1), self.emitters.unwrap_or(16));
         params.radius = self.radius.unwrap_or(params.radius);
         generators::add_particles(scene, &params).map_err(inner_message)?;
         let settings = scene.particles.as_mut().expect("set by add_particles");
         settings.intensity = self.intensity.unwrap_or(settings.intensity);
         settings.lifetime = self.lifetime.unwrap_or(settings.lifetime);
-        use crate::{particles::ParticleFilter, pipelines::ParticleMethod};
-        settings.rendering.method = match self.method.as_deref() {
-            None => None,
-            Some("off") => Some(ParticleMethod::Off),
-            Some("grid") => Some(ParticleMethod::Grid),
-            Some("bvh") => Some(ParticleMethod::Bvh),
-            Some(other) => return Err(format!("method {other:?}: use \"off\", \"grid\" or \"bvh\"")),
+        let overlay = ParticleOverlay {
+            method: self.method.as_deref().map(str::parse).transpose().map_err(|e| format!("method {e}"))?,
+            filter: self.filter.as_deref().map(str::parse).transpose().map_err(|e| format!("filter {e}"))?,
+            voxel_size: self.voxel_size,
+            samples: self.samples,
+            cascades: self.cascades,
+            cascade_resolution: self.cascade_resolution,
         };
-        settings.rendering.filter = match self.filter.as_deref() {
-            None => None,
-            Some("nearest") => Some(ParticleFilter::Nearest),
-            Some("trilinear") => Some(ParticleFilter::Trilinear),
-            Some("tricubic") => Some(ParticleFilter::Tricubic),
-            Some(other) => return Err(format!("filter {other:?}: use \"nearest\", \"trilinear\" or \"tricubic\"")),
-        };
-        if let Some(size) = self.voxel_size.filter(|s| !(s.is_finite() && *s > 0.0)) {
-            return Err(format!("voxel_size {size} must be a finite length > 0, in metres"));
-        }
-        if let Some(samples) = self.samples.filter(|s| !(1..=crate::particles::MAX_PARTICLE_SAMPLES).contains(s)) {
-            return Err(format!("samples {samples}: give 1 to {}", crate::particles::MAX_PARTICLE_SAMPLES));
-        }
-        if let Some(cascades) = self.cascades.filter(|c| *c > crate::particles::MAX_PARTICLE_CASCADES) {
-            return Err(format!("cascades {cascades}: give 0 (one grid over the scene) to {}", crate::particles::MAX_PARTICLE_CASCADES));
-        }
-        let minimum = crate::particles::MIN_CASCADE_RESOLUTION;
-        if let Some(resolution) = self.cascade_resolution.filter(|r| *r < minimum || !r.is_multiple_of(2)) {
-            return Err(format!("cascade_resolution {resolution}: give an even number of voxels per axis, at least {minimum}"));
-        }
-        settings.rendering.voxel_size = self.voxel_size;
-        settings.rendering.samples = self.samples;
-        settings.rendering.cascades = self.cascades;
-        settings.rendering.cascade_resolution = self.cascade_resolution;
-        settings.validate().map_err(inner_message)
+        overlay.validate(Spelling::Key).map_err(inner_message)?;
+        settings.validate().map_err(inner_message)?;
+        Ok(overlay)
     }
 }
 
@@ -443,9 +403,10 @@ impl SceneFile {
             && self.particles.is_none()
     }
 
-    /// Applies the file's settings on top of the loaded glTF, resolving image paths against `dir`;
-    /// errors are reasons for `Error::SceneFile`.
-    fn apply(&self, scene: &mut Scene, dir: &Path, budget: &LoadBudget) -> Result<(), String> {
+    /// Applies the file's settings on top of the loaded glTF, resolving image paths against `dir`, and
+    /// returns what it asks of the renderer; errors are reasons for `Error::SceneFile`.
+    fn apply(&self, scene: &mut Scene, dir: &Path, budget: &LoadBudget) -> Result<SettingsOverlay, String> {
+        let mut overlay = SettingsOverlay::default();
         if let Some(exposure) = self.exposure {
             scene.exposure = exposure;
         }
@@ -483,10 +444,10 @@ impl SceneFile {
             generators::add_scattered_decals(scene, &params).map_err(|e| format!("scatter_decals {i}: {}", inner_message(e)))?;
         }
         if let Some(particles) = &self.particles {
-            particles.apply(scene).map_err(|m| format!("particles: {m}"))?;
+            overlay.particles = particles.apply(scene).map_err(|m| format!("particles: {m}"))?;
         }
         if let Some(rays) = &self.rays {
-            scene.ray_hints = rays.to_hints().map_err(|m| format!("rays: {m}"))?;
+            overlay.rays = rays.overlay().map_err(|m| format!("rays: {m}"))?;
         }
         for (i, spec) in self.deform.iter().enumerate() {
             spec.apply(scene).map_err(|m| format!("deform {i}: {m}"))?;
@@ -497,7 +458,8 @@ impl SceneFile {
                 .map_err(|e| format!("animate: {}", inner_message(e)))?;
         }
         // Exposure, ambient and sun are checked here; the glTF part was checked on import.
-        scene.validate().map_err(inner_message)
+        scene.validate().map_err(inner_message)?;
+        Ok(overlay)
     }
 }
 
@@ -757,6 +719,11 @@ mod tests {
         let path = dir.join("scene.toml");
         std::fs::write(&path, text).unwrap();
         load(&path)
+    }
+
+    /// The scene alone.
+    fn load(path: &Path) -> Result<Scene> {
+        super::load(path).map(|(scene, _)| scene)
     }
 
     fn reason(result: Result<Scene>) -> String {
@@ -1158,11 +1125,11 @@ roughness_metallic = "decals/rm.png"
             "gltf = 'Box.gltf'\n[particles]\ncount = 5\nmethod = 'bvh'\nvoxel_size = 0.5\nfilter = 'tricubic'\nsamples = 4\n",
         )
         .unwrap();
-        let rendering = load(&path).unwrap().particles.unwrap().rendering;
-        assert_eq!(rendering.method, Some(crate::pipelines::ParticleMethod::Bvh));
+        let rendering = super::load(&path).unwrap().1.particles;
+        assert_eq!(rendering.method, Some(crate::settings::ParticleMethod::Bvh));
         assert_eq!(
             (rendering.voxel_size, rendering.filter, rendering.samples),
-            (Some(0.5), Some(crate::particles::ParticleFilter::Tricubic), Some(4))
+            (Some(0.5), Some(crate::settings::ParticleFilter::Tricubic), Some(4))
         );
         std::fs::write(&path, "gltf = 'Box.gltf'\n[particles]\ncount = 5\nmethod = 'magic'\n").unwrap();
         let magic = reason(load(&path));

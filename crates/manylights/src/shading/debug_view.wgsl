@@ -1,7 +1,7 @@
-// Debug views (`config::DebugView`, `frame.debug_view`): instead of its radiance, a pixel shows what
+// Debug views (`settings::DebugView`, `frame.debug_view`): instead of its radiance, a pixel shows what
 // shading counted there as a heat map from black (none) through blue, cyan, green and yellow to red
 // (`frame.debug_view.y` or more). The enumeration modules count as they work; `shade` shows the view.
-// Keep `heat_map` in sync with `config::heat_map`.
+// Keep `heat_map` in sync with `settings::heat_map`.
 
 const DEBUG_VIEW_OFF: u32 = 0u;
 // Lights whose light reaches the point (after the tight test), in any method.

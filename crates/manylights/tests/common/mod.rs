@@ -5,15 +5,15 @@
 
 use glam::{Mat4, Vec3, Vec4};
 use manylights::{
-    accel::BvhBuild,
-    config::{RenderConfig, Tonemapper},
     gpu::GpuContext,
-    particles::ParticleFilter,
-    pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
-    post::PostSettings,
-    rays::RaySettings,
     renderer::{Image, Renderer},
     scene::{Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Vertex},
+    settings::BvhBuild,
+    settings::ParticleFilter,
+    settings::PostSettings,
+    settings::RaySettings,
+    settings::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
+    settings::{RenderConfig, Tonemapper},
 };
 
 pub const WIDTH: u32 = 256;

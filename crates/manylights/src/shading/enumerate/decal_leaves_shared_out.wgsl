@@ -1,5 +1,5 @@
 // A leaf's decals for `decals_bvh.wgsl`, shared out among the lanes of a subgroup walking together
-// (dense decals, `passes::query_walks`), as the dense lights' leaves are (`lights_bvh.wgsl`): each
+// (dense decals, `plan::query_walks`), as the dense lights' leaves are (`lights_bvh.wgsl`): each
 // lane tests one decal of the leaf against the box around all the lanes' points, then every lane
 // takes the decals some lane kept, one after the other, through its own tests. A subgroup's width of
 // box tests takes one round instead of one each in every lane, and each kept decal is read at one

@@ -1,7 +1,7 @@
 // Decal enumeration through the decals' acceleration structure (Hansen & Peters 2021): the point
 // query reaches the leaves whose box contains the shading point (walking as a subgroup, those of its
 // neighbours too, `accel/volume_query.wgsl`); `decal_accumulate` applies the exact box test, so the
-// result equals the brute-force loop's. A leaves module (`passes::query_walks`) hands a leaf's decals
+// result equals the brute-force loop's. A leaves module (`plan::query_walks`) hands a leaf's decals
 // to the tests: each lane every decal (`decal_leaves_each.wgsl`), or, for dense decals walked as a
 // subgroup, the lanes sharing the leaf out (`decal_leaves_shared_out.wgsl`).
 #include "shading/decal_bindings.wgsl"

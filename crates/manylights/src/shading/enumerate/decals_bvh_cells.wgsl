@@ -11,7 +11,7 @@
 // so the walk down the group's BVH, a chain of dependent loads node after node and leaf round after
 // leaf round, becomes a round or two per cell. `decal_accumulate` applies the exact box test, so the
 // result equals the brute-force loop's. Needs subgroup operations (the lists come with the walks that
-// share leaves out, `passes::query_walks`).
+// share leaves out, `plan::query_walks`).
 #include "shading/decal_bindings.wgsl"
 #include "shading/decals.wgsl"
 #include "shading/decal_box.wgsl"

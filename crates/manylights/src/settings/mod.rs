@@ -1,92 +1,57 @@
-//! Render settings chosen by the caller (the CLI's flags), validated against the device.
+//! Every choice a caller makes about rendering, at the bottom of the library: the option enums
+//! (each spelled once, [`named_enum!`](crate::named_enum)), [`RenderConfig`] and its validation
+//! against the device's limits, and the overlays a scene file's hints make. The CLI, the viewer, the
+//! scene file and the bench use these types directly.
 
-use crate::{
-    accel::BvhBuild,
-    gpu::GpuContext,
-    particles::{ParticleFilter, MAX_PARTICLE_SAMPLES},
-    pipelines::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
-    post::PostSettings,
-    rays::RaySettings,
-    Error, Result,
+pub mod display;
+pub mod methods;
+#[macro_use]
+pub mod named;
+pub mod particles;
+pub mod post;
+pub mod rays;
+
+pub use display::{heat_map, DebugView, Tonemapper};
+pub use methods::{BvhBuild, DecalMethod, LightMethod, ParticleMethod, PipelineKind};
+pub use named::Named;
+pub use particles::{ParticleFilter, ParticleOverlay, MAX_PARTICLE_CASCADES, MAX_PARTICLE_SAMPLES, MIN_CASCADE_RESOLUTION};
+pub use post::{
+    AutoExposure, Bloom, DepthOfField, MotionBlur, PostSettings, MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH, MAX_MOTION_BLUR_SAMPLES, POST_TILE,
 };
+pub use rays::{RayOverlay, RaySettings, SunShadows, MAX_REFLECTION_BOUNCES, MAX_SHADOW_RAYS};
 
-/// Keep the discriminants in sync with `TONEMAP_*` in `shading/types.wgsl`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Tonemapper {
-    #[default]
-    Aces = 0,
-    Agx = 1,
-    /// Clamp only: for inspecting linear values.
-    None = 2,
+use crate::{Error, Result};
+
+/// How an error message names an option: as its command-line flag, or as its scene-file key.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Spelling {
+    Flag,
+    Key,
 }
 
-/// What a frame shows instead of its radiance, for looking inside the methods (the viewer's debug
-/// views). Keep the discriminants in sync with `DEBUG_VIEW_*` in `shading/debug_view.wgsl`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum DebugView {
-    #[default]
-    Off = 0,
-    /// Lights reaching each point, as a heat map up to 16.
-    LightsReaching = 1,
-    /// The light method's work at each point: BVH nodes visited, the froxel's list length (cluster
-    /// occupancy) or lights tested, up to 128.
-    LightWork = 2,
-    /// Decals covering each point, up to 16.
-    DecalsCovering = 3,
-    /// The particle lights' radiance alone (exposed and tonemapped as usual).
-    ParticleLight = 4,
-    /// A horizontal slice through the particle grid (`RenderConfig::debug_slice_height`): the grid's
-    /// colour sums where pixels' rays cross it before their surface, the scene dimmed elsewhere.
-    ParticleGridSlice = 5,
-}
-
-impl DebugView {
-    pub const ALL: [DebugView; 6] = [
-        DebugView::Off,
-        DebugView::LightsReaching,
-        DebugView::LightWork,
-        DebugView::DecalsCovering,
-        DebugView::ParticleLight,
-        DebugView::ParticleGridSlice,
-    ];
-
-    pub fn name(self) -> &'static str {
+impl Spelling {
+    pub fn pick(self, flag: &'static str, key: &'static str) -> &'static str {
         match self {
-            DebugView::Off => "off",
-            DebugView::LightsReaching => "lights-reaching",
-            DebugView::LightWork => "light-work",
-            DebugView::DecalsCovering => "decals-covering",
-            DebugView::ParticleLight => "particle-light",
-            DebugView::ParticleGridSlice => "particle-grid-slice",
+            Spelling::Flag => flag,
+            Spelling::Key => key,
         }
     }
-
-    /// The count a heat map tops out at; 0 for views that are not heat maps.
-    pub fn scale(self) -> u32 {
-        match self {
-            DebugView::LightsReaching | DebugView::DecalsCovering => 16,
-            DebugView::LightWork => 128,
-            DebugView::Off | DebugView::ParticleLight | DebugView::ParticleGridSlice => 0,
-        }
-    }
-
-    /// The frame uniforms' `debug_view`, with the slice's height (metres) for the grid slice.
-    pub fn uniform(self, slice_height: f32) -> [u32; 4] {
-        [self as u32, self.scale(), slice_height.to_bits(), 0]
-    }
 }
 
-/// The heat map of `count` out of `scale` as the shaders draw it (`heat_map` in
-/// `shading/debug_view.wgsl`): black for none, then blue, cyan, green, yellow, red.
-pub fn heat_map(count: u32, scale: u32) -> [f32; 3] {
-    if count == 0 {
-        return [0.0; 3];
-    }
-    let stops = [[0.0, 0.0, 1.0], [0.0, 1.0, 1.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [1.0, 0.0, 0.0]];
-    let t = (count as f32 / scale.max(1) as f32).clamp(0.0, 1.0) * 4.0;
-    let i = (t as usize).min(3);
-    let f = t - i as f32;
-    std::array::from_fn(|c| stops[i][c] + (stops[i + 1][c] - stops[i][c]) * f)
+/// What a scene file asks of the renderer besides its scene: its `[rays]` and its `[particles]`
+/// rendering keys, each taken unless the command line makes its own choice.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SettingsOverlay {
+    pub rays: RayOverlay,
+    pub particles: ParticleOverlay,
+}
+
+/// The device limits the settings are checked against (`GpuContext::device_limits`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DeviceLimits {
+    pub max_texture_dimension_2d: u32,
+    pub max_texture_dimension_3d: u32,
+    pub max_buffer_size: u64,
 }
 
 #[derive(Clone, Debug)]
@@ -156,9 +121,22 @@ impl Default for RenderConfig {
 }
 
 impl RenderConfig {
-    /// Checks the settings against what the device supports.
-    pub fn validate(&self, ctx: &GpuContext) -> Result<()> {
-        let max = ctx.limits.max_texture_dimension_2d;
+    /// The particle settings `overlay` chooses over these.
+    pub fn with_particles(self, overlay: ParticleOverlay) -> Self {
+        Self {
+            particle_method: overlay.method.unwrap_or(self.particle_method),
+            particle_voxel_size: overlay.voxel_size.unwrap_or(self.particle_voxel_size),
+            particle_filter: overlay.filter.unwrap_or(self.particle_filter),
+            particle_samples: overlay.samples.unwrap_or(self.particle_samples),
+            particle_cascades: overlay.cascades.unwrap_or(self.particle_cascades),
+            particle_cascade_resolution: overlay.cascade_resolution.unwrap_or(self.particle_cascade_resolution),
+            ..self
+        }
+    }
+
+    /// Checks the settings against each other and against what the device supports.
+    pub fn validate(&self, limits: &DeviceLimits) -> Result<()> {
+        let max = limits.max_texture_dimension_2d;
         if self.width == 0 || self.height == 0 {
             return Err(Error::InvalidConfig(format!(
                 "resolution {}×{} is empty; width and height must be at least 1",
@@ -173,13 +151,13 @@ impl RenderConfig {
         }
         // The HDR image (16 bytes a pixel) must fit one buffer to be read back.
         let hdr_bytes = u64::from(self.width) * u64::from(self.height) * 16;
-        if hdr_bytes > ctx.limits.max_buffer_size {
+        if hdr_bytes > limits.max_buffer_size {
             return Err(Error::InvalidConfig(format!(
                 "resolution {}×{} needs a {} MiB readback buffer, over this GPU's {} MiB limit; choose a smaller --width/--height",
                 self.width,
                 self.height,
                 hdr_bytes >> 20,
-                ctx.limits.max_buffer_size >> 20
+                limits.max_buffer_size >> 20
             )));
         }
         if !self.decal_method.works_in(self.pipeline) {
@@ -192,21 +170,12 @@ impl RenderConfig {
         if self.max_texture_size == 0 {
             return Err(Error::InvalidConfig("the maximum texture size must be at least 1".into()));
         }
-        if !(self.particle_voxel_size.is_finite() && self.particle_voxel_size > 0.0) {
-            return Err(Error::InvalidConfig(format!(
-                "particle voxel size {} must be a finite length > 0, in metres",
-                self.particle_voxel_size
-            )));
-        }
-        if !(1..=MAX_PARTICLE_SAMPLES).contains(&self.particle_samples) {
-            return Err(Error::InvalidConfig(format!(
-                "{} particle samples per point: give 1 to {MAX_PARTICLE_SAMPLES}",
-                self.particle_samples
-            )));
-        }
+        particles::check_voxel_size(self.particle_voxel_size, Spelling::Flag)?;
+        particles::check_samples(self.particle_samples, Spelling::Flag)?;
+        particles::check_cascades(self.particle_cascades, Spelling::Flag)?;
         // The resolution is checked without cascades too: a bad one given with none is still a mistake.
-        crate::particles::check_clipmap(self.particle_cascade_resolution, self.particle_cascades)?;
-        self.rays.validate()?;
+        particles::check_cascade_resolution(self.particle_cascade_resolution, Spelling::Flag)?;
+        self.rays.validate(Spelling::Flag)?;
         if let Some(height) = self.debug_slice_height.filter(|h| !h.is_finite()) {
             return Err(Error::InvalidConfig(format!(
                 "debug slice height {height} must be a finite height in metres (--debug-slice-height)"

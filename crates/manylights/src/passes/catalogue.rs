@@ -1,0 +1,77 @@
+//! Every shader the renderer builds, for the tests that validate and compile them all.
+
+use crate::gpu::shaders::ShaderDesc;
+use crate::plan::ShadingMethods;
+use crate::settings::{DecalMethod, LightMethod, ParticleMethod, PipelineKind};
+
+/// Every shader the renderer builds, with every substitution it uses: the naga test validates each.
+pub fn all_shaders() -> Vec<ShaderDesc> {
+    let mut shaders = vec![
+        ShaderDesc::new("passes/visbuffer_raster_indexed.wgsl"),
+        ShaderDesc::new("passes/visbuffer_raster_pulled.wgsl"),
+        ShaderDesc::new("passes/deform.wgsl"),
+        ShaderDesc::new("rays/refit.wgsl"),
+        ShaderDesc::new("post/velocity.wgsl"),
+        ShaderDesc::new("post/velocity_raster.wgsl"),
+        ShaderDesc::new("post/depth_of_field.wgsl"),
+        ShaderDesc::new("post/motion_blur.wgsl"),
+        ShaderDesc::new("post/exposure.wgsl"),
+        ShaderDesc::new("post/bloom.wgsl"),
+        ShaderDesc::new("post/tonemap.wgsl"),
+        crate::accel::volume_query_probe_shader(false),
+        crate::accel::volume_query_probe_shader(true),
+        ShaderDesc::new("accel/lbvh.wgsl"),
+        ShaderDesc::new("accel/leaf_order.wgsl"),
+        ShaderDesc::new("accel/radix_sort.wgsl"),
+        ShaderDesc::new("accel/cluster_build.wgsl"),
+        ShaderDesc::new("passes/deferred_decals.wgsl"),
+        ShaderDesc::new("passes/depth_prepass.wgsl"),
+        ShaderDesc::new("passes/gbuffer_raster.wgsl"),
+        ShaderDesc::new("particles/motion.wgsl"),
+        ShaderDesc::new("particles/splat.wgsl"),
+        ShaderDesc::new("particles/lights.wgsl"),
+        ShaderDesc::new("rays/trace_probe.wgsl"),
+        ShaderDesc::new("passes/ray_shadows.wgsl"),
+        ShaderDesc::new("passes/shadow_filter.wgsl"),
+    ];
+    for lights in LightMethod::ALL {
+        for decals in DecalMethod::ALL {
+            // Every particle method (`Bvh` lights with the particles' lights, which subgroups walk
+            // together), with and without reflections, lamp shadows and subgroup walks, and with
+            // sparse and dense decals.
+            let flags = [false, true];
+            let variants: Vec<_> =
+                ParticleMethod::ALL.iter().flat_map(|&p| flags.iter().flat_map(move |&r| flags.map(move |s| (p, r, s)))).collect();
+            for (particles, reflections, light_shadows) in variants {
+                // Dense decals, and their cell lists, change only the BVH's shader.
+                let densities: &[(bool, bool, bool)] = if decals == DecalMethod::Bvh {
+                    &[(false, false, false), (true, false, false), (true, true, false), (true, true, true)]
+                } else {
+                    &[(false, false, false), (true, false, false)]
+                };
+                for &(subgroups, dense_decals, decal_cell_lists) in densities {
+                    let methods = ShadingMethods {
+                        lights,
+                        decals,
+                        particles,
+                        reflections,
+                        light_shadows,
+                        subgroups,
+                        dense_decals,
+                        decal_cell_lists,
+                        debug_views: false,
+                    };
+                    if decals.works_in(PipelineKind::Forward) {
+                        shaders.push(super::forward_shade::shader(methods));
+                    }
+                    shaders.push(super::transparent_shade::shader(methods));
+                    if decals.works_in(PipelineKind::Visbuffer) {
+                        shaders.push(super::visbuffer_shade::shader(methods));
+                    }
+                    shaders.push(super::deferred_shade::shader(methods));
+                }
+            }
+        }
+    }
+    shaders
+}
