@@ -38,9 +38,10 @@ pub const SAH_MAX_LEAF_SIZE: u32 = 16;
 /// Nodes with more primitives than this are split unless the SAH prefers a leaf.
 const MIN_SPLIT_SIZE: usize = 4;
 
-/// Leaves of [`Bvh::build_wide`] hold up to this many primitives. Measured on the H100 with 100k decals
-/// shared out: leaves of up to 16, 32 and 64 (node costs 3, 16 and 32) shaded in 1.083, 0.956 and
-/// 0.939 ms (BENCHMARKS.md, "Wide leaves for dense decals").
+/// Leaves of [`Bvh::build_wide`] hold up to this many primitives. Bigger leaves trade node visits for
+/// primitive tests, which a subgroup sharing a leaf out runs a subgroup's width at a time: crowded
+/// decals shade faster with leaves of up to 64 than of 16 or 32, and no faster with larger ones
+/// (benchmarks/LOG.md, topic 2).
 pub const WIDE_LEAF_SIZE: u32 = 64;
 
 /// The SAH cost of visiting a node in [`Bvh::build_wide`], in primitive tests: a subgroup sharing a
@@ -51,9 +52,9 @@ pub const WIDE_TRAVERSAL_COST: f64 = 32.0;
 const BINS: usize = 16;
 
 /// SAH cost of visiting an internal node, relative to testing one primitive's volume. On the GPU a
-/// node visit is a dependent load and a branch, a leaf's primitives are tested back to back: with 3
-/// (and leaves of up to 16) shading took 9 to 14 % less time than with 1 (and 8) for large lights,
-/// ≈ 1 m decals and 1M small lights, and the same for small ones (BENCHMARKS.md).
+/// node visit is a dependent load and a branch, a leaf's primitives are tested back to back: at 3
+/// (with leaves of up to 16) large lights, ≈ 1 m decals and 1M small lights shade faster than at 1
+/// (with leaves of up to 8), and small ones as fast (benchmarks/LOG.md, topics 4 and 5).
 const TRAVERSAL_COST: f64 = 3.0;
 
 /// Most primitive slots one BVH, or one node array holding several, can address: a leaf's first
@@ -147,8 +148,9 @@ impl Bvh {
     /// As [`build`](Self::build), with leaves of up to [`WIDE_LEAF_SIZE`] primitives, for queries that
     /// share each leaf out among a subgroup's lanes (`shading/enumerate/decal_leaves_shared_out.wgsl`):
     /// they test a subgroup's width of primitives in one round, so the SAH counts a node visit as
-    /// [`WIDE_TRAVERSAL_COST`] primitive tests. 100k decals of about a metre over Sponza, shared out,
-    /// shaded in 0.939 ms instead of 1.083 on the H100 (BENCHMARKS.md, "Wide leaves for dense decals").
+    /// [`WIDE_TRAVERSAL_COST`] primitive tests. Crowded decals (100k of about a metre over Sponza),
+    /// shared out, shade faster with these leaves than with [`build`](Self::build)'s (benchmarks/LOG.md,
+    /// topic 2).
     pub fn build_wide(aabbs: &[Aabb]) -> crate::Result<Bvh> {
         Self::build_with_leaves(aabbs, WIDE_LEAF_SIZE, WIDE_TRAVERSAL_COST)
     }

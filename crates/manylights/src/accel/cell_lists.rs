@@ -20,11 +20,9 @@ use super::entry_grid::MAX_CELLS_PER_AXIS;
 use super::Aabb;
 
 /// Cell edge as a share of the volumes' median box edge. Finer cells list fewer volumes, but a
-/// subgroup's lanes then fall in more cells, each taken in turn; over Sponza, 100k ≈ 1 m decals (boxes
-/// of about 2 m) in lists sorted by layer, hidden layers skipped, shaded in 0.622, 0.606, 0.633, 0.653
-/// and 0.640 ms in the visibility buffer on the H100 with cells of 0.5, 0.625, 0.75, 0.875 and 1 times
-/// that edge (52, 66, 78, 95 and 120 decals a cell), against 0.948 walking (BENCHMARKS.md, "Cell
-/// lists in layer order").
+/// subgroup's lanes then fall in more cells, each taken in turn. For 100k ≈ 1 m decals over Sponza
+/// (boxes of about 2 m), cells of 0.5 to 1 times that edge all shade much faster than the walk, and
+/// five eighths fastest (benchmarks/LOG.md, topic 2).
 const CELL_EDGE_PER_VOLUME: f32 = 0.625;
 /// Lists longer than this on average, over the cells that list anything, take more rounds than the
 /// walk they replace: such groups keep their entry grid.

@@ -3,8 +3,8 @@
 // 1. `cluster_count`: a thread per (instance, item) pair bounds the volume in the world, finds the
 //    froxels of its bounds (`cluster_grid.wgsl`) and counts itself into each; a volume reaching more
 //    than SPREAD_FROXELS froxels is queued instead, and `cluster_count_spread` gives each queued
-//    volume a workgroup whose threads share its froxels (one thread walking a wall-sized decal's
-//    60,000 froxels took 28 ms at 1080p on an H100);
+//    volume a workgroup whose threads share its froxels (a wall-sized decal reaches about 60,000,
+//    far too many for one thread; benchmarks/LOG.md, topic 1);
 // 2. `cluster_scan_blocks`, `cluster_scan_block_offsets`, `cluster_scan_apply`: exclusive prefix sums
 //    of the counts, in blocks of SCAN_THREADS froxels, turn them into list ranges;
 // 3. `cluster_fill`, `cluster_fill_spread`: the same threads and workgroups write the volumes into

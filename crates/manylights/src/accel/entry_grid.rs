@@ -21,11 +21,11 @@ use super::{Aabb, Bvh, END};
 /// Groups with fewer primitives are queried from the root: their trees are a few levels deep.
 pub const MIN_PRIMITIVES: usize = 16;
 /// Cells per primitive the grids aim at, the fewest a structure's grids get, and the most they hold
-/// together (16 MiB of cells). Finer cells start more queries at a leaf or end them at once: 28k small
-/// lights shade in 0.244, 0.228, 0.213, 0.200, 0.195 and 0.188 ms with 2, 4, 8, 16, 32 and 64 cells
-/// per light on the H100, while ≈ 1 m decals, which overlap every cell anyway, shade alike. A few
-/// sparse volumes get far more cells each: at 32 per decal, 100 small decals left cells about a
-/// metre wide, and a quarter of the fragments walked a subtree to find nothing (BENCHMARKS.md).
+/// together (16 MiB of cells). Finer cells start more queries at a leaf or end them at once: small
+/// lights shade faster with every doubling of cells per light up to 64, while ≈ 1 m decals, which
+/// overlap every cell anyway, shade alike. A few sparse volumes get far more cells each, so that 100
+/// small decals do not leave cells a metre wide, where many fragments walk a subtree to find nothing
+/// (benchmarks/LOG.md, topics 3 and 4).
 const CELLS_PER_PRIMITIVE: f64 = 64.0;
 const MIN_CELLS: f64 = (1 << 18) as f64;
 const MAX_CELLS: f64 = (1 << 21) as f64;
@@ -64,7 +64,7 @@ pub const MAX_CELLS_PER_AXIS: u32 = 1023;
 /// Nodes the grid's build may visit per cell, on average, before it gives up on the grid (see
 /// [`EntryGrid::build`]): over Sponza, 100 small decals visit 10 per cell, 100k ≈ 1 m decals 54, 1M
 /// 0.3 m decals 34, 28k lights of ≈ 1.7 m 108. 300k lights scattered over the one-metre Box visit
-/// more than 256 per cell over 2M cells: 27 s of building on two cores, for cells so crowded that
+/// more than 256 per cell over 2M cells: tens of seconds of building, for cells so crowded that
 /// their queries would start high in the tree anyway.
 const MAX_VISITS_PER_CELL: usize = 256;
 

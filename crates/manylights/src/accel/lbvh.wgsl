@@ -58,10 +58,9 @@ fn box_centre(b: Box) -> vec3<f32> {
     return b.min.xyz * 0.5 + b.max.xyz * 0.5;
 }
 
-// Cells per axis of the Morton grid. 8 bits per axis (24-bit codes, three radix passes) shaded 1M,
-// 100k and 28k lights and 100k decals exactly as fast as 10 bits (four passes), and built 0.03 to
-// 0.07 ms faster (BENCHMARKS.md); equal codes are ordered by position, so any precision builds a
-// valid tree.
+// Cells per axis of the Morton grid. 8 bits per axis (24-bit codes) sort in three radix passes
+// instead of 10 bits' four, and the trees they build shade as fast (benchmarks/LOG.md, topic 5);
+// equal codes are ordered by position, so any precision builds a valid tree.
 const MORTON_CELLS: f32 = 256.0;
 
 // Spreads the low 10 bits of v to every third bit.

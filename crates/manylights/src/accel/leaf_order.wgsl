@@ -19,8 +19,8 @@ struct LeafOrderParams {
 @group(0) @binding(3) var<storage, read_write> items: array<vec4<u32>>;
 
 // One invocation per 16 bytes: neighbouring invocations copy one item's consecutive parts, so each
-// item is read and written in whole segments (an invocation per item, looping over its parts, took
-// 0.19 ms for 1M lights on an H100).
+// item is read and written in whole segments; an invocation per item, looping over its parts,
+// strides through memory and is slower (benchmarks/LOG.md, topic 4).
 @compute @workgroup_size(256)
 fn leaf_order(@builtin(global_invocation_id) id: vec3<u32>) {
     let t = id.y * params.row_threads + id.x;

@@ -24,23 +24,23 @@
 // A cursor: `VOLUMES_query_next_leaf` returns every group leaf whose box contains the point (and,
 // walking as a subgroup, the other lanes' leaves, below), as the range of items it holds (items are stored in leaf order, `accel/structure.rs`), and the caller
 // applies its own tight test to them (light range and cone, decal box) without a copy of the
-// traversal per use. It hands out whole leaves: a cursor returning one item per call measured 20 %
-// slower shading on the H200. Every invocation that begins a query calls `VOLUMES_query_next_leaf`
-// until it returns BVH_END, without leaving the loop early.
+// traversal per use. It hands out whole leaves, which shade faster than a cursor returning one item
+// per call (benchmarks/LOG.md, topic 5). Every invocation that begins a query calls
+// `VOLUMES_query_next_leaf` until it returns BVH_END, without leaving the loop early.
 //
 // The caller also defines `VOLUMES_query_entered(instance)`, called as the query enters an instance's
 // group, before any of its leaves: there it keeps what its tests need of the instance (lights: the
 // surface in the group's space; decals: the instance, the surface in the group's space walking
 // alone, and the box around the lanes' points sharing leaves out). The query keeps only the instance's
-// index: a copy of the whole instance held through every walk cost the shading passes more than the
-// callers' own state (BENCHMARKS.md, "The instance handed to the caller").
+// index: a copy of the whole instance held through every walk costs the shading passes more than the
+// callers' own state (benchmarks/LOG.md, topic 4).
 //
 // An invocation skips a node only when its own point is outside it, whichever invocations walk with it.
 // Walking alone it gets a leaf's items only when its point is inside; where the subgroup walks as one,
 // every lane gets each leaf the walk reaches, and the caller's tight test rejects the items of a leaf
 // whose box does not hold the lane's point (an item's box lies inside its leaf's): a trip count the
-// same for every lane measured faster than an empty range for the lanes outside (BENCHMARKS.md,
-// "Whole leaves for every lane"). A link back to the node itself ends the
+// same for every lane is faster than an empty range for the lanes outside (benchmarks/LOG.md,
+// topic 3). A link back to the node itself ends the
 // walk: no valid tree has one, but lavapipe's fragment shaders run lanes outside the triangle (helpers)
 // with storage loads masked to zero, so node 0 reads as a box at the origin linking to node 0, and a
 // lane looping there until llvmpipe's loop limiter (65,535 iterations, shared by every loop of the

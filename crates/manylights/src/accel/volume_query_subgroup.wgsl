@@ -15,8 +15,8 @@ fn VOLUMES_walk_any(inside: bool) -> bool {
 // lowest start to the highest stop (what lies between and holds no lane's point is skipped as usual;
 // empty cells add none). This is the walk's one assumption: lanes running together entered the same
 // instance, as they do when they share the top-level walk from the query's start. (Lavapipe's helper
-// lanes read no grid flag and never get here.) Checking it with two more subgroup operations made
-// 100k decals in fragments three times slower on the H100, with no lane ever failing it.
+// lanes read no grid flag and never get here.) It is assumed, not checked: two more subgroup operations
+// made crowded decals in fragments about three times slower (benchmarks/LOG.md, topic 3).
 fn VOLUMES_walk_cells(start: u32, stop: u32) -> vec2<u32> {
     return vec2<u32>(subgroupMin(start), subgroupMax(stop));
 }

@@ -2,11 +2,10 @@
 //!
 //! WGSL zero-initialises every private and function variable, and naga writes that as an
 //! initialiser on the variable, which the driver carries out at the start of every invocation or
-//! call. Two arrays made that costly: the decal layers' sums, 192 bytes indexed by layer, so in local
-//! memory — zeroing them cost 0.75 ms of the forward pass and 0.04–0.05 ms of the compute shading
-//! passes at 1080p on the H100, most of what 100 small decals cost there, even for pixels no decal
-//! covers — and the closest-hit traversal's stack, 768 bytes zeroed for every reflection ray
-//! (BENCHMARKS.md). Their code never reads an element it has not written (`decal_layers_touched`,
+//! call. Two arrays make that costly (benchmarks/LOG.md, topic 4): the decal layers' sums, 192 bytes
+//! indexed by layer, so in local memory — zeroing them would be most of what a few small decals
+//! cost, even for pixels no decal covers — and the closest-hit traversal's stack, 768 bytes zeroed
+//! for every reflection ray. Their code never reads an element it has not written (`decal_layers_touched`,
 //! the stack's depth), so on Vulkan these shaders are compiled here with the options wgpu's own
 //! Vulkan backend uses, the initialisers are removed from the SPIR-V, and the module is passed through
 //! (`Features::PASSTHROUGH_SHADERS`). Anywhere else — another backend, or the feature withheld — wgpu
@@ -15,8 +14,8 @@
 //! The words keep the WGSL's binding numbers, while wgpu's Vulkan backend numbers a group's
 //! descriptors by their rank among its layout's entries (wgpu-hal's `create_bind_group_layout`), and
 //! rewrites the bindings of the modules it compiles to match. The two agree only where each group's
-//! bindings are 0, 1, 2, … without a gap, as every shading pass's are (tested below): a pass binding
-//! 0–3 and 7 read a wrong descriptor at 7 here, on the H100, and the right one through wgpu.
+//! bindings are 0, 1, 2, … without a gap, as every shading pass's are (tested below): with bindings
+//! 0–3 and 7, say, wgpu numbers the fifth descriptor 4, and the module's 7 names none of them.
 
 use crate::{Error, Result};
 

@@ -1,7 +1,8 @@
 // Visibility-buffer raster: depth plus one u32 visibility id per pixel (the draw's
 // `first_visibility_id` + the triangle's number within the draw). Alpha-masked materials discard here;
-// nothing else is shaded. On our benchmark GPUs this pass is bound by fragment output, so it writes 4
-// bytes a pixel, not 8, and never clears the ids: shading tells the background by its depth.
+// nothing else is shaded. Raster is bound by fragment output on GPUs with few graphics units, so this
+// pass writes 4 bytes a pixel, not 8, and never clears the ids: shading tells the background by its
+// depth (benchmarks/LOG.md, topic 5).
 //
 // Shared by two entry files that differ in how a fragment learns its triangle:
 // `visbuffer_raster_indexed.wgsl` draws indexed (the vertex cache reuses shared vertices) and reads

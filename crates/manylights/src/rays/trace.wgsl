@@ -180,7 +180,7 @@ const RAY_STACK_SIZE: u32 = 96u;
 // The nearest hit along origin + t · dir with 0 < t < t_max, visiting the nearer child of each node first and keeping the farther on a stack with the distance
 // where the ray enters it: once a hit is nearer than that, the subtree is skipped unvisited. The
 // stackless walk must visit children in their stored order; for closest hits that visits far more
-// nodes (BENCHMARKS.md).
+// nodes (benchmarks/LOG.md, topic 7).
 fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> RayHit {
     var hit = RayHit(t_max, RAY_NO_HIT, 0u, 0.0, 0.0);
     // Not zero-filled on Vulkan (`gpu/spirv.rs`, UNZEROED_VARIABLES): entries below `depth` only are read.

@@ -19,7 +19,7 @@ const DEBUG_VIEW_PARTICLE_LIGHT: u32 = 4u;
 const DEBUG_VIEW_PARTICLE_GRID_SLICE: u32 = 5u;
 
 // Whether this pipeline shows a debug view (`ShadingMethods::debug_views`): otherwise the counters are
-// compiled out, which took 5 % off fragment shading on the H100 (BENCHMARKS.md, "Debug counters, …").
+// compiled out, as counting every node, light and decal slows shading (benchmarks/LOG.md, topic 4).
 override DEBUG_VIEWS: bool = false;
 
 var<private> debug_lights_reaching: u32;

@@ -69,9 +69,8 @@ fn decal_surface_in_group(world: DecalSurface, instance: VolumeInstance) -> Deca
 
 // Adds decal `index` if the point (`local`, in the decal's group space) is inside its box. `surface`
 // is the surface before any decal, in the same group's space (`decal_surface_in_group`). The record's
-// box is read first and the rest only for decals whose box holds the point, as with lights: 100k
-// decals shaded 8 % faster in the deferred pipeline on the H100 (BENCHMARKS.md, "Light records read
-// field by field").
+// box is read first and the rest only for decals whose box holds the point, as with lights: decals
+// that fail the box test never load their whole record (benchmarks/LOG.md, topic 3).
 fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surface: DecalSurface) {
     let decal_from_group = decals[index].decal_from_group;
     let p = vec4<f32>(local, 1.0) * decal_from_group;
@@ -161,9 +160,8 @@ fn decal_accumulate_top_down(index: u32, layer: u32, instance: VolumeInstance, l
 // A decal material's base colour with alpha and its roughness and metallic, as `material.wgsl`'s for
 // surfaces, from the material's record for decals (its textures in the decal arrays), read field by
 // field. Decals sample their textures clamped to the edges (`wrap_u2_v2`), whatever the material's
-// wrap modes (`scene::Decal`): the switch over the nine wrap-mode samplers that surfaces take cost
-// 100k decals 0.22 ms of shading in the visibility buffer and 4.7 ms in fragments on the H100
-// (BENCHMARKS.md, "Decal textures clamped to their edges").
+// wrap modes (`scene::Decal`): the switch over the nine wrap-mode samplers that surfaces take is
+// costly for crowded decals, most of all in fragments (benchmarks/LOG.md, topic 2).
 fn decal_base_color(material: u32, g: UvGradients) -> vec4<f32> {
     var color = materials[material].base_color_factor;
     let layer = materials[material].base_color_layer;

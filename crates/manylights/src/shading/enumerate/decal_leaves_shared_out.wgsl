@@ -3,10 +3,9 @@
 // lane tests one decal of the leaf against the box around all the lanes' points, then every lane
 // takes the decals some lane kept, one after the other, through its own tests. A subgroup's width of
 // box tests takes one round instead of one each in every lane, and each kept decal is read at one
-// address by the whole subgroup, so these decals' groups have wide leaves (`Bvh::build_wide`). With 100k
-// decals of about a metre over Sponza this shaded 11 % faster than every lane testing every decal,
-// 23 % with the wide leaves, and slower where decals crowd less (BENCHMARKS.md, "Dense decals' leaves
-// shared out", "Wide leaves for dense decals").
+// address by the whole subgroup, so these decals' groups have wide leaves (`Bvh::build_wide`). Where
+// decals crowd (100k of about a metre over Sponza) this is faster than every lane testing every decal,
+// more so with the wide leaves; where they crowd less it is slower (benchmarks/LOG.md, topic 2).
 
 #include "shading/decal_box.wgsl"
 

@@ -11,8 +11,7 @@
 
 // The instance the query is in, and the surface in its group's space, set as the query enters it.
 // Where a whole subgroup walks together, the surface is turned into the group's space for every decal
-// instead: held through that walk it cost more than it saved (BENCHMARKS.md, "Debug counters, decals
-// in their group's space, …", "Dense decals' leaves shared out").
+// instead: held through that walk it costs more than it saves (benchmarks/LOG.md, topics 2 and 4).
 var<private> decal_instance: VolumeInstance;
 var<private> decal_world: DecalSurface;
 var<private> decal_surface: DecalSurface;

@@ -6,8 +6,8 @@
 #include "shading/debug_view.wgsl"
 
 // A light's sphere of influence: its position and range, the record's first 16 bytes. Most lights a
-// loop meets are out of range, so it reads these and loads the rest only for lights that pass: a
-// million particle lights shaded 12 % faster through the BVH (BENCHMARKS.md, as `light_in_range`).
+// loop meets are out of range, so it reads these and loads the rest only for lights that pass
+// (benchmarks/LOG.md, topic 3).
 fn light_sphere(index: u32) -> vec4<f32> {
     return vec4<f32>(lights[index].position, lights[index].range);
 }
@@ -19,10 +19,10 @@ fn sphere_reaches(sphere: vec4<f32>, p: vec3<f32>) -> bool {
 }
 
 // Whether a light's sphere can light the surface `local` (group space): within its range, and above
-// the surface's horizon (`brdf_times_cosine` is zero below it). For crowds of lights, where most
-// lights in range of a point still fail the horizon test: 1M exact particles shade 1.1 ms faster on
-// the H100 with it (BENCHMARKS.md, "Leaves shared out"). Loops that meet mostly lights out of range
-// test the range alone: the horizon test made 28k lights by brute force 5 % slower there.
+// the surface's horizon (`brdf_times_cosine` is zero below it). It serves crowds of lights, where
+// many lights in range of a point are still below its horizon, sparing their contributions. Loops
+// that meet mostly lights out of range test the range alone: there the horizon test costs more than
+// it saves (benchmarks/LOG.md, topic 3).
 fn sphere_may_light(sphere: vec4<f32>, local: ShadingInput) -> bool {
     return sphere_reaches(sphere, local.position) && dot(local.normal, sphere.xyz - local.position) > 0.0;
 }
@@ -74,9 +74,8 @@ fn light_radiance_in_range(
 
 // Radiance light `index`, whose sphere is `sphere`, reflects towards the viewer from the surface `s`;
 // zero outside its range and cone. The rest of the record is read field by field, only where needed:
-// the colour and kind, and a spot's cone. The whole 64-byte record loaded at once, sphere included,
-// made a million exact particle lights shade 12 % slower on the H100, and 256 lights by brute
-// force 8 % (BENCHMARKS.md, "Light records read field by field").
+// the colour and kind, and a spot's cone. Loading the whole 64-byte record at once, sphere included,
+// is slower for dense and sparse lights alike (benchmarks/LOG.md, topic 3).
 fn light_contribution(index: u32, sphere: vec4<f32>, s: ShadingInput) -> vec3<f32> {
     let to_light = sphere.xyz - s.position;
     let distance_sq = dot(to_light, to_light);

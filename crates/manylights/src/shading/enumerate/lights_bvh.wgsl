@@ -43,7 +43,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
         // The subgroup's leaf: each lane tests one light against the box around all the lanes'
         // points, then every lane takes the lights some lane kept, one after the other, their index
         // and sphere from the lanes that read them. The shuffles run before any lane's own test: a
-        // lane shuffles only from active lanes (from one that had left, the H100 returned garbage).
+        // lane shuffles only from active lanes (SPIR-V leaves a shuffle from an inactive lane undefined).
         // Lanes past the leaf's end read its last light and keep none. Only the ballot's words that
         // hold lanes are read: one on 32-lane subgroups.
         for (var first = leaf.x; first < leaf.y; first += lanes.y) {
