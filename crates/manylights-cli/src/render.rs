@@ -12,7 +12,8 @@ use manylights::{
     scene::{Camera, Scene},
     settings::{
         AutoExposure, Bloom, BvhBuild, DebugView, DecalMethod, DepthOfField, LightMethod, MotionBlur, ParticleFilter, ParticleMethod,
-        ParticleOverlay, PipelineKind, PostSettings, RayOverlay, RaySettings, RenderConfig, SunShadows, Tonemapper, MAX_REFLECTION_BOUNCES,
+        ParticleOverlay, PipelineKind, PostSettings, RayOverlay, RaySettings, RenderConfig, SunShadows, Tonemapper, MAX_ANISOTROPY,
+        MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH, MAX_MOTION_BLUR_SAMPLES, MAX_REFLECTION_BOUNCES, MAX_SHADOW_RAYS,
     },
 };
 
@@ -27,9 +28,9 @@ pub(crate) const MAX_FRAMES: u32 = 100_000;
 pub struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    #[arg(long, default_value_t = 1280)]
+    #[arg(long, default_value_t = RenderConfig::default().width)]
     width: u32,
-    #[arg(long, default_value_t = 720)]
+    #[arg(long, default_value_t = RenderConfig::default().height)]
     height: u32,
     /// Camera index in the scene (glTF cameras, or the scene file's camera first); without cameras the
     /// scene is framed automatically.
@@ -37,66 +38,53 @@ pub struct RenderArgs {
     camera: Option<usize>,
     /// Frame graph: visibility buffer (shading in compute), deferred (G-buffer, lighting in compute)
     /// or forward (depth prepass, shading in fragments).
-    #[arg(long, value_enum, default_value_t = PipelineKind::Visbuffer)]
+    #[arg(long, value_enum, default_value_t = RenderConfig::default().pipeline)]
     pipeline: PipelineKind,
     /// How shading finds the local lights reaching a point: none (sun and ambient only), loop over
     /// all, point queries in a BVH, or per-froxel lists built every frame (clustered shading).
-    #[arg(long, value_enum, default_value_t = LightMethod::Brute)]
+    #[arg(long, value_enum, default_value_t = RenderConfig::default().light_method)]
     light_method: LightMethod,
     /// How the light BVH is built (with --light-method bvh): once on the CPU, or every frame on the GPU.
-    #[arg(long, value_enum, default_value_t = BvhBuild::CpuOnce)]
+    #[arg(long, value_enum, default_value_t = RenderConfig::default().light_bvh_build)]
     light_bvh_build: BvhBuild,
     /// How shading finds the decals covering a point: none, loop over all, point queries in a BVH,
     /// per-froxel lists built every frame (clustered shading), or decal boxes rasterised into the
     /// G-buffer (deferred decals, --pipeline deferred only).
-    #[arg(long, value_enum, default_value_t = DecalMethod::Brute)]
+    #[arg(long, value_enum, default_value_t = RenderConfig::default().decal_method)]
     decal_method: DecalMethod,
     /// How the decal BVH is built (with --decal-method bvh): once on the CPU, or every frame on the GPU.
-    #[arg(long, value_enum, default_value_t = BvhBuild::CpuOnce)]
+    #[arg(long, value_enum, default_value_t = RenderConfig::default().decal_bvh_build)]
     decal_bvh_build: BvhBuild,
-    /// How particle lights (--particles, or a scene file's [particles]) light the scene: not at all,
-    /// through the 3D textures they are splatted into every frame, or exactly, as point lights in the
-    /// lights' BVH rebuilt every frame (with --light-method bvh). [default: the scene file's, or grid]
-    #[arg(long, value_enum)]
+    #[arg(long, value_enum, help = format!("How particle lights (--particles, or a scene file's [particles]) light the scene: not at all, through the 3D textures they are splatted into every frame, or exactly, as point lights in the lights' BVH rebuilt every frame (with --light-method bvh). [default: the scene file's, or {}]", RenderConfig::default().particle_method))]
     particle_method: Option<ParticleMethod>,
-    /// Edge of the particle grid's voxels, in metres. [default: the scene file's, or 1]
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, help = format!("Edge of the particle grid's voxels, in metres. [default: the scene file's, or {}]", RenderConfig::default().particle_voxel_size))]
     particle_voxel_size: Option<f32>,
-    /// How shading reads the particle grid: the voxel the point is in, the eight around it, or a cubic
-    /// B-spline over 64 (smooth across voxel faces). [default: the scene file's, or trilinear]
-    #[arg(long, value_enum)]
+    #[arg(long, value_enum, help = format!("How shading reads the particle grid: the voxel the point is in, the eight around it, or a cubic B-spline over 64 (smooth across voxel faces). [default: the scene file's, or {}]", RenderConfig::default().particle_filter))]
     particle_filter: Option<ParticleFilter>,
-    /// Points around each shading point, within half a voxel, whose grid light is averaged
-    /// (supersampling; 1 = the point alone). [default: the scene file's, or 1]
-    #[arg(long)]
+    #[arg(long, help = format!("Points around each shading point, within half a voxel, whose grid light is averaged (supersampling; 1 = the point alone). [default: the scene file's, or {}]", RenderConfig::default().particle_samples))]
     particle_samples: Option<u32>,
-    /// Camera-centred clipmap cascades of the particle grid, each with voxels twice the size of the
-    /// one before; 0 is one grid fixed over the whole scene, whose size grows with the world.
-    /// [default: the scene file's, or 0]
-    #[arg(long)]
+    #[arg(long, help = format!("Camera-centred clipmap cascades of the particle grid, each with voxels twice the size of the one before; 0 is one grid fixed over the whole scene, whose size grows with the world. [default: the scene file's, or {}]", RenderConfig::default().particle_cascades))]
     particle_cascades: Option<u32>,
-    /// Voxels per axis of each particle cascade (even). [default: the scene file's, or 64]
-    #[arg(long)]
+    #[arg(long, help = format!("Voxels per axis of each particle cascade (even). [default: the scene file's, or {}]", RenderConfig::default().particle_cascade_resolution))]
     particle_cascade_resolution: Option<u32>,
     #[command(flatten)]
     rays: RayArgs,
     #[command(flatten)]
     post: PostArgs,
-    #[arg(long, value_enum, default_value_t = Tonemapper::Aces)]
+    #[arg(long, value_enum, default_value_t = RenderConfig::default().tonemapper)]
     tonemap: Tonemapper,
     /// Show, instead of radiance, a heat map of the lights reaching each point, of the light method's
     /// work (BVH nodes visited, cluster occupancy, lights tested) or of the decals covering it, the
     /// particle lights' radiance alone, or a horizontal slice through the particle grid.
-    #[arg(long, value_enum, default_value_t = DebugView::Off)]
+    #[arg(long, value_enum, default_value_t = RenderConfig::default().debug_view)]
     debug_view: DebugView,
     /// Height in metres of the particle-grid-slice debug view's plane. [default: a metre below the eye]
     #[arg(long, allow_negative_numbers = true)]
     debug_slice_height: Option<f32>,
     /// Largest texture size kept on the GPU (larger images are downsampled).
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long, default_value_t = RenderConfig::default().max_texture_size)]
     texture_size: u32,
-    /// Maximum anisotropy of texture filtering (1 = trilinear, up to 16).
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = RenderConfig::default().anisotropy, help = format!("Maximum anisotropy of texture filtering (1 = trilinear, up to {})", MAX_ANISOTROPY))]
     anisotropy: u16,
     /// Output image (tonemapped, sRGB): .png, or .jpg / .jpeg.
     #[arg(short, long, default_value = "out.png")]
@@ -132,18 +120,14 @@ pub(crate) struct PostArgs {
     /// Measure the exposure from each frame's luminance histogram instead of using the scene's.
     #[arg(long)]
     auto_exposure: bool,
-    /// Stops brighter (+) or darker (−) than auto exposure's middle grey. [default: 0]
-    #[arg(long, requires = "auto_exposure", allow_negative_numbers = true)]
+    #[arg(long, requires = "auto_exposure", allow_negative_numbers = true, help = format!("Stops brighter (+) or darker (−) than auto exposure's middle grey. [default: {}]", AutoExposure::default().compensation_ev))]
     exposure_compensation: Option<f32>,
-    /// How fast auto exposure follows the image, per second (the first frame takes it at once).
-    /// [default: 3]
-    #[arg(long, requires = "auto_exposure", allow_negative_numbers = true)]
+    #[arg(long, requires = "auto_exposure", allow_negative_numbers = true, help = format!("How fast auto exposure follows the image, per second (the first frame takes it at once). [default: {}]", AutoExposure::default().adaptation_speed))]
     exposure_adaptation: Option<f32>,
     /// Bloom: the image blurred over a chain of half-resolution levels, blended over it.
     #[arg(long)]
     bloom: bool,
-    /// Bloom's share of the image, above 0 and at most 1. [default: 0.05]
-    #[arg(long, requires = "bloom", allow_negative_numbers = true)]
+    #[arg(long, requires = "bloom", allow_negative_numbers = true, help = format!("Bloom's share of the image, above 0 and at most 1. [default: {}]", Bloom::default().intensity))]
     bloom_intensity: Option<f32>,
     /// Depth of field of a thin lens with the camera's field of view on a 24 mm-high sensor.
     #[arg(long)]
@@ -151,27 +135,22 @@ pub(crate) struct PostArgs {
     /// Distance in focus, in metres. [default: what the image's centre shows]
     #[arg(long, requires = "depth_of_field", allow_negative_numbers = true)]
     focus_distance: Option<f32>,
-    /// The lens's f-number: lower is shallower. [default: 2.8]
-    #[arg(long, requires = "depth_of_field", allow_negative_numbers = true)]
+    #[arg(long, requires = "depth_of_field", allow_negative_numbers = true, help = format!("The lens's f-number: lower is shallower. [default: {}]", DepthOfField::default().f_number))]
     f_number: Option<f32>,
-    /// Largest circle of confusion's radius, in pixels, 1 to 16. [default: 16]
-    #[arg(long, requires = "depth_of_field", allow_negative_numbers = true)]
+    #[arg(long, requires = "depth_of_field", allow_negative_numbers = true, help = format!("Largest circle of confusion's radius, in pixels, 1 to {}. [default: {}]", MAX_COC_RADIUS, DepthOfField::default().max_radius))]
     max_coc: Option<f32>,
     /// Motion blur from per-pixel velocities: the camera's motion between frames and animated
     /// instances' (glTF animation) over the frame interval.
     #[arg(long)]
     motion_blur: bool,
-    /// Shutter time as a fraction of the frame interval (0.5: a 180° shutter). [default: 0.5]
-    #[arg(long, requires = "motion_blur", allow_negative_numbers = true)]
+    #[arg(long, requires = "motion_blur", allow_negative_numbers = true, help = format!("Shutter time as a fraction of the frame interval (0.5: a 180° shutter). [default: {}]", MotionBlur::default().shutter))]
     shutter: Option<f32>,
-    /// Samples per pixel along the blur, 1 to 64. [default: 16]
-    #[arg(long, requires = "motion_blur")]
+    #[arg(long, requires = "motion_blur", help = format!("Samples per pixel along the blur, 1 to {}. [default: {}]", MAX_MOTION_BLUR_SAMPLES, MotionBlur::default().samples))]
     motion_blur_samples: Option<u32>,
-    /// Longest blur, in pixels, 1 to 32. [default: 32]
-    #[arg(long, requires = "motion_blur", allow_negative_numbers = true)]
+    #[arg(long, requires = "motion_blur", allow_negative_numbers = true, help = format!("Longest blur, in pixels, 1 to {}. [default: {}]", MAX_MOTION_BLUR_LENGTH, MotionBlur::default().max_length))]
     max_motion_blur: Option<f32>,
     /// Natural vignetting: 0 none, 1 the cos⁴ falloff of a real lens.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = PostSettings::default().vignette, allow_negative_numbers = true)]
     vignette: f32,
 }
 
@@ -205,32 +184,20 @@ impl PostArgs {
 /// Ray-traced effects; each overrides the scene file's `[rays]`.
 #[derive(Args)]
 pub(crate) struct RayArgs {
-    /// Sun shadows by rays from every pixel: none, one ray to the sun's centre, or rays to points of
-    /// its disc (--shadow-rays) and a spatial filter. [default: the scene file's, or off]
-    #[arg(long, value_enum)]
+    #[arg(long, value_enum, help = format!("Sun shadows by rays from every pixel: none, one ray to the sun's centre, or rays to points of its disc (--shadow-rays) and a spatial filter. [default: the scene file's, or {}]", RaySettings::default().sun_shadows))]
     shadows: Option<SunShadows>,
-    /// The sun's angular diameter in degrees: the width of soft shadows' penumbrae. [default: the
-    /// scene file's, or 0.53]
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, help = format!("The sun's angular diameter in degrees: the width of soft shadows' penumbrae. [default: the scene file's, or {}]", RaySettings::default().sun_angle_degrees))]
     sun_angle: Option<f32>,
-    /// Rays per pixel towards the sun's disc with --shadows soft (1 to 64). [default: the scene
-    /// file's, or 4]
-    #[arg(long)]
+    #[arg(long, help = format!("Rays per pixel towards the sun's disc with --shadows soft (1 to {}). [default: the scene file's, or {}]", MAX_SHADOW_RAYS, RaySettings::default().shadow_rays))]
     shadow_rays: Option<u32>,
     /// Ray-traced reflections on glossy surfaces, their hits shaded by the full shading core.
     #[arg(long)]
     reflections: bool,
-    /// Reflection bounces with --reflections (1 to 8). [default: the scene file's, or 1]
-    #[arg(long, requires = "reflections")]
+    #[arg(long, requires = "reflections", help = format!("Reflection bounces with --reflections (1 to {}). [default: the scene file's, or 1]", MAX_REFLECTION_BOUNCES))]
     bounces: Option<u32>,
-    /// Surfaces below this perceptual roughness reflect (above 0, at most 1). [default: the scene
-    /// file's, or 0.3]
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, help = format!("Surfaces below this perceptual roughness reflect (above 0, at most 1). [default: the scene file's, or {}]", RaySettings::default().reflection_roughness))]
     reflection_roughness: Option<f32>,
-    /// Shadow rays each shading point may trace towards local lights that cast shadows (glTF and
-    /// scene-file lights; scattered ones do not), 0 to 64, in the order the light method finds them.
-    /// [default: the scene file's, or 0]
-    #[arg(long)]
+    #[arg(long, help = format!("Shadow rays each shading point may trace towards local lights that cast shadows (glTF and scene-file lights; scattered ones do not), 0 to {}, in the order the light method finds them. [default: the scene file's, or {}]", MAX_SHADOW_RAYS, RaySettings::default().light_shadow_rays))]
     light_shadow_rays: Option<u32>,
 }
 

@@ -511,22 +511,41 @@ impl App {
     }
 
     /// One frame: scripted switches, the camera, the scene's frame, the panel, presenting.
+    /// One frame: the switches due now, a new scene or renderer where they ask for one, the scene's
+    /// image, the window with its panel, and what the panel asked for.
     fn redraw(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        let scripted = self.apply_scripted_switches()?;
+        let regenerated = self.regenerate_if_asked(scripted)?;
+        if self.gpu.is_none() {
+            return Ok(());
+        }
+        self.rebuild_if_stale(regenerated, scripted)?;
+        self.render_scene()?;
+        let Some(asked) = self.draw_window()? else { return Ok(()) };
+        self.switches = asked.switches;
+        self.wanted_counts = asked.counts;
+        if let Some(camera) = asked.jump.and_then(|i| self.scene.cameras.get(i)) {
+            self.fly = FlyCamera::from_camera(camera);
+        }
+        if asked.screenshot {
+            let path = self.next_screenshot_path();
+            self.screenshot(&path, true)?;
+        }
+        self.frame += 1;
+        if self.args.frames.is_some_and(|n| self.frame >= n) {
+            if let Some(path) = self.args.screenshot.clone() {
+                self.screenshot(&path, false)?;
+            }
+            self.stop(event_loop, Ok(()));
+        }
+        Ok(())
+    }
+
+    /// Applies the `--set` switches due this frame; whether there were any.
+    fn apply_scripted_switches(&mut self) -> anyhow::Result<bool> {
         let due: Vec<(String, String)> =
             self.scripted.iter().filter(|s| s.frame == self.frame).map(|s| (s.key.clone(), s.value.clone())).collect();
-        // A switch a script asked for must take: its refusal ends the run; the panel's is shown.
         let scripted = !due.is_empty();
-        let frame = self.frame;
-        let refused = |message: &mut Option<String>, result: anyhow::Result<()>| -> anyhow::Result<()> {
-            match result {
-                Err(e) if scripted => Err(e.context(format!("frame {}: a --set switch was refused", frame))),
-                Err(e) => {
-                    *message = Some(format!("{e:#}"));
-                    Ok(())
-                }
-                Ok(()) => Ok(()),
-            }
-        };
         for (key, value) in due {
             if key == WINDOW_KEY {
                 let (width, height) = parse_window_size(&value)?;
@@ -538,29 +557,57 @@ impl App {
             }
             apply(&mut self.switches, &mut self.wanted_counts, &key, &value)?;
         }
-        let mut regenerated = false;
-        if self.wanted_counts != self.counts {
-            let result = self.regenerate_scene();
-            regenerated = result.is_ok();
-            refused(&mut self.message, result)?;
-            self.edited_counts = self.counts;
+        Ok(scripted)
+    }
+
+    /// A refused switch: the run's error when a script asked for it (it must take), otherwise shown
+    /// in the panel.
+    fn refused(&mut self, scripted: bool, result: anyhow::Result<()>) -> anyhow::Result<()> {
+        match result {
+            Err(e) if scripted => Err(e.context(format!("frame {}: a --set switch was refused", self.frame))),
+            Err(e) => {
+                self.message = Some(format!("{e:#}"));
+                Ok(())
+            }
+            Ok(()) => Ok(()),
         }
+    }
+
+    /// Generates the scene again where the counts asked for changed; whether it was.
+    fn regenerate_if_asked(&mut self, scripted: bool) -> anyhow::Result<bool> {
+        if self.wanted_counts == self.counts {
+            return Ok(false);
+        }
+        let result = self.regenerate_scene();
+        let regenerated = result.is_ok();
+        self.refused(scripted, result)?;
+        self.edited_counts = self.counts;
+        Ok(regenerated)
+    }
+
+    /// Builds the renderer again where the scene, the image size or the switches changed.
+    fn rebuild_if_stale(&mut self, regenerated: bool, scripted: bool) -> anyhow::Result<()> {
         let Some(gpu) = &self.gpu else { return Ok(()) };
         let stale = gpu.renderer.is_none()
             || gpu.image.is_some_and(|(_, size)| size != Self::image_size(gpu))
             || gpu.built != Some(self.switches)
             || regenerated;
-        if stale {
-            let result = self.rebuild();
-            if result.is_err() {
-                // Back to what the renderer was made with, so a refused panel switch is not retried
-                // every frame.
-                if let Some(built) = self.gpu.as_ref().and_then(|g| g.built) {
-                    self.switches = built;
-                }
-            }
-            refused(&mut self.message, result)?;
+        if !stale {
+            return Ok(());
         }
+        let result = self.rebuild();
+        if result.is_err() {
+            // Back to what the renderer was made with, so a refused panel switch is not retried
+            // every frame.
+            if let Some(built) = self.gpu.as_ref().and_then(|g| g.built) {
+                self.switches = built;
+            }
+        }
+        self.refused(scripted, result)
+    }
+
+    /// Moves the camera by the time since the last frame and renders the scene's image.
+    fn render_scene(&mut self) -> anyhow::Result<()> {
         let now = std::time::Instant::now();
         let dt = (now - self.last_frame).as_secs_f32().min(0.1);
         self.last_frame = now;
@@ -575,19 +622,23 @@ impl App {
                 self.history.pop_front();
             }
         }
+        Ok(())
+    }
 
+    /// Draws the panel and the image into the window; what the panel asked for, or `None` when the
+    /// window could not be drawn this frame.
+    fn draw_window(&mut self) -> anyhow::Result<Option<PanelAsks>> {
+        let gpu = self.gpu.as_mut().context("the window is gone")?;
         let raw_input = gpu.egui_state.take_egui_input(&gpu.window);
         let egui_ctx = gpu.egui_state.egui_ctx().clone();
-        let mut switches = self.switches;
-        let mut counts = self.wanted_counts;
-        let mut jump = None;
-        let mut want_screenshot = false;
+        let mut asks = PanelAsks { switches: self.switches, counts: self.wanted_counts, jump: None, screenshot: false };
         let image = gpu.image;
         let mut output = egui_ctx.run_ui(raw_input, |ui| {
             egui::Panel::left("controls").exact_size(PANEL_WIDTH).show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
-                    let state = (&mut switches, (&mut self.edited_counts, &mut counts));
-                    panel(ui, state, &self.scene, &mut jump, &mut want_screenshot, (&self.timings, &self.history), self.message.as_deref());
+                    let shown =
+                        PanelShows { scene: &self.scene, timings: &self.timings, history: &self.history, message: self.message.as_deref() };
+                    panel(ui, &mut asks, &mut self.edited_counts, &shown);
                 });
             });
             egui::CentralPanel::no_frame().show(ui, |ui| {
@@ -604,7 +655,7 @@ impl App {
             pixels_per_point: output.pixels_per_point,
         };
         // Font atlas and other egui textures: uploaded before painting, freed after.
-        let textures = std::mem::take(&mut output.textures_delta);
+        let mut textures = std::mem::take(&mut output.textures_delta);
         for (id, deltas) in &textures.set {
             for delta in deltas {
                 gpu.egui_renderer.update_texture(&gpu.ctx.device, &gpu.ctx.queue, *id, delta);
@@ -619,9 +670,9 @@ impl App {
             // Resized: reconfigure and draw the next frame.
             wgpu::CurrentSurfaceTexture::Outdated => {
                 gpu.surface.configure(&gpu.ctx.device, &gpu.surface_config);
-                return Ok(());
+                return Ok(None);
             }
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => return Ok(()),
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => return Ok(None),
             other => bail!("cannot draw into the window: its surface is {other:?}"),
         };
         let target = frame.texture.create_view(&Default::default());
@@ -649,71 +700,49 @@ impl App {
         for id in &textures.free {
             gpu.egui_renderer.free_texture(id);
         }
-        let mut textures = textures;
         textures.clear();
         gpu.ctx.check_errors()?;
-
-        self.switches = switches;
-        self.wanted_counts = counts;
-        if let Some(camera) = jump.and_then(|i| self.scene.cameras.get(i)) {
-            self.fly = FlyCamera::from_camera(camera);
-        }
-        if want_screenshot {
-            let path = self.next_screenshot_path();
-            self.screenshot(&path, true)?;
-        }
-        self.frame += 1;
-        if self.args.frames.is_some_and(|n| self.frame >= n) {
-            if let Some(path) = self.args.screenshot.clone() {
-                self.screenshot(&path, false)?;
-            }
-            self.stop(event_loop, Ok(()));
-        }
-        Ok(())
+        Ok(Some(asks))
     }
 }
 
-/// The panel: switches, counts, cameras, timings and the frame-time graph.
-fn panel(
-    ui: &mut egui::Ui,
-    (switches, (edited, counts)): (&mut Switches, (&mut Counts, &mut Counts)),
-    scene: &Scene,
-    jump: &mut Option<usize>,
-    screenshot: &mut bool,
-    (timings, history): (&PassTimings, &VecDeque<f64>),
-    message: Option<&str>,
-) {
+/// What the panel asks for: switches, the counts to generate the scene with, a camera to jump to,
+/// a screenshot.
+struct PanelAsks {
+    switches: Switches,
+    counts: Counts,
+    jump: Option<usize>,
+    screenshot: bool,
+}
+
+/// What the panel shows besides its switches.
+struct PanelShows<'a> {
+    scene: &'a Scene,
+    timings: &'a PassTimings,
+    history: &'a VecDeque<f64>,
+    message: Option<&'a str>,
+}
+
+/// A combo box choosing one of an option enum's values.
+fn choice<T: Named + PartialEq>(ui: &mut egui::Ui, label: &str, value: &mut T) {
+    egui::ComboBox::from_label(label).selected_text(value.name()).show_ui(ui, |ui| {
+        for &v in T::all() {
+            ui.selectable_value(value, v, v.name());
+        }
+    });
+}
+
+/// The panel: switches, counts (`edited` while they are dragged), cameras, timings and the
+/// frame-time graph.
+fn panel(ui: &mut egui::Ui, asks: &mut PanelAsks, edited: &mut Counts, shown: &PanelShows) {
+    let switches = &mut asks.switches;
     ui.heading("manylights");
-    egui::ComboBox::from_label("pipeline").selected_text(switches.pipeline.name()).show_ui(ui, |ui| {
-        for p in PipelineKind::ALL {
-            ui.selectable_value(&mut switches.pipeline, p, p.name());
-        }
-    });
-    egui::ComboBox::from_label("lights").selected_text(switches.light_method.name()).show_ui(ui, |ui| {
-        for m in LightMethod::ALL {
-            ui.selectable_value(&mut switches.light_method, m, m.name());
-        }
-    });
-    egui::ComboBox::from_label("decals").selected_text(switches.decal_method.name()).show_ui(ui, |ui| {
-        for m in DecalMethod::ALL {
-            ui.selectable_value(&mut switches.decal_method, m, m.name());
-        }
-    });
-    egui::ComboBox::from_label("particles").selected_text(switches.particle_method.name()).show_ui(ui, |ui| {
-        for m in ParticleMethod::ALL {
-            ui.selectable_value(&mut switches.particle_method, m, m.name());
-        }
-    });
-    egui::ComboBox::from_label("debug view").selected_text(switches.debug_view.name()).show_ui(ui, |ui| {
-        for v in DebugView::ALL {
-            ui.selectable_value(&mut switches.debug_view, v, v.name());
-        }
-    });
-    egui::ComboBox::from_label("sun shadows").selected_text(switches.shadows.name()).show_ui(ui, |ui| {
-        for s in SunShadows::ALL {
-            ui.selectable_value(&mut switches.shadows, s, s.name());
-        }
-    });
+    choice(ui, "pipeline", &mut switches.pipeline);
+    choice(ui, "lights", &mut switches.light_method);
+    choice(ui, "decals", &mut switches.decal_method);
+    choice(ui, "particles", &mut switches.particle_method);
+    choice(ui, "debug view", &mut switches.debug_view);
+    choice(ui, "sun shadows", &mut switches.shadows);
     ui.checkbox(&mut switches.reflections, "reflections");
     ui.separator();
     ui.checkbox(&mut switches.auto_exposure, "auto exposure");
@@ -729,35 +758,35 @@ fn panel(
         released |= response.drag_stopped() || response.lost_focus();
     }
     if released {
-        *counts = *edited;
+        asks.counts = *edited;
     }
-    if !scene.cameras.is_empty() {
+    if !shown.scene.cameras.is_empty() {
         ui.separator();
         ui.label("cameras");
-        for (i, camera) in scene.cameras.iter().enumerate() {
+        for (i, camera) in shown.scene.cameras.iter().enumerate() {
             if ui.button(format!("{i}: {}", camera.name)).clicked() {
-                *jump = Some(i);
+                asks.jump = Some(i);
             }
         }
     }
     ui.separator();
     if ui.button("screenshot (F12)").clicked() {
-        *screenshot = true;
+        asks.screenshot = true;
     }
-    if let Some(message) = message {
+    if let Some(message) = shown.message {
         ui.label(message);
     }
     ui.separator();
-    let total: f64 = timings.iter().map(|(_, ms)| ms).sum();
+    let total: f64 = shown.timings.iter().map(|(_, ms)| ms).sum();
     ui.label(format!("GPU frame {total:.3} ms"));
     egui::Grid::new("timings").striped(true).show(ui, |ui| {
-        for (pass, ms) in timings {
+        for (pass, ms) in shown.timings {
             ui.label(*pass);
             ui.label(format!("{ms:.3}"));
             ui.end_row();
         }
     });
-    frame_graph(ui, history);
+    frame_graph(ui, shown.history);
 }
 
 /// The last frames' GPU times as a line, scaled to the largest.

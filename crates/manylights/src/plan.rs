@@ -103,7 +103,7 @@ pub enum ShadingStage {
 /// Which structures a pass's point queries walk a subgroup at a time (where the device has subgroup
 /// operations). A walk shared by the subgroup loads each node once for all its lanes, but lanes that
 /// need nothing wait for it, and each item any lane finds is processed in a round of its own. As
-/// measured (BENCHMARKS.md), it pays for dense lights (particles as exact lights: hundreds reach
+/// measured (benchmarks/LOG.md, topics 3 and 4), it pays for dense lights (particles as exact lights: hundreds reach
 /// every point) in every stage, for decals in fragments, whose lanes walking alone diverge most, and
 /// for dense decals in compute, whose leaves the lanes then share out, each testing one decal against
 /// the box around all their points; not for sparse lights, nor for sparse decals in compute.
@@ -118,7 +118,7 @@ pub struct QueryWalks {
 
 /// From how many boxes hold a decal's centre, on average, decals count as dense
 /// ([`ShadingMethods::dense_decals`]): sharing leaves out breaks even with walking alone around 20
-/// and wins from about 28, while sparse decals shared out are slower in fragments (BENCHMARKS.md).
+/// and wins from about 28, while sparse decals shared out are slower in fragments (benchmarks/LOG.md, topic 2).
 pub const DENSE_DECAL_OVERLAP: f32 = 24.0;
 
 pub fn query_walks(methods: ShadingMethods, stage: ShadingStage) -> QueryWalks {
@@ -256,7 +256,7 @@ impl FramePlan {
                 config.light_method == LightMethod::Clustered,
                 config.light_bvh_build,
             ),
-            clustered: config.light_method == LightMethod::Clustered && !particle_lights,
+            clustered: config.light_method == LightMethod::Clustered,
             wide_leaves: false,
             cell_lists: false,
         };

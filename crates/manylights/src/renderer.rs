@@ -7,7 +7,7 @@ use crate::{
     accel::VolumeStructure,
     gpu::{cluster_grid::ClusterGrid, readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
     particles::{ParticleGrid, ParticleSystem, ParticleVolume},
-    passes::{deform::Deform, FrameInputs},
+    passes::{deform::Deform, FrameInputs, Structures},
     pipelines::{FramePipeline, FrameSetup},
     plan::{Capabilities, FramePlan, Measurements, ParticlePlan, ShadingMethods, StructurePlan},
     post::PostFrame,
@@ -65,10 +65,9 @@ struct InstanceMotion {
     primitive_counts: Vec<usize>,
 }
 
-/// The anisotropy the samplers get. lavapipe (Mesa 22.3) takes seconds per pixel when decal textures
-/// are sampled anisotropically (in the visibility-buffer resolve and in fragment shaders; measured:
-/// one decal at 64×36 turned a 14 ms frame into 5 s), so on lavapipe every pipeline filters
-/// trilinearly, with a warning.
+/// The anisotropy the samplers get. lavapipe takes seconds per pixel when decal textures are sampled
+/// anisotropically (in the visibility-buffer resolve and in fragment shaders), so on lavapipe every
+/// pipeline filters trilinearly, with a warning.
 fn effective_anisotropy(ctx: &GpuContext, config: &RenderConfig) -> u16 {
     if config.anisotropy > 1 && ctx.info.name.contains("llvmpipe") {
         static WARNED: std::sync::Once = std::sync::Once::new();
@@ -159,7 +158,7 @@ impl Renderer {
             methods,
             shadows: config.rays.sun_shadows,
             post: config.post,
-            structures: (&lights, &decals),
+            structures: Structures { lights: &lights, decals: &decals },
             size: (config.width, config.height),
         };
         let pipeline = FramePipeline::new(&ctx, &gpu_scene, config.pipeline, setup)?;

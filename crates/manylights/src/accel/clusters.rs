@@ -90,6 +90,39 @@ struct ClusterBuildParams {
     row_threads: u32,
 }
 
+/// What a structure's clustered lists are called: the label of their buffers and the timer scope of
+/// their build.
+#[derive(Clone, Copy)]
+pub struct ClusterNames {
+    pub label: &'static str,
+    pub scope: &'static str,
+}
+
+/// The clustered method's lists, for structures that shading reads through them: the froxel grid,
+/// the bounds each volume is binned by (group space), and the scene's bind group layout, whose frame
+/// uniforms the list build reads.
+pub struct Clustering<'a> {
+    pub grid: ClusterGrid,
+    pub bounds: Vec<ClusterBounds>,
+    pub frame_layout: &'a wgpu::BindGroupLayout,
+}
+
+impl Clustering<'_> {
+    /// The lists over a structure's instances (`instances`, holding `instance_items` items each),
+    /// whose items are stored in the order of `scene_indices` (their indices into `bounds`).
+    pub fn lists(
+        self,
+        ctx: &GpuContext,
+        names: ClusterNames,
+        instances: &wgpu::Buffer,
+        instance_items: &[u32],
+        scene_indices: &[u32],
+    ) -> Result<ClusterLists> {
+        let bounds: Vec<ClusterBounds> = scene_indices.iter().map(|&i| self.bounds[i as usize]).collect();
+        ClusterLists::new(ctx, names, self.frame_layout, instances, instance_items, &bounds, self.grid)
+    }
+}
+
 /// One structure's per-froxel lists and the passes that build them.
 pub struct ClusterLists {
     /// Per froxel, (first entry, length): bound to shading.
@@ -123,7 +156,7 @@ impl ClusterLists {
     /// bind group layout: the build reads the frame uniforms from it.
     pub fn new(
         ctx: &GpuContext,
-        (label, scope): (&'static str, &'static str),
+        ClusterNames { label, scope }: ClusterNames,
         frame_layout: &wgpu::BindGroupLayout,
         instances: &wgpu::Buffer,
         instance_items: &[u32],

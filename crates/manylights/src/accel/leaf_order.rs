@@ -27,15 +27,24 @@ pub struct LeafOrder {
     scope: &'static str,
 }
 
+/// Where the pass writes the items, and the primitive indices of the rebuilt leaves it reads.
+pub struct LeafOrderTarget<'a> {
+    pub items: &'a wgpu::Buffer,
+    pub primitives: &'a wgpu::Buffer,
+    /// The first of the items' primitive indices.
+    pub first_primitive: u32,
+}
+
 impl LeafOrder {
-    /// The pass that writes `count` items of `item_bytes` each (a multiple of 16) into `items` from
-    /// `scene_items`, item i from scene item `primitives[first_primitive + i]`, timed as `scope`.
+    /// The pass that writes `count` items of `item_bytes` each (a multiple of 16) into `target.items`
+    /// from `scene_items`, item i from scene item `target.primitives[target.first_primitive + i]`,
+    /// timed as `scope`.
     pub fn new(
         ctx: &GpuContext,
         scope: &'static str,
         scene_items: &[u8],
         item_bytes: usize,
-        (items, primitives, first_primitive): (&wgpu::Buffer, &wgpu::Buffer, u32),
+        LeafOrderTarget { items, primitives, first_primitive }: LeafOrderTarget,
     ) -> Result<Self> {
         debug_assert!(item_bytes.is_multiple_of(16) && !scene_items.is_empty());
         let device = &ctx.device;

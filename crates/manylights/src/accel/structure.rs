@@ -25,11 +25,11 @@ use glam::Affine3A;
 use super::{
     bvh::{MAX_LEAF_SIZE, MAX_PRIMITIVES},
     cell_lists::{self, CellLists},
-    clusters::{ClusterBounds, ClusterLists},
+    clusters::{ClusterBounds, ClusterLists, ClusterNames, Clustering},
     decal_aabb,
     entry_grid::{self, EntryGrid},
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
-    leaf_order::LeafOrder,
+    leaf_order::{LeafOrder, LeafOrderTarget},
     light_aabb, Aabb, Bvh, BvhNode,
 };
 use crate::{
@@ -46,7 +46,7 @@ use crate::{
 
 /// Up to this many instances the top level is built on the CPU (binned SAH, one instance per leaf)
 /// and uploaded with the instances, which takes microseconds; a GPU build has a fixed cost of its
-/// passes (0.18 ms for 16 instances on an H100). Above it, the GPU builds the top level.
+/// passes, larger than a CPU build of a small top level. Above it, the GPU builds the top level.
 pub const CPU_TOP_LEVEL_MAX_INSTANCES: usize = 1024;
 
 /// Keep in sync with `VolumeInstance` in `accel/bvh_types.wgsl`.
@@ -67,7 +67,7 @@ pub struct GpuVolumeInstance {
 
 /// Instance 0 and its group's entry-grid or cell-list header (zero without either), in a uniform buffer: a query over
 /// a lone instance starts from them without two dependent storage loads before its first node, which
-/// the fragment stage waits for (BENCHMARKS.md, "…, the lone instance in a uniform"). Keep in sync with
+/// the fragment stage waits for (benchmarks/LOG.md, topic 4). Keep in sync with
 /// `FirstInstance` in `accel/bvh_types.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
@@ -299,20 +299,11 @@ pub struct DynamicTargets<'a> {
     pub first_primitive: u32,
 }
 
-/// The clustered method's lists, for structures that shading reads through them: the froxel grid,
-/// the bounds each volume is binned by (group space), and the scene's bind group layout, whose frame
-/// uniforms the list build reads.
-pub struct Clustering<'a> {
-    pub grid: ClusterGrid,
-    pub bounds: Vec<ClusterBounds>,
-    pub frame_layout: &'a wgpu::BindGroupLayout,
-}
-
 pub struct VolumeStructure {
     pub bind_group_layout: wgpu::BindGroupLayout,
     pub bind_group: wgpu::BindGroup,
     label: &'static str,
-    items: wgpu::Buffer,
+    buffers: Buffers,
     /// Each item's decal layer (empty for lights): deferred decals draw in layer order.
     layers: Vec<u32>,
     /// The scene's index of each item but the dynamic group's, in the order they are stored: CPU-built
@@ -330,11 +321,6 @@ pub struct VolumeStructure {
     groups: Vec<Group>,
     /// Instances of non-empty groups: instances of empty groups can contain nothing.
     instances: Vec<GroupInstance>,
-    instance_buffer: wgpu::Buffer,
-    /// A [`GpuFirstInstance`].
-    first_instance: wgpu::Buffer,
-    nodes: wgpu::Buffer,
-    primitives: wgpu::Buffer,
     /// Builds the top level on the GPU when there are more than [`CPU_TOP_LEVEL_MAX_INSTANCES`].
     top_level_builder: Option<GpuLbvh>,
     top_level_scope: &'static str,
@@ -407,10 +393,10 @@ impl VolumeStructure {
         let group = self.groups.iter().find(|g| g.dynamic)?;
         let builder = group.builder.as_ref()?;
         Some(DynamicTargets {
-            items: &self.items,
+            items: &self.buffers.items,
             first_item: group.items.start,
             boxes: builder.boxes(),
-            primitives: &self.primitives,
+            primitives: &self.buffers.primitives,
             first_primitive: builder.primitive_base(),
         })
     }
@@ -476,129 +462,39 @@ impl VolumeStructure {
         Ok((pairs, ranges))
     }
 
+    /// Builds the structure over `volumes`: its groups' BVHs as `build` says, with clustered lists
+    /// when `clustering` is given.
     pub fn new(ctx: &GpuContext, volumes: &Volumes, build: GroupBuild, clustering: Option<Clustering>) -> Result<Self> {
+        volumes.check()?;
         let label = volumes.kind.label();
-        let count = volumes.boxes.len();
-        if volumes.items.len() != count * volumes.kind.record_bytes() {
-            return Err(Error::InvalidConfig(format!(
-                "{} bytes of {label} records for {count} volumes; each record takes {} bytes",
-                volumes.items.len(),
-                volumes.kind.record_bytes()
-            )));
-        }
-        if let Some(i) = volumes.boxes.iter().position(|b| !b.is_valid()) {
-            return Err(Error::InvalidScene(format!(
-                "{label} {i}: its volume has a NaN, infinite or inverted bound {:?}",
-                volumes.boxes[i]
-            )));
-        }
-        let (ranges, all_instances) = volumes.groups.resolve(count);
-        let mut instances: Vec<GroupInstance> = all_instances.into_iter().filter(|i| !ranges[i.group].is_empty()).collect();
-        let dynamic = volumes.dynamic.filter(|d| d.count > 0);
-        if dynamic.is_some() {
-            // The dynamic group comes after the others, at identity.
-            instances.push(GroupInstance { group: ranges.len(), world_from_group: Affine3A::IDENTITY, spin: None });
-        }
-        let dynamic_count = dynamic.map_or(0, |d| d.count);
-        let instance_slots = instances.len().max(1) as u32;
-        let top_level_nodes = 2 * instance_slots - 1;
-
-        // Node and primitive layout: the top level, then every group's entry-grid header and BVH (at
-        // most 2n − 1 nodes).
-        let mut node_base = top_level_nodes;
-        let mut group_bases = Vec::new();
-        for range in &ranges {
-            group_bases.push(node_base + 1);
-            node_base += 1 + (2 * range.len() as u32).saturating_sub(1);
-        }
-        let dynamic_root = node_base + 1;
-        node_base += 1 + (2 * dynamic_count).saturating_sub(1);
-        let node_count = u64::from(node_base);
-        volumes.kind.check_capacity(ctx, count, dynamic_count, instance_slots)?;
-        let primitive_count = u64::from(instance_slots) + count as u64 + u64::from(dynamic_count);
-        let item_bytes = volumes.items.len() as u64 + u64::from(dynamic_count) * volumes.kind.record_bytes() as u64;
+        let layout = Layout::new(volumes);
+        volumes.kind.check_capacity(ctx, layout.count, layout.dynamic_count(), layout.instance_slots)?;
         let fits = |what: &str, bytes: u64| {
             ctx.check_storage_binding(&format!("{label} {what}"), bytes)
                 .map_err(|m| Error::InvalidScene(format!("{m}; use fewer {label}s")))
         };
         // Without group BVHs only the top level's nodes are written.
-        let stored_nodes = if build == GroupBuild::None && dynamic.is_none() { u64::from(top_level_nodes) } else { node_count };
-        let node_bytes = stored_nodes * std::mem::size_of::<BvhNode>() as u64;
+        let stored_nodes = if build == GroupBuild::None && layout.dynamic.is_none() { layout.top_level_nodes() } else { layout.node_count };
+        let node_bytes = u64::from(stored_nodes) * std::mem::size_of::<BvhNode>() as u64;
         fits("BVH nodes", node_bytes)?;
         // CPU builds first: their entry grids' cells and covers, or cell lists, follow the primitive
-        // indices in the same array, within one budget of cells and cover words for all the groups
-        // (`GridBudget`) and one of list words (`cell_lists::MAX_LIST_WORDS`).
-        let grid_budget = entry_grid::GridBudget::for_structure(count);
-        let group_boxes = |range: &Range<usize>| &volumes.boxes[range.clone()];
-        // Each group's CPU-built tree, if it has one.
-        let cpu_trees = |builder: fn(&[Aabb]) -> Result<Bvh>| -> Result<Vec<Option<Bvh>>> {
-            let cpu_built = |range: &Range<usize>| build == GroupBuild::CpuOnce && !range.is_empty();
-            ranges.iter().map(|range| cpu_built(range).then(|| builder(group_boxes(range))).transpose()).collect()
-        };
-        // Crowded volumes whose queries share leaves out get wide leaves.
-        let trees = cpu_trees(if volumes.wide_leaves { Bvh::build_wide } else { Bvh::build })?;
-        let wide_leaves = volumes.wide_leaves && trees.iter().any(Option::is_some);
-        // Crowded decals that are one group placed once get cell lists where they fit, which shading
-        // reads in place of any walk (`VolumeStructure::cell_lists`). Only the placed group's: groups
-        // without an instance are never queried.
-        const _: () = assert!(DECAL_LAYERS - 1 <= cell_lists::MAX_RANK);
-        let listed_group =
-            (volumes.kind == VolumeKind::Decals && volumes.cell_lists && wide_leaves && instances.len() == 1 && dynamic.is_none())
-                .then(|| instances[0].group);
-        let list_words_per_primitive = cell_lists::MAX_LIST_WORDS as f64 / count.max(1) as f64;
-        let cpu_builds: Vec<Option<(Bvh, Option<GroupGrid>)>> = trees
-            .into_iter()
-            .zip(&ranges)
-            .enumerate()
-            .map(|(group, (tree, range))| {
-                tree.map(|bvh| {
-                    let lists = (listed_group == Some(group))
-                        .then(|| {
-                            let (boxes, records): (Vec<Aabb>, Vec<GpuDecal>) = bvh
-                                .primitive_indices
-                                .iter()
-                                .map(|&p| {
-                                    let at = (range.start + p as usize) * std::mem::size_of::<GpuDecal>();
-                                    let record: GpuDecal =
-                                        bytemuck::pod_read_unaligned(&volumes.items[at..at + std::mem::size_of::<GpuDecal>()]);
-                                    (volumes.boxes[range.start + p as usize], record)
-                                })
-                                .unzip();
-                            decal_cell_lists(&boxes, &records, (range.len() as f64 * list_words_per_primitive) as usize)
-                        })
-                        .flatten();
-                    let grid = match lists {
-                        Some(lists) => Some(GroupGrid::Lists(lists)),
-                        None => EntryGrid::build(&bvh, group_boxes(range), grid_budget).map(GroupGrid::Entry),
-                    };
-                    (bvh, grid)
-                })
-            })
-            .collect();
-        // Each item's scene index, in the order the items are stored: a CPU-built group's in its
-        // leaf order; the others' as the scene has them until their builds sort them.
-        let scene_indices: Vec<u32> = ranges
-            .iter()
-            .zip(&cpu_builds)
-            .flat_map(|(range, build)| {
-                let start = range.start as u32;
-                match build {
-                    Some((bvh, _)) => bvh.primitive_indices.iter().map(|&p| start + p).collect::<Vec<_>>(),
-                    None => range.clone().map(|i| i as u32).collect(),
-                }
-            })
-            .collect();
-        let rebuilt_on_gpu = build == GroupBuild::GpuEveryFrame && ranges.iter().any(|range| !range.is_empty());
+        // indices in the same array.
+        let cpu_groups = cpu_builds(volumes, &layout, build)?;
+        let wide_leaves = volumes.wide_leaves && cpu_groups.iter().any(Option::is_some);
+        let scene_indices = stored_order(&layout.ranges, &cpu_groups);
+        let rebuilt_on_gpu = build == GroupBuild::GpuEveryFrame && layout.ranges.iter().any(|range| !range.is_empty());
         if rebuilt_on_gpu && clustering.is_some() {
             return Err(Error::InvalidConfig(format!(
                 "clustered lists bin the {label}s in the order the CPU stores them, which GPU rebuilds change every frame; build the {label}s' BVH once on the CPU"
             )));
         }
-        let cell_words: u64 = cpu_builds.iter().flatten().filter_map(|(_, g)| g.as_ref()).map(|g| g.gpu_len() as u64).sum();
-        let cell_lists = listed_group.is_some_and(|g| matches!(&cpu_builds[g], Some((_, Some(GroupGrid::Lists(_))))));
+        let cell_words: u64 = cpu_groups.iter().flatten().filter_map(|g| g.grid.as_ref()).map(|g| g.gpu_len() as u64).sum();
+        let cell_lists = cpu_groups.iter().flatten().any(|g| matches!(g.grid, Some(GroupGrid::Lists(_))));
+        let primitive_count = layout.primitive_count();
         if primitive_count + cell_words > u64::from(entry_grid::CELL_COVER_OFFSET_MASK) {
             return Err(Error::InvalidScene(format!(
-                "{count} {label}s need {} words of primitive indices, entry grids and cell lists, over the {} a structure addresses; use fewer {label}s",
+                "{} {label}s need {} words of primitive indices, entry grids and cell lists, over the {} a structure addresses; use fewer {label}s",
+                layout.count,
                 primitive_count + cell_words,
                 entry_grid::CELL_COVER_OFFSET_MASK
             )));
@@ -606,142 +502,41 @@ impl VolumeStructure {
         let primitive_bytes = (primitive_count + cell_words) * 4;
         fits("BVH primitives, entry grids and cell lists", primitive_bytes)?;
 
-        let device = &ctx.device;
-        use wgpu::BufferUsages as U;
-        let storage = |name: &str, size: u64, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(&format!("{label} {name}")),
-                size: size.max(4),
-                usage: U::STORAGE | usage,
-                mapped_at_creation: false,
-            })
-        };
-        let nodes = storage("bvh nodes", node_bytes, U::COPY_DST | U::COPY_SRC);
-        let primitives = storage("bvh primitives", primitive_bytes, U::COPY_DST | U::COPY_SRC);
-        let instance_buffer =
-            storage("instances", u64::from(instance_slots) * std::mem::size_of::<GpuVolumeInstance>() as u64, U::COPY_DST);
-        let first_instance = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(&format!("{label} first instance")),
-            size: std::mem::size_of::<GpuFirstInstance>() as u64,
-            usage: U::UNIFORM | U::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let items = storage("items", item_bytes.max(64), U::COPY_DST);
-        let bytes_per_item = volumes.kind.record_bytes();
+        let buffers = Buffers::new(ctx, volumes, &layout, node_bytes, primitive_bytes);
         let leaf_order = if rebuilt_on_gpu {
             let scope = volumes.kind.scopes().leaf_order;
-            Some(LeafOrder::new(ctx, scope, volumes.items, bytes_per_item, (&items, &primitives, instance_slots))?)
+            let targets =
+                LeafOrderTarget { items: &buffers.items, primitives: &buffers.primitives, first_primitive: layout.instance_slots };
+            Some(LeafOrder::new(ctx, scope, volumes.items, volumes.kind.record_bytes(), targets)?)
         } else {
-            let in_leaf_order: Vec<u8> = scene_indices
-                .iter()
-                .flat_map(|&i| &volumes.items[i as usize * bytes_per_item..(i as usize + 1) * bytes_per_item])
-                .copied()
-                .collect();
-            if !in_leaf_order.is_empty() {
-                ctx.queue.write_buffer(&items, 0, &in_leaf_order);
-            }
+            buffers.write_items_in_order(ctx, volumes, &scene_indices);
             None
         };
         if !scene_indices.is_empty() {
-            ctx.queue.write_buffer(&primitives, u64::from(instance_slots) * 4, bytemuck::cast_slice(&scene_indices));
+            ctx.queue.write_buffer(&buffers.primitives, u64::from(layout.instance_slots) * 4, bytemuck::cast_slice(&scene_indices));
         }
-
-        let mut groups = Vec::new();
-        let mut next_cell = primitive_count as u32;
-        for ((range, &blas_root), cpu_build) in ranges.iter().zip(&group_bases).zip(cpu_builds) {
-            let items_range = range.start as u32..range.end as u32;
-            let boxes = &volumes.boxes[range.clone()];
-            let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
-            let mut grid_header: Option<GridHeader> = None;
-            let builder = match cpu_build {
-                Some((bvh, grid)) => {
-                    let group_nodes = relocate(&bvh, blas_root, items_range.start);
-                    ctx.queue.write_buffer(&nodes, u64::from(blas_root) * 32, bytemuck::cast_slice(&group_nodes));
-                    if let Some(grid) = grid {
-                        let (cells, header) = grid.gpu_words(blas_root, items_range.start, next_cell);
-                        ctx.queue.write_buffer(&primitives, u64::from(next_cell) * 4, bytemuck::cast_slice(&cells));
-                        ctx.queue.write_buffer(&nodes, u64::from(blas_root - 1) * 32, bytemuck::bytes_of(&header.node));
-                        grid_header = Some(header);
-                        next_cell += cells.len() as u32;
-                    }
-                    None
-                }
-                None if boxes.is_empty() || build == GroupBuild::None => None,
-                None => {
-                    let target = LbvhTarget {
-                        nodes: nodes.clone(),
-                        primitives: primitives.clone(),
-                        node_base: blas_root,
-                        primitive_base: instance_slots + items_range.start,
-                        item_base: items_range.start,
-                        leaf_base: items_range.start,
-                    };
-                    let mut builder = GpuLbvh::with_target(ctx, boxes.len() as u32, target)?;
-                    builder.set_boxes(&ctx.queue, boxes)?;
-                    Some(builder)
-                }
-            };
-            groups.push(Group { items: items_range, blas_root, grid: grid_header, dynamic: false, bounds, builder });
+        let mut groups = place_groups(ctx, volumes, &layout, &buffers, build, cpu_groups)?;
+        if let Some(dynamic) = layout.dynamic {
+            groups.push(dynamic_group(ctx, &layout, &buffers, dynamic)?);
         }
-        if let Some(d) = dynamic {
-            let first = count as u32;
-            let target = LbvhTarget {
-                nodes: nodes.clone(),
-                primitives: primitives.clone(),
-                node_base: dynamic_root,
-                primitive_base: instance_slots + first,
-                item_base: first,
-                leaf_base: first,
-            };
-            let mut builder = GpuLbvh::with_target(ctx, d.count, target)?.with_max_leaf_size(match d.leaves {
-                DynamicLeaves::Widest => MAX_LEAF_SIZE,
-                DynamicLeaves::AtMost(size) => size,
-            });
-            builder.set_gpu_boxes(&ctx.queue, d.count, &d.bounds)?;
-            groups.push(Group {
-                items: first..first + d.count,
-                blas_root: dynamic_root,
-                grid: None,
-                dynamic: true,
-                bounds: d.bounds,
-                builder: Some(builder),
-            });
-        }
-        let top_level_builder = if instances.len() > CPU_TOP_LEVEL_MAX_INSTANCES {
-            let target = LbvhTarget {
-                nodes: nodes.clone(),
-                primitives: primitives.clone(),
-                node_base: 0,
-                primitive_base: 0,
-                item_base: 0,
-                leaf_base: 0,
-            };
-            Some(GpuLbvh::with_target(ctx, instance_slots, target)?)
-        } else {
-            None
-        };
-
+        let top_level_builder = (layout.instances.len() > CPU_TOP_LEVEL_MAX_INSTANCES)
+            .then(|| GpuLbvh::with_target(ctx, layout.instance_slots, buffers.target(0, 0, 0)))
+            .transpose()?;
         let Scopes { top_level: top_level_scope, groups: blas_scope, clusters: cluster_scope, .. } = volumes.kind.scopes();
         let clusters = match clustering {
             Some(c) => {
-                let instance_items: Vec<u32> = instances.iter().map(|i| ranges[i.group].len() as u32).collect();
-                let bounds: Vec<ClusterBounds> = scene_indices.iter().map(|&i| c.bounds[i as usize]).collect();
-                Some(ClusterLists::new(ctx, (label, cluster_scope), c.frame_layout, &instance_buffer, &instance_items, &bounds, c.grid)?)
+                let instance_items: Vec<u32> = layout.instances.iter().map(|i| layout.ranges[i.group].len() as u32).collect();
+                Some(c.lists(ctx, ClusterNames { label, scope: cluster_scope }, &buffers.instances, &instance_items, &scene_indices)?)
             }
             None => None,
         };
-        let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        // Keep in sync with `shading/light_bindings.wgsl` and `shading/decal_bindings.wgsl`.
-        let mut entries = [0, 1, 2, 3, 4, 5].map(|binding| bindings::storage_read(binding, all)).to_vec();
-        entries.push(bindings::uniform(6, all));
-        let bind_group_layout = bindings::layout(device, label, &entries);
-        let buffers = [&items, &nodes, &primitives, &instance_buffer, &first_instance];
-        let bind_group = shading_bind_group(ctx, label, &bind_group_layout, buffers, clusters.as_ref());
+        let bind_group_layout = shading_bind_group_layout(&ctx.device, label);
+        let bind_group = shading_bind_group(ctx, label, &bind_group_layout, buffers.bound(), clusters.as_ref());
         Ok(Self {
             bind_group_layout,
             bind_group,
             label,
-            items,
+            buffers,
             layers: Vec::new(),
             scene_indices,
             wide_leaves,
@@ -749,11 +544,7 @@ impl VolumeStructure {
             leaf_order,
             clusters,
             groups,
-            instances,
-            instance_buffer,
-            first_instance,
-            nodes,
-            primitives,
+            instances: layout.instances,
             top_level_builder,
             top_level_scope,
             blas_scope,
@@ -808,8 +599,7 @@ impl VolumeStructure {
         if clusters.fitted(ctx)? {
             return Ok(true);
         }
-        let buffers = [&self.items, &self.nodes, &self.primitives, &self.instance_buffer, &self.first_instance];
-        self.bind_group = shading_bind_group(ctx, self.label, &self.bind_group_layout, buffers, self.clusters.as_ref());
+        self.bind_group = shading_bind_group(ctx, self.label, &self.bind_group_layout, self.buffers.bound(), self.clusters.as_ref());
         Ok(false)
     }
 
@@ -843,9 +633,9 @@ impl VolumeStructure {
         if let Some(i) = boxes.iter().position(|b| !b.is_valid()) {
             return Err(Error::InvalidScene(format!("{} instance {i}: its bounds are not finite at time {time}", self.label)));
         }
-        ctx.queue.write_buffer(&self.instance_buffer, 0, bytemuck::cast_slice(&gpu));
+        ctx.queue.write_buffer(&self.buffers.instances, 0, bytemuck::cast_slice(&gpu));
         let first = GpuFirstInstance { instance: gpu[0], entry_grid_header: placed[0].1.grid.map_or_else(BvhNode::zeroed, |g| g.node) };
-        ctx.queue.write_buffer(&self.first_instance, 0, bytemuck::bytes_of(&first));
+        ctx.queue.write_buffer(&self.buffers.first_instance, 0, bytemuck::bytes_of(&first));
         match &mut self.top_level_builder {
             Some(builder) => {
                 builder.set_boxes(&ctx.queue, &boxes)?;
@@ -854,13 +644,296 @@ impl VolumeStructure {
             None => {
                 // The top level sits at the start of both arrays, its leaves naming instances.
                 let top_level = Bvh::build_with_leaf_size(&boxes, 1)?;
-                ctx.queue.write_buffer(&self.nodes, 0, bytemuck::cast_slice(&top_level.nodes));
-                ctx.queue.write_buffer(&self.primitives, 0, bytemuck::cast_slice(&top_level.primitive_indices));
+                ctx.queue.write_buffer(&self.buffers.nodes, 0, bytemuck::cast_slice(&top_level.nodes));
+                ctx.queue.write_buffer(&self.buffers.primitives, 0, bytemuck::cast_slice(&top_level.primitive_indices));
             }
         }
         self.built_for = Some(time);
         Ok(())
     }
+}
+
+impl Volumes<'_> {
+    /// Checks that there is one record per box and that every box is finite.
+    fn check(&self) -> Result<()> {
+        let label = self.kind.label();
+        let count = self.boxes.len();
+        if self.items.len() != count * self.kind.record_bytes() {
+            return Err(Error::InvalidConfig(format!(
+                "{} bytes of {label} records for {count} volumes; each record takes {} bytes",
+                self.items.len(),
+                self.kind.record_bytes()
+            )));
+        }
+        if let Some(i) = self.boxes.iter().position(|b| !b.is_valid()) {
+            return Err(Error::InvalidScene(format!("{label} {i}: its volume has a NaN, infinite or inverted bound {:?}", self.boxes[i])));
+        }
+        Ok(())
+    }
+}
+
+/// Where a structure's groups and instances lie in its arrays: the top level's nodes first (one
+/// instance per leaf), then every group's grid header node and BVH (at most 2n − 1 nodes), then the
+/// dynamic group's; primitives are the top level's instance indices, then every item, then the CPU
+/// builds' grids and lists.
+struct Layout {
+    /// Volumes, without the dynamic group's.
+    count: usize,
+    ranges: Vec<Range<usize>>,
+    /// Instances of non-empty groups (instances of empty groups can contain nothing), then the
+    /// dynamic group's, at identity.
+    instances: Vec<GroupInstance>,
+    dynamic: Option<DynamicGroup>,
+    instance_slots: u32,
+    /// Each group's root node.
+    group_roots: Vec<u32>,
+    dynamic_root: u32,
+    node_count: u32,
+}
+
+impl Layout {
+    fn new(volumes: &Volumes) -> Self {
+        let count = volumes.boxes.len();
+        let (ranges, all_instances) = volumes.groups.resolve(count);
+        let mut instances: Vec<GroupInstance> = all_instances.into_iter().filter(|i| !ranges[i.group].is_empty()).collect();
+        let dynamic = volumes.dynamic.filter(|d| d.count > 0);
+        if dynamic.is_some() {
+            instances.push(GroupInstance { group: ranges.len(), world_from_group: Affine3A::IDENTITY, spin: None });
+        }
+        let instance_slots = instances.len().max(1) as u32;
+        let mut node_base = 2 * instance_slots - 1;
+        let mut group_roots = Vec::with_capacity(ranges.len());
+        for range in &ranges {
+            group_roots.push(node_base + 1);
+            node_base += 1 + (2 * range.len() as u32).saturating_sub(1);
+        }
+        let dynamic_root = node_base + 1;
+        node_base += 1 + (2 * dynamic.map_or(0, |d| d.count)).saturating_sub(1);
+        Self { count, ranges, instances, dynamic, instance_slots, group_roots, dynamic_root, node_count: node_base }
+    }
+
+    fn dynamic_count(&self) -> u32 {
+        self.dynamic.map_or(0, |d| d.count)
+    }
+
+    fn top_level_nodes(&self) -> u32 {
+        2 * self.instance_slots - 1
+    }
+
+    /// Primitive indices: the top level's, then every item's, the dynamic group's too.
+    fn primitive_count(&self) -> u64 {
+        u64::from(self.instance_slots) + self.count as u64 + u64::from(self.dynamic_count())
+    }
+}
+
+/// A group built once on the CPU: its BVH, and what its queries read before it, if anything.
+struct CpuGroup {
+    bvh: Bvh,
+    grid: Option<GroupGrid>,
+}
+
+/// Each group's CPU build where `build` asks for one: its BVH (with wide leaves where
+/// `volumes.wide_leaves` asks), and its entry grid or, for crowded decals that are one group placed
+/// once, its cell lists where they fit ([`VolumeStructure::cell_lists`]). Only the placed group gets
+/// lists: groups without an instance are never queried. Grids share one budget of cells and cover
+/// words for all the groups (`GridBudget`), lists one of list words (`cell_lists::MAX_LIST_WORDS`).
+fn cpu_builds(volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Result<Vec<Option<CpuGroup>>> {
+    const _: () = assert!(DECAL_LAYERS - 1 <= cell_lists::MAX_RANK);
+    let tree = if volumes.wide_leaves { Bvh::build_wide } else { Bvh::build };
+    let trees = layout
+        .ranges
+        .iter()
+        .map(|range| (build == GroupBuild::CpuOnce && !range.is_empty()).then(|| tree(&volumes.boxes[range.clone()])).transpose())
+        .collect::<Result<Vec<_>>>()?;
+    let wide_leaves = volumes.wide_leaves && trees.iter().any(Option::is_some);
+    let listed_group = (volumes.kind == VolumeKind::Decals
+        && volumes.cell_lists
+        && wide_leaves
+        && layout.instances.len() == 1
+        && layout.dynamic.is_none())
+    .then(|| layout.instances[0].group);
+    let grid_budget = entry_grid::GridBudget::for_structure(layout.count);
+    let list_words_per_primitive = cell_lists::MAX_LIST_WORDS as f64 / layout.count.max(1) as f64;
+    let groups = trees.into_iter().zip(&layout.ranges).enumerate().map(|(group, (tree, range))| {
+        tree.map(|bvh| {
+            let lists = (listed_group == Some(group))
+                .then(|| decal_cell_lists_in_leaf_order(volumes, range, &bvh, (range.len() as f64 * list_words_per_primitive) as usize))
+                .flatten();
+            let grid = match lists {
+                Some(lists) => Some(GroupGrid::Lists(lists)),
+                None => EntryGrid::build(&bvh, &volumes.boxes[range.clone()], grid_budget).map(GroupGrid::Entry),
+            };
+            CpuGroup { bvh, grid }
+        })
+    });
+    Ok(groups.collect())
+}
+
+/// The cell lists of the decal group over `range`, its items in `bvh`'s leaf order, as stored.
+fn decal_cell_lists_in_leaf_order(volumes: &Volumes, range: &Range<usize>, bvh: &Bvh, budget_words: usize) -> Option<CellLists> {
+    let record_bytes = std::mem::size_of::<GpuDecal>();
+    let (boxes, records): (Vec<Aabb>, Vec<GpuDecal>) = bvh
+        .primitive_indices
+        .iter()
+        .map(|&p| {
+            let item = range.start + p as usize;
+            let record: GpuDecal = bytemuck::pod_read_unaligned(&volumes.items[item * record_bytes..(item + 1) * record_bytes]);
+            (volumes.boxes[item], record)
+        })
+        .unzip();
+    decal_cell_lists(&boxes, &records, budget_words)
+}
+
+/// Each item's scene index, in the order the items are stored: a CPU-built group's in its leaf
+/// order; the others' as the scene has them until their builds sort them.
+fn stored_order(ranges: &[Range<usize>], cpu_groups: &[Option<CpuGroup>]) -> Vec<u32> {
+    ranges
+        .iter()
+        .zip(cpu_groups)
+        .flat_map(|(range, group)| {
+            let start = range.start as u32;
+            match group {
+                Some(group) => group.bvh.primitive_indices.iter().map(|&p| start + p).collect::<Vec<_>>(),
+                None => range.clone().map(|i| i as u32).collect(),
+            }
+        })
+        .collect()
+}
+
+/// A structure's GPU arrays.
+struct Buffers {
+    items: wgpu::Buffer,
+    nodes: wgpu::Buffer,
+    primitives: wgpu::Buffer,
+    instances: wgpu::Buffer,
+    /// A [`GpuFirstInstance`].
+    first_instance: wgpu::Buffer,
+}
+
+impl Buffers {
+    fn new(ctx: &GpuContext, volumes: &Volumes, layout: &Layout, node_bytes: u64, primitive_bytes: u64) -> Self {
+        use wgpu::BufferUsages as U;
+        let label = volumes.kind.label();
+        let buffer = |name: &str, size: u64, usage| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(&format!("{label} {name}")),
+                size: size.max(4),
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let item_bytes = volumes.items.len() as u64 + u64::from(layout.dynamic_count()) * volumes.kind.record_bytes() as u64;
+        let instance_bytes = u64::from(layout.instance_slots) * std::mem::size_of::<GpuVolumeInstance>() as u64;
+        // The order of creation decides where the driver places the arrays, which measurably moves
+        // shading's speed (benchmarks/LOG.md, topic 1): the items come last.
+        let nodes = buffer("bvh nodes", node_bytes, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+        let primitives = buffer("bvh primitives", primitive_bytes, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+        let instances = buffer("instances", instance_bytes, U::STORAGE | U::COPY_DST);
+        let first_instance = buffer("first instance", std::mem::size_of::<GpuFirstInstance>() as u64, U::UNIFORM | U::COPY_DST);
+        let items = buffer("items", item_bytes.max(64), U::STORAGE | U::COPY_DST);
+        Self { items, nodes, primitives, instances, first_instance }
+    }
+
+    /// Writes the items in their stored order (`scene_indices`).
+    fn write_items_in_order(&self, ctx: &GpuContext, volumes: &Volumes, scene_indices: &[u32]) {
+        let bytes = volumes.kind.record_bytes();
+        let in_order: Vec<u8> =
+            scene_indices.iter().flat_map(|&i| &volumes.items[i as usize * bytes..(i as usize + 1) * bytes]).copied().collect();
+        if !in_order.is_empty() {
+            ctx.queue.write_buffer(&self.items, 0, &in_order);
+        }
+    }
+
+    /// Where a GPU build writes a BVH: nodes from `node_base`, primitives from `primitive_base`, its
+    /// leaves naming items from `item_base`.
+    fn target(&self, node_base: u32, primitive_base: u32, item_base: u32) -> LbvhTarget {
+        LbvhTarget {
+            nodes: self.nodes.clone(),
+            primitives: self.primitives.clone(),
+            node_base,
+            primitive_base,
+            item_base,
+            leaf_base: item_base,
+        }
+    }
+
+    /// The buffers shading binds, in binding order.
+    fn bound(&self) -> [&wgpu::Buffer; 5] {
+        [&self.items, &self.nodes, &self.primitives, &self.instances, &self.first_instance]
+    }
+}
+
+/// Every group but the dynamic one in the arrays: a CPU-built group's BVH and grid written once, a
+/// GPU-rebuilt group's builder set up over its boxes.
+fn place_groups(
+    ctx: &GpuContext,
+    volumes: &Volumes,
+    layout: &Layout,
+    buffers: &Buffers,
+    build: GroupBuild,
+    cpu_groups: Vec<Option<CpuGroup>>,
+) -> Result<Vec<Group>> {
+    let node_offset = |node: u32| u64::from(node) * std::mem::size_of::<BvhNode>() as u64;
+    let mut next_cell = layout.primitive_count() as u32;
+    let mut groups = Vec::with_capacity(layout.ranges.len() + 1);
+    for ((range, &blas_root), cpu_group) in layout.ranges.iter().zip(&layout.group_roots).zip(cpu_groups) {
+        let items = range.start as u32..range.end as u32;
+        let boxes = &volumes.boxes[range.clone()];
+        let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
+        let mut grid = None;
+        let builder = match cpu_group {
+            Some(CpuGroup { bvh, grid: group_grid }) => {
+                let nodes = relocate(&bvh, blas_root, items.start);
+                ctx.queue.write_buffer(&buffers.nodes, node_offset(blas_root), bytemuck::cast_slice(&nodes));
+                if let Some(group_grid) = group_grid {
+                    let (cells, header) = group_grid.gpu_words(blas_root, items.start, next_cell);
+                    ctx.queue.write_buffer(&buffers.primitives, u64::from(next_cell) * 4, bytemuck::cast_slice(&cells));
+                    ctx.queue.write_buffer(&buffers.nodes, node_offset(blas_root - 1), bytemuck::bytes_of(&header.node));
+                    grid = Some(header);
+                    next_cell += cells.len() as u32;
+                }
+                None
+            }
+            None if boxes.is_empty() || build == GroupBuild::None => None,
+            None => {
+                let target = buffers.target(blas_root, layout.instance_slots + items.start, items.start);
+                let mut builder = GpuLbvh::with_target(ctx, boxes.len() as u32, target)?;
+                builder.set_boxes(&ctx.queue, boxes)?;
+                Some(builder)
+            }
+        };
+        groups.push(Group { items, blas_root, grid, dynamic: false, bounds, builder });
+    }
+    Ok(groups)
+}
+
+/// The dynamic group, after the others: a GPU build over boxes a pass writes every frame.
+fn dynamic_group(ctx: &GpuContext, layout: &Layout, buffers: &Buffers, dynamic: DynamicGroup) -> Result<Group> {
+    let first = layout.count as u32;
+    let leaf_size = match dynamic.leaves {
+        DynamicLeaves::Widest => MAX_LEAF_SIZE,
+        DynamicLeaves::AtMost(size) => size,
+    };
+    let target = buffers.target(layout.dynamic_root, layout.instance_slots + first, first);
+    let mut builder = GpuLbvh::with_target(ctx, dynamic.count, target)?.with_max_leaf_size(leaf_size);
+    builder.set_gpu_boxes(&ctx.queue, dynamic.count, &dynamic.bounds)?;
+    Ok(Group {
+        items: first..first + dynamic.count,
+        blas_root: layout.dynamic_root,
+        grid: None,
+        dynamic: true,
+        bounds: dynamic.bounds,
+        builder: Some(builder),
+    })
+}
+
+/// The layout of the bind group shading reads. Keep in sync with `shading/light_bindings.wgsl` and
+/// `shading/decal_bindings.wgsl`.
+fn shading_bind_group_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
+    let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
+    let mut entries = [0, 1, 2, 3, 4, 5].map(|binding| bindings::storage_read(binding, all)).to_vec();
+    entries.push(bindings::uniform(6, all));
+    bindings::layout(device, label, &entries)
 }
 
 /// The bind group shading reads (`shading/*_bindings.wgsl`): items, nodes, primitives, instances,

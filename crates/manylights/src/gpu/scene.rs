@@ -242,85 +242,10 @@ impl GpuScene {
         scene.validate()?;
         let device = &ctx.device;
 
-        // Surfaces' and decals' textures go into separate arrays, each at the size of its own largest
-        // image: decal stamps are small, and sampled at the scene's texture size they took 19 % longer
-        // to apply (BENCHMARKS.md, "Decal textures at their own size"). Every material has a record
-        // for each use, the decals' after the surfaces' ([`GpuScene::decal_material_base`]).
-        let texture_arrays = |materials: &[&Material]| -> Result<(TextureArray, TextureArray)> {
-            let (srgb_used, linear_used) = texture_usage(materials);
-            let upload = |used: &[usize], space| TextureArray::upload(device, &ctx.queue, &scene.textures, used, space, max_texture_size);
-            Ok((upload(&srgb_used, TextureSpace::Srgb)?, upload(&linear_used, TextureSpace::Linear)?))
-        };
-        let surface_materials: BTreeSet<usize> = scene.meshes.iter().flat_map(|m| m.primitives.iter().map(|p| p.material)).collect();
-        let decal_materials: BTreeSet<usize> = scene.decals.iter().map(|d| d.material).collect();
-        let used_by = |set: &BTreeSet<usize>| set.iter().map(|&m| &scene.materials[m]).collect::<Vec<_>>();
-        let (color_textures, data_textures) = texture_arrays(&used_by(&surface_materials))?;
-        let (decal_color_textures, decal_data_textures) = texture_arrays(&used_by(&decal_materials))?;
-        let materials: Vec<GpuMaterial> = (scene.materials.iter().map(|m| gpu_material(m, &color_textures, &data_textures)))
-            .chain(scene.materials.iter().map(|m| gpu_material(m, &decal_color_textures, &decal_data_textures)))
-            .collect();
-
-        // Concatenate every primitive's vertices and indices; record where each starts.
-        let mut vertices = Vec::new();
-        let mut indices = Vec::new();
-        let mut primitive_ranges = Vec::new();
-        for mesh in &scene.meshes {
-            primitive_ranges.push(
-                mesh.primitives
-                    .iter()
-                    .map(|p| {
-                        let range = (indices.len() as u32, p.indices.len() as u32, vertices.len() as u32);
-                        vertices.extend_from_slice(&p.vertices);
-                        indices.extend_from_slice(&p.indices);
-                        range
-                    })
-                    .collect::<Vec<_>>(),
-            );
-        }
-
-        let mut draws = Vec::new();
-        let mut instance_first_draw = Vec::with_capacity(scene.instances.len());
-        let mut draw_commands = Vec::new();
-        let mut transparent_draw_commands = Vec::new();
-        // Visibility ids number the drawn triangles from 0 (the background is told by depth).
-        let mut next_visibility_id = 0u64;
-        for instance in &scene.instances {
-            instance_first_draw.push(draws.len());
-            let (world_from_local, normal_from_local) = draw_transforms(&instance.world_from_local);
-            let handedness = normal_from_local[0][3];
-            let mesh = &scene.meshes[instance.mesh];
-            for (primitive, &(first_index, index_count, base_vertex)) in mesh.primitives.iter().zip(&primitive_ranges[instance.mesh]) {
-                let material = &scene.materials[primitive.material];
-                let commands = if material.alpha_mode == AlphaMode::Blend { &mut transparent_draw_commands } else { &mut draw_commands };
-                commands.push(DrawCommand {
-                    draw_index: draws.len() as u32,
-                    first_index,
-                    index_count,
-                    base_vertex,
-                    center: instance.world_from_local.transform_point3(primitive_center(primitive)),
-                    local_center: primitive_center(primitive),
-                    state: RasterState {
-                        alpha_mask: matches!(material.alpha_mode, AlphaMode::Mask { .. }),
-                        double_sided: material.double_sided,
-                        mirrored: handedness < 0.0,
-                    },
-                });
-                draws.push(GpuDraw {
-                    world_from_local,
-                    normal_from_local,
-                    first_index,
-                    first_visibility_id: next_visibility_id as u32,
-                    base_vertex,
-                    material: primitive.material as u32,
-                });
-                next_visibility_id += u64::from(index_count / 3);
-            }
-        }
-        if next_visibility_id > 1 << 32 {
-            return Err(Error::InvalidScene(format!(
-                "the scene draws {next_visibility_id} triangles; the visibility buffer numbers at most 2³²"
-            )));
-        }
+        let textures = SceneTextures::upload(ctx, scene, max_texture_size)?;
+        let materials = textures.materials(scene);
+        let Geometry { vertices, indices, primitive_ranges } = concatenate_primitives(scene);
+        let DrawList { draws, instance_first_draw, draw_commands, transparent_draw_commands } = DrawList::new(scene, &primitive_ranges)?;
 
         let limit = ctx.limits.max_storage_buffer_binding_size;
         // Deformed meshes' vertices are rewritten on the GPU every frame (`passes/deform.rs`).
@@ -329,11 +254,7 @@ impl GpuScene {
         let draw_buffer = storage_buffer(device, "draws", &draws, limit, wgpu::BufferUsages::COPY_DST)?;
         let transforms: Vec<[[f32; 4]; 4]> = draws.iter().map(|d| d.world_from_local).collect();
         let previous_transforms = storage_buffer(device, "previous draw transforms", &transforms, limit, wgpu::BufferUsages::COPY_DST)?;
-        let mut moving_draws = vec![false; draws.len()];
-        for &(instance, _) in scene.animation.iter().flat_map(|a| &a.instances) {
-            let first = instance_first_draw[instance];
-            moving_draws[first..first + scene.meshes[scene.instances[instance].mesh].primitives.len()].fill(true);
-        }
+        let moving_draws = moving_draws(scene, &instance_first_draw, draws.len());
         let material_buffer = storage_buffer(device, "materials", &materials, limit, wgpu::BufferUsages::empty())?;
         // The top level and the instances are rewritten when instances move (`move_instances`).
         // Deformed meshes' BLASes are refitted on the GPU (`rays/refit.rs`); tests read them back.
@@ -347,46 +268,8 @@ impl GpuScene {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        // One sampler per (wrap u, wrap v) pair, in the order of `shading/scene_bindings.wgsl`.
-        let address_modes = [wgpu::AddressMode::Repeat, wgpu::AddressMode::MirrorRepeat, wgpu::AddressMode::ClampToEdge];
-        let samplers: Vec<wgpu::Sampler> = (0..WRAP_SAMPLERS)
-            .map(|i| {
-                device.create_sampler(&wgpu::SamplerDescriptor {
-                    label: Some("material sampler"),
-                    address_mode_u: address_modes[i as usize % 3],
-                    address_mode_v: address_modes[i as usize / 3],
-                    mag_filter: wgpu::FilterMode::Linear,
-                    min_filter: wgpu::FilterMode::Linear,
-                    mipmap_filter: wgpu::MipmapFilterMode::Linear,
-                    anisotropy_clamp: anisotropy,
-                    ..Default::default()
-                })
-            })
-            .collect();
-
-        // The particle grids shading samples: the particle system's (`particles/`), or placeholders.
-        let placeholder = || {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("no particle grid"),
-                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D3,
-                format: wgpu::TextureFormat::Rgba16Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-        };
-        let particle_views = match particle_grids {
-            Some(grids) => grids.map(|t| t.create_view(&Default::default())),
-            None => [placeholder(), placeholder()].map(|t| t.create_view(&Default::default())),
-        };
-        let particle_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("particle grid sampler"),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
+        let samplers = material_samplers(device, anisotropy);
+        let (particle_views, particle_sampler) = particle_grid_bindings(device, particle_grids);
 
         let bind_group_layout = Self::create_bind_group_layout(device);
         let bind_group = bindings::bind_group(
@@ -399,15 +282,15 @@ impl GpuScene {
                 index_buffer.as_entire_binding(),
                 draw_buffer.as_entire_binding(),
                 material_buffer.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&color_textures.view),
-                wgpu::BindingResource::TextureView(&data_textures.view),
+                wgpu::BindingResource::TextureView(&textures.surface_color.view),
+                wgpu::BindingResource::TextureView(&textures.surface_data.view),
             ]
             .into_iter()
             .chain(samplers.iter().map(wgpu::BindingResource::Sampler))
             .chain(particle_views.iter().map(wgpu::BindingResource::TextureView))
             .chain([wgpu::BindingResource::Sampler(&particle_sampler)])
             .chain([&ray_node_buffer, &ray_triangle_buffer, &ray_instance_buffer].map(|b| b.as_entire_binding()))
-            .chain([&decal_color_textures, &decal_data_textures].map(|t| wgpu::BindingResource::TextureView(&t.view)))
+            .chain([&textures.decal_color, &textures.decal_data].map(|t| wgpu::BindingResource::TextureView(&t.view)))
             .collect(),
         );
         ctx.check_errors()?;
@@ -524,6 +407,183 @@ fn draw_transforms(world_from_local: &glam::Mat4) -> ([[f32; 4]; 4], [[f32; 4]; 
     let handedness = Mat3::from_mat4(*world_from_local).determinant().signum();
     let columns = [normal_from_local.x_axis.extend(handedness), normal_from_local.y_axis.extend(0.0), normal_from_local.z_axis.extend(0.0)];
     (world_from_local.to_cols_array_2d(), columns.map(|c| c.to_array()))
+}
+
+/// The scene's texture arrays. Surfaces' and decals' textures go into separate arrays, each at the
+/// size of its own largest image: decal stamps are small, and sampled at the scene's texture size
+/// they apply more slowly (benchmarks/LOG.md, topic 2).
+struct SceneTextures {
+    surface_color: TextureArray,
+    surface_data: TextureArray,
+    decal_color: TextureArray,
+    decal_data: TextureArray,
+}
+
+impl SceneTextures {
+    fn upload(ctx: &GpuContext, scene: &Scene, max_texture_size: u32) -> Result<Self> {
+        let arrays = |materials: BTreeSet<usize>| -> Result<(TextureArray, TextureArray)> {
+            let materials: Vec<&Material> = materials.iter().map(|&m| &scene.materials[m]).collect();
+            let (srgb_used, linear_used) = texture_usage(&materials);
+            let upload =
+                |used: &[usize], space| TextureArray::upload(&ctx.device, &ctx.queue, &scene.textures, used, space, max_texture_size);
+            Ok((upload(&srgb_used, TextureSpace::Srgb)?, upload(&linear_used, TextureSpace::Linear)?))
+        };
+        let (surface_color, surface_data) = arrays(scene.meshes.iter().flat_map(|m| m.primitives.iter().map(|p| p.material)).collect())?;
+        let (decal_color, decal_data) = arrays(scene.decals.iter().map(|d| d.material).collect())?;
+        Ok(Self { surface_color, surface_data, decal_color, decal_data })
+    }
+
+    /// Every material's record for each use, the decals' after the surfaces'
+    /// ([`GpuScene::decal_material_base`]).
+    fn materials(&self, scene: &Scene) -> Vec<GpuMaterial> {
+        let surfaces = scene.materials.iter().map(|m| gpu_material(m, &self.surface_color, &self.surface_data));
+        surfaces.chain(scene.materials.iter().map(|m| gpu_material(m, &self.decal_color, &self.decal_data))).collect()
+    }
+}
+
+/// Every primitive's vertices and indices, concatenated, and where each primitive starts.
+struct Geometry {
+    vertices: Vec<crate::scene::Vertex>,
+    indices: Vec<u32>,
+    /// (first index, index count, base vertex) by mesh and primitive.
+    primitive_ranges: Vec<Vec<(u32, u32, u32)>>,
+}
+
+fn concatenate_primitives(scene: &Scene) -> Geometry {
+    let mut vertices = Vec::new();
+    let mut indices = Vec::new();
+    let mut primitive_ranges = Vec::new();
+    for mesh in &scene.meshes {
+        primitive_ranges.push(
+            mesh.primitives
+                .iter()
+                .map(|p| {
+                    let range = (indices.len() as u32, p.indices.len() as u32, vertices.len() as u32);
+                    vertices.extend_from_slice(&p.vertices);
+                    indices.extend_from_slice(&p.indices);
+                    range
+                })
+                .collect::<Vec<_>>(),
+        );
+    }
+    Geometry { vertices, indices, primitive_ranges }
+}
+
+/// One draw per instance and primitive, and the commands that draw them, opaque and transparent.
+struct DrawList {
+    draws: Vec<GpuDraw>,
+    instance_first_draw: Vec<usize>,
+    draw_commands: Vec<DrawCommand>,
+    transparent_draw_commands: Vec<DrawCommand>,
+}
+
+impl DrawList {
+    fn new(scene: &Scene, primitive_ranges: &[Vec<(u32, u32, u32)>]) -> Result<Self> {
+        let mut list = Self {
+            draws: Vec::new(),
+            instance_first_draw: Vec::with_capacity(scene.instances.len()),
+            draw_commands: Vec::new(),
+            transparent_draw_commands: Vec::new(),
+        };
+        // Visibility ids number the drawn triangles from 0 (the background is told by depth).
+        let mut next_visibility_id = 0u64;
+        for instance in &scene.instances {
+            list.instance_first_draw.push(list.draws.len());
+            let (world_from_local, normal_from_local) = draw_transforms(&instance.world_from_local);
+            let handedness = normal_from_local[0][3];
+            let mesh = &scene.meshes[instance.mesh];
+            for (primitive, &(first_index, index_count, base_vertex)) in mesh.primitives.iter().zip(&primitive_ranges[instance.mesh]) {
+                let material = &scene.materials[primitive.material];
+                let commands =
+                    if material.alpha_mode == AlphaMode::Blend { &mut list.transparent_draw_commands } else { &mut list.draw_commands };
+                commands.push(DrawCommand {
+                    draw_index: list.draws.len() as u32,
+                    first_index,
+                    index_count,
+                    base_vertex,
+                    center: instance.world_from_local.transform_point3(primitive_center(primitive)),
+                    local_center: primitive_center(primitive),
+                    state: RasterState {
+                        alpha_mask: matches!(material.alpha_mode, AlphaMode::Mask { .. }),
+                        double_sided: material.double_sided,
+                        mirrored: handedness < 0.0,
+                    },
+                });
+                list.draws.push(GpuDraw {
+                    world_from_local,
+                    normal_from_local,
+                    first_index,
+                    first_visibility_id: next_visibility_id as u32,
+                    base_vertex,
+                    material: primitive.material as u32,
+                });
+                next_visibility_id += u64::from(index_count / 3);
+            }
+        }
+        if next_visibility_id > 1 << 32 {
+            return Err(Error::InvalidScene(format!(
+                "the scene draws {next_visibility_id} triangles; the visibility buffer numbers at most 2³²"
+            )));
+        }
+        Ok(list)
+    }
+}
+
+/// Which draws the node animation moves.
+fn moving_draws(scene: &Scene, instance_first_draw: &[usize], draw_count: usize) -> Vec<bool> {
+    let mut moving = vec![false; draw_count];
+    for &(instance, _) in scene.animation.iter().flat_map(|a| &a.instances) {
+        let first = instance_first_draw[instance];
+        moving[first..first + scene.meshes[scene.instances[instance].mesh].primitives.len()].fill(true);
+    }
+    moving
+}
+
+/// One sampler per (wrap u, wrap v) pair, in the order of `shading/scene_bindings.wgsl`.
+fn material_samplers(device: &wgpu::Device, anisotropy: u16) -> Vec<wgpu::Sampler> {
+    let address_modes = [wgpu::AddressMode::Repeat, wgpu::AddressMode::MirrorRepeat, wgpu::AddressMode::ClampToEdge];
+    (0..WRAP_SAMPLERS)
+        .map(|i| {
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("material sampler"),
+                address_mode_u: address_modes[i as usize % 3],
+                address_mode_v: address_modes[i as usize / 3],
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                anisotropy_clamp: anisotropy,
+                ..Default::default()
+            })
+        })
+        .collect()
+}
+
+/// The particle grids shading samples, the particle system's (`particles/`) or 1×1×1 placeholders,
+/// and their sampler.
+fn particle_grid_bindings(device: &wgpu::Device, grids: Option<[&wgpu::Texture; 2]>) -> ([wgpu::TextureView; 2], wgpu::Sampler) {
+    let placeholder = || {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("no particle grid"),
+            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D3,
+            format: wgpu::TextureFormat::Rgba16Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        })
+    };
+    let views = match grids {
+        Some(grids) => grids.map(|t| t.create_view(&Default::default())),
+        None => [placeholder(), placeholder()].map(|t| t.create_view(&Default::default())),
+    };
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("particle grid sampler"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
+    (views, sampler)
 }
 
 /// Records of one kind as bytes, with the size of one record.

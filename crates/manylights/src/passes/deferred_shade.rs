@@ -1,8 +1,7 @@
 //! Deferred lighting in compute (`deferred_shade.wgsl`): G-buffer and depth in, decals and lights
 //! through the shading core, HDR radiance out.
 
-use super::FrameInputs;
-use crate::accel::VolumeStructure;
+use super::{builder::ComputeStep, FrameInputs, Structures};
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::passes::ray_shadows::{self, RayShadows};
 use crate::passes::visbuffer_shade::HDR_FORMAT;
@@ -15,8 +14,15 @@ pub fn shader(methods: ShadingMethods) -> ShaderDesc {
 }
 
 pub struct DeferredShade {
-    pipeline: wgpu::ComputePipeline,
+    step: ComputeStep,
     bind_group: wgpu::BindGroup,
+}
+
+/// The images the pass reads and writes: the depth and the G-buffer it lights, the HDR image.
+pub struct DeferredShadeImages<'a> {
+    pub depth: &'a wgpu::TextureView,
+    pub gbuffer: &'a [wgpu::TextureView; 4],
+    pub hdr: &'a wgpu::TextureView,
 }
 
 impl DeferredShade {
@@ -26,10 +32,9 @@ impl DeferredShade {
         ctx: &GpuContext,
         scene: &GpuScene,
         methods: ShadingMethods,
-        (lights, decals): (&VolumeStructure, &VolumeStructure),
+        structures: Structures,
         shadows: Option<&RayShadows>,
-        (depth, gbuffer): (&wgpu::TextureView, &[wgpu::TextureView; 4]),
-        hdr: &wgpu::TextureView,
+        images: DeferredShadeImages,
     ) -> Result<Self> {
         let device = &ctx.device;
         let compute = wgpu::ShaderStages::COMPUTE;
@@ -49,16 +54,16 @@ impl DeferredShade {
                 ray_shadows::shading_mask_entry(6, compute), // sun visibility
             ],
         );
-        let layouts = [&scene.bind_group_layout, &layout, &lights.bind_group_layout, &decals.bind_group_layout];
+        let layouts = [&scene.bind_group_layout, &layout, &structures.lights.bind_group_layout, &structures.decals.bind_group_layout];
         let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
         let constants = [("SUN_SHADOW_MASK", has_mask), methods.debug_views_constant()];
-        let pipeline = bindings::compute_pipeline_with_constants(device, "deferred_shade", &shader(methods), &layouts, &constants)?;
-        let mut views = vec![wgpu::BindingResource::TextureView(depth)];
-        views.extend(gbuffer.iter().map(wgpu::BindingResource::TextureView));
-        views.push(wgpu::BindingResource::TextureView(hdr));
+        let step = ComputeStep::new(device, &shader(methods), "deferred_shade", &layouts, &constants)?;
+        let mut views = vec![wgpu::BindingResource::TextureView(images.depth)];
+        views.extend(images.gbuffer.iter().map(wgpu::BindingResource::TextureView));
+        views.push(wgpu::BindingResource::TextureView(images.hdr));
         views.push(wgpu::BindingResource::TextureView(&mask));
         let bind_group = bindings::bind_group(device, "deferred_shade", &layout, views);
-        Ok(Self { pipeline, bind_group })
+        Ok(Self { step, bind_group })
     }
 
     pub fn record(
@@ -68,16 +73,7 @@ impl DeferredShade {
         inputs: &FrameInputs,
         (width, height): (u32, u32),
     ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("deferred_shade"),
-            timestamp_writes: timer.map(|t| t.compute_pass("deferred_shade")),
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &inputs.scene.bind_group, &[]);
-        pass.set_bind_group(1, &self.bind_group, &[]);
-        pass.set_bind_group(2, &inputs.lights.bind_group, &[]);
-        pass.set_bind_group(3, &inputs.decals.bind_group, &[]);
-        let (x, y) = super::dispatch_size(width, height);
-        pass.dispatch_workgroups(x, y, 1);
+        let groups = [&inputs.scene.bind_group, &self.bind_group, &inputs.lights.bind_group, &inputs.decals.bind_group];
+        self.step.record(encoder, timer, &groups, super::dispatch_size(width, height));
     }
 }

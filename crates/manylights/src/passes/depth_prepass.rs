@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 
-use super::visbuffer_raster::DEPTH_FORMAT;
+use super::builder::{nearest_depth, Fragment, Raster};
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::Result;
@@ -16,40 +16,16 @@ impl DepthPrepass {
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Result<Self> {
         let module = shaders::create_module(&ctx.device, &ShaderDesc::new("passes/depth_prepass.wgsl"))?;
         let layout = bindings::pipeline_layout(&ctx.device, "depth_prepass", &[&scene.bind_group_layout]);
-        let pipelines = RasterState::all()
-            .map(|state| {
-                let pipeline = ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("depth_prepass"),
-                    layout: Some(&layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("forward_vertex"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: state.primitive(),
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
-                        depth_write_enabled: Some(true),
-                        // Reverse Z: nearer is greater.
-                        depth_compare: Some(wgpu::CompareFunction::Greater),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    // Opaque draws write depth without a fragment stage.
-                    fragment: state.alpha_mask.then(|| wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some("depth_prepass_masked"),
-                        compilation_options: Default::default(),
-                        targets: &[],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                });
-                (state, pipeline)
-            })
-            .collect();
+        let raster = Raster {
+            label: "depth_prepass",
+            layout: &layout,
+            vertex_module: &module,
+            vertex_entry: "forward_vertex",
+            depth: nearest_depth(),
+        };
+        // Opaque draws write depth without a fragment stage.
+        let masked = Fragment { module: &module, entry: "depth_prepass_masked", constants: &[], targets: &[] };
+        let pipelines = raster.per_state(&ctx.device, RasterState::all(), |state| state.alpha_mask.then_some(masked));
         Ok(Self { pipelines })
     }
 

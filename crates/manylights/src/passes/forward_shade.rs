@@ -5,9 +5,8 @@
 
 use std::collections::HashMap;
 
-use super::FrameInputs;
-use super::{visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
-use crate::accel::VolumeStructure;
+use super::builder::{depth_test, Fragment, Raster};
+use super::{visbuffer_shade::HDR_FORMAT, FrameInputs, ShadedImage, Structures};
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::passes::ray_shadows::{self, RayShadows};
@@ -34,7 +33,7 @@ impl ForwardShade {
         ctx: &GpuContext,
         scene: &GpuScene,
         methods: ShadingMethods,
-        (lights, decals): (&VolumeStructure, &VolumeStructure),
+        structures: Structures,
         shadows: Option<&RayShadows>,
     ) -> Result<Self> {
         let device = &ctx.device;
@@ -44,75 +43,45 @@ impl ForwardShade {
         let layout = bindings::pipeline_layout(
             device,
             "forward_shade",
-            &[&scene.bind_group_layout, &group, &lights.bind_group_layout, &decals.bind_group_layout],
+            &[&scene.bind_group_layout, &group, &structures.lights.bind_group_layout, &structures.decals.bind_group_layout],
         );
         let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
         let constants = [("SUN_SHADOW_MASK", has_mask), methods.debug_views_constant()];
-        // EQUAL against the prepass's depth: only the visible fragment of each pixel is shaded.
-        let depth_equal = wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(false),
-            depth_compare: Some(wgpu::CompareFunction::Equal),
-            stencil: Default::default(),
-            bias: Default::default(),
-        };
         // One fragment module per entry point, shared by the raster states' pipelines.
         let fragment = |entry: &'static str| -> Result<_> {
             Ok((shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, entry, &constants)?, entry))
         };
-        let (opaque, masked, sky) = (fragment("forward_opaque")?, fragment("forward_masked")?, fragment("forward_sky")?);
-        let pipeline = |label, vertex_entry, (fragment_module, fragment_entry): &(wgpu::ShaderModule, &str), primitive| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(vertex_entry),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive,
-                depth_stencil: Some(depth_equal.clone()),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: fragment_module,
-                    entry_point: Some(*fragment_entry),
-                    compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
-                    targets: &[Some(HDR_FORMAT.into())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+        let modules = [fragment("forward_opaque")?, fragment("forward_masked")?, fragment("forward_sky")?];
+        let targets = [Some(HDR_FORMAT.into())];
+        let [opaque, masked, sky] =
+            modules.each_ref().map(|(module, entry)| Fragment { module, entry, constants: &constants, targets: &targets });
+        let raster = |label, vertex_entry| Raster {
+            label,
+            layout: &layout,
+            vertex_module: &module,
+            vertex_entry,
+            // EQUAL against the prepass's depth: only the visible fragment of each pixel is shaded.
+            depth: depth_test(false, wgpu::CompareFunction::Equal),
         };
-        let pipelines = RasterState::all()
-            .map(|state| {
-                let fragment = if state.alpha_mask { &masked } else { &opaque };
-                (state, pipeline("forward_shade", "forward_vertex", fragment, state.primitive()))
-            })
-            .collect();
-        let sky = pipeline("forward_sky", "forward_sky_vertex", &sky, wgpu::PrimitiveState::default());
+        let pipelines = raster("forward_shade", "forward_vertex")
+            .per_state(device, RasterState::all(), |state| Some(if state.alpha_mask { masked } else { opaque }));
+        let sky = raster("forward_sky", "forward_sky_vertex").pipeline(device, wgpu::PrimitiveState::default(), Some(sky));
         let bind_group = bindings::bind_group(device, "forward_shade", &group, vec![wgpu::BindingResource::TextureView(&mask)]);
         Ok(Self { pipelines, sky, bind_group })
     }
 
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: Option<&mut GpuTimer>,
-        inputs: &FrameInputs,
-        (hdr, depth): (&wgpu::TextureView, &wgpu::TextureView),
-    ) {
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, inputs: &FrameInputs, image: ShadedImage) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("forward_shade"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: hdr,
+                view: image.hdr,
                 depth_slice: None,
                 resolve_target: None,
                 // Every pixel is written: by a surface or by the sky.
                 ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
             })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
+                view: image.depth,
                 depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),

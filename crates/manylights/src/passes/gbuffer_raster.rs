@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 
-use super::visbuffer_raster::DEPTH_FORMAT;
+use super::builder::{nearest_depth, Fragment, Raster};
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::Result;
@@ -21,39 +21,17 @@ impl GBufferRaster {
         let module = shaders::create_module(&ctx.device, &ShaderDesc::new("passes/gbuffer_raster.wgsl"))?;
         let layout = bindings::pipeline_layout(&ctx.device, "gbuffer_raster", &[&scene.bind_group_layout]);
         let targets = GBUFFER_FORMATS.map(|format| Some(wgpu::ColorTargetState::from(format)));
-        let pipelines = RasterState::all()
-            .map(|state| {
-                let pipeline = ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("gbuffer_raster"),
-                    layout: Some(&layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("forward_vertex"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: state.primitive(),
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
-                        depth_write_enabled: Some(true),
-                        // Reverse Z: nearer is greater.
-                        depth_compare: Some(wgpu::CompareFunction::Greater),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(if state.alpha_mask { "gbuffer_masked" } else { "gbuffer_opaque" }),
-                        compilation_options: Default::default(),
-                        targets: &targets,
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                });
-                (state, pipeline)
-            })
-            .collect();
+        let raster = Raster {
+            label: "gbuffer_raster",
+            layout: &layout,
+            vertex_module: &module,
+            vertex_entry: "forward_vertex",
+            depth: nearest_depth(),
+        };
+        let pipelines = raster.per_state(&ctx.device, RasterState::all(), |state| {
+            let entry = if state.alpha_mask { "gbuffer_masked" } else { "gbuffer_opaque" };
+            Some(Fragment { module: &module, entry, constants: &[], targets: &targets })
+        });
         Ok(Self { pipelines })
     }
 

@@ -12,6 +12,7 @@ use crate::gpu::{
 };
 use crate::plan::{query_walks, volume_query_module, ShadingMethods, ShadingStage};
 
+pub mod builder;
 #[cfg(test)]
 pub mod catalogue;
 pub mod deferred_decals;
@@ -58,6 +59,20 @@ pub struct FrameInputs<'a> {
     pub lights: &'a VolumeStructure,
     pub decals: &'a VolumeStructure,
     pub eye: glam::Vec3,
+}
+
+/// The light and decal structures, bound as groups 2 and 3 by the shading passes.
+#[derive(Clone, Copy)]
+pub struct Structures<'a> {
+    pub lights: &'a VolumeStructure,
+    pub decals: &'a VolumeStructure,
+}
+
+/// The HDR image a raster shading pass writes, and the depth image it tests against.
+#[derive(Clone, Copy)]
+pub struct ShadedImage<'a> {
+    pub hdr: &'a wgpu::TextureView,
+    pub depth: &'a wgpu::TextureView,
 }
 
 /// Workgroup edge of the 2D compute passes (`@workgroup_size(8, 8)` in their WGSL).

@@ -2,7 +2,8 @@
 //! shadows their spatial filter (`shadow_filter.rs`). The shading passes read the resulting mask
 //! (`shading/sun_shadow_mask.wgsl`); every pipeline records this after its depth is written.
 
-use super::shadow_filter::ShadowFilter;
+use super::builder::ComputeStep;
+use super::shadow_filter::{ShadowFilter, ShadowFilterImages};
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::settings::SunShadows;
 use crate::Result;
@@ -11,7 +12,7 @@ use crate::Result;
 pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 pub struct RayShadows {
-    pipeline: wgpu::ComputePipeline,
+    step: ComputeStep,
     bind_group: wgpu::BindGroup,
     /// Soft shadows only: smooths `traced` into the mask the shading reads.
     filter: Option<ShadowFilter>,
@@ -38,12 +39,8 @@ impl RayShadows {
                 bindings::storage_texture_write(1, compute, MASK_FORMAT),                                      // sun visibility
             ],
         );
-        let pipeline = bindings::compute_pipeline(
-            device,
-            "ray_shadows",
-            &ShaderDesc::new("passes/ray_shadows.wgsl"),
-            &[&scene.bind_group_layout, &layout],
-        )?;
+        let shader = ShaderDesc::new("passes/ray_shadows.wgsl");
+        let step = ComputeStep::new(device, &shader, "ray_shadows", &[&scene.bind_group_layout, &layout], &[])?;
         let traced = mask(device, "sun visibility (traced)", width, height);
         let traced_view = traced.create_view(&Default::default());
         let bind_group = bindings::bind_group(
@@ -56,11 +53,14 @@ impl RayShadows {
             SunShadows::Soft => {
                 let filtered = mask(device, "sun visibility (filtered)", width, height);
                 let filtered_view = filtered.create_view(&Default::default());
-                (Some(ShadowFilter::new(ctx, scene, depth, &traced_view, &filtered_view)?), filtered_view)
+                (
+                    Some(ShadowFilter::new(ctx, scene, ShadowFilterImages { depth, traced: &traced_view, filtered: &filtered_view })?),
+                    filtered_view,
+                )
             }
             _ => (None, traced_view),
         };
-        Ok(Self { pipeline, bind_group, filter, mask_view })
+        Ok(Self { step, bind_group, filter, mask_view })
     }
 
     /// The mask the shading passes read.
@@ -75,17 +75,7 @@ impl RayShadows {
         scene: &GpuScene,
         (width, height): (u32, u32),
     ) {
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("ray_shadows"),
-                timestamp_writes: timer.as_deref_mut().map(|t| t.compute_pass("ray_shadows")),
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &scene.bind_group, &[]);
-            pass.set_bind_group(1, &self.bind_group, &[]);
-            let (x, y) = super::dispatch_size(width, height);
-            pass.dispatch_workgroups(x, y, 1);
-        }
+        self.step.record(encoder, timer.as_deref_mut(), &[&scene.bind_group, &self.bind_group], super::dispatch_size(width, height));
         if let Some(filter) = &self.filter {
             filter.record(encoder, timer, scene, (width, height));
         }

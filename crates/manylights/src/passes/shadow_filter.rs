@@ -1,22 +1,24 @@
 //! The depth-aware spatial filter of soft sun shadows. See `shadow_filter.wgsl`.
 
+use super::builder::ComputeStep;
 use super::ray_shadows::MASK_FORMAT;
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::Result;
 
 pub struct ShadowFilter {
-    pipeline: wgpu::ComputePipeline,
+    step: ComputeStep,
     bind_group: wgpu::BindGroup,
 }
 
+/// The images the filter reads and writes: the frame's depth, the traced mask, the filtered one.
+pub struct ShadowFilterImages<'a> {
+    pub depth: &'a wgpu::TextureView,
+    pub traced: &'a wgpu::TextureView,
+    pub filtered: &'a wgpu::TextureView,
+}
+
 impl ShadowFilter {
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        depth: &wgpu::TextureView,
-        traced: &wgpu::TextureView,
-        filtered: &wgpu::TextureView,
-    ) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, ShadowFilterImages { depth, traced, filtered }: ShadowFilterImages) -> Result<Self> {
         let device = &ctx.device;
         let compute = wgpu::ShaderStages::COMPUTE;
         let layout = bindings::layout(
@@ -28,12 +30,8 @@ impl ShadowFilter {
                 bindings::storage_texture_write(2, compute, MASK_FORMAT), // filtered
             ],
         );
-        let pipeline = bindings::compute_pipeline(
-            device,
-            "shadow_filter",
-            &ShaderDesc::new("passes/shadow_filter.wgsl"),
-            &[&scene.bind_group_layout, &layout],
-        )?;
+        let shader = ShaderDesc::new("passes/shadow_filter.wgsl");
+        let step = ComputeStep::new(device, &shader, "shadow_filter", &[&scene.bind_group_layout, &layout], &[])?;
         let bind_group = bindings::bind_group(
             device,
             "shadow_filter",
@@ -44,18 +42,10 @@ impl ShadowFilter {
                 wgpu::BindingResource::TextureView(filtered),
             ],
         );
-        Ok(Self { pipeline, bind_group })
+        Ok(Self { step, bind_group })
     }
 
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, (width, height): (u32, u32)) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("shadow_filter"),
-            timestamp_writes: timer.map(|t| t.compute_pass("shadow_filter")),
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &scene.bind_group, &[]);
-        pass.set_bind_group(1, &self.bind_group, &[]);
-        let (x, y) = super::dispatch_size(width, height);
-        pass.dispatch_workgroups(x, y, 1);
+        self.step.record(encoder, timer, &[&scene.bind_group, &self.bind_group], super::dispatch_size(width, height));
     }
 }

@@ -7,9 +7,8 @@
 
 use std::collections::HashMap;
 
-use super::FrameInputs;
-use super::{visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
-use crate::accel::VolumeStructure;
+use super::builder::{depth_test, Fragment, Raster};
+use super::{visbuffer_shade::HDR_FORMAT, FrameInputs, ShadedImage, Structures};
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::plan::ShadingMethods;
@@ -28,12 +27,7 @@ pub struct TransparentShade {
 
 impl TransparentShade {
     /// The pass for `scene`'s transparent draws; `None` when it has none.
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        methods: ShadingMethods,
-        (lights, decals): (&VolumeStructure, &VolumeStructure),
-    ) -> Result<Option<Self>> {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, methods: ShadingMethods, structures: Structures) -> Result<Option<Self>> {
         if scene.transparent_draw_commands.is_empty() {
             return Ok(None);
         }
@@ -51,7 +45,7 @@ impl TransparentShade {
         let layout = bindings::pipeline_layout(
             device,
             "transparent_shade",
-            &[&scene.bind_group_layout, &empty, &lights.bind_group_layout, &decals.bind_group_layout],
+            &[&scene.bind_group_layout, &empty, &structures.lights.bind_group_layout, &structures.decals.bind_group_layout],
         );
         let over = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::SrcAlpha,
@@ -67,67 +61,38 @@ impl TransparentShade {
         let constants = [methods.debug_views_constant()];
         let fragment_module = shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, "transparent_shade", &constants)?;
         let states: std::collections::BTreeSet<RasterState> = scene.transparent_draw_commands.iter().map(|c| c.state).collect();
-        let pipelines = states
-            .into_iter()
-            .map(|state| {
-                let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("transparent_shade"),
-                    layout: Some(&layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("forward_vertex"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: state.primitive(),
-                    // Reverse Z: in front of the opaque surface is greater. Not written, so every
-                    // transparent layer in front of it blends.
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::Greater),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &fragment_module,
-                        entry_point: Some("transparent_shade"),
-                        compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
-                        targets: &[Some(wgpu::ColorTargetState {
-                            format: HDR_FORMAT,
-                            blend: Some(wgpu::BlendState { color: over, alpha: keep }),
-                            write_mask: wgpu::ColorWrites::ALL,
-                        })],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                });
-                (state, pipeline)
-            })
-            .collect();
+        let targets = [Some(wgpu::ColorTargetState {
+            format: HDR_FORMAT,
+            blend: Some(wgpu::BlendState { color: over, alpha: keep }),
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let fragment = Fragment { module: &fragment_module, entry: "transparent_shade", constants: &constants, targets: &targets };
+        let raster = Raster {
+            label: "transparent_shade",
+            layout: &layout,
+            vertex_module: &module,
+            vertex_entry: "forward_vertex",
+            // In front of the opaque surface; not written, so every transparent layer in front of it
+            // blends.
+            depth: depth_test(false, wgpu::CompareFunction::Greater),
+        };
+        let pipelines = raster.per_state(device, states, |_| Some(fragment));
         let empty = bindings::bind_group(device, "transparent_shade (unused)", &empty, Vec::new());
         Ok(Some(Self { pipelines, empty }))
     }
 
     /// Blends the transparent draws over `hdr`, tested against `depth`.
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: Option<&mut GpuTimer>,
-        inputs: &FrameInputs,
-        (hdr, depth): (&wgpu::TextureView, &wgpu::TextureView),
-    ) {
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, inputs: &FrameInputs, image: ShadedImage) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("transparent_shade"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: hdr,
+                view: image.hdr,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
             })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
+                view: image.depth,
                 depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),

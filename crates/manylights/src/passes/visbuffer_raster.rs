@@ -4,6 +4,7 @@
 
 use std::collections::HashMap;
 
+use super::builder::{nearest_depth, Fragment, Raster};
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::Result;
@@ -16,51 +17,32 @@ pub struct VisbufferRaster {
     indexed: bool,
 }
 
+/// The images the raster writes: the visibility ids and the depth.
+pub struct VisbufferImages<'a> {
+    pub visibility: &'a wgpu::TextureView,
+    pub depth: &'a wgpu::TextureView,
+}
+
 impl VisbufferRaster {
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Result<Self> {
-        // Indexed draws transform shared vertices once: 12 % faster raster on the H100 (BENCHMARKS.md).
+        // Indexed draws transform shared vertices once, a faster raster (benchmarks/LOG.md, topic 5).
         let indexed = ctx.features.contains(wgpu::Features::PRIMITIVE_INDEX);
         let entry = if indexed { "passes/visbuffer_raster_indexed.wgsl" } else { "passes/visbuffer_raster_pulled.wgsl" };
         let module = shaders::create_module(&ctx.device, &ShaderDesc::new(entry))?;
         let layout = bindings::pipeline_layout(&ctx.device, "visbuffer_raster", &[&scene.bind_group_layout]);
-        let pipelines = RasterState::all().map(|state| (state, Self::create_pipeline(&ctx.device, &layout, &module, state))).collect();
+        let raster = Raster {
+            label: "visbuffer_raster",
+            layout: &layout,
+            vertex_module: &module,
+            vertex_entry: "visbuffer_vertex",
+            depth: nearest_depth(),
+        };
+        let targets = [Some(VISIBILITY_FORMAT.into())];
+        let pipelines = raster.per_state(&ctx.device, RasterState::all(), |state| {
+            let entry = if state.alpha_mask { "visbuffer_masked" } else { "visbuffer_opaque" };
+            Some(Fragment { module: &module, entry, constants: &[], targets: &targets })
+        });
         Ok(Self { pipelines, indexed })
-    }
-
-    fn create_pipeline(
-        device: &wgpu::Device,
-        layout: &wgpu::PipelineLayout,
-        module: &wgpu::ShaderModule,
-        state: RasterState,
-    ) -> wgpu::RenderPipeline {
-        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("visbuffer_raster"),
-            layout: Some(layout),
-            vertex: wgpu::VertexState {
-                module,
-                entry_point: Some("visbuffer_vertex"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: state.primitive(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                // Reverse Z: nearer is greater.
-                depth_compare: Some(wgpu::CompareFunction::Greater),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module,
-                entry_point: Some(if state.alpha_mask { "visbuffer_masked" } else { "visbuffer_opaque" }),
-                compilation_options: Default::default(),
-                targets: &[Some(VISIBILITY_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
     }
 
     pub fn record(
@@ -69,8 +51,7 @@ impl VisbufferRaster {
         timer: Option<&mut GpuTimer>,
         scene: &GpuScene,
         eye: glam::Vec3,
-        visibility: &wgpu::TextureView,
-        depth: &wgpu::TextureView,
+        VisbufferImages { visibility, depth }: VisbufferImages,
     ) {
         let order = scene.draw_order(eye);
 
@@ -80,8 +61,8 @@ impl VisbufferRaster {
                 view: visibility,
                 depth_slice: None,
                 resolve_target: None,
-                // Not cleared: shading reads ids only where depth says a triangle was drawn, and
-                // clearing 1080p ids cost 0.15 ms on the H100, more than a tenth of the pass.
+                // Not cleared: shading reads ids only where depth says a triangle was drawn, and a
+                // clear costs a sizeable share of this output-bound pass.
                 ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
             })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {

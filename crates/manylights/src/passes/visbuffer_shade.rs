@@ -1,7 +1,6 @@
 //! Visibility-buffer resolve and shading in compute. See `visbuffer_shade.wgsl`.
 
-use super::FrameInputs;
-use crate::accel::VolumeStructure;
+use super::{builder::ComputeStep, FrameInputs, Structures};
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::passes::ray_shadows::{self, RayShadows};
 use crate::plan::ShadingMethods;
@@ -16,8 +15,15 @@ pub fn shader(methods: ShadingMethods) -> ShaderDesc {
 }
 
 pub struct VisbufferShade {
-    pipeline: wgpu::ComputePipeline,
+    step: ComputeStep,
     bind_group: wgpu::BindGroup,
+}
+
+/// The images the pass reads and writes.
+pub struct VisbufferShadeImages<'a> {
+    pub visibility: &'a wgpu::TextureView,
+    pub depth: &'a wgpu::TextureView,
+    pub hdr: &'a wgpu::TextureView,
 }
 
 impl VisbufferShade {
@@ -27,9 +33,9 @@ impl VisbufferShade {
         ctx: &GpuContext,
         scene: &GpuScene,
         methods: ShadingMethods,
-        (lights, decals): (&VolumeStructure, &VolumeStructure),
+        structures: Structures,
         shadows: Option<&RayShadows>,
-        (visibility, depth, hdr): (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
+        images: VisbufferShadeImages,
     ) -> Result<Self> {
         let device = &ctx.device;
         let compute = wgpu::ShaderStages::COMPUTE;
@@ -44,22 +50,22 @@ impl VisbufferShade {
                 ray_shadows::shading_mask_entry(3, compute),                                                  // sun visibility
             ],
         );
-        let layouts = [&scene.bind_group_layout, &layout, &lights.bind_group_layout, &decals.bind_group_layout];
+        let layouts = [&scene.bind_group_layout, &layout, &structures.lights.bind_group_layout, &structures.decals.bind_group_layout];
         let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
         let constants = [("SUN_SHADOW_MASK", has_mask), methods.debug_views_constant()];
-        let pipeline = bindings::compute_pipeline_with_constants(device, "visbuffer_shade", &shader(methods), &layouts, &constants)?;
+        let step = ComputeStep::new(device, &shader(methods), "visbuffer_shade", &layouts, &constants)?;
         let bind_group = bindings::bind_group(
             device,
             "visbuffer_shade",
             &layout,
             vec![
-                wgpu::BindingResource::TextureView(visibility),
-                wgpu::BindingResource::TextureView(hdr),
-                wgpu::BindingResource::TextureView(depth),
+                wgpu::BindingResource::TextureView(images.visibility),
+                wgpu::BindingResource::TextureView(images.hdr),
+                wgpu::BindingResource::TextureView(images.depth),
                 wgpu::BindingResource::TextureView(&mask),
             ],
         );
-        Ok(Self { pipeline, bind_group })
+        Ok(Self { step, bind_group })
     }
 
     pub fn record(
@@ -69,16 +75,7 @@ impl VisbufferShade {
         inputs: &FrameInputs,
         (width, height): (u32, u32),
     ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("visbuffer_shade"),
-            timestamp_writes: timer.map(|t| t.compute_pass("visbuffer_shade")),
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &inputs.scene.bind_group, &[]);
-        pass.set_bind_group(1, &self.bind_group, &[]);
-        pass.set_bind_group(2, &inputs.lights.bind_group, &[]);
-        pass.set_bind_group(3, &inputs.decals.bind_group, &[]);
-        let (x, y) = super::dispatch_size(width, height);
-        pass.dispatch_workgroups(x, y, 1);
+        let groups = [&inputs.scene.bind_group, &self.bind_group, &inputs.lights.bind_group, &inputs.decals.bind_group];
+        self.step.record(encoder, timer, &groups, super::dispatch_size(width, height));
     }
 }

@@ -23,14 +23,14 @@
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
     deferred_decals::DeferredDecals,
-    deferred_shade::DeferredShade,
+    deferred_shade::{DeferredShade, DeferredShadeImages},
     gbuffer_raster::{GBufferRaster, GBUFFER_FORMATS},
     ray_shadows::RayShadows,
     transparent_shade::TransparentShade,
 };
-use crate::post::PostChain;
+use crate::post::{PostChain, PostImages};
 use crate::{
-    passes::FrameInputs,
+    passes::{FrameInputs, ShadedImage},
     pipelines::{FrameSetup, FrameTargets},
     settings::DecalMethod,
     Result,
@@ -76,7 +76,7 @@ impl DeferredPipeline {
             DecalMethod::DeferredDecals => {
                 let copy =
                     super::target(&ctx.device, "surface normals", width, height, GBUFFER_FORMATS[1], U::COPY_DST | U::TEXTURE_BINDING);
-                Some((DeferredDecals::new(ctx, scene, structures.1, &depth_view, &view(&copy))?, textures[1].clone(), copy))
+                Some((DeferredDecals::new(ctx, scene, structures.decals, &depth_view, &view(&copy))?, textures[1].clone(), copy))
             }
             _ => None,
         };
@@ -84,10 +84,17 @@ impl DeferredPipeline {
         Ok(Self {
             raster: GBufferRaster::new(ctx, scene)?,
             decals,
-            shade: DeferredShade::new(ctx, scene, methods, structures, shadows.as_ref(), (&depth_view, &gbuffer), &hdr_view)?,
+            shade: DeferredShade::new(
+                ctx,
+                scene,
+                methods,
+                structures,
+                shadows.as_ref(),
+                DeferredShadeImages { depth: &depth_view, gbuffer: &gbuffer, hdr: &hdr_view },
+            )?,
             shadows,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
-            post: PostChain::new(ctx, scene, post, (&targets.depth, &targets.hdr, &targets.ldr))?,
+            post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
             targets,
             gbuffer,
             depth_view,
@@ -108,7 +115,7 @@ impl DeferredPipeline {
         }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
         if let Some(transparent) = &self.transparent {
-            transparent.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
+            transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
         }
         self.post.record(encoder, timer, inputs.scene, inputs.eye);
     }

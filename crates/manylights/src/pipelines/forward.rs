@@ -1,6 +1,6 @@
 //! The forward frame: a depth prepass, then every visible fragment shaded in the fragment stage by the
-//! same shading core as the visibility buffer's compute resolve, then tonemapping. On our benchmark
-//! GPUs (H100/H200 through Vulkan) fragment shading is many times slower than the compute resolve;
+//! same shading core as the visibility buffer's compute resolve, then tonemapping. On GPUs with few
+//! graphics units fragment shading is many times slower than the compute resolve (BENCHMARKS.md);
 //! this pipeline is there to compare, as the paper's table does, and for surfaces only a forward
 //! pass can draw.
 //!
@@ -25,9 +25,9 @@ use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
     depth_prepass::DepthPrepass, forward_shade::ForwardShade, ray_shadows::RayShadows, transparent_shade::TransparentShade,
 };
-use crate::post::PostChain;
+use crate::post::{PostChain, PostImages};
 use crate::{
-    passes::FrameInputs,
+    passes::{FrameInputs, ShadedImage},
     pipelines::{FrameSetup, FrameTargets},
     Result,
 };
@@ -58,7 +58,7 @@ impl ForwardPipeline {
             shade: ForwardShade::new(ctx, scene, methods, structures, shadows.as_ref())?,
             shadows,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
-            post: PostChain::new(ctx, scene, post, (&targets.depth, &targets.hdr, &targets.ldr))?,
+            post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
             targets,
             depth_view,
             hdr_view,
@@ -71,9 +71,9 @@ impl ForwardPipeline {
         if let Some(shadows) = &self.shadows {
             shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (self.targets.width, self.targets.height));
         }
-        self.shade.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
+        self.shade.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
         if let Some(transparent) = &self.transparent {
-            transparent.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
+            transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
         }
         self.post.record(encoder, timer, inputs.scene, inputs.eye);
     }

@@ -12,11 +12,10 @@ pub use deferred::DeferredPipeline;
 pub use forward::ForwardPipeline;
 pub use visbuffer::VisbufferPipeline;
 
-use crate::accel::VolumeStructure;
 use crate::gpu::textures::target;
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
-use crate::passes::FrameInputs;
 use crate::passes::{visbuffer_raster::DEPTH_FORMAT, visbuffer_shade::HDR_FORMAT};
+use crate::passes::{FrameInputs, Structures};
 use crate::plan::ShadingMethods;
 use crate::post::{tonemap::LDR_FORMAT, PostChain};
 use crate::settings::{PipelineKind, PostSettings, SunShadows};
@@ -73,7 +72,7 @@ pub struct FrameSetup<'a> {
     pub methods: ShadingMethods,
     pub shadows: SunShadows,
     pub post: PostSettings,
-    pub structures: (&'a VolumeStructure, &'a VolumeStructure),
+    pub structures: Structures<'a>,
     pub size: (u32, u32),
 }
 

@@ -23,12 +23,12 @@ use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::{
     ray_shadows::RayShadows,
     transparent_shade::TransparentShade,
-    visbuffer_raster::{VisbufferRaster, VISIBILITY_FORMAT},
-    visbuffer_shade::VisbufferShade,
+    visbuffer_raster::{VisbufferImages, VisbufferRaster, VISIBILITY_FORMAT},
+    visbuffer_shade::{VisbufferShade, VisbufferShadeImages},
 };
-use crate::post::PostChain;
+use crate::post::{PostChain, PostImages};
 use crate::{
-    passes::FrameInputs,
+    passes::{FrameInputs, ShadedImage},
     pipelines::{FrameSetup, FrameTargets},
     Result,
 };
@@ -59,10 +59,17 @@ impl VisbufferPipeline {
         let shadows = setup.traced_shadows().map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
         Ok(Self {
             raster: VisbufferRaster::new(ctx, scene)?,
-            shade: VisbufferShade::new(ctx, scene, methods, structures, shadows.as_ref(), (&visibility_view, &depth_view, &hdr_view))?,
+            shade: VisbufferShade::new(
+                ctx,
+                scene,
+                methods,
+                structures,
+                shadows.as_ref(),
+                VisbufferShadeImages { visibility: &visibility_view, depth: &depth_view, hdr: &hdr_view },
+            )?,
             shadows,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
-            post: PostChain::new(ctx, scene, post, (&targets.depth, &targets.hdr, &targets.ldr))?,
+            post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
             targets,
             visibility_view,
             depth_view,
@@ -73,13 +80,14 @@ impl VisbufferPipeline {
     /// Records one frame. The frame uniforms must already be written.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         let (width, height) = (self.targets.width, self.targets.height);
-        self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.visibility_view, &self.depth_view);
+        let images = VisbufferImages { visibility: &self.visibility_view, depth: &self.depth_view };
+        self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, images);
         if let Some(shadows) = &self.shadows {
             shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (width, height));
         }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
         if let Some(transparent) = &self.transparent {
-            transparent.record(encoder, timer.as_deref_mut(), inputs, (&self.hdr_view, &self.depth_view));
+            transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
         }
         self.post.record(encoder, timer, inputs.scene, inputs.eye);
     }

@@ -1,7 +1,7 @@
 //! Depth of field: `depth_of_field_tiles` (largest circle of confusion per tile) then
 //! `depth_of_field` (the gather). See `depth_of_field.wgsl`.
 
-use super::{tile_image, TiledGather};
+use super::{tile_image, EffectImages, TiledGather};
 use crate::gpu::{bindings, GpuContext, GpuScene};
 use crate::Result;
 
@@ -9,7 +9,7 @@ pub fn new(
     ctx: &GpuContext,
     scene: &GpuScene,
     uniforms: &wgpu::Buffer,
-    (depth, input, output): (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
+    EffectImages { depth, input, output }: EffectImages,
     size: (u32, u32),
 ) -> Result<TiledGather> {
     let c = wgpu::ShaderStages::COMPUTE;

@@ -1,13 +1,14 @@
 //! Auto exposure: `exposure_histogram` then `exposure_average`. See `exposure.wgsl`.
 
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::passes::builder::ComputeStep;
 use crate::Result;
 
 const HISTOGRAM_BINS: u64 = 128;
 
 pub struct AutoExposurePass {
-    histogram_pipeline: wgpu::ComputePipeline,
-    average_pipeline: wgpu::ComputePipeline,
+    histogram: ComputeStep,
+    average: ComputeStep,
     bind_group: wgpu::BindGroup,
 }
 
@@ -35,10 +36,10 @@ impl AutoExposurePass {
         );
         let shader = ShaderDesc::new("post/exposure.wgsl");
         let layouts = [&scene.bind_group_layout, &layout];
-        let histogram_pipeline = bindings::compute_pipeline(device, "exposure_histogram", &shader, &layouts)?;
-        let average_pipeline = bindings::compute_pipeline(device, "exposure_average", &shader, &layouts)?;
+        let histogram = ComputeStep::new(device, &shader, "exposure_histogram", &layouts, &[])?;
+        let average = ComputeStep::new(device, &shader, "exposure_average", &layouts, &[])?;
         // Zeroed at creation; `exposure_average` clears it after reading.
-        let histogram = device.create_buffer(&wgpu::BufferDescriptor {
+        let histogram_bins = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("exposure histogram"),
             size: HISTOGRAM_BINS * 4,
             usage: wgpu::BufferUsages::STORAGE,
@@ -51,11 +52,11 @@ impl AutoExposurePass {
             vec![
                 uniforms.as_entire_binding(),
                 wgpu::BindingResource::TextureView(input),
-                histogram.as_entire_binding(),
+                histogram_bins.as_entire_binding(),
                 state.as_entire_binding(),
             ],
         );
-        Ok(Self { histogram_pipeline, average_pipeline, bind_group })
+        Ok(Self { histogram, average, bind_group })
     }
 
     pub fn record(
@@ -65,18 +66,8 @@ impl AutoExposurePass {
         scene: &GpuScene,
         (width, height): (u32, u32),
     ) {
-        let pixels = crate::passes::dispatch_size(width, height);
-        for (name, pipeline, (x, y)) in
-            [("exposure_histogram", &self.histogram_pipeline, pixels), ("exposure_average", &self.average_pipeline, (1, 1))]
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(name),
-                timestamp_writes: timer.as_deref_mut().map(|t| t.compute_pass(name)),
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &scene.bind_group, &[]);
-            pass.set_bind_group(1, &self.bind_group, &[]);
-            pass.dispatch_workgroups(x, y, 1);
-        }
+        let groups = [&scene.bind_group, &self.bind_group];
+        self.histogram.record(encoder, timer.as_deref_mut(), &groups, crate::passes::dispatch_size(width, height));
+        self.average.record(encoder, timer, &groups, (1, 1));
     }
 }

@@ -21,9 +21,11 @@ pub mod tonemap;
 pub mod velocity;
 
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::passes::builder::ComputeStep;
 use crate::scene::{Camera, Projection};
 use crate::settings::{PostSettings, POST_TILE};
 use crate::{Error, Result};
+use velocity::VelocityImages;
 
 /// The images between post passes: 32-bit float like the HDR image, so a pixel an effect leaves
 /// alone passes through exactly.
@@ -32,6 +34,23 @@ pub const POST_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// Sensor height of the thin lens depth of field models: 35 mm film's 24 mm, so f-numbers and focus
 /// behave as on a full-frame camera with the view's field of view.
 pub const SENSOR_HEIGHT: f32 = 0.024;
+
+/// The frame's images the chain reads and writes: its depth and shaded HDR image, and the 8-bit
+/// image it ends in.
+#[derive(Clone, Copy)]
+pub struct PostImages<'a> {
+    pub depth: &'a wgpu::Texture,
+    pub hdr: &'a wgpu::Texture,
+    pub ldr: &'a wgpu::Texture,
+}
+
+/// The images a screen-space effect reads and writes: the frame's depth, its input, its output.
+#[derive(Clone, Copy)]
+pub struct EffectImages<'a> {
+    pub depth: &'a wgpu::TextureView,
+    pub input: &'a wgpu::TextureView,
+    pub output: &'a wgpu::TextureView,
+}
 
 /// The chain's per-frame constants. Keep in sync with `PostUniforms` in `post/post_types.wgsl`.
 #[repr(C)]
@@ -127,8 +146,7 @@ pub struct TiledGather {
 }
 
 struct TiledStep {
-    entry: &'static str,
-    pipeline: wgpu::ComputePipeline,
+    step: ComputeStep,
     bind_group: wgpu::BindGroup,
     workgroups: (u32, u32),
 }
@@ -142,23 +160,16 @@ impl TiledGather {
         let step = |(entry, bound): Bindings, (width, height): (u32, u32)| -> Result<TiledStep> {
             let (entries, resources): (Vec<_>, Vec<_>) = bound.into_iter().map(|(e, r)| (e, (e.binding, r))).unzip();
             let layout = bindings::layout(&ctx.device, entry, &entries);
-            let pipeline = bindings::compute_pipeline(&ctx.device, entry, &ShaderDesc::new(shader), &[&scene.bind_group_layout, &layout])?;
+            let step = ComputeStep::new(&ctx.device, &ShaderDesc::new(shader), entry, &[&scene.bind_group_layout, &layout], &[])?;
             let bind_group = bindings::bind_group_at(&ctx.device, entry, &layout, resources);
-            Ok(TiledStep { entry, pipeline, bind_group, workgroups: crate::passes::dispatch_size(width, height) })
+            Ok(TiledStep { step, bind_group, workgroups: crate::passes::dispatch_size(width, height) })
         };
         Ok(Self { steps: [step(tiles, (columns, rows))?, step(gather, size)?] })
     }
 
     fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, scene: &GpuScene) {
         for step in &self.steps {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(step.entry),
-                timestamp_writes: timer.as_deref_mut().map(|t| t.compute_pass(step.entry)),
-            });
-            pass.set_pipeline(&step.pipeline);
-            pass.set_bind_group(0, &scene.bind_group, &[]);
-            pass.set_bind_group(1, &step.bind_group, &[]);
-            pass.dispatch_workgroups(step.workgroups.0, step.workgroups.1, 1);
+            step.step.record(encoder, timer.as_deref_mut(), &[&scene.bind_group, &step.bind_group], step.workgroups);
         }
     }
 }
@@ -189,12 +200,7 @@ pub struct PostChain {
 
 impl PostChain {
     /// The chain from `hdr` (and `depth`) to `ldr` for `settings`.
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        settings: PostSettings,
-        (depth, hdr, ldr): (&wgpu::Texture, &wgpu::Texture, &wgpu::Texture),
-    ) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, settings: PostSettings, PostImages { depth, hdr, ldr }: PostImages) -> Result<Self> {
         settings.validate()?;
         let device = &ctx.device;
         let size = (hdr.width(), hdr.height());
@@ -221,7 +227,13 @@ impl PostChain {
         let depth_of_field = match settings.depth_of_field {
             Some(_) => {
                 let output = post_image(device, "depth of field", size);
-                let pass = depth_of_field::new(ctx, scene, &uniforms, (&depth_view, &current, &output), size)?;
+                let pass = depth_of_field::new(
+                    ctx,
+                    scene,
+                    &uniforms,
+                    EffectImages { depth: &depth_view, input: &current, output: &output },
+                    size,
+                )?;
                 current = output;
                 Some(pass)
             }
@@ -238,9 +250,17 @@ impl PostChain {
                     wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
                 );
                 let velocity_view = view(&velocity_image);
-                let velocity = velocity::Velocity::new(ctx, scene, &uniforms, &depth_view, &velocity_view)?;
+                let velocity =
+                    velocity::Velocity::new(ctx, scene, &uniforms, VelocityImages { depth: &depth_view, velocity: &velocity_view })?;
                 let output = post_image(device, "motion blur", size);
-                let pass = motion_blur::new(ctx, scene, &uniforms, (&depth_view, &velocity_view, &current, &output), size)?;
+                let pass = motion_blur::new(
+                    ctx,
+                    scene,
+                    &uniforms,
+                    EffectImages { depth: &depth_view, input: &current, output: &output },
+                    &velocity_view,
+                    size,
+                )?;
                 current = output;
                 Some((velocity, velocity_view, pass))
             }
@@ -315,7 +335,14 @@ impl PostChain {
             pass.record(encoder, timer.as_deref_mut(), scene);
         }
         if let Some((velocity, velocity_view, pass)) = &self.motion_blur {
-            velocity.record(encoder, timer.as_deref_mut(), scene, eye, (&self.depth, velocity_view), self.size);
+            velocity.record(
+                encoder,
+                timer.as_deref_mut(),
+                scene,
+                eye,
+                VelocityImages { depth: &self.depth, velocity: velocity_view },
+                self.size,
+            );
             pass.record(encoder, timer.as_deref_mut(), scene);
         }
         if let Some(pass) = &self.exposure {

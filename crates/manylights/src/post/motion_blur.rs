@@ -1,7 +1,7 @@
 //! Motion blur: `motion_blur_tiles` (longest blur per tile) then `motion_blur` (McGuire's
 //! reconstruction filter). See `motion_blur.wgsl`; velocities come from `velocity.rs`.
 
-use super::{tile_image, velocity::VELOCITY_FORMAT, TiledGather};
+use super::{tile_image, velocity::VELOCITY_FORMAT, EffectImages, TiledGather};
 use crate::gpu::{bindings, GpuContext, GpuScene};
 use crate::Result;
 
@@ -9,7 +9,8 @@ pub fn new(
     ctx: &GpuContext,
     scene: &GpuScene,
     uniforms: &wgpu::Buffer,
-    (depth, velocity, input, output): (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
+    EffectImages { depth, input, output }: EffectImages,
+    velocity: &wgpu::TextureView,
     size: (u32, u32),
 ) -> Result<TiledGather> {
     let c = wgpu::ShaderStages::COMPUTE;

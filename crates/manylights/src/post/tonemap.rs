@@ -2,13 +2,14 @@
 //! sRGB encoding into the 8-bit output.
 
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::passes::builder::ComputeStep;
 use crate::Result;
 
 /// Storage textures cannot be sRGB, so the shader encodes sRGB itself into a plain RGBA8 texture.
 pub const LDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 pub struct Tonemap {
-    pipeline: wgpu::ComputePipeline,
+    step: ComputeStep,
     bind_group: wgpu::BindGroup,
 }
 
@@ -42,13 +43,8 @@ impl Tonemap {
         );
         let flag = |on: bool| f64::from(u8::from(on));
         let constants = [("BLOOM", flag(inputs.bloom.is_some())), ("AUTO_EXPOSURE", flag(inputs.auto_exposure))];
-        let pipeline = bindings::compute_pipeline_with_constants(
-            device,
-            "tonemap",
-            &ShaderDesc::new("post/tonemap.wgsl"),
-            &[&scene.bind_group_layout, &layout],
-            &constants,
-        )?;
+        let step =
+            ComputeStep::new(device, &ShaderDesc::new("post/tonemap.wgsl"), "tonemap", &[&scene.bind_group_layout, &layout], &constants)?;
         // Without bloom the shader does not read its binding: the image stands in.
         let bind_group = bindings::bind_group(
             device,
@@ -62,18 +58,10 @@ impl Tonemap {
                 wgpu::BindingResource::TextureView(inputs.ldr),
             ],
         );
-        Ok(Self { pipeline, bind_group })
+        Ok(Self { step, bind_group })
     }
 
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, (width, height): (u32, u32)) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("tonemap"),
-            timestamp_writes: timer.map(|t| t.compute_pass("tonemap")),
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &scene.bind_group, &[]);
-        pass.set_bind_group(1, &self.bind_group, &[]);
-        let (x, y) = crate::passes::dispatch_size(width, height);
-        pass.dispatch_workgroups(x, y, 1);
+        self.step.record(encoder, timer, &[&scene.bind_group, &self.bind_group], crate::passes::dispatch_size(width, height));
     }
 }

@@ -5,14 +5,21 @@ use std::collections::HashMap;
 
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
-use crate::passes::visbuffer_raster::DEPTH_FORMAT;
+use crate::passes::builder::{depth_test, ComputeStep, Fragment, Raster};
 use crate::Result;
 
 /// Pixels moved since the previous frame, x right and y down.
 pub const VELOCITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
+/// The frame's depth, which the velocities are reconstructed from, and the velocity image.
+#[derive(Clone, Copy)]
+pub struct VelocityImages<'a> {
+    pub depth: &'a wgpu::TextureView,
+    pub velocity: &'a wgpu::TextureView,
+}
+
 pub struct Velocity {
-    camera_pipeline: wgpu::ComputePipeline,
+    camera_step: ComputeStep,
     camera_bind_group: wgpu::BindGroup,
     raster_pipelines: HashMap<RasterState, wgpu::RenderPipeline>,
     raster_bind_group: wgpu::BindGroup,
@@ -23,8 +30,7 @@ impl Velocity {
         ctx: &GpuContext,
         scene: &GpuScene,
         uniforms: &wgpu::Buffer,
-        depth: &wgpu::TextureView,
-        velocity: &wgpu::TextureView,
+        VelocityImages { depth, velocity }: VelocityImages,
     ) -> Result<Self> {
         let device = &ctx.device;
         let compute = wgpu::ShaderStages::COMPUTE;
@@ -37,8 +43,8 @@ impl Velocity {
                 bindings::storage_texture_write(2, compute, VELOCITY_FORMAT),
             ],
         );
-        let camera_pipeline =
-            bindings::compute_pipeline(device, "velocity", &ShaderDesc::new("post/velocity.wgsl"), &[&scene.bind_group_layout, &layout])?;
+        let camera_step =
+            ComputeStep::new(device, &ShaderDesc::new("post/velocity.wgsl"), "velocity", &[&scene.bind_group_layout, &layout], &[])?;
         let camera_bind_group = bindings::bind_group(
             device,
             "velocity",
@@ -56,42 +62,20 @@ impl Velocity {
         );
         let module = shaders::create_module(device, &ShaderDesc::new("post/velocity_raster.wgsl"))?;
         let pipeline_layout = bindings::pipeline_layout(device, "velocity_raster", &[&scene.bind_group_layout, &raster_layout]);
-        let raster_pipelines = RasterState::all()
-            .map(|state| {
-                let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("velocity_raster"),
-                    layout: Some(&pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("velocity_vertex"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: state.primitive(),
-                    // The surface depth holds, drawn again by another vertex shader: equal to rounding,
-                    // so pulled a few units nearer (reverse Z: greater) and tested GREATER_EQUAL,
-                    // without writing.
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
-                        stencil: Default::default(),
-                        bias: wgpu::DepthBiasState { constant: 8, slope_scale: 1.0, clamp: 0.0 },
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(if state.alpha_mask { "velocity_raster_masked" } else { "velocity_raster" }),
-                        compilation_options: Default::default(),
-                        targets: &[Some(VELOCITY_FORMAT.into())],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                });
-                (state, pipeline)
-            })
-            .collect();
-        Ok(Self { camera_pipeline, camera_bind_group, raster_pipelines, raster_bind_group })
+        // The surface depth holds, drawn again by another vertex shader: equal to rounding, so pulled
+        // a few units nearer (reverse Z: greater) and tested GREATER_EQUAL, without writing.
+        let depth = wgpu::DepthStencilState {
+            bias: wgpu::DepthBiasState { constant: 8, slope_scale: 1.0, clamp: 0.0 },
+            ..depth_test(false, wgpu::CompareFunction::GreaterEqual)
+        };
+        let raster =
+            Raster { label: "velocity_raster", layout: &pipeline_layout, vertex_module: &module, vertex_entry: "velocity_vertex", depth };
+        let targets = [Some(VELOCITY_FORMAT.into())];
+        let raster_pipelines = raster.per_state(device, RasterState::all(), |state| {
+            let entry = if state.alpha_mask { "velocity_raster_masked" } else { "velocity_raster" };
+            Some(Fragment { module: &module, entry, constants: &[], targets: &targets })
+        });
+        Ok(Self { camera_step, camera_bind_group, raster_pipelines, raster_bind_group })
     }
 
     pub fn record(
@@ -100,20 +84,11 @@ impl Velocity {
         mut timer: Option<&mut GpuTimer>,
         scene: &GpuScene,
         eye: glam::Vec3,
-        (depth, velocity): (&wgpu::TextureView, &wgpu::TextureView),
+        VelocityImages { depth, velocity }: VelocityImages,
         (width, height): (u32, u32),
     ) {
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("velocity"),
-                timestamp_writes: timer.as_deref_mut().map(|t| t.compute_pass("velocity")),
-            });
-            pass.set_pipeline(&self.camera_pipeline);
-            pass.set_bind_group(0, &scene.bind_group, &[]);
-            pass.set_bind_group(1, &self.camera_bind_group, &[]);
-            let (x, y) = crate::passes::dispatch_size(width, height);
-            pass.dispatch_workgroups(x, y, 1);
-        }
+        let groups = [&scene.bind_group, &self.camera_bind_group];
+        self.camera_step.record(encoder, timer.as_deref_mut(), &groups, crate::passes::dispatch_size(width, height));
         let moving = scene.moving_draw_order(eye);
         if moving.is_empty() {
             return;

@@ -22,6 +22,9 @@ pub use rays::{RayOverlay, RaySettings, SunShadows, MAX_REFLECTION_BOUNCES, MAX_
 
 use crate::{Error, Result};
 
+/// Most anisotropy of texture filtering.
+pub const MAX_ANISOTROPY: u16 = 16;
+
 /// How an error message names an option: as its command-line flag, or as its scene-file key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Spelling {
@@ -80,7 +83,7 @@ pub struct RenderConfig {
     pub tonemapper: Tonemapper,
     /// Largest texture layer size; larger images are downsampled at upload.
     pub max_texture_size: u32,
-    /// Maximum anisotropy of texture filtering, 1 (trilinear) to 16. Software rasterisers are many
+    /// Maximum anisotropy of texture filtering, 1 (trilinear) to [`MAX_ANISOTROPY`]. Software rasterisers are many
     /// times slower with anisotropic filtering, so the tests use 1.
     pub anisotropy: u16,
     /// Ray-traced effects: sun shadows and reflections, and their budgets (`rays/`).
@@ -182,8 +185,8 @@ impl RenderConfig {
             )));
         }
         self.post.validate()?;
-        if !(1..=16).contains(&self.anisotropy) {
-            return Err(Error::InvalidConfig(format!("anisotropy {} must be between 1 and 16", self.anisotropy)));
+        if !(1..=MAX_ANISOTROPY).contains(&self.anisotropy) {
+            return Err(Error::InvalidConfig(format!("anisotropy {} must be between 1 and {MAX_ANISOTROPY}", self.anisotropy)));
         }
         Ok(())
     }

@@ -58,9 +58,8 @@ macro_rules! named_enum {
 
             /// The variant spelled `s`; the error lists the spellings.
             fn from_str(s: &str) -> Result<Self, String> {
-                Self::ALL.iter().copied().find(|v| v.name() == s).ok_or_else(|| {
-                    format!("{s:?}: use {}", <Self as $crate::settings::named::Named>::choices("\""))
-                })
+                use $crate::settings::named::Named;
+                Self::named(s).ok_or_else(|| format!("{s:?}: use {}", Self::choices("\"")))
             }
         }
 
