@@ -140,13 +140,8 @@ impl Switches {
             "depth-of-field" => self.depth_of_field = on()?,
             "motion-blur" => self.motion_blur = on()?,
             "auto-exposure" => self.auto_exposure = on()?,
-            "vignette" => {
-                self.vignette = value
-                    .parse()
-                    .ok()
-                    .filter(|v: &f32| (0.0..=1.0).contains(v))
-                    .with_context(|| format!("vignette={value}: give 0 to 1"))?
-            }
+            // Its range is checked with the rest of the settings when the renderer is built.
+            "vignette" => self.vignette = value.parse().with_context(|| format!("vignette={value}: give a number"))?,
             _ => bail!(
                 "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, debug-view, shadows, reflections, bloom, \
                  depth-of-field, motion-blur, auto-exposure, vignette, lights, decals or particles"
