@@ -9,6 +9,9 @@
 #   scripts/bench-device.sh tests        the GPU-only test binaries under .bench/tests/, if any
 #   scripts/bench-device.sh table        `manylights bench`: the paper's Table 1, every pipeline and method (issue 5)
 #   scripts/bench-device.sh sweeps       `manylights bench`: lights and decals from 1k to 1M (issue 5)
+#   scripts/bench-device.sh dense        `manylights bench`: dense lights, bvh against clustered, and auto (issue 33)
+#   scripts/bench-device.sh assets       every scene of .bench/assets/ and sponza_lite with no flags against each
+#                                        explicit method, alone and with 28k lights or 100k decals (issue 33)
 #   scripts/bench-device.sh particles    moving particle lights through the 3D-texture grid (issue 6)
 #   scripts/bench-device.sh clipmap      1M particles: clipmap cascades against the grid over the scene (issue 6)
 #   scripts/bench-device.sh exact        262,144 and 1,048,576 particles as exact lights, every pipeline (issue 6)
@@ -31,11 +34,13 @@ for n in 28000 100000 1000000; do
   printf 'gltf = "sponza_lite/Sponza.gltf"\n[camera]\nindex = 0\n[[scatter_lights]]\ncount = %s\nseed = 1\nrange = [0.1, 0.3]\n' $n >.bench/small_$n.toml
 done
 nvidia-smi --query-gpu=name,driver_version --format=csv | tee "$out/gpu.txt"
+# Timings compare configurations: the exposure is fixed (auto exposure's passes left out) unless
+# FIX_EXPOSURE is set, empty to meter as `render` does with no flags.
 run() { # name, frames, then render arguments
   local name=$1 frames=$2; shift 2
   echo "== $name"
   timeout 300 $bin render --width 1920 --height 1080 --warmup "${WARMUP:-50}" --frames "$frames" --timings \
-    --timings-json "$out/$name.json" -o /tmp/$name.png "$@" 2>&1 | grep -v "^GPU\|^wrote"
+    --timings-json "$out/$name.json" -o /tmp/$name.png ${FIX_EXPOSURE---exposure 0} "$@" 2>&1 | grep -v "^GPU\|^wrote"
 }
 bvh="--light-method bvh"
 structures() {
@@ -230,6 +235,27 @@ soak() {
   tail -n 3 "$out/soak/render-soak.log"
 }
 
+# Each scene with no flags (auto methods, auto exposure, as a new user runs it) against every explicit
+# method of what it varies, the rest left at the defaults: the scene's own lights, 28,000 scattered
+# lights, 100,000 scattered decals.
+assets() {
+  local scene name variant m
+  for scene in $sponza $(ls .bench/assets/*/*.glb .bench/assets/*/*.gltf 2>/dev/null | sort -u -t/ -k3,3); do
+    name=$(basename "${scene%.*}")
+    for variant in own lights decals; do
+      local extra="" flag="--light-method"
+      case $variant in
+        lights) extra="--lights 28000 --seed 1" ;;
+        decals) extra="--decals 100000 --seed 1"; flag="--decal-method" ;;
+      esac
+      FIX_EXPOSURE= WARMUP=10 run "assets_${name}_${variant}_none" 50 --scene "$scene" $extra
+      for m in off brute bvh clustered; do
+        FIX_EXPOSURE= WARMUP=10 run "assets_${name}_${variant}_$m" 50 --scene "$scene" $extra $flag $m
+      done
+    done
+  done
+}
+
 # The bench command's own report (bench.md, .json, .csv, plots) lands in the archive under bench-<set>/.
 bench() { # set name, then bench arguments
   local name=$1; shift
@@ -250,9 +276,11 @@ for set in "${@:-structures}"; do
     post) post ;;
     deform) deform ;;
     soak) soak ;;
-    table) bench table --sweeps none ;;
-    sweeps) bench sweeps --scenes none ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, particles, exact, clipmap, rays, post, deform or soak)" >&2; exit 2 ;;
+    table) bench table --sweeps none --dense none ;;
+    sweeps) bench sweeps --scenes none --dense none ;;
+    dense) bench dense --scenes none --sweeps none ;;
+    assets) assets ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform or soak)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

@@ -1,9 +1,11 @@
 //! `manylights info`: what wgpu sees and what manylights would use, and what a scene holds.
 
 use manylights::{
-    accel::overlap::{decal_overlap, light_overlap, Overlap},
+    accel::overlap::{decal_overlap, light_overlap, scene_statistics, Overlap},
     gpu::{context, GpuContext},
+    plan::{Capabilities, Measurements, MethodChoice},
     scene::generators::surface_points,
+    settings::{PipelineKind, RenderConfig},
 };
 
 use crate::progress;
@@ -41,7 +43,7 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         ctx.limits.max_storage_buffer_binding_size / (1 << 20),
         ctx.limits.max_buffer_size / (1 << 20)
     );
-    let (scene, _) = args.load(Some(&ctx))?;
+    let (scene, overlay) = args.load(Some(&ctx))?;
     println!(
         "scene {}: {} triangles drawn, {} materials, {} textures",
         args.scene,
@@ -67,6 +69,14 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         };
         show("lights", lights);
         show("decals", decals);
+    }
+    // What `auto` picks with the default settings (and the scene file's), per pipeline.
+    let caps = Capabilities { subgroups: ctx.features.contains(wgpu::Features::SUBGROUP) };
+    let defaults = RenderConfig::default().with_particles(overlay.particles);
+    let stats = scene_statistics(&scene, Measurements::for_settings(&defaults, caps))?;
+    for pipeline in PipelineKind::ALL {
+        let chosen = MethodChoice::resolve(&RenderConfig { pipeline, ..defaults.clone() }, &stats);
+        println!("  {} pipeline: lights {}; decals {}", pipeline.name(), chosen.lights, chosen.decals);
     }
     Ok(())
 }

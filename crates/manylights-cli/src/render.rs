@@ -11,9 +11,10 @@ use manylights::{
     renderer::{FrameTiming, Renderer},
     scene::{Camera, Scene},
     settings::{
-        AutoExposure, Bloom, BvhBuild, DebugView, DecalMethod, DepthOfField, LightMethod, MotionBlur, ParticleFilter, ParticleMethod,
-        ParticleOverlay, PipelineKind, PostSettings, RayOverlay, RaySettings, RenderConfig, SunShadows, Tonemapper, MAX_ANISOTROPY,
-        MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH, MAX_MOTION_BLUR_SAMPLES, MAX_REFLECTION_BOUNCES, MAX_SHADOW_RAYS,
+        AutoExposure, Bloom, BvhBuild, DebugView, DecalMethod, DepthOfField, Exposure, LightMethod, MotionBlur, ParticleFilter,
+        ParticleMethod, ParticleOverlay, PipelineKind, PostSettings, RayOverlay, RaySettings, RenderConfig, SunShadows, Tonemapper,
+        EV100_RANGE, MAX_ANISOTROPY, MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH, MAX_MOTION_BLUR_SAMPLES, MAX_REFLECTION_BOUNCES,
+        MAX_SHADOW_RAYS,
     },
 };
 
@@ -40,19 +41,16 @@ pub struct RenderArgs {
     /// or forward (depth prepass, shading in fragments).
     #[arg(long, value_enum, default_value_t = RenderConfig::default().pipeline)]
     pipeline: PipelineKind,
-    /// How shading finds the local lights reaching a point: none (sun and ambient only), loop over
-    /// all, point queries in a BVH, or per-froxel lists built every frame (clustered shading).
-    #[arg(long, value_enum, default_value_t = RenderConfig::default().light_method)]
-    light_method: LightMethod,
-    /// How the light BVH is built (with --light-method bvh): once on the CPU, or every frame on the GPU.
+    #[arg(long, value_enum, help = format!("How shading finds the local lights reaching a point: the fastest for the scene, pipeline and settings (auto: `info` and --timings say which and why), none (sun and ambient only), loop over all, point queries in a BVH, or per-froxel lists built every frame (clustered shading). [default: the scene file's, or {}]", RenderConfig::default().light_method))]
+    light_method: Option<LightMethod>,
+    /// How the light BVH is built (with --light-method bvh): once on the CPU, or every frame on the
+    /// GPU (auto then weighs the rebuild).
     #[arg(long, value_enum, default_value_t = RenderConfig::default().light_bvh_build)]
     light_bvh_build: BvhBuild,
-    /// How shading finds the decals covering a point: none, loop over all, point queries in a BVH,
-    /// per-froxel lists built every frame (clustered shading), or decal boxes rasterised into the
-    /// G-buffer (deferred decals, --pipeline deferred only).
-    #[arg(long, value_enum, default_value_t = RenderConfig::default().decal_method)]
-    decal_method: DecalMethod,
-    /// How the decal BVH is built (with --decal-method bvh): once on the CPU, or every frame on the GPU.
+    #[arg(long, value_enum, help = format!("How shading finds the decals covering a point: the fastest for the scene (auto), none, loop over all, point queries in a BVH, per-froxel lists built every frame (clustered shading), or decal boxes rasterised into the G-buffer (deferred decals, --pipeline deferred only). [default: the scene file's, or {}]", RenderConfig::default().decal_method))]
+    decal_method: Option<DecalMethod>,
+    /// How the decal BVH is built (with --decal-method bvh): once on the CPU, or every frame on the
+    /// GPU (auto then weighs the rebuild).
     #[arg(long, value_enum, default_value_t = RenderConfig::default().decal_bvh_build)]
     decal_bvh_build: BvhBuild,
     #[arg(long, value_enum, help = format!("How particle lights (--particles, or a scene file's [particles]) light the scene: not at all, through the 3D textures they are splatted into every frame, or exactly, as point lights in the lights' BVH rebuilt every frame (with --light-method bvh). [default: the scene file's, or {}]", RenderConfig::default().particle_method))]
@@ -117,12 +115,15 @@ pub struct RenderArgs {
 /// Post effects after shading, each off unless asked for; tonemapping is `--tonemap`.
 #[derive(Args)]
 pub(crate) struct PostArgs {
-    /// Measure the exposure from each frame's luminance histogram instead of using the scene's.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_name = "EV100", help = format!("A fixed exposure, in EV100 ({} to {}; 0 maps a luminance of 1.2 to white, each step up halves the image's brightness) instead of measuring each frame's. [default: the scene file's `exposure`, or auto]", EV100_RANGE.0, EV100_RANGE.1))]
+    exposure: Option<f32>,
+    /// Measure the exposure from each frame's luminance histogram even where the scene file fixes
+    /// one (without a scene file's `exposure` or --exposure, frames are exposed so anyway).
+    #[arg(long, conflicts_with = "exposure")]
     auto_exposure: bool,
-    #[arg(long, requires = "auto_exposure", allow_negative_numbers = true, help = format!("Stops brighter (+) or darker (−) than auto exposure's middle grey. [default: {}]", AutoExposure::default().compensation_ev))]
+    #[arg(long, conflicts_with = "exposure", allow_negative_numbers = true, help = format!("Stops brighter (+) or darker (−) than auto exposure's middle grey. [default: {}]", AutoExposure::default().compensation_ev))]
     exposure_compensation: Option<f32>,
-    #[arg(long, requires = "auto_exposure", allow_negative_numbers = true, help = format!("How fast auto exposure follows the image, per second (the first frame takes it at once). [default: {}]", AutoExposure::default().adaptation_speed))]
+    #[arg(long, conflicts_with = "exposure", allow_negative_numbers = true, help = format!("How fast auto exposure follows the image, per second (the first frame takes it at once). [default: {}]", AutoExposure::default().adaptation_speed))]
     exposure_adaptation: Option<f32>,
     /// Bloom: the image blurred over a chain of half-resolution levels, blended over it.
     #[arg(long)]
@@ -155,16 +156,29 @@ pub(crate) struct PostArgs {
 }
 
 impl PostArgs {
-    pub(crate) fn settings(&self) -> PostSettings {
+    /// The post settings, exposed as the command line, then the scene file (`scene_exposure`), asks.
+    pub(crate) fn settings(&self, scene_exposure: Option<f32>) -> anyhow::Result<PostSettings> {
         let auto = AutoExposure::default();
         let bloom = Bloom::default();
         let dof = DepthOfField::default();
         let blur = MotionBlur::default();
-        PostSettings {
-            auto_exposure: self.auto_exposure.then(|| AutoExposure {
-                compensation_ev: self.exposure_compensation.unwrap_or(auto.compensation_ev),
-                adaptation_speed: self.exposure_adaptation.unwrap_or(auto.adaptation_speed),
-            }),
+        if let Some(ev100) = self.exposure.filter(|ev| !(EV100_RANGE.0..=EV100_RANGE.1).contains(ev)) {
+            bail!(
+                "--exposure {ev100}: give an EV100 from {} to {} (or leave it out to expose automatically)",
+                EV100_RANGE.0,
+                EV100_RANGE.1
+            );
+        }
+        Ok(PostSettings {
+            exposure: Exposure::chosen(
+                self.exposure,
+                self.auto_exposure,
+                scene_exposure,
+                AutoExposure {
+                    compensation_ev: self.exposure_compensation.unwrap_or(auto.compensation_ev),
+                    adaptation_speed: self.exposure_adaptation.unwrap_or(auto.adaptation_speed),
+                },
+            ),
             bloom: self.bloom.then(|| Bloom { intensity: self.bloom_intensity.unwrap_or(bloom.intensity) }),
             depth_of_field: self.depth_of_field.then(|| DepthOfField {
                 focus_distance: self.focus_distance,
@@ -177,7 +191,7 @@ impl PostArgs {
                 max_length: self.max_motion_blur.unwrap_or(blur.max_length),
             }),
             vignette: self.vignette,
-        }
+        })
     }
 }
 
@@ -252,15 +266,15 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         width: args.width,
         height: args.height,
         pipeline: args.pipeline,
-        light_method: args.light_method,
+        light_method: args.light_method.or(overlay.methods.lights).unwrap_or_default(),
         light_bvh_build: args.light_bvh_build,
-        decal_method: args.decal_method,
+        decal_method: args.decal_method.or(overlay.methods.decals).unwrap_or_default(),
         decal_bvh_build: args.decal_bvh_build,
         tonemapper: args.tonemap,
         max_texture_size: args.texture_size,
         anisotropy: args.anisotropy,
         rays: args.rays.settings(&overlay.rays)?,
-        post: args.post.settings(),
+        post: args.post.settings(overlay.exposure)?,
         debug_view: args.debug_view,
         debug_slice_height: args.debug_slice_height,
         ..RenderConfig::default()
@@ -370,6 +384,8 @@ impl TimingReport {
             args.frames,
             args.warmup
         );
+        let chosen = renderer.methods_chosen();
+        println!("{} pipeline; lights: {}; decals: {}", renderer.config.pipeline.name(), chosen.lights, chosen.decals);
         if let Some(particles) = scene.particles.as_ref().filter(|p| p.count > 0) {
             let config = &renderer.config;
             let grid = match (config.particle_method, config.particle_cascades) {
@@ -437,8 +453,10 @@ impl TimingReport {
             "lights": scene.lights.len(),
             "pipeline": renderer.config.pipeline.name(),
             "light_method": renderer.config.light_method.name(),
+            "light_method_why": renderer.methods_chosen().lights.to_string(),
             "decals": scene.decals.len(),
             "decal_method": renderer.config.decal_method.name(),
+            "decal_method_why": renderer.methods_chosen().decals.to_string(),
             "animated": is_animated(scene),
             "particles": particles_json(renderer, scene),
             "rays": rays_json(renderer),
@@ -455,10 +473,12 @@ impl TimingReport {
 /// The post effects that ran, each null when off, and the camera's velocity.
 fn post_json(post: &PostSettings, camera_velocity: Option<&[f32]>) -> serde_json::Value {
     serde_json::json!({
-        "auto_exposure": post.auto_exposure.map(|a| serde_json::json!({
-            "compensation_ev": a.compensation_ev,
-            "adaptation_speed": a.adaptation_speed,
-        })),
+        "exposure": match post.exposure {
+            Exposure::Auto(a) => serde_json::json!({
+                "auto": { "compensation_ev": a.compensation_ev, "adaptation_speed": a.adaptation_speed },
+            }),
+            Exposure::Fixed(scale) => serde_json::json!({ "fixed_scale": scale }),
+        },
         "bloom": post.bloom.map(|b| serde_json::json!({ "intensity": b.intensity })),
         "depth_of_field": post.depth_of_field.map(|d| serde_json::json!({
             "focus_distance": d.focus_distance,

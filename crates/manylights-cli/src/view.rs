@@ -19,11 +19,12 @@ use manylights::{
     files::{self, OutputFormat, OutputPlan},
     gpu::{context::instance, GpuContext, PassTimings},
     image_io,
+    plan::MethodChoice,
     renderer::Renderer,
     scene::{Camera, Projection, Scene},
     settings::{
-        AutoExposure, Bloom, DebugView, DecalMethod, DepthOfField, LightMethod, MotionBlur, Named, ParticleMethod, PipelineKind,
-        RenderConfig, SunShadows,
+        Bloom, DebugView, DecalMethod, DepthOfField, Exposure, LightMethod, MotionBlur, Named, ParticleMethod, PipelineKind, RenderConfig,
+        SettingsOverlay, SunShadows,
     },
 };
 use winit::{
@@ -77,6 +78,8 @@ struct Switches {
     depth_of_field: bool,
     motion_blur: bool,
     auto_exposure: bool,
+    /// The exposure with auto exposure off: the scene file's, or 1.
+    fixed_exposure: f32,
     vignette: f32,
 }
 
@@ -84,8 +87,8 @@ impl Default for Switches {
     fn default() -> Self {
         Self {
             pipeline: PipelineKind::Visbuffer,
-            light_method: LightMethod::Bvh,
-            decal_method: DecalMethod::Bvh,
+            light_method: LightMethod::default(),
+            decal_method: DecalMethod::default(),
             particle_method: ParticleMethod::Grid,
             debug_view: DebugView::Off,
             shadows: SunShadows::Off,
@@ -93,13 +96,26 @@ impl Default for Switches {
             bloom: false,
             depth_of_field: false,
             motion_blur: false,
-            auto_exposure: false,
+            auto_exposure: true,
+            fixed_exposure: 1.0,
             vignette: 0.0,
         }
     }
 }
 
 impl Switches {
+    /// The switches a scene file's methods and exposure start with.
+    fn for_scene(overlay: &SettingsOverlay) -> Self {
+        let defaults = Self::default();
+        Self {
+            light_method: overlay.methods.lights.unwrap_or(defaults.light_method),
+            decal_method: overlay.methods.decals.unwrap_or(defaults.decal_method),
+            auto_exposure: overlay.exposure.is_none(),
+            fixed_exposure: overlay.exposure.unwrap_or(defaults.fixed_exposure),
+            ..defaults
+        }
+    }
+
     fn config(&self, (width, height): (u32, u32)) -> RenderConfig {
         let mut config = RenderConfig {
             width,
@@ -116,7 +132,7 @@ impl Switches {
         config.post.bloom = self.bloom.then(Bloom::default);
         config.post.depth_of_field = self.depth_of_field.then(DepthOfField::default);
         config.post.motion_blur = self.motion_blur.then(MotionBlur::default);
-        config.post.auto_exposure = self.auto_exposure.then(AutoExposure::default);
+        config.post.exposure = if self.auto_exposure { Exposure::default() } else { Exposure::Fixed(self.fixed_exposure) };
         config.post.vignette = self.vignette;
         config
     }
@@ -331,7 +347,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.screenshot {
         outputs.add("--screenshot", path, &OutputFormat::IMAGES)?;
     }
-    let (scene, _) = args.scene.load(None)?;
+    let (scene, overlay) = args.scene.load(None)?;
     outputs.check_inputs(&scene.source_files)?;
     let camera = crate::render::choose_camera(&scene, args.camera)?;
     let counts = Counts { lights: args.scene.lights, decals: args.scene.decals, particles: args.scene.particles };
@@ -344,7 +360,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         counts,
         wanted_counts: counts,
         edited_counts: counts,
-        switches: Switches::default(),
+        switches: Switches::for_scene(&overlay),
         scripted,
         gpu: None,
         keys: Default::default(),
@@ -628,11 +644,17 @@ impl App {
         let egui_ctx = gpu.egui_state.egui_ctx().clone();
         let mut asks = PanelAsks { switches: self.switches, counts: self.wanted_counts, jump: None, screenshot: false };
         let image = gpu.image;
+        let chosen = gpu.renderer.as_ref().map(Renderer::methods_chosen);
         let mut output = egui_ctx.run_ui(raw_input, |ui| {
             egui::Panel::left("controls").exact_size(PANEL_WIDTH).show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
-                    let shown =
-                        PanelShows { scene: &self.scene, timings: &self.timings, history: &self.history, message: self.message.as_deref() };
+                    let shown = PanelShows {
+                        scene: &self.scene,
+                        chosen,
+                        timings: &self.timings,
+                        history: &self.history,
+                        message: self.message.as_deref(),
+                    };
                     panel(ui, &mut asks, &mut self.edited_counts, &shown);
                 });
             });
@@ -713,6 +735,8 @@ struct PanelAsks {
 /// What the panel shows besides its switches.
 struct PanelShows<'a> {
     scene: &'a Scene,
+    /// What `auto` chose, once a renderer is built.
+    chosen: Option<MethodChoice>,
     timings: &'a PassTimings,
     history: &'a VecDeque<f64>,
     message: Option<&'a str>,
@@ -735,6 +759,10 @@ fn panel(ui: &mut egui::Ui, asks: &mut PanelAsks, edited: &mut Counts, shown: &P
     choice(ui, "pipeline", &mut switches.pipeline);
     choice(ui, "lights", &mut switches.light_method);
     choice(ui, "decals", &mut switches.decal_method);
+    if let Some(chosen) = shown.chosen {
+        ui.label(format!("lights: {}", chosen.lights)).on_hover_text("the light method that runs, and why");
+        ui.label(format!("decals: {}", chosen.decals)).on_hover_text("the decal method that runs, and why");
+    }
     choice(ui, "particles", &mut switches.particle_method);
     choice(ui, "debug view", &mut switches.debug_view);
     choice(ui, "sun shadows", &mut switches.shadows);

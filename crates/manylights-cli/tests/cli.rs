@@ -154,11 +154,12 @@ fn scene_file_particle_settings_yield_to_flags() {
     let gltf = assets().join("box/Box.gltf");
     std::fs::write(&scene, format!("gltf = {:?}\n[particles]\ncount = 200\nmethod = 'bvh'\n", gltf.to_str().unwrap())).unwrap();
     let scene = scene.to_str().unwrap();
-    // bvh particles need bvh lights, and the default light method is brute: the scene's choice applied.
-    let err = failure(&["render", "--scene", scene, "--width", "16", "--height", "16"]);
+    // bvh particles need bvh lights: the scene's choice applied, refused with brute lights asked for.
+    let err = failure(&["render", "--scene", scene, "--width", "16", "--height", "16", "--light-method", "brute"]);
     assert!(err.contains("--particle-method bvh") && err.contains("--light-method bvh"), "{err}");
     let out = dir.join("out.png");
-    for extra in [["--light-method", "bvh"], ["--particle-method", "grid"]] {
+    // `auto` (the default) picks bvh for them.
+    for extra in [["--light-method", "auto"], ["--light-method", "bvh"], ["--particle-method", "grid"]] {
         let mut args = vec!["render", "--scene", scene, "--width", "16", "--height", "16", "-o", out.to_str().unwrap()];
         args.extend(extra);
         let run = manylights(&args);

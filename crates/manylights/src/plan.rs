@@ -2,8 +2,138 @@
 //! and the scene's measured statistics before anything is built. Every choice of shader variant,
 //! query walk, leaf size and structure build is made here, in pure functions tested without a GPU.
 
-use crate::settings::{BvhBuild, DebugView, DecalMethod, LightMethod, ParticleMethod, RenderConfig};
+use std::fmt;
+
+use crate::settings::{BvhBuild, DebugView, DecalMethod, LightMethod, Named, ParticleMethod, PipelineKind, RenderConfig};
 use crate::{Error, Result};
+
+/// Up to this many lights or decals, `auto` loops over them all: a handful of volumes costs a brute
+/// loop less than a walk or a list (6 large decals: brute 1.175 ms against bvh 1.189 in the
+/// visibility buffer; 100 small decals: 1.521 against 1.174; BENCHMARKS.md, Table 1).
+pub const BRUTE_FORCE_MAX: usize = 8;
+
+/// From how many lights reach a surface point, on average, `auto` lists lights in clusters rather
+/// than walking their BVH built once, per pipeline (BENCHMARKS.md, "Dense lights").
+pub fn dense_light_overlap(pipeline: PipelineKind) -> f32 {
+    match pipeline {
+        PipelineKind::Visbuffer | PipelineKind::Deferred => 8.0,
+        PipelineKind::Forward => 4.0,
+    }
+}
+
+/// Why `auto` chose a method, or that it was asked for: one line for `info`, `--timings` and the
+/// timings JSON.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Why {
+    /// The caller named the method.
+    Asked,
+    /// The scene has none to find.
+    NoVolumes,
+    /// Few enough for a loop over all of them ([`BRUTE_FORCE_MAX`]).
+    Few(usize),
+    /// Particles are lit as lights in the lights' BVH, which only `bvh` reads.
+    ParticleLights,
+    /// Reflections shade points outside the view, which clustered lists do not cover.
+    Reflections,
+    /// The BVH would be rebuilt on the GPU every frame, and clustered lists, rebuilt every frame
+    /// too, are faster at every count measured (BENCHMARKS.md, "Scaling").
+    RebuiltEveryFrame,
+    /// The mean overlap at surface points, against the pipeline's threshold for lights
+    /// ([`dense_light_overlap`]); decals' BVHs win at every overlap measured.
+    Overlap { count: usize, overlap: f32, threshold: Option<f32> },
+}
+
+impl fmt::Display for Why {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Why::Asked => f.write_str("asked for"),
+            Why::NoVolumes => f.write_str("none in the scene"),
+            Why::Few(n) => write!(f, "{n}, at most {BRUTE_FORCE_MAX}: a loop over all is cheapest"),
+            Why::ParticleLights => f.write_str("particles are lights in the lights' BVH, which only bvh reads"),
+            Why::Reflections => f.write_str("reflections shade points outside the view, where clustered lists do not reach"),
+            Why::RebuiltEveryFrame => f.write_str("rebuilt every frame, where clustered lists are faster than a BVH"),
+            Why::Overlap { count, overlap, threshold: Some(threshold) } if overlap >= threshold => {
+                write!(f, "{count} reaching {overlap:.2} a surface point on average, at least {threshold}: clustered lists are faster")
+            }
+            Why::Overlap { count, overlap, threshold: Some(threshold) } => {
+                write!(f, "{count} reaching {overlap:.2} a surface point on average, below {threshold}: a BVH walk is faster")
+            }
+            Why::Overlap { count, overlap, threshold: None } => {
+                write!(f, "{count} reaching {overlap:.2} a surface point on average: a BVH walk is faster at every overlap")
+            }
+        }
+    }
+}
+
+/// A method and why it runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Chosen<M> {
+    pub method: M,
+    pub why: Why,
+}
+
+impl<M: Named> fmt::Display for Chosen<M> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.why {
+            Why::Asked => write!(f, "{} (asked for)", self.method.name()),
+            why => write!(f, "{} (auto: {why})", self.method.name()),
+        }
+    }
+}
+
+/// The light and decal methods that run: the ones asked for, or `auto`'s choice.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MethodChoice {
+    pub lights: Chosen<LightMethod>,
+    pub decals: Chosen<DecalMethod>,
+}
+
+impl MethodChoice {
+    /// Resolves `auto` for `config` on a scene with `stats` ([`Measurements::for_settings`] measures
+    /// the overlaps it reads).
+    pub fn resolve(config: &RenderConfig, stats: &SceneStatistics) -> Self {
+        let reflections = config.rays.reflection_bounces > 0;
+        let lights = match config.light_method {
+            LightMethod::Auto => {
+                let particle_lights = stats.particles > 0 && config.particle_method == ParticleMethod::Bvh;
+                let threshold = dense_light_overlap(config.pipeline);
+                let (method, why) = match (particle_lights, stats.placed_lights, stats.light_overlap) {
+                    (true, _, _) => (LightMethod::Bvh, Why::ParticleLights),
+                    (false, 0, _) => (LightMethod::Off, Why::NoVolumes),
+                    (false, n, _) if n <= BRUTE_FORCE_MAX => (LightMethod::Brute, Why::Few(n)),
+                    _ if reflections => (LightMethod::Bvh, Why::Reflections),
+                    _ if config.light_bvh_build == BvhBuild::GpuEveryFrame => (LightMethod::Clustered, Why::RebuiltEveryFrame),
+                    (false, count, overlap) => {
+                        let overlap = overlap.unwrap_or(0.0);
+                        let method = if overlap >= threshold { LightMethod::Clustered } else { LightMethod::Bvh };
+                        (method, Why::Overlap { count, overlap, threshold: Some(threshold) })
+                    }
+                };
+                Chosen { method, why }
+            }
+            method => Chosen { method, why: Why::Asked },
+        };
+        let decals = match config.decal_method {
+            DecalMethod::Auto => {
+                let (method, why) = match (stats.placed_decals, stats.decal_overlap) {
+                    (0, _) => (DecalMethod::Off, Why::NoVolumes),
+                    (n, _) if n <= BRUTE_FORCE_MAX => (DecalMethod::Brute, Why::Few(n)),
+                    _ if reflections => (DecalMethod::Bvh, Why::Reflections),
+                    _ if config.decal_bvh_build == BvhBuild::GpuEveryFrame => (DecalMethod::Clustered, Why::RebuiltEveryFrame),
+                    (count, overlap) => (DecalMethod::Bvh, Why::Overlap { count, overlap: overlap.unwrap_or(0.0), threshold: None }),
+                };
+                Chosen { method, why }
+            }
+            method => Chosen { method, why: Why::Asked },
+        };
+        Self { lights, decals }
+    }
+
+    /// `config` with the chosen methods in place of `auto`.
+    pub fn apply(&self, config: &RenderConfig) -> RenderConfig {
+        RenderConfig { light_method: self.lights.method, decal_method: self.decals.method, ..config.clone() }
+    }
+}
 
 /// Where and when a structure's groups get their BVHs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -63,7 +193,8 @@ impl ShadingMethods {
         match self.lights {
             LightMethod::Off => "shading/enumerate/lights_off.wgsl",
             LightMethod::Brute => "shading/enumerate/lights_brute.wgsl",
-            LightMethod::Bvh => "shading/enumerate/lights_bvh.wgsl",
+            // `auto` is resolved before a plan is made (`MethodChoice`).
+            LightMethod::Bvh | LightMethod::Auto => "shading/enumerate/lights_bvh.wgsl",
             LightMethod::Clustered => "shading/enumerate/lights_clustered.wgsl",
         }
     }
@@ -75,7 +206,7 @@ impl ShadingMethods {
             DecalMethod::Bvh if self.decal_cell_lists && self.subgroups => "shading/enumerate/decals_bvh_cells.wgsl",
             DecalMethod::Off => "shading/enumerate/decals_off.wgsl",
             DecalMethod::Brute => "shading/enumerate/decals_brute.wgsl",
-            DecalMethod::Bvh => "shading/enumerate/decals_bvh.wgsl",
+            DecalMethod::Bvh | DecalMethod::Auto => "shading/enumerate/decals_bvh.wgsl",
             DecalMethod::Clustered => "shading/enumerate/decals_clustered.wgsl",
             // Already blended into the G-buffer when shading runs.
             DecalMethod::DeferredDecals => "shading/enumerate/decals_off.wgsl",
@@ -165,6 +296,13 @@ pub struct Capabilities {
 pub struct SceneStatistics {
     /// Particles the scene launches (0 without any).
     pub particles: u32,
+    /// Lights and decals as placed: each group's items once per instance of it.
+    pub placed_lights: usize,
+    pub placed_decals: usize,
+    /// How many lights or decals reach a point of the surfaces, on average, estimated from a sample
+    /// of both (`accel::overlap::sampled_overlap`), where [`Measurements`] asks: `None` where not.
+    pub light_overlap: Option<f32>,
+    pub decal_overlap: Option<f32>,
     /// Instances of non-empty decal groups: the structure's placed groups.
     pub placed_decal_groups: usize,
     /// How many decal boxes of its group hold a decal's centre, on average over a sample of them
@@ -176,15 +314,22 @@ pub struct SceneStatistics {
 /// Which statistics the plan reads for these settings, so that nothing else is measured.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Measurements {
-    /// The decals' centre overlap: only `bvh` decals built on the CPU for a device whose queries can
-    /// share leaves out may get wide leaves.
+    /// The decals' centre overlap: only `bvh` decals (asked for, or maybe `auto`'s) built on the CPU
+    /// for a device whose queries can share leaves out may get wide leaves.
     pub decal_centre_overlap: bool,
+    /// The overlaps at surface points, which `auto` reads.
+    pub light_overlap: bool,
+    pub decal_overlap: bool,
 }
 
 impl Measurements {
     pub fn for_settings(config: &RenderConfig, caps: Capabilities) -> Self {
         Self {
-            decal_centre_overlap: config.decal_method == DecalMethod::Bvh && config.decal_bvh_build == BvhBuild::CpuOnce && caps.subgroups,
+            decal_centre_overlap: matches!(config.decal_method, DecalMethod::Bvh | DecalMethod::Auto)
+                && config.decal_bvh_build == BvhBuild::CpuOnce
+                && caps.subgroups,
+            light_overlap: config.light_method == LightMethod::Auto,
+            decal_overlap: config.decal_method == DecalMethod::Auto,
         }
     }
 }
@@ -222,6 +367,8 @@ pub struct FramePlan {
     pub particles: ParticlePlan,
     /// The frame traces rays: the scene's triangles get a ray hierarchy.
     pub traces_rays: bool,
+    /// The light and decal methods that run, and why.
+    pub methods: MethodChoice,
     /// The shading core's variant, with the decals' cell lists as planned
     /// ([`FramePlan::shading_methods`] gives the one for the lists actually built).
     planned_methods: ShadingMethods,
@@ -231,6 +378,8 @@ impl FramePlan {
     /// The plan for `config` on a device with `caps`, for a scene with `stats` (measured as
     /// [`Measurements::for_settings`] asks). Errors name settings that cannot work together.
     pub fn resolve(config: &RenderConfig, caps: Capabilities, stats: &SceneStatistics) -> Result<Self> {
+        let methods = MethodChoice::resolve(config, stats);
+        let config = &methods.apply(config);
         let has_particles = stats.particles > 0;
         let particle_lights = has_particles && config.particle_method == ParticleMethod::Bvh;
         if particle_lights && config.light_method != LightMethod::Bvh {
@@ -285,6 +434,7 @@ impl FramePlan {
             decals,
             particles,
             traces_rays: config.rays.traces_rays(),
+            methods,
             planned_methods: ShadingMethods { dense_decals, decal_cell_lists: decals.cell_lists, ..unlisted },
         })
     }
@@ -340,7 +490,8 @@ mod tests {
         assert!(!Measurements::for_settings(&bvh, Capabilities { subgroups: false }).decal_centre_overlap);
         let gpu_built = RenderConfig { decal_bvh_build: BvhBuild::GpuEveryFrame, ..bvh.clone() };
         assert!(!Measurements::for_settings(&gpu_built, SUBGROUPS).decal_centre_overlap);
-        let stats = |overlap, placed| SceneStatistics { decal_centre_overlap: Some(overlap), placed_decal_groups: placed, particles: 0 };
+        let stats =
+            |overlap, placed| SceneStatistics { decal_centre_overlap: Some(overlap), placed_decal_groups: placed, ..Default::default() };
         let sparse = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 0.5, 1)).unwrap();
         assert!(!sparse.decals.wide_leaves && !sparse.decals.cell_lists && !sparse.shading_methods(true).dense_decals);
         let dense = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP, 1)).unwrap();
@@ -384,5 +535,71 @@ mod tests {
         assert!(methods.reflections && methods.light_shadows && methods.debug_views && methods.subgroups);
         assert_eq!(methods.light_enumeration_module(), "shading/enumerate/lights_bvh.wgsl");
         assert_eq!(methods.debug_views_constant(), ("DEBUG_VIEWS", 1.0));
+    }
+
+    fn scene(lights: usize, light_overlap: f32, decals: usize, decal_overlap: f32) -> SceneStatistics {
+        SceneStatistics {
+            placed_lights: lights,
+            placed_decals: decals,
+            light_overlap: Some(light_overlap),
+            decal_overlap: Some(decal_overlap),
+            ..Default::default()
+        }
+    }
+
+    fn auto() -> RenderConfig {
+        RenderConfig::default()
+    }
+
+    #[test]
+    fn auto_is_the_default_and_picks_by_count_and_overlap() {
+        assert_eq!((auto().light_method, auto().decal_method), (LightMethod::Auto, DecalMethod::Auto));
+        let chosen = |config: &RenderConfig, stats| {
+            let c = MethodChoice::resolve(config, &stats);
+            (c.lights.method, c.decals.method)
+        };
+        assert_eq!(chosen(&auto(), scene(0, 0.0, 0, 0.0)), (LightMethod::Off, DecalMethod::Off));
+        assert_eq!(chosen(&auto(), scene(BRUTE_FORCE_MAX, 3.0, 6, 1.0)), (LightMethod::Brute, DecalMethod::Brute));
+        let threshold = dense_light_overlap(PipelineKind::Visbuffer);
+        assert_eq!(chosen(&auto(), scene(28_000, 0.45, 100_000, 22.8)), (LightMethod::Bvh, DecalMethod::Bvh));
+        assert_eq!(chosen(&auto(), scene(28_000, threshold, 100_000, 200.0)), (LightMethod::Clustered, DecalMethod::Bvh));
+        let forward = RenderConfig { pipeline: PipelineKind::Forward, ..auto() };
+        let between = (dense_light_overlap(PipelineKind::Forward) + threshold) * 0.5;
+        assert_eq!(chosen(&forward, scene(28_000, between, 0, 0.0)).0, LightMethod::Clustered);
+        assert_eq!(chosen(&auto(), scene(28_000, between, 0, 0.0)).0, LightMethod::Bvh);
+        // Rebuilt every frame, clustered lists win; reflections need what lies outside the view.
+        let rebuilt = RenderConfig { light_bvh_build: BvhBuild::GpuEveryFrame, decal_bvh_build: BvhBuild::GpuEveryFrame, ..auto() };
+        assert_eq!(chosen(&rebuilt, scene(1000, 0.1, 1000, 0.1)), (LightMethod::Clustered, DecalMethod::Clustered));
+        let mut reflecting = rebuilt.clone();
+        reflecting.rays.reflection_bounces = 1;
+        assert_eq!(chosen(&reflecting, scene(1000, 50.0, 1000, 0.1)), (LightMethod::Bvh, DecalMethod::Bvh));
+        // Particles lit as lights need the lights' BVH, even with no other light.
+        let particles = RenderConfig { particle_method: ParticleMethod::Bvh, ..auto() };
+        let with_particles = SceneStatistics { particles: 1000, ..scene(0, 0.0, 0, 0.0) };
+        assert_eq!(chosen(&particles, with_particles).0, LightMethod::Bvh);
+        // A method asked for is kept, and says so.
+        let asked = MethodChoice::resolve(&config(LightMethod::Brute, DecalMethod::Clustered), &scene(28_000, 0.45, 100, 1.0));
+        assert_eq!((asked.lights.method, asked.lights.why, asked.decals.method), (LightMethod::Brute, Why::Asked, DecalMethod::Clustered));
+        assert_eq!(asked.lights.to_string(), "brute (asked for)");
+    }
+
+    #[test]
+    fn auto_is_resolved_before_anything_is_planned_and_says_why() {
+        let plan = FramePlan::resolve(&auto(), SUBGROUPS, &scene(28_000, 0.45, 3, 1.0)).unwrap();
+        let methods = plan.shading_methods(true);
+        assert_eq!((methods.lights, methods.decals), (LightMethod::Bvh, DecalMethod::Brute));
+        assert_eq!(plan.lights.build, GroupBuild::CpuOnce);
+        let why = plan.methods.lights.to_string();
+        assert!(
+            why.starts_with("bvh (auto: 28000 reaching 0.45")
+                && why.contains(&format!("below {}", dense_light_overlap(PipelineKind::Visbuffer))),
+            "{why}"
+        );
+        assert_eq!(plan.methods.decals.to_string(), format!("brute (auto: 3, at most {BRUTE_FORCE_MAX}: a loop over all is cheapest)"));
+        // Overlaps are measured only for `auto`.
+        let measured = Measurements::for_settings(&auto(), SUBGROUPS);
+        assert!(measured.light_overlap && measured.decal_overlap && measured.decal_centre_overlap);
+        let explicit = Measurements::for_settings(&config(LightMethod::Bvh, DecalMethod::Clustered), SUBGROUPS);
+        assert!(!explicit.light_overlap && !explicit.decal_overlap && !explicit.decal_centre_overlap);
     }
 }

@@ -9,7 +9,7 @@ use crate::{
     particles::{ParticleGrid, ParticleSystem, ParticleVolume},
     passes::{deform::Deform, FrameInputs, Structures},
     pipelines::{FramePipeline, FrameSetup},
-    plan::{Capabilities, FramePlan, Measurements, ParticlePlan, ShadingMethods, StructurePlan},
+    plan::{Capabilities, FramePlan, Measurements, MethodChoice, ParticlePlan, ShadingMethods, StructurePlan},
     post::PostFrame,
     rays::{refit::BlasRefit, RayStructure, RayStructureStats},
     scene::ParticleSettings,
@@ -26,7 +26,10 @@ pub const FRAME_INTERVAL: f32 = 1.0 / 60.0;
 pub struct Renderer {
     pub ctx: GpuContext,
     pub scene: GpuScene,
+    /// The settings the frames run with: as given, with `auto`'s methods resolved.
     pub config: RenderConfig,
+    /// The light and decal methods that run, and why.
+    methods_chosen: MethodChoice,
     pipeline: FramePipeline,
     /// What the shading passes were composed with, decided by the configuration, the device and the
     /// structures built for the scene.
@@ -100,6 +103,8 @@ impl Renderer {
         let caps = Capabilities { subgroups: ctx.features.contains(wgpu::Features::SUBGROUP) };
         let stats = crate::accel::overlap::scene_statistics(scene, Measurements::for_settings(&config, caps))?;
         let plan = FramePlan::resolve(&config, caps, &stats)?;
+        // From here on the methods that run stand in the settings; `methods_chosen` says why.
+        let config = plan.methods.apply(&config);
         let particle_settings = scene.particles.as_ref().filter(|s| s.count > 0);
         let light_particles = particle_settings.filter(|_| matches!(plan.particles, ParticlePlan::Lights(_)));
         check_loop_limit(&ctx, scene, &config, light_particles.map_or(0, |p| p.count as usize))?;
@@ -178,6 +183,7 @@ impl Renderer {
             ctx,
             scene: gpu_scene,
             config,
+            methods_chosen: plan.methods,
             pipeline,
             methods,
             lights,
@@ -198,6 +204,11 @@ impl Renderer {
     /// The methods the shading passes were composed with.
     pub fn shading_methods(&self) -> ShadingMethods {
         self.methods
+    }
+
+    /// The light and decal methods that run, and why (`auto`'s choice, or asked for).
+    pub fn methods_chosen(&self) -> MethodChoice {
+        self.methods_chosen
     }
 
     /// The ray hierarchy's sizes and CPU build times, when the frame traces rays.
@@ -284,7 +295,14 @@ impl Renderer {
     }
 
     fn submit_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<FrameTiming>> {
-        let mut uniforms = FrameUniforms::new(camera, self.config.width, self.config.height, &self.scene.constants, self.config.tonemapper);
+        let mut uniforms = FrameUniforms::new(
+            camera,
+            self.config.width,
+            self.config.height,
+            &self.scene.constants,
+            self.config.post.exposure.fixed_scale(),
+            self.config.tonemapper,
+        );
         uniforms.light_instance_count = self.lights.instance_count();
         uniforms.decal_instance_count = self.decals.instance_count();
         (uniforms.ray_options, uniforms.ray_settings) = crate::gpu::frame::ray_uniforms(&self.config.rays, camera, self.config.height);

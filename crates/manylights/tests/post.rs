@@ -16,7 +16,7 @@ use manylights::{
         animation::{Animation, Channel, Interpolation, Node, Property, Trs},
         Camera, Instance, Material, Scene,
     },
-    settings::{AutoExposure, Bloom, DepthOfField, MotionBlur, PostSettings},
+    settings::{AutoExposure, Bloom, DepthOfField, Exposure, MotionBlur, PostSettings},
     settings::{LightMethod, PipelineKind},
     settings::{RenderConfig, Tonemapper},
 };
@@ -98,7 +98,7 @@ fn uniform_wall(radiance: f32) -> (Scene, Camera) {
 fn vignetting_follows_the_cos4_law_off_the_axis() {
     let (scene, camera) = uniform_wall(0.5);
     for strength in [1.0, 0.5] {
-        let image = render_ldr(&scene, &camera, PostSettings { vignette: strength, ..Default::default() });
+        let image = render_ldr(&scene, &camera, PostSettings { vignette: strength, ..still_post() });
         let tan = (30f32).to_radians().tan();
         let aspect = WIDTH as f32 / HEIGHT as f32;
         for (x, y) in [(128, 72), (0, 0), (255, 143), (40, 100), (200, 20)] {
@@ -128,10 +128,8 @@ fn auto_exposure_log2(l: f32, compensation: f32) -> f32 {
 fn auto_exposure_maps_the_image_to_middle_grey_whatever_its_scale_and_adapts_at_its_rate() {
     // 1 % above powers of two, so the luminance sits inside its bin whatever the rounding.
     let (dim, bright) = (1.01 * 2f32.powi(-4), 1.01 * 2f32.powi(-2));
-    let auto = |compensation_ev| PostSettings {
-        auto_exposure: Some(AutoExposure { compensation_ev, ..Default::default() }),
-        ..Default::default()
-    };
+    let auto =
+        |compensation_ev| PostSettings { exposure: Exposure::Auto(AutoExposure { compensation_ev, ..Default::default() }), ..still_post() };
     let (dim_wall, camera) = uniform_wall(dim);
     let (bright_wall, _) = uniform_wall(bright);
     let dim_image = render_ldr(&dim_wall, &camera, auto(0.0));
@@ -157,7 +155,7 @@ fn auto_exposure_maps_the_image_to_middle_grey_whatever_its_scale_and_adapts_at_
     );
     let behind = Camera::look_at("back", Vec3::new(0.0, 0.0, 4.0), Vec3::new(0.0, 0.0, 8.0), 60f32.to_radians(), 0.1);
     let settings =
-        PostSettings { auto_exposure: Some(AutoExposure { compensation_ev: 0.0, adaptation_speed: speed }), ..Default::default() };
+        PostSettings { exposure: Exposure::Auto(AutoExposure { compensation_ev: 0.0, adaptation_speed: speed }), ..still_post() };
     let mut renderer = renderer(&scene, post_config(settings));
     renderer.render(&ahead).unwrap();
     let first = renderer.read_ldr().unwrap();
@@ -177,8 +175,8 @@ fn bloom_spreads_a_bright_spot_over_its_surroundings_falling_off_with_distance()
     // An 8×8-pixel spot of radiance 1 at the image's centre, on the black sky.
     let half = 4.0 * METRES_PER_PIXEL;
     let (scene, camera) = quads(&[(Vec3::ZERO, (half, half), 1.0)]);
-    let off = render_ldr(&scene, &camera, PostSettings::default());
-    let bloom = |intensity| render_ldr(&scene, &camera, PostSettings { bloom: Some(Bloom { intensity }), ..Default::default() });
+    let off = render_ldr(&scene, &camera, still_post());
+    let bloom = |intensity| render_ldr(&scene, &camera, PostSettings { bloom: Some(Bloom { intensity }), ..still_post() });
     let (full, half_bloom) = (bloom(1.0), bloom(0.5));
     // Without bloom the sky beside the spot is black; with it, lit, less and less farther out, and
     // alike on every side.
@@ -216,10 +214,10 @@ fn depth_of_field_blurs_by_the_circle_of_confusion_and_keeps_what_is_in_focus_ex
     // A vertical bar four pixels wide, 4 m from the camera, on the black sky.
     let bar = |x: f32| (Vec3::new(x, 0.0, 0.0), (2.0 * METRES_PER_PIXEL, 10.0), 1.0);
     let (scene, camera) = quads(&[bar(0.0)]);
-    let sharp = render_ldr(&scene, &camera, PostSettings::default());
+    let sharp = render_ldr(&scene, &camera, still_post());
     let dof = |focus, f_number| PostSettings {
         depth_of_field: Some(DepthOfField { focus_distance: focus, f_number, max_radius: 16.0 }),
-        ..Default::default()
+        ..still_post()
     };
     // Focused on the bar (explicitly, or on what the centre shows): exactly the sharp image.
     assert_eq!(render_ldr(&scene, &camera, dof(Some(4.0), 0.1)).pixels, sharp.pixels);
@@ -265,8 +263,8 @@ fn motion_blur_smears_along_the_cameras_motion_and_leaves_a_still_image_exact() 
     // A 12×12-pixel square at the centre.
     let half = 6.0 * METRES_PER_PIXEL;
     let (scene, camera) = quads(&[(Vec3::ZERO, (half, half), 1.0)]);
-    let blur = PostSettings { motion_blur: Some(MotionBlur { shutter: 1.0, samples: 32, max_length: 32.0 }), ..Default::default() };
-    let still = render_ldr(&scene, &camera, PostSettings::default());
+    let blur = PostSettings { motion_blur: Some(MotionBlur { shutter: 1.0, samples: 32, max_length: 32.0 }), ..still_post() };
+    let still = render_ldr(&scene, &camera, still_post());
     assert_eq!(render_ldr(&scene, &camera, blur).pixels, still.pixels, "nothing moved: nothing may blur");
 
     // The camera slides 10 pixels' worth to the left between two frames: the square moves 10 px to
@@ -278,7 +276,7 @@ fn motion_blur_smears_along_the_cameras_motion_and_leaves_a_still_image_exact() 
     blurred.render(&camera).unwrap();
     blurred.render(&moved).unwrap();
     let image = blurred.read_ldr().unwrap();
-    let sharp = render_ldr(&scene, &moved, PostSettings::default());
+    let sharp = render_ldr(&scene, &moved, still_post());
     let (sharp_columns, blurred_columns) = (lit_columns(&sharp, 72), lit_columns(&image, 72));
     let (first, last) = (sharp_columns[0], *sharp_columns.last().unwrap());
     assert_eq!(last - first + 1, 12, "{sharp_columns:?}");
@@ -324,8 +322,8 @@ fn motion_blur_smears_animated_instances_by_their_own_motion_and_not_still_ones_
         r.render(&camera).unwrap();
         r.read_ldr().unwrap()
     };
-    let sharp = at(PostSettings::default());
-    let blurred = at(PostSettings { motion_blur: Some(MotionBlur { shutter: 1.0, samples: 32, max_length: 32.0 }), ..Default::default() });
+    let sharp = at(still_post());
+    let blurred = at(PostSettings { motion_blur: Some(MotionBlur { shutter: 1.0, samples: 32, max_length: 32.0 }), ..still_post() });
     let y = 72;
     let flying: Vec<u32> = lit_columns(&sharp, y).into_iter().filter(|&x| x < 128).collect();
     let (first, last) = (flying[0], *flying.last().unwrap());
@@ -350,7 +348,7 @@ fn motion_blur_smears_animated_instances_by_their_own_motion_and_not_still_ones_
 fn every_post_effect_runs_in_every_pipeline() {
     let (scene, camera) = quads(&[(Vec3::ZERO, (0.5, 0.5), 1.0), (Vec3::new(0.0, 0.0, -4.0), (20.0, 20.0), 0.1)]);
     let all = PostSettings {
-        auto_exposure: Some(AutoExposure::default()),
+        exposure: Exposure::Auto(AutoExposure::default()),
         bloom: Some(Bloom::default()),
         depth_of_field: Some(DepthOfField { f_number: 0.5, ..Default::default() }),
         motion_blur: Some(MotionBlur::default()),
@@ -368,21 +366,18 @@ fn every_post_effect_runs_in_every_pipeline() {
 fn bad_post_settings_are_refused_with_the_flag_to_fix() {
     let (scene, camera) = uniform_wall(1.0);
     let cases: [(PostSettings, &str); 6] = [
-        (PostSettings { vignette: 2.0, ..Default::default() }, "--vignette"),
-        (PostSettings { bloom: Some(Bloom { intensity: f32::NAN }), ..Default::default() }, "--bloom-intensity"),
+        (PostSettings { vignette: 2.0, ..still_post() }, "--vignette"),
+        (PostSettings { bloom: Some(Bloom { intensity: f32::NAN }), ..still_post() }, "--bloom-intensity"),
         (
-            PostSettings { depth_of_field: Some(DepthOfField { focus_distance: Some(-1.0), ..Default::default() }), ..Default::default() },
+            PostSettings { depth_of_field: Some(DepthOfField { focus_distance: Some(-1.0), ..Default::default() }), ..still_post() },
             "--focus-distance",
         ),
-        (PostSettings { depth_of_field: Some(DepthOfField { f_number: 0.0, ..Default::default() }), ..Default::default() }, "--f-number"),
-        (
-            PostSettings { motion_blur: Some(MotionBlur { samples: 0, ..Default::default() }), ..Default::default() },
-            "--motion-blur-samples",
-        ),
+        (PostSettings { depth_of_field: Some(DepthOfField { f_number: 0.0, ..Default::default() }), ..still_post() }, "--f-number"),
+        (PostSettings { motion_blur: Some(MotionBlur { samples: 0, ..Default::default() }), ..still_post() }, "--motion-blur-samples"),
         (
             PostSettings {
-                auto_exposure: Some(AutoExposure { compensation_ev: f32::INFINITY, ..Default::default() }),
-                ..Default::default()
+                exposure: Exposure::Auto(AutoExposure { compensation_ev: f32::INFINITY, ..Default::default() }),
+                ..still_post()
             },
             "--exposure-compensation",
         ),
@@ -398,7 +393,7 @@ fn bad_post_settings_are_refused_with_the_flag_to_fix() {
     // Depth of field needs a lens: an orthographic camera is refused when the frame is rendered.
     let ortho =
         Camera { projection: manylights::scene::Projection::Orthographic { xmag: 2.0, ymag: 2.0, znear: 0.1, zfar: 10.0 }, ..camera };
-    let mut r = renderer(&scene, post_config(PostSettings { depth_of_field: Some(DepthOfField::default()), ..Default::default() }));
+    let mut r = renderer(&scene, post_config(PostSettings { depth_of_field: Some(DepthOfField::default()), ..still_post() }));
     let error = r.render(&ortho).unwrap_err().to_string();
     assert!(error.contains("perspective"), "{error}");
 }

@@ -6,6 +6,7 @@ use std::time::Instant;
 use manylights::{
     accel::overlap,
     gpu::GpuContext,
+    plan::MethodChoice,
     renderer::{FrameTiming, Renderer},
     scene::{generators, Camera, Scene},
     settings::{DecalMethod, LightMethod, RenderConfig},
@@ -88,6 +89,8 @@ pub(crate) struct Timing {
     pub cpu_frame: Stat,
     /// Wall-clock time per frame while the timed frames were submitted back to back.
     pub wall_ms_per_frame: f64,
+    /// The light and decal methods that ran (`auto`'s choice, or those asked for).
+    pub chosen: MethodChoice,
 }
 
 /// Passes summed into the columns of the tables.
@@ -129,7 +132,7 @@ impl PassGroup {
 }
 
 impl Timing {
-    fn new(frames: &[FrameTiming], wall_ms_per_frame: f64) -> Self {
+    fn new(frames: &[FrameTiming], wall_ms_per_frame: f64, chosen: MethodChoice) -> Self {
         let samples = FrameSamples::new(frames);
         let passes = samples.passes.iter().map(|(name, s)| (*name, Stat::of(s))).collect();
         let groups = PassGroup::ALL
@@ -150,6 +153,7 @@ impl Timing {
             gpu_frame: Stat::of(&samples.gpu_frame),
             cpu_frame: Stat::of(&samples.cpu_frame),
             wall_ms_per_frame,
+            chosen,
         }
     }
 
@@ -187,7 +191,7 @@ fn try_measure(ctx: &GpuContext, scene: &Scene, camera: &Camera, config: RenderC
     let start = Instant::now();
     let frames = renderer.render_frames(camera, plan.frames)?;
     let wall_ms_per_frame = start.elapsed().as_secs_f64() * 1e3 / frames.len().max(1) as f64;
-    Ok(Outcome::Timed(Timing::new(&frames, wall_ms_per_frame)))
+    Ok(Outcome::Timed(Timing::new(&frames, wall_ms_per_frame, renderer.methods_chosen())))
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

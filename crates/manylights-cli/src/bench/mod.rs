@@ -21,10 +21,10 @@ use manylights::{
     scene::{
         self,
         generators::{self, ScatterDecals, ScatterLights},
-        paper_scenes::{PaperScene, SMALL_LIGHT_RANGE},
+        paper_scenes::{PaperScene, PAPER_DECAL_SIZE, SMALL_LIGHT_RANGE},
         Camera, Scene,
     },
-    settings::{BvhBuild, DecalMethod, LightMethod, Named, PipelineKind, RenderConfig},
+    settings::{BvhBuild, DecalMethod, Exposure, LightMethod, Named, PipelineKind, PostSettings, RenderConfig},
 };
 
 use crate::render::choose_camera;
@@ -76,6 +76,11 @@ pub struct BenchArgs {
     /// --quick 16384].
     #[arg(long)]
     sweep_max: Option<u32>,
+    /// Dense-light scenes to run, comma-separated, or `none` [default: all]: the paper's small lights
+    /// and lights sized for overlaps of about 10, 50 and 100, in every pipeline, with bvh built once
+    /// and rebuilt every frame, clustered shading and auto.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    dense: Vec<DenseArg>,
     /// Pipeline of the sweeps.
     #[arg(long, value_enum, default_value_t = PipelineKind::Visbuffer)]
     sweep_pipeline: PipelineKind,
@@ -98,6 +103,45 @@ pub struct BenchArgs {
     out: PathBuf,
 }
 
+/// The dense-light scenes of `--dense`: 28,000 lights of the paper's small range, or of a range found
+/// for a mean overlap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum DenseArg {
+    SmallLights,
+    #[value(name = "overlap-10")]
+    Overlap10,
+    #[value(name = "overlap-50")]
+    Overlap50,
+    #[value(name = "overlap-100")]
+    Overlap100,
+    None,
+}
+
+impl DenseArg {
+    /// The mean overlap aimed at; `None` for the paper's range.
+    fn target_overlap(self) -> Option<f64> {
+        match self {
+            DenseArg::Overlap10 => Some(10.0),
+            DenseArg::Overlap50 => Some(50.0),
+            DenseArg::Overlap100 => Some(100.0),
+            DenseArg::SmallLights | DenseArg::None => None,
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            DenseArg::SmallLights => "small-lights",
+            DenseArg::Overlap10 => "overlap-10",
+            DenseArg::Overlap50 => "overlap-50",
+            DenseArg::Overlap100 => "overlap-100",
+            DenseArg::None => "none",
+        }
+    }
+}
+
+/// Lights of the dense scenes: as many as the paper's small lights.
+const DENSE_LIGHTS: usize = 28_000;
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub(crate) enum SweepArg {
     Lights,
@@ -117,6 +161,7 @@ struct Job {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Suite {
     Table,
+    Dense,
     Sweep(SweepArg),
 }
 
@@ -124,6 +169,7 @@ impl Suite {
     fn name(self) -> &'static str {
         match self {
             Suite::Table => "table",
+            Suite::Dense => "dense",
             Suite::Sweep(SweepArg::Lights) => "sweep-lights",
             Suite::Sweep(_) => "sweep-decals",
         }
@@ -136,6 +182,7 @@ enum SceneRecipe {
     Paper(PaperScene),
     SweepLights(u32),
     SweepDecals(u32),
+    Dense(DenseArg),
 }
 
 impl SceneRecipe {
@@ -144,7 +191,7 @@ impl SceneRecipe {
         match self {
             SceneRecipe::Base => None,
             SceneRecipe::Paper(paper) if paper.has_decals() => Some(measure::Volumes::Decals),
-            SceneRecipe::Paper(_) | SceneRecipe::SweepLights(_) => Some(measure::Volumes::Lights),
+            SceneRecipe::Paper(_) | SceneRecipe::SweepLights(_) | SceneRecipe::Dense(_) => Some(measure::Volumes::Lights),
             SceneRecipe::SweepDecals(_) => Some(measure::Volumes::Decals),
         }
     }
@@ -158,12 +205,41 @@ impl SceneRecipe {
                 let params = ScatterLights { count: count as usize, seed, range: Some(SMALL_LIGHT_RANGE), ..Default::default() };
                 generators::add_scattered_lights(&mut scene, &params)?;
             }
+            SceneRecipe::Dense(dense) => {
+                let range = match dense.target_overlap() {
+                    None => SMALL_LIGHT_RANGE,
+                    Some(target) => {
+                        let range = dense_range(base, seed, target)?;
+                        (range, range)
+                    }
+                };
+                let params = ScatterLights { count: DENSE_LIGHTS, seed, range: Some(range), ..Default::default() };
+                generators::add_scattered_lights(&mut scene, &params)?;
+            }
             SceneRecipe::SweepDecals(count) => {
-                generators::add_scattered_decals(&mut scene, &ScatterDecals { count: count as usize, seed, size: None })?;
+                let size = Some(scene.bounds().diagonal() * PAPER_DECAL_SIZE);
+                generators::add_scattered_decals(&mut scene, &ScatterDecals { count: count as usize, seed, size })?;
             }
         }
         Ok(scene)
     }
+}
+
+/// The range at which [`DENSE_LIGHTS`] lights just above the surfaces of `base` reach `target` of them
+/// a surface point, on average: the overlap grows about as the range squared (the disc a light
+/// reaches of a surface), so a few corrections from a guess converge on it.
+fn dense_range(base: &Scene, seed: u64, target: f64) -> manylights::Result<f32> {
+    let mut range = base.bounds().diagonal() * 0.02;
+    for _ in 0..4 {
+        let mut scene = base.clone();
+        generators::add_scattered_lights(
+            &mut scene,
+            &ScatterLights { count: DENSE_LIGHTS, seed, range: Some((range, range)), ..Default::default() },
+        )?;
+        let overlap = measure::mean_overlap(&scene, measure::Volumes::Lights, seed, 2000)?;
+        range *= (target / overlap.max(1e-3)).sqrt().clamp(0.25, 4.0) as f32;
+    }
+    Ok(range)
 }
 
 /// Everything the report needs besides the measurements.
@@ -193,6 +269,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if args.scenes.len() > 1 && args.scenes.contains(&SceneChoice(None)) {
         bail!("--scenes: `none` runs no scene, so give it alone, not with others");
     }
+    if args.dense.len() > 1 && args.dense.contains(&DenseArg::None) {
+        bail!("--dense: `none` runs no dense scene, so give it alone, not with others");
+    }
     if args.sweeps.len() > 1 && args.sweeps.contains(&SweepArg::None) {
         bail!("--sweeps: `none` runs no sweep, so give it alone, not with others");
     }
@@ -208,7 +287,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     let jobs = plan_jobs(args, sweep_max);
     if jobs.is_empty() {
-        bail!("nothing to run: --scenes none with --sweeps none, or no method applies to the scenes asked for");
+        bail!("nothing to run: --scenes none with --dense none and --sweeps none, or no method applies to the scenes asked for");
     }
 
     // The folder and its files are checked before the run, which may take a long time.
@@ -293,6 +372,8 @@ fn plan_jobs(args: &BenchArgs, sweep_max: u32) -> Vec<Job> {
         decal_bvh_build: bvh_build,
         max_texture_size: args.texture_size,
         anisotropy: args.anisotropy,
+        // Timings compare methods: a fixed exposure keeps the meter's passes out of them.
+        post: PostSettings { exposure: Exposure::Fixed(1.0), ..PostSettings::default() },
         ..RenderConfig::default()
     };
 
@@ -316,6 +397,26 @@ fn plan_jobs(args: &BenchArgs, sweep_max: u32) -> Vec<Job> {
                 }
                 let config = config(pipeline, light_method, decal_method, BvhBuild::CpuOnce);
                 jobs.push(Job { suite: Suite::Table, scene_name: paper.name().into(), make_scene: SceneRecipe::Paper(paper), config });
+            }
+        }
+    }
+    let dense = if args.dense.is_empty() {
+        vec![DenseArg::SmallLights, DenseArg::Overlap10, DenseArg::Overlap50, DenseArg::Overlap100]
+    } else {
+        dedup(&args.dense)
+    };
+    for scene in dense.into_iter().filter(|&d| d != DenseArg::None) {
+        for &pipeline in &pipelines {
+            let runs = [
+                (LightMethod::Bvh, BvhBuild::CpuOnce),
+                (LightMethod::Bvh, BvhBuild::GpuEveryFrame),
+                (LightMethod::Clustered, BvhBuild::CpuOnce),
+                (LightMethod::Auto, BvhBuild::CpuOnce),
+                (LightMethod::Auto, BvhBuild::GpuEveryFrame),
+            ];
+            for (light_method, build) in runs {
+                let config = config(pipeline, light_method, DecalMethod::Off, build);
+                jobs.push(Job { suite: Suite::Dense, scene_name: scene.name().into(), make_scene: SceneRecipe::Dense(scene), config });
             }
         }
     }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use manylights::files::{OutputFormat, StagedOutputs};
 use manylights::scene::paper_scenes::PaperScene;
-use manylights::settings::PipelineKind;
+use manylights::settings::{BvhBuild, PipelineKind};
 
 use super::measure::{Measurement, Outcome, PassGroup};
 use super::{plot, RunInfo, Suite, SweepArg};
@@ -79,6 +79,8 @@ fn json(info: &RunInfo, results: &[Measurement]) -> serde_json::Value {
             match &r.outcome {
                 Outcome::Timed(t) => {
                     fields.insert("frames".into(), t.frames.into());
+                    fields.insert("light_method_ran".into(), t.chosen.lights.to_string().into());
+                    fields.insert("decal_method_ran".into(), t.chosen.decals.to_string().into());
                     fields.insert("frame".into(), t.gpu_frame.to_json());
                     fields.insert("cpu_frame".into(), t.cpu_frame.to_json());
                     fields.insert("wall_ms_per_frame".into(), t.wall_ms_per_frame.into());
@@ -220,6 +222,10 @@ fn markdown(info: &RunInfo, results: &[Measurement], plots: &[String]) -> String
         table_one(&mut md, &table);
         matrix(&mut md, &table);
     }
+    let dense: Vec<&Measurement> = results.iter().filter(|r| r.suite == Suite::Dense).collect();
+    if !dense.is_empty() {
+        dense_table(&mut md, &dense);
+    }
     for sweep in [SweepArg::Lights, SweepArg::Decals] {
         let rows: Vec<&Measurement> = results.iter().filter(|r| r.suite == Suite::Sweep(sweep)).collect();
         if !rows.is_empty() {
@@ -313,9 +319,9 @@ fn sweep_table(md: &mut String, sweep: SweepArg, rows: &[&Measurement]) {
     let methods = ["bvh", "clustered", "brute"];
     let _ = writeln!(
         md,
-        "| {what} | overlap | {} |\n| ---: | ---: |{}",
+        "| {what} | overlap | {} | bvh ÷ clustered |\n| ---: | ---: |{}",
         methods.map(|m| format!("{m} build | {m} shade | {m} frame")).join(" | "),
-        " ---: |".repeat(methods.len() * 3)
+        " ---: |".repeat(methods.len() * 3 + 1)
     );
     let mut counts: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     counts.dedup();
@@ -328,7 +334,84 @@ fn sweep_table(md: &mut String, sweep: SweepArg, rows: &[&Measurement]) {
             }
             found => format!("— | — | {}", frame_cell(found.map(|r| **r))),
         });
-        let _ = writeln!(md, "| {count} | {overlap} | {} |", cells.join(" | "));
+        let frame = |method: &str| at.iter().find(|r| r.method() == method).and_then(|r| frame_ms(r));
+        let ratio = ratio_cell(frame("bvh"), frame("clustered"));
+        let _ = writeln!(md, "| {count} | {overlap} | {} | {ratio} |", cells.join(" | "));
     }
     md.push('\n');
+}
+
+fn frame_ms(r: &Measurement) -> Option<f64> {
+    match &r.outcome {
+        Outcome::Timed(t) => Some(t.gpu_frame.median),
+        _ => None,
+    }
+}
+
+/// `a ÷ b` to two places, bold where `a` is faster; — without both.
+fn ratio_cell(a: Option<f64>, b: Option<f64>) -> String {
+    match (a, b) {
+        (Some(a), Some(b)) if b > 0.0 => {
+            let ratio = a / b;
+            if ratio < 1.0 {
+                format!("**{ratio:.2}**")
+            } else {
+                format!("{ratio:.2}")
+            }
+        }
+        _ => "—".into(),
+    }
+}
+
+/// Dense lights: per scene and pipeline, bvh built once and rebuilt every frame against clustered
+/// shading, and what `auto` chose in each case, against the fastest of the explicit methods.
+fn dense_table(md: &mut String, rows: &[&Measurement]) {
+    let _ = writeln!(md, "## Dense lights: bvh against clustered shading, and auto\n");
+    let _ = writeln!(
+        md,
+        "| scene | overlap | pipeline | bvh once | bvh every frame | clustered | bvh ÷ clustered (once) | bvh ÷ clustered (every frame) | auto once | auto every frame | auto ÷ best |\n\
+         | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | --- | --- | ---: |"
+    );
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        for pipeline in PipelineKind::ALL {
+            let at: Vec<&&Measurement> = rows.iter().filter(|r| r.scene == scene && r.config.pipeline == pipeline).collect();
+            if at.is_empty() {
+                continue;
+            }
+            let find = |method: &str, build: BvhBuild| {
+                at.iter().copied().copied().find(|r| r.method() == method && (method == "clustered" || r.config.light_bvh_build == build))
+            };
+            let ms = |m: Option<&Measurement>| m.and_then(frame_ms);
+            let (bvh_once, bvh_every, clustered) =
+                (find("bvh", BvhBuild::CpuOnce), find("bvh", BvhBuild::GpuEveryFrame), find("clustered", BvhBuild::CpuOnce));
+            let (auto_once, auto_every) = (find("auto", BvhBuild::CpuOnce), find("auto", BvhBuild::GpuEveryFrame));
+            let auto_cell = |r: Option<&Measurement>| match r.map(|r| &r.outcome) {
+                Some(Outcome::Timed(t)) => format!("{:.3} ({})", t.gpu_frame.median, t.chosen.lights.method.name()),
+                _ => frame_cell(r),
+            };
+            // auto against the fastest explicit method for the same build, the worse of the two builds.
+            let best = |bvh: Option<f64>| [bvh, ms(clustered)].into_iter().flatten().reduce(f64::min);
+            let worst_ratio = [(ms(auto_once), best(ms(bvh_once))), (ms(auto_every), best(ms(bvh_every)))]
+                .into_iter()
+                .filter_map(|(auto, best)| Some(auto? / best?))
+                .reduce(f64::max);
+            let overlap = at.first().and_then(|r| r.overlap).map_or("—".into(), |o| format!("{o:.2}"));
+            let _ = writeln!(
+                md,
+                "| {scene} | {overlap} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                pipeline.name(),
+                frame_cell(bvh_once),
+                frame_cell(bvh_every),
+                frame_cell(clustered),
+                ratio_cell(ms(bvh_once), ms(clustered)),
+                ratio_cell(ms(bvh_every), ms(clustered)),
+                auto_cell(auto_once),
+                auto_cell(auto_every),
+                worst_ratio.map_or("—".into(), |r| format!("{r:.3}")),
+            );
+        }
+    }
+    md.push_str("\nonce: the BVH built on the CPU at load; every frame: rebuilt on the GPU (an LBVH) each frame, its build in the frame time; clustered lists are built every frame in both. auto ÷ best: auto's frame against the faster of bvh and clustered for the same build, the worse of the two builds.\n\n");
 }

@@ -49,13 +49,13 @@ pub struct FrameUniforms {
 pub struct SceneConstants {
     pub sun: Option<crate::scene::Sun>,
     pub ambient: glam::Vec3,
-    pub exposure: f32,
     /// Bounds of the geometry: the clustered grid's depth slices end at its far side.
     pub bounds: Aabb,
 }
 
 impl FrameUniforms {
-    pub fn new(camera: &Camera, width: u32, height: u32, scene: &SceneConstants, tonemapper: Tonemapper) -> Self {
+    /// `exposure` is the fixed scale before tonemapping (1 under auto exposure, whose meter scales).
+    pub fn new(camera: &Camera, width: u32, height: u32, scene: &SceneConstants, exposure: f32, tonemapper: Tonemapper) -> Self {
         let clip_from_view = camera.clip_from_view(width as f32 / height as f32);
         let clip_from_world = clip_from_view * camera.world_from_view.inverse();
         // Invert in f64: reverse-Z projections lose visible precision when inverted in f32.
@@ -73,7 +73,7 @@ impl FrameUniforms {
             sun_radiance: sun_radiance.to_array(),
             ambient: scene.ambient.extend(0.0).to_array(),
             light_instance_count: 0,
-            exposure: scene.exposure,
+            exposure,
             tonemapper: tonemapper as u32,
             decal_instance_count: 0,
             cluster_grid: ClusterGrid::for_resolution(width, height).uniform(),

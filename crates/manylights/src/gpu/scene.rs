@@ -301,7 +301,7 @@ impl GpuScene {
             frame_uniforms,
             draw_commands,
             transparent_draw_commands,
-            constants: SceneConstants { sun: scene.sun, ambient: scene.ambient, exposure: scene.exposure, bounds: scene.bounds() },
+            constants: SceneConstants { sun: scene.sun, ambient: scene.ambient, bounds: scene.bounds() },
             triangle_count: scene.drawn_triangle_count() as u64,
             decal_material_base: scene.materials.len() as u32,
             index_buffer,

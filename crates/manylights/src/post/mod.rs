@@ -85,7 +85,7 @@ impl PostUniforms {
         let relative_to_world = glam::DMat4::from_translation(frame.camera.position().as_dvec3());
         let previous_clip_from_relative = (previous_clip_from_world * relative_to_world).as_mat4();
 
-        let (key, rate) = match settings.auto_exposure {
+        let (key, rate) = match settings.exposure.auto() {
             Some(auto) => {
                 let rate = frame.interval.map_or(1.0, |dt| 1.0 - (-dt * auto.adaptation_speed).exp());
                 (0.18 * 2f32.powf(auto.compensation_ev), rate)
@@ -267,7 +267,8 @@ impl PostChain {
             None => None,
         };
         let exposure = settings
-            .auto_exposure
+            .exposure
+            .auto()
             .map(|_| exposure::AutoExposurePass::new(ctx, scene, &uniforms, &current, &exposure_state))
             .transpose()?;
         let bloom = settings.bloom.map(|_| bloom::BloomPass::new(ctx, scene, &uniforms, &current, size)).transpose()?;

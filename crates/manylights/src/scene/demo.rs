@@ -53,7 +53,6 @@ pub fn demo_scene() -> Scene {
         cameras: vec![Camera::look_at("demo", Vec3::new(4.6, 3.1, 7.2), Vec3::new(-0.6, 0.9, -1.4), 52f32.to_radians(), 0.05)],
         sun: Some(Sun { direction: Vec3::new(-0.45, -0.35, -0.82).normalize(), color: Vec3::new(1.0, 0.82, 0.62), illuminance: 2.5 }),
         ambient: Vec3::new(0.025, 0.03, 0.04),
-        exposure: 1.0,
         ..Scene::default()
     }
 }

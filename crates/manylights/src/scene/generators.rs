@@ -22,7 +22,9 @@ pub struct ScatterLights {
     pub seed: u64,
     /// Distance above the surface, along its normal. `None`: a tenth of the mean range.
     pub offset: Option<f32>,
-    /// Light range, uniform in [min, max]. `None`: around 4 % of the scene's bounding-box diagonal.
+    /// Light range, uniform in [min, max]. `None`: [0.5, 1.5] × a typical range, 4 % of the scene's
+    /// bounding-box diagonal, or less where many lights would crowd: at most the range at which about
+    /// [`DEFAULT_LIGHT_OVERLAP`] lights reach each surface point ([`typical_light_range`]).
     pub range: Option<(f32, f32)>,
     /// Intensity in candela, uniform in [min, max]. `None`: (range / 2)² for each light, so that the
     /// illuminance at half its range is about 1.
@@ -33,6 +35,19 @@ impl Default for ScatterLights {
     fn default() -> Self {
         Self { count: 256, seed: 1, offset: None, range: None, intensity: None }
     }
+}
+
+/// How many scattered lights of the default range reach a surface point, on average, at most: a few
+/// overlapping pools of light, whatever the count and the scene's size.
+pub const DEFAULT_LIGHT_OVERLAP: f32 = 2.0;
+
+/// The middle of the default range of `count` lights scattered over `area` m² of surfaces in bounds
+/// of diagonal `diagonal`: 4 % of the diagonal, or less where that many would crowd. A light just above
+/// a surface reaches a disc of about π r² of it, and ranges uniform in [0.5, 1.5] × r have a mean
+/// square of 13/12 r², so `count` of them reach N·π·13/12·r² / area lights a point.
+pub fn typical_light_range(diagonal: f32, area: f32, count: usize) -> f32 {
+    let crowded = (DEFAULT_LIGHT_OVERLAP * area / (count.max(1) as f32 * std::f32::consts::PI * 13.0 / 12.0)).sqrt();
+    (diagonal * 0.04).min(crowded).max(1e-3)
 }
 
 /// Generates `params.count` point lights over the surfaces of `scene`'s instances. Deterministic: the
@@ -50,7 +65,7 @@ pub fn scatter_lights(scene: &Scene, params: &ScatterLights) -> Result<Vec<Light
         return Err(Error::InvalidConfig(format!("cannot scatter {} lights: the scene has no triangles with any area", params.count)));
     }
     let range = params.range.unwrap_or_else(|| {
-        let typical = (scene.bounds().diagonal() * 0.04).max(1e-3);
+        let typical = typical_light_range(scene.bounds().diagonal(), area as f32, params.count);
         (typical * 0.5, typical * 1.5)
     });
     let offset = params.offset.unwrap_or((range.0 + range.1) * 0.05);
@@ -133,7 +148,8 @@ pub struct ScatterDecals {
     pub count: usize,
     pub seed: u64,
     /// Mean edge of the box's square face; each decal's is uniform in [0.75, 1.25] × size and its depth
-    /// half that. `None`: 2.5 % of the scene's bounding-box diagonal.
+    /// half that. `None`: 2.5 % of the scene's bounding-box diagonal, or less where many decals would
+    /// crowd: at most the edge at which about [`DEFAULT_DECAL_OVERLAP`] decals cover each surface point.
     pub size: Option<f32>,
 }
 
@@ -141,6 +157,17 @@ impl Default for ScatterDecals {
     fn default() -> Self {
         Self { count: 256, seed: 1, size: None }
     }
+}
+
+/// How many scattered decals of the default size cover a surface point, on average, at most.
+pub const DEFAULT_DECAL_OVERLAP: f32 = 1.0;
+
+/// The default mean edge of `count` decals scattered over `area` m² of surfaces in bounds of diagonal
+/// `diagonal`: 2.5 % of the diagonal, or less where that many would crowd (a decal covers about its
+/// square face, edges uniform in [0.75, 1.25] × s having a mean square of 49/48 s²).
+pub fn typical_decal_size(diagonal: f32, area: f32, count: usize) -> f32 {
+    let crowded = (DEFAULT_DECAL_OVERLAP * area / (count.max(1) as f32 * 49.0 / 48.0)).sqrt();
+    (diagonal * 0.025).min(crowded)
 }
 
 /// Generates `params.count` decals over the surfaces of `scene`'s instances, each with a material
@@ -162,7 +189,9 @@ pub fn scatter_decals(scene: &Scene, params: &ScatterDecals, materials: Range<us
     if !(area.is_finite() && area > 0.0) {
         return Err(Error::InvalidConfig(format!("cannot scatter {} decals: the scene has no triangles with any area", params.count)));
     }
-    let size = params.size.unwrap_or_else(|| scene.bounds().diagonal() * 0.025);
+    let size = params
+        .size
+        .unwrap_or_else(|| typical_decal_size(scene.bounds().diagonal(), Surfaces::new(scene).total_area() as f32, params.count));
     if !(size.is_finite() && size > 0.0) {
         return Err(Error::InvalidConfig(format!(
             "scattered decals: the scene's bounds give no usable size ({size}); give one explicitly"
@@ -376,14 +405,24 @@ pub struct ScatterParticles {
     pub seed: u64,
     pub emitters: usize,
     /// Light radius (range) in metres, uniform in [min, max] per launch; emitters float the largest
-    /// above their surfaces.
-    pub radius: (f32, f32),
+    /// above their surfaces. `None`: [0.5, 1.5] × 2.7 % of the scene's bounding-box diagonal (about
+    /// [0.5, 1.5] m in a courtyard like Sponza's).
+    pub radius: Option<(f32, f32)>,
+    /// Candela of a particle's brightest channel. `None`: [`DEFAULT_PARTICLE_INTENSITY`] for a
+    /// radius of 1 m, scaled by the square of the mean radius (so the light they shed does not
+    /// depend on the scene's units), and shared out beyond [`BRIGHT_PARTICLES`] particles (so a
+    /// million light a room as brightly as that many do).
+    pub intensity: Option<f32>,
 }
 
+/// The intensity of a particle of 1 m mean radius, among at most [`BRIGHT_PARTICLES`].
+pub const DEFAULT_PARTICLE_INTENSITY: f32 = 0.2;
+pub const BRIGHT_PARTICLES: u32 = 65_536;
+
 impl ScatterParticles {
-    /// `count` particles from `emitters` emitters, with the default radius.
+    /// `count` particles from `emitters` emitters, with the default radius and intensity.
     pub fn new(count: u32, seed: u64, emitters: usize) -> Self {
-        Self { count, seed, emitters, radius: super::ParticleSettings::default().radius }
+        Self { count, seed, emitters, radius: None, intensity: None }
     }
 }
 
@@ -394,11 +433,16 @@ pub fn add_particles(scene: &mut Scene, params: &ScatterParticles) -> Result<()>
     if params.emitters == 0 || params.emitters > MAX_PARTICLE_EMITTERS {
         return Err(Error::InvalidConfig(format!("particles: {} emitters; give 1 to {MAX_PARTICLE_EMITTERS}", params.emitters)));
     }
-    let (low, high) = params.radius;
+    scene.validate()?;
+    let bounds = scene.bounds();
+    let typical = (bounds.diagonal() * 0.027).max(1e-3);
+    let (low, high) = params.radius.unwrap_or((typical * 0.5, typical * 1.5));
     if !(low.is_finite() && high.is_finite() && low > 0.0 && low <= high) {
         return Err(Error::InvalidConfig(format!("particles: radius [{low}, {high}] must be finite with 0 < min ≤ max")));
     }
-    scene.validate()?;
+    let mean_radius = (low + high) * 0.5;
+    let shared_out = (BRIGHT_PARTICLES as f32 / params.count.max(1) as f32).min(1.0);
+    let intensity = params.intensity.unwrap_or(DEFAULT_PARTICLE_INTENSITY * mean_radius * mean_radius * shared_out);
     let surfaces = Surfaces::new(scene);
     let area = surfaces.total_area();
     if !(area.is_finite() && area > 0.0) {
@@ -410,10 +454,10 @@ pub fn add_particles(scene: &mut Scene, params: &ScatterParticles) -> Result<()>
     let mut settings = super::ParticleSettings {
         count: params.count,
         seed: params.seed as u32 ^ (params.seed >> 32) as u32,
-        radius: params.radius,
+        radius: (low, high),
+        intensity,
         ..Default::default()
     };
-    let bounds = scene.bounds();
     let height = (bounds.max.y - bounds.min.y).max(1e-3);
     let speed = (2.0 * settings.gravity * height / 6.0).sqrt();
     let mut rng = Pcg64::seed_from_u64(params.seed);

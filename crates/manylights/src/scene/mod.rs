@@ -377,8 +377,6 @@ pub struct Scene {
     pub sun: Option<Sun>,
     /// Uniform ambient radiance, a stand-in for indirect light.
     pub ambient: Vec3,
-    /// Linear scale applied to radiance before tonemapping.
-    pub exposure: f32,
     /// Moving particle lights (`particles/`), if any.
     pub particles: Option<ParticleSettings>,
     /// Node animation moving mesh instances (glTF animations), if any.
@@ -403,7 +401,6 @@ impl Default for Scene {
             cameras: Vec::new(),
             sun: None,
             ambient: Vec3::splat(0.03),
-            exposure: 1.0,
             particles: None,
             animation: None,
             deformers: Vec::new(),
@@ -507,9 +504,6 @@ impl Scene {
         }
         if !(self.ambient.is_finite() && self.ambient.min_element() >= 0.0) {
             return err("ambient must be finite and ≥ 0".into());
-        }
-        if !(self.exposure.is_finite() && self.exposure > 0.0) {
-            return err(format!("exposure must be finite and > 0, got {}", self.exposure));
         }
         Ok(())
     }

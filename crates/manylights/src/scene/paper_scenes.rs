@@ -7,6 +7,9 @@ use super::generators::{self, LargeDecals, ScatterDecals, ScatterLights};
 use super::Scene;
 use crate::Result;
 
+/// Mean edge of the paper's small decals, as a fraction of the scene's bounding-box diagonal.
+pub const PAPER_DECAL_SIZE: f32 = 0.025;
+
 /// Range of the paper's small lights, in metres (glTF's unit), uniform between the two.
 pub const SMALL_LIGHT_RANGE: (f32, f32) = (0.1, 0.3);
 
@@ -16,7 +19,7 @@ crate::named_enum! {
         /// Decals over whole walls and floors: the largest flat surfaces, one decal each.
         #[default]
         LargeDecals = "large-decals",
-        /// 100 small decals (the generator's default size: about one metre on Sponza) on surface
+        /// 100 small decals (2.5 % of the scene's diagonal: about one metre on Sponza) on surface
         /// points, facing out along the normal.
         SmallDecals = "small-decals",
         /// 100,000 of the same.
@@ -57,7 +60,11 @@ impl PaperScene {
         let count = self.count();
         match self {
             Self::LargeDecals => generators::add_large_decals(scene, &LargeDecals { count, seed }),
-            Self::SmallDecals | Self::ManyDecals => generators::add_scattered_decals(scene, &ScatterDecals { count, seed, size: None }),
+            Self::SmallDecals | Self::ManyDecals => {
+                // The paper's size, however many: 2.5 % of the diagonal (the default shrinks crowds).
+                let size = Some(scene.bounds().diagonal() * PAPER_DECAL_SIZE);
+                generators::add_scattered_decals(scene, &ScatterDecals { count, seed, size })
+            }
             Self::SmallLights => {
                 let params = ScatterLights { count, seed, range: Some(SMALL_LIGHT_RANGE), ..Default::default() };
                 generators::add_scattered_lights(scene, &params)

@@ -6,7 +6,7 @@
 //!
 //! ```toml
 //! gltf = "../shared/assets/sponza/Sponza.gltf"   # absent: an empty scene
-//! exposure = 1.0                  # linear scale before tonemapping
+//! exposure = 1.0                  # fixed linear scale before tonemapping; absent: exposed automatically
 //! ambient = [0.03, 0.03, 0.03]    # uniform ambient radiance
 //!
 //! [camera]                # becomes camera 0; either `index = N` (move glTF camera N to the front) …
@@ -40,7 +40,8 @@
 //! count = 256             # required
 //! seed = 1                # default 1
 //! offset = 0.2            # distance along the surface normal; default a tenth of the mean range
-//! range = [0.5, 2.0]      # uniform in [min, max]; default about 4 % of the scene's diagonal
+//! range = [0.5, 2.0]      # uniform in [min, max]; default [0.5, 1.5] × 4 % of the scene's diagonal, less
+//!                         # where many would crowd (about 2 lights reaching each surface point)
 //! intensity = [0.5, 3.0]  # uniform in [min, max]; default (range / 2)² per light
 //!
 //! [[decals]]              # explicit decals: a box centred on `position` projecting an image
@@ -62,7 +63,8 @@
 //! [[scatter_decals]]      # decals with built-in materials scattered over the surfaces (generators::ScatterDecals)
 //! count = 256             # required
 //! seed = 1                # default 1
-//! size = 0.5              # mean edge; default 2.5 % of the scene's diagonal
+//! size = 0.5              # mean edge; default 2.5 % of the scene's diagonal, less where many would
+//!                         # crowd (about 1 decal covering each surface point)
 //!
 //! [[large_decals]]        # decals covering the largest flat surfaces, floors and walls (generators::LargeDecals)
 //! count = 6               # required: one per plane, largest first
@@ -72,8 +74,9 @@
 //! count = 262144          # required
 //! seed = 1                # default 1
 //! emitters = 16           # default 16: on seeded upward-facing surface points
-//! radius = [0.5, 1.5]     # light range in metres, uniform per launch; default [0.5, 1.5]
-//! intensity = 0.2         # candela of the brightest channel; default 0.2
+//! radius = [0.5, 1.5]     # light range in metres, uniform per launch; default [0.5, 1.5] × 2.7 % of the scene's diagonal
+//! intensity = 0.2         # candela of the brightest channel; default 0.2 × (mean radius in m)²,
+//!                         # × 65536 / count beyond 65536 particles
 //! lifetime = [2.0, 4.0]   # seconds between launches; default [2, 4]
 //! method = "grid"         # how to render them, unless the command line says: "off", "grid" or "bvh"
 //! voxel_size = 0.5        # the grid's voxel edge in metres, likewise
@@ -81,6 +84,10 @@
 //! samples = 4             # jittered samples per shading point, likewise
 //! cascades = 4            # camera-centred clipmap cascades (0: one grid over the scene), likewise
 //! cascade_resolution = 64 # voxels per axis of each cascade, likewise
+//!
+//! [methods]               # how lights and decals are found, unless the command line says
+//! lights = "auto"         # "auto" (default: the fastest for the scene), "off", "brute", "bvh", "clustered"
+//! decals = "auto"         # the same, or "deferred-decals" (deferred pipeline only)
 //!
 //! [rays]                  # ray-traced effects (settings::RaySettings), unless the command line says
 //! shadows = "soft"        # the sun's: "off", "hard" (one ray per pixel) or "soft"; default "off"
@@ -117,7 +124,7 @@ use super::{
     DEFAULT_LIGHT_CUTOFF,
 };
 use crate::files::{self, guard, InputKind, LoadBudget};
-use crate::settings::{ParticleOverlay, RayOverlay, SettingsOverlay, Spelling};
+use crate::settings::{DecalMethod, LightMethod, MethodOverlay, ParticleOverlay, RayOverlay, SettingsOverlay, Spelling};
 use crate::{Error, Result};
 
 /// Loads a TOML scene file and the glTF it references, with the file's choices of how to render it.
@@ -181,6 +188,7 @@ struct SceneFile {
     #[serde(default)]
     large_decals: Vec<LargeDecalsSpec>,
     particles: Option<ParticlesSpec>,
+    methods: Option<MethodsSpec>,
     rays: Option<RaysSpec>,
     #[serde(default)]
     deform: Vec<DeformSpec>,
@@ -217,6 +225,19 @@ impl DeformSpec {
         }
         scene.deformers.extend(meshes.into_iter().map(|mesh| super::deform::Deformer { mesh, wave }));
         Ok(())
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MethodsSpec {
+    lights: Option<LightMethod>,
+    decals: Option<DecalMethod>,
+}
+
+impl MethodsSpec {
+    fn overlay(&self) -> MethodOverlay {
+        MethodOverlay { lights: self.lights, decals: self.decals }
     }
 }
 
@@ -365,10 +386,10 @@ impl ParticlesSpec {
     /// Adds the particles to `scene`; returns the file's choices of how to render them.
     fn apply(&self, scene: &mut Scene) -> Result<ParticleOverlay, String> {
         let mut params = ScatterParticles::new(self.count, self.seed.unwrap_or(1), self.emitters.unwrap_or(16));
-        params.radius = self.radius.unwrap_or(params.radius);
+        params.radius = self.radius;
+        params.intensity = self.intensity;
         generators::add_particles(scene, &params).map_err(inner_message)?;
         let settings = scene.particles.as_mut().expect("set by add_particles");
-        settings.intensity = self.intensity.unwrap_or(settings.intensity);
         settings.lifetime = self.lifetime.unwrap_or(settings.lifetime);
         let overlay = ParticleOverlay {
             method: self.method.as_deref().map(str::parse).transpose().map_err(|e| format!("method {e}"))?,
@@ -408,7 +429,13 @@ impl SceneFile {
     fn apply(&self, scene: &mut Scene, dir: &Path, budget: &LoadBudget) -> Result<SettingsOverlay, String> {
         let mut overlay = SettingsOverlay::default();
         if let Some(exposure) = self.exposure {
-            scene.exposure = exposure;
+            if !(exposure.is_finite() && exposure > 0.0) {
+                return Err(format!("exposure {exposure} must be a finite scale above 0 (or absent: exposed automatically)"));
+            }
+            overlay.exposure = Some(exposure);
+        }
+        if let Some(methods) = &self.methods {
+            overlay.methods = methods.overlay();
         }
         if let Some(ambient) = self.ambient {
             scene.ambient = Vec3::from(ambient);
@@ -457,7 +484,7 @@ impl SceneFile {
             generators::group_for_animation(scene, groups, animate.seed.unwrap_or(1))
                 .map_err(|e| format!("animate: {}", inner_message(e)))?;
         }
-        // Exposure, ambient and sun are checked here; the glTF part was checked on import.
+        // Ambient and sun are checked here; the glTF part was checked on import.
         scene.validate().map_err(inner_message)?;
         Ok(overlay)
     }
@@ -768,6 +795,10 @@ gltf = "models/Box.gltf"
 exposure = 2.0
 ambient = [0.1, 0.2, 0.3]
 
+[methods]
+lights = "clustered"
+decals = "bvh"
+
 [camera]
 position = [3.0, 2.0, 3.0]
 target = [0.0, 0.0, 0.0]
@@ -802,9 +833,10 @@ intensity = [1.0, 2.0]
 "#,
         )
         .unwrap();
-        let scene = load(&path).unwrap();
+        let (scene, overlay) = super::load(&path).unwrap();
         assert_eq!(scene.drawn_triangle_count(), 12);
-        assert_eq!(scene.exposure, 2.0);
+        assert_eq!(overlay.exposure, Some(2.0));
+        assert_eq!(overlay.methods, MethodOverlay { lights: Some(LightMethod::Clustered), decals: Some(DecalMethod::Bvh) });
         assert_eq!(scene.ambient, Vec3::new(0.1, 0.2, 0.3));
         assert_eq!(scene.cameras.len(), 1);
         assert!(scene.cameras[0].position().abs_diff_eq(Vec3::new(3.0, 2.0, 3.0), 1e-5));
@@ -833,7 +865,7 @@ intensity = [1.0, 2.0]
             assert!(reason.contains("sets nothing to render") && reason.contains("gltf ="), "{reason}");
         }
         let lights_only = load_text("lights_only", "[[lights]]\ntype = 'point'\nposition = [0, 1, 0]\nintensity = 1.0\n").unwrap();
-        assert_eq!((lights_only.lights.len(), lights_only.exposure), (1, 1.0));
+        assert_eq!(lights_only.lights.len(), 1);
     }
 
     #[test]
@@ -912,7 +944,9 @@ intensity = [1.0, 2.0]
     #[test]
     fn invalid_globals_and_scatter_settings_are_scene_file_errors() {
         let light = "[[lights]]\ntype = 'point'\nposition = [0, 1, 0]\nintensity = 1.0\n";
-        assert!(reason(load_text("exposure", &format!("exposure = 0.0\n{light}"))).contains("exposure must be finite and > 0"));
+        assert!(reason(load_text("exposure", &format!("exposure = 0.0\n{light}"))).contains("exposure 0 must be a finite scale above 0"));
+        let method = reason(load_text("method", &format!("[methods]\nlights = \"fast\"\n{light}")));
+        assert!(method.contains("fast") && method.contains("bvh"), "{method}");
         let scatter = reason(load_text("scatter", "[[scatter_lights]]\ncount = 4\n"));
         assert!(scatter.starts_with("scatter_lights 0:") && scatter.contains("no triangles"), "{scatter}");
     }

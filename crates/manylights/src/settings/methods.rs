@@ -18,10 +18,13 @@ named_enum! {
 named_enum! {
     /// How the shading core finds the local lights that reach a point.
     pub enum LightMethod {
+        /// The fastest of the others for the scene, pipeline and settings, chosen from statistics
+        /// measured at load (`plan::MethodChoice`).
+        #[default]
+        Auto = "auto",
         /// No local lights: the baseline the others are measured against.
         Off = "off",
         /// Loop over every light.
-        #[default]
         Brute = "brute",
         /// Point queries in a BVH over the lights' volumes (`accel`).
         Bvh = "bvh",
@@ -33,10 +36,13 @@ named_enum! {
 named_enum! {
     /// How the shading core finds the decals that cover a point.
     pub enum DecalMethod {
+        /// The fastest of the others for the scene, pipeline and settings, chosen from statistics
+        /// measured at load (`plan::MethodChoice`).
+        #[default]
+        Auto = "auto",
         /// No decals: the baseline the others are measured against.
         Off = "off",
         /// Loop over every decal.
-        #[default]
         Brute = "brute",
         /// Point queries in a BVH over the decals' boxes (`accel`).
         Bvh = "bvh",
@@ -78,4 +84,12 @@ named_enum! {
         /// `<label>_blas_build`.
         GpuEveryFrame = "gpu-every-frame",
     }
+}
+
+/// The light and decal methods a scene file's `[methods]` asks for, each taken unless the command
+/// line makes its own choice.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MethodOverlay {
+    pub lights: Option<LightMethod>,
+    pub decals: Option<DecalMethod>,
 }

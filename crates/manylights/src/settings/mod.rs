@@ -12,11 +12,12 @@ pub mod post;
 pub mod rays;
 
 pub use display::{heat_map, DebugView, Tonemapper};
-pub use methods::{BvhBuild, DecalMethod, LightMethod, ParticleMethod, PipelineKind};
+pub use methods::{BvhBuild, DecalMethod, LightMethod, MethodOverlay, ParticleMethod, PipelineKind};
 pub use named::Named;
 pub use particles::{ParticleFilter, ParticleOverlay, MAX_PARTICLE_CASCADES, MAX_PARTICLE_SAMPLES, MIN_CASCADE_RESOLUTION};
 pub use post::{
-    AutoExposure, Bloom, DepthOfField, MotionBlur, PostSettings, MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH, MAX_MOTION_BLUR_SAMPLES, POST_TILE,
+    AutoExposure, Bloom, DepthOfField, Exposure, MotionBlur, PostSettings, EV100_RANGE, MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH,
+    MAX_MOTION_BLUR_SAMPLES, POST_TILE,
 };
 pub use rays::{RayOverlay, RaySettings, SunShadows, MAX_REFLECTION_BOUNCES, MAX_SHADOW_RAYS};
 
@@ -41,12 +42,15 @@ impl Spelling {
     }
 }
 
-/// What a scene file asks of the renderer besides its scene: its `[rays]` and its `[particles]`
-/// rendering keys, each taken unless the command line makes its own choice.
+/// What a scene file asks of the renderer besides its scene: its `[methods]`, `[rays]` and
+/// `[particles]` rendering keys and its fixed `exposure` (a linear scale), each taken unless the
+/// command line makes its own choice.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SettingsOverlay {
+    pub methods: MethodOverlay,
     pub rays: RayOverlay,
     pub particles: ParticleOverlay,
+    pub exposure: Option<f32>,
 }
 
 /// The device limits the settings are checked against (`GpuContext::device_limits`).
@@ -102,9 +106,9 @@ impl Default for RenderConfig {
             width: 1280,
             height: 720,
             pipeline: PipelineKind::Visbuffer,
-            light_method: LightMethod::Brute,
+            light_method: LightMethod::Auto,
             light_bvh_build: BvhBuild::CpuOnce,
-            decal_method: DecalMethod::Brute,
+            decal_method: DecalMethod::Auto,
             decal_bvh_build: BvhBuild::CpuOnce,
             particle_method: ParticleMethod::Grid,
             particle_voxel_size: 1.0,

@@ -28,6 +28,60 @@ impl Default for AutoExposure {
     }
 }
 
+/// How radiance is scaled before tonemapping.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Exposure {
+    /// Measured from every frame's luminance histogram; a first frame takes it at once, so a still
+    /// render is exposed from its own image.
+    Auto(AutoExposure),
+    /// A fixed linear scale ([`Exposure::from_ev100`] gives a camera's).
+    Fixed(f32),
+}
+
+impl Default for Exposure {
+    fn default() -> Self {
+        Exposure::Auto(AutoExposure::default())
+    }
+}
+
+/// The range `--exposure` accepts, in EV100: from a dark night to far past direct sunlight.
+pub const EV100_RANGE: (f32, f32) = (-20.0, 30.0);
+
+impl Exposure {
+    /// The scale of a camera set to `ev100`: 1 / (1.2 · 2^EV100), the saturation-based sensitivity
+    /// of ISO 12232 with the lens's 78 % transmission (Lagarde & de Rousiers, "Moving Frostbite to
+    /// PBR", 2014), so 0 EV100 maps a luminance of 1.2 to white.
+    pub fn from_ev100(ev100: f32) -> Self {
+        Exposure::Fixed(1.0 / (1.2 * ev100.exp2()))
+    }
+
+    /// A caller's choice over a scene file's: a fixed EV100 (`--exposure`) first, then auto exposure
+    /// asked for by name (`--auto-exposure`), then the scene file's fixed scale; auto otherwise.
+    pub fn chosen(fixed_ev100: Option<f32>, auto_asked: bool, scene_scale: Option<f32>, auto: AutoExposure) -> Self {
+        match (fixed_ev100, auto_asked, scene_scale) {
+            (Some(ev100), _, _) => Exposure::from_ev100(ev100),
+            (None, false, Some(scale)) => Exposure::Fixed(scale),
+            _ => Exposure::Auto(auto),
+        }
+    }
+
+    /// The auto exposure's settings, when metered.
+    pub fn auto(self) -> Option<AutoExposure> {
+        match self {
+            Exposure::Auto(auto) => Some(auto),
+            Exposure::Fixed(_) => None,
+        }
+    }
+
+    /// The fixed scale; 1 when metered (the meter's result then scales the image).
+    pub fn fixed_scale(self) -> f32 {
+        match self {
+            Exposure::Auto(_) => 1.0,
+            Exposure::Fixed(scale) => scale,
+        }
+    }
+}
+
 /// Bloom (`bloom.wgsl`): the blurred image's share of the result.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bloom {
@@ -79,7 +133,7 @@ impl Default for MotionBlur {
 /// picks its curve, `None` clamps).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PostSettings {
-    pub auto_exposure: Option<AutoExposure>,
+    pub exposure: Exposure,
     pub bloom: Option<Bloom>,
     pub depth_of_field: Option<DepthOfField>,
     pub motion_blur: Option<MotionBlur>,
@@ -95,7 +149,15 @@ impl PostSettings {
         if !in_range(self.vignette, 0.0, 1.0) {
             return invalid(format!("vignette strength {} must be between 0 (none) and 1 (the cos⁴ law) (--vignette)", self.vignette));
         }
-        if let Some(auto) = self.auto_exposure {
+        if let Exposure::Fixed(scale) = self.exposure {
+            if !(scale.is_finite() && scale > 0.0) {
+                return invalid(format!(
+                    "exposure scale {scale} must be finite and above 0 (--exposure takes EV100 from {} to {})",
+                    EV100_RANGE.0, EV100_RANGE.1
+                ));
+            }
+        }
+        if let Exposure::Auto(auto) = self.exposure {
             if !in_range(auto.compensation_ev, -16.0, 16.0) {
                 return invalid(format!(
                     "exposure compensation {} EV must be between -16 and 16 (--exposure-compensation)",

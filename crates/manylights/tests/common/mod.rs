@@ -10,9 +10,9 @@ use manylights::{
     scene::{Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Vertex},
     settings::BvhBuild,
     settings::ParticleFilter,
-    settings::PostSettings,
     settings::RaySettings,
     settings::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
+    settings::{Exposure, PostSettings},
     settings::{RenderConfig, Tonemapper},
 };
 
@@ -39,10 +39,16 @@ pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfi
         max_texture_size: 256,
         anisotropy: 1,
         rays: RaySettings::default(),
-        post: PostSettings::default(),
+        post: still_post(),
         debug_view: Default::default(),
         debug_slice_height: None,
     }
+}
+
+/// Post settings with every effect off and the exposure fixed at 1, so images compare across
+/// methods and with golden images (auto exposure, the default, is tested in `post.rs`).
+pub fn still_post() -> PostSettings {
+    PostSettings { exposure: Exposure::Fixed(1.0), ..PostSettings::default() }
 }
 
 pub fn renderer(scene: &Scene, config: RenderConfig) -> Renderer {
