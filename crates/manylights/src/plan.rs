@@ -13,11 +13,13 @@ use crate::{Error, Result};
 pub const BRUTE_FORCE_MAX: usize = 8;
 
 /// From how many lights reach a surface point, on average, `auto` lists lights in clusters rather
-/// than walking their BVH built once, per pipeline (BENCHMARKS.md, "Dense lights").
-pub fn dense_light_overlap(pipeline: PipelineKind) -> f32 {
+/// than walking their BVH built once: in the forward pipeline only, where bvh ÷ clustered is 0.98 at
+/// overlap 10 and 1.07 at 50; in compute it is 0.70–0.98 up to overlap 100, so never there
+/// (BENCHMARKS.md, "Dense lights").
+pub fn dense_light_overlap(pipeline: PipelineKind) -> Option<f32> {
     match pipeline {
-        PipelineKind::Visbuffer | PipelineKind::Deferred => 8.0,
-        PipelineKind::Forward => 4.0,
+        PipelineKind::Visbuffer | PipelineKind::Deferred => None,
+        PipelineKind::Forward => Some(20.0),
     }
 }
 
@@ -39,7 +41,7 @@ pub enum Why {
     /// too, are faster at every count measured (BENCHMARKS.md, "Scaling").
     RebuiltEveryFrame,
     /// The mean overlap at surface points, against the pipeline's threshold for lights
-    /// ([`dense_light_overlap`]); decals' BVHs win at every overlap measured.
+    /// ([`dense_light_overlap`]; none: a BVH built once wins at every overlap measured, as for decals).
     Overlap { count: usize, overlap: f32, threshold: Option<f32> },
 }
 
@@ -59,7 +61,7 @@ impl fmt::Display for Why {
                 write!(f, "{count} reaching {overlap:.2} a surface point on average, below {threshold}: a BVH walk is faster")
             }
             Why::Overlap { count, overlap, threshold: None } => {
-                write!(f, "{count} reaching {overlap:.2} a surface point on average: a BVH walk is faster at every overlap")
+                write!(f, "{count} reaching {overlap:.2} a surface point on average: a BVH built once is faster at every overlap measured")
             }
         }
     }
@@ -105,8 +107,9 @@ impl MethodChoice {
                     _ if config.light_bvh_build == BvhBuild::GpuEveryFrame => (LightMethod::Clustered, Why::RebuiltEveryFrame),
                     (false, count, overlap) => {
                         let overlap = overlap.unwrap_or(0.0);
-                        let method = if overlap >= threshold { LightMethod::Clustered } else { LightMethod::Bvh };
-                        (method, Why::Overlap { count, overlap, threshold: Some(threshold) })
+                        let dense = threshold.is_some_and(|threshold| overlap >= threshold);
+                        let method = if dense { LightMethod::Clustered } else { LightMethod::Bvh };
+                        (method, Why::Overlap { count, overlap, threshold })
                     }
                 };
                 Chosen { method, why }
@@ -560,13 +563,13 @@ mod tests {
         };
         assert_eq!(chosen(&auto(), scene(0, 0.0, 0, 0.0)), (LightMethod::Off, DecalMethod::Off));
         assert_eq!(chosen(&auto(), scene(BRUTE_FORCE_MAX, 3.0, 6, 1.0)), (LightMethod::Brute, DecalMethod::Brute));
-        let threshold = dense_light_overlap(PipelineKind::Visbuffer);
         assert_eq!(chosen(&auto(), scene(28_000, 0.45, 100_000, 22.8)), (LightMethod::Bvh, DecalMethod::Bvh));
-        assert_eq!(chosen(&auto(), scene(28_000, threshold, 100_000, 200.0)), (LightMethod::Clustered, DecalMethod::Bvh));
+        // Built once, a BVH wins in compute at any overlap; in fragments, dense lights go to clusters.
+        assert_eq!(chosen(&auto(), scene(28_000, 100.0, 100_000, 200.0)), (LightMethod::Bvh, DecalMethod::Bvh));
         let forward = RenderConfig { pipeline: PipelineKind::Forward, ..auto() };
-        let between = (dense_light_overlap(PipelineKind::Forward) + threshold) * 0.5;
-        assert_eq!(chosen(&forward, scene(28_000, between, 0, 0.0)).0, LightMethod::Clustered);
-        assert_eq!(chosen(&auto(), scene(28_000, between, 0, 0.0)).0, LightMethod::Bvh);
+        let threshold = dense_light_overlap(PipelineKind::Forward).unwrap();
+        assert_eq!(chosen(&forward, scene(28_000, threshold, 0, 0.0)).0, LightMethod::Clustered);
+        assert_eq!(chosen(&forward, scene(28_000, threshold - 1.0, 0, 0.0)).0, LightMethod::Bvh);
         // Rebuilt every frame, clustered lists win; reflections need what lies outside the view.
         let rebuilt = RenderConfig { light_bvh_build: BvhBuild::GpuEveryFrame, decal_bvh_build: BvhBuild::GpuEveryFrame, ..auto() };
         assert_eq!(chosen(&rebuilt, scene(1000, 0.1, 1000, 0.1)), (LightMethod::Clustered, DecalMethod::Clustered));
