@@ -75,7 +75,7 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     let defaults = RenderConfig::default().with_particles(overlay.particles);
     let stats = scene_statistics(&scene, Measurements::for_settings(&defaults, caps))?;
     for pipeline in PipelineKind::ALL {
-        let chosen = MethodChoice::resolve(&RenderConfig { pipeline, ..defaults.clone() }, &stats);
+        let chosen = MethodChoice::resolve(&RenderConfig { pipeline, ..defaults.clone() }, caps, &stats);
         println!("  {} pipeline: lights {}; decals {}", pipeline.name(), chosen.lights, chosen.decals);
     }
     Ok(())

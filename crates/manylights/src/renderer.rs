@@ -135,7 +135,7 @@ impl Renderer {
                     &ctx,
                     &scene.lights,
                     &scene.light_groups,
-                    plan.lights.build,
+                    &plan.lights,
                     settings.count,
                     settings.bounds(),
                     leaves,
@@ -145,8 +145,7 @@ impl Renderer {
                 (lights, Some(particles))
             }
             _ => {
-                let lights =
-                    VolumeStructure::for_lights(&ctx, &scene.lights, &scene.light_groups, plan.lights.build, clusters(&plan.lights))?;
+                let lights = VolumeStructure::for_lights(&ctx, &scene.lights, &scene.light_groups, &plan.lights, clusters(&plan.lights))?;
                 (lights, grid_particles)
             }
         };

@@ -269,6 +269,8 @@ pub struct Volumes<'a> {
     /// The CPU-built groups get wide leaves ([`Bvh::build_wide`]), for queries that share each leaf
     /// out among a subgroup's lanes (`plan::StructurePlan::wide_leaves`).
     pub wide_leaves: bool,
+    /// The leaves of groups rebuilt on the GPU every frame (`plan::StructurePlan::rebuilt_leaves`).
+    pub rebuilt_leaves: DynamicLeaves,
     /// The one placed group gets cell lists where they fit (`plan::StructurePlan::cell_lists`).
     pub cell_lists: bool,
     pub groups: &'a Groups,
@@ -339,7 +341,7 @@ impl VolumeStructure {
         ctx: &GpuContext,
         lights: &[Light],
         groups: &Groups,
-        build: GroupBuild,
+        plan: &StructurePlan,
         clusters: Option<(ClusterGrid, &wgpu::BindGroupLayout)>,
     ) -> Result<Self> {
         let items: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
@@ -353,12 +355,13 @@ impl VolumeStructure {
             kind: VolumeKind::Lights,
             items: bytemuck::cast_slice(&items),
             boxes: &boxes,
-            wide_leaves: false,
+            wide_leaves: plan.wide_leaves,
+            rebuilt_leaves: plan.rebuilt_leaves,
             cell_lists: false,
             groups,
             dynamic: None,
         };
-        Self::new(ctx, &volumes, build, clustering)
+        Self::new(ctx, &volumes, plan.build, clustering)
     }
 
     /// The structure over a scene's lights and `particle_lights` point lights more, which a GPU pass
@@ -368,7 +371,7 @@ impl VolumeStructure {
         ctx: &GpuContext,
         lights: &[Light],
         groups: &Groups,
-        build: GroupBuild,
+        plan: &StructurePlan,
         particle_lights: u32,
         particle_bounds: Aabb,
         leaves: DynamicLeaves,
@@ -380,12 +383,13 @@ impl VolumeStructure {
             kind: VolumeKind::Lights,
             items: bytemuck::cast_slice(&items),
             boxes: &boxes,
-            wide_leaves: false,
+            wide_leaves: plan.wide_leaves,
+            rebuilt_leaves: plan.rebuilt_leaves,
             cell_lists: false,
             groups,
             dynamic: Some(dynamic),
         };
-        Self::new(ctx, &volumes, build, None)
+        Self::new(ctx, &volumes, plan.build, None)
     }
 
     /// Where the GPU writes the dynamic group's volumes, if the structure has one.
@@ -424,6 +428,7 @@ impl VolumeStructure {
             items: bytemuck::cast_slice(&items),
             boxes: &boxes,
             wide_leaves: plan.wide_leaves,
+            rebuilt_leaves: plan.rebuilt_leaves,
             cell_lists: plan.cell_lists,
             groups,
             dynamic: None,
@@ -897,7 +902,8 @@ fn place_groups(
             None if boxes.is_empty() || build == GroupBuild::None => None,
             None => {
                 let target = buffers.target(blas_root, layout.instance_slots + items.start, items.start);
-                let mut builder = GpuLbvh::with_target(ctx, boxes.len() as u32, target)?;
+                let leaves = max_leaf_size(volumes.rebuilt_leaves);
+                let mut builder = GpuLbvh::with_target(ctx, boxes.len() as u32, target)?.with_max_leaf_size(leaves);
                 builder.set_boxes(&ctx.queue, boxes)?;
                 Some(builder)
             }
@@ -907,13 +913,18 @@ fn place_groups(
     Ok(groups)
 }
 
+/// The most boxes a leaf of a GPU build holds, as the plan's `leaves` say.
+fn max_leaf_size(leaves: DynamicLeaves) -> u32 {
+    match leaves {
+        DynamicLeaves::Widest => MAX_LEAF_SIZE,
+        DynamicLeaves::AtMost(size) => size,
+    }
+}
+
 /// The dynamic group, after the others: a GPU build over boxes a pass writes every frame.
 fn dynamic_group(ctx: &GpuContext, layout: &Layout, buffers: &Buffers, dynamic: DynamicGroup) -> Result<Group> {
     let first = layout.count as u32;
-    let leaf_size = match dynamic.leaves {
-        DynamicLeaves::Widest => MAX_LEAF_SIZE,
-        DynamicLeaves::AtMost(size) => size,
-    };
+    let leaf_size = max_leaf_size(dynamic.leaves);
     let target = buffers.target(layout.dynamic_root, layout.instance_slots + first, first);
     let mut builder = GpuLbvh::with_target(ctx, dynamic.count, target)?.with_max_leaf_size(leaf_size);
     builder.set_gpu_boxes(&ctx.queue, dynamic.count, &dynamic.bounds)?;
