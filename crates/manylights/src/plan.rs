@@ -4,13 +4,28 @@
 
 use std::fmt;
 
-use crate::settings::{BvhBuild, DebugView, DecalMethod, LightMethod, Named, ParticleMethod, RenderConfig};
+use crate::settings::{BvhBuild, DebugView, DecalMethod, LightMethod, Named, ParticleMethod, PipelineKind, RenderConfig};
 use crate::{Error, Result};
 
 /// Up to this many lights or decals, `auto` loops over them all: a handful of volumes costs a brute
 /// loop less than a walk or a list (6 large decals: brute 1.175 ms against bvh 1.189 in the
 /// visibility buffer; 100 small decals: 1.521 against 1.174; BENCHMARKS.md, Table 1).
 pub const BRUTE_FORCE_MAX: usize = 8;
+
+/// Whether lights in a BVH rebuilt on the GPU every frame are faster than clustered lists rebuilt
+/// every frame (BENCHMARKS.md, "Dense lights" and "Scaling", H100): where subgroups share dense
+/// lights' leaves out (0.62–0.83× at overlaps 50 and 100, every pipeline), and in compute from
+/// overlap [`REBUILT_BVH_OVERLAP`] for up to [`REBUILT_BVH_MAX_LIGHTS`] lights (28,000 at overlap 10:
+/// 0.91× visibility buffer, 0.97× deferred). Sparser, the LBVH's build costs more than its walk saves
+/// (1.07–1.17× from 0.03 to 2.6); a million lights at overlap 9.8 took 1.07×, their build 0.6 ms;
+/// forward at overlap 10, walked alone, 1.63×.
+pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, lights: usize, overlap: f32) -> bool {
+    let shared_walks = caps.subgroups && overlap >= DENSE_LIGHT_OVERLAP;
+    shared_walks || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP && lights <= REBUILT_BVH_MAX_LIGHTS)
+}
+
+pub const REBUILT_BVH_OVERLAP: f32 = 4.0;
+pub const REBUILT_BVH_MAX_LIGHTS: usize = 262_144;
 
 /// Why `auto` chose a method, or that it was asked for: one line for `info`, `--timings` and the
 /// timings JSON.
@@ -26,9 +41,9 @@ pub enum Why {
     ParticleLights,
     /// Reflections shade points outside the view, which clustered lists do not cover.
     Reflections,
-    /// The BVH would be rebuilt on the GPU every frame over sparse volumes (their overlap below
-    /// [`DENSE_LIGHT_OVERLAP`] for lights, any for decals), where clustered lists, rebuilt every frame
-    /// too, are faster (BENCHMARKS.md, "Dense lights" and "Scaling").
+    /// The BVH would be rebuilt on the GPU every frame where clustered lists, rebuilt every frame too,
+    /// are faster: lights as [`rebuilt_bvh_wins`] says, decals at every count measured (BENCHMARKS.md,
+    /// "Scaling").
     RebuiltEveryFrame,
     /// The mean overlap at surface points, where a BVH is faster: built once at every overlap
     /// measured (up to 100), or rebuilt every frame over lights dense enough that subgroups share
@@ -84,15 +99,14 @@ impl MethodChoice {
         let lights = match config.light_method {
             LightMethod::Auto => {
                 let particle_lights = stats.particles > 0 && config.particle_method == ParticleMethod::Bvh;
-                // Walked as a subgroup with leaves shared out, a BVH rebuilt every frame beats
-                // clustered lists too.
-                let shared_walks = caps.subgroups && stats.light_overlap.is_some_and(|o| o >= DENSE_LIGHT_OVERLAP);
+                let overlap = stats.light_overlap.unwrap_or(0.0);
+                let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, stats.placed_lights, overlap);
                 let (method, why) = match (particle_lights, stats.placed_lights, stats.light_overlap) {
                     (true, _, _) => (LightMethod::Bvh, Why::ParticleLights),
                     (false, 0, _) => (LightMethod::Off, Why::NoVolumes),
                     (false, n, _) if n <= BRUTE_FORCE_MAX => (LightMethod::Brute, Why::Few(n)),
                     _ if reflections => (LightMethod::Bvh, Why::Reflections),
-                    _ if config.light_bvh_build == BvhBuild::GpuEveryFrame && !shared_walks => {
+                    _ if config.light_bvh_build == BvhBuild::GpuEveryFrame && !rebuilt_bvh_wins => {
                         (LightMethod::Clustered, Why::RebuiltEveryFrame)
                     }
                     (false, count, overlap) => (LightMethod::Bvh, Why::Overlap { count, overlap: overlap.unwrap_or(0.0) }),
@@ -485,7 +499,6 @@ fn group_build(walks_bvh: bool, reads_items_in_leaf_order: bool, asked: BvhBuild
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::settings::PipelineKind;
 
     const SUBGROUPS: Capabilities = Capabilities { subgroups: true };
 
@@ -595,7 +608,11 @@ mod tests {
         let rebuilt = RenderConfig { light_bvh_build: BvhBuild::GpuEveryFrame, decal_bvh_build: BvhBuild::GpuEveryFrame, ..auto() };
         assert_eq!(chosen(&rebuilt, scene(1000, 0.1, 1000, 0.1)), (LightMethod::Clustered, DecalMethod::Clustered));
         assert_eq!(chosen(&rebuilt, scene(1000, DENSE_LIGHT_OVERLAP, 1000, 50.0)), (LightMethod::Bvh, DecalMethod::Clustered));
-        let alone = MethodChoice::resolve(&rebuilt, Capabilities { subgroups: false }, &scene(1000, 50.0, 0, 0.0));
+        assert_eq!(chosen(&rebuilt, scene(28_000, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
+        assert_eq!(chosen(&rebuilt, scene(1 << 20, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
+        let forward = RenderConfig { pipeline: PipelineKind::Forward, ..rebuilt.clone() };
+        assert_eq!(chosen(&forward, scene(28_000, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
+        let alone = MethodChoice::resolve(&forward, Capabilities { subgroups: false }, &scene(1000, 50.0, 0, 0.0));
         assert_eq!(alone.lights.method, LightMethod::Clustered);
         let mut reflecting = rebuilt.clone();
         reflecting.rays.reflection_bounces = 1;
