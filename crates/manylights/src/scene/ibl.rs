@@ -32,7 +32,8 @@ const BRDF_SAMPLES: u32 = 256;
 /// c0 + c1 y + c2 z + c3 x + c4 xy + c5 yz + c6 (3z² − 1) + c7 xz + c8 (x² − y²). Keep in sync with
 /// `environment_irradiance` in `shading/environment.wgsl`.
 pub fn irradiance_sh(environment: &Environment) -> [Vec3; 9] {
-    let source = &Pyramid::new(environment).levels[2];
+    // The finest level: coarser ones leave the higher bands of a uniform environment visibly non-zero.
+    let source = &Pyramid::new(environment).levels[0];
     // Cosine lobe convolution per band (Â_l / π) times the basis constant, squared once for the
     // projection and once for the evaluation.
     let band = [1.0, 2.0 / 3.0, 0.25];

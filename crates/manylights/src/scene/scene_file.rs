@@ -740,6 +740,27 @@ mod tests {
         super::load(path).map(|(scene, _)| scene)
     }
 
+    #[test]
+    fn sky_and_environment_keys() {
+        let dir = temp_dir("scene_file_environment");
+        let pixels = vec![image::Rgb([0.25f32, 0.5, 1.0]); 8];
+        image::codecs::hdr::HdrEncoder::new(std::fs::File::create(dir.join("sky.hdr")).unwrap()).encode(&pixels, 4, 2).unwrap();
+        let gltf = format!("gltf = {:?}\n", assets_dir().join("box/Box.glb"));
+        let path = dir.join("scene.toml");
+        std::fs::write(&path, format!("{gltf}sky = \"daylight\"\n")).unwrap();
+        let (scene, overlay) = super::load(&path).unwrap();
+        assert_eq!((overlay.sky, scene.environment), (Some(Sky::Daylight), None), "the scene file's sky is an overlay its caller applies");
+        std::fs::write(&path, format!("{gltf}environment = \"sky.hdr\"\n")).unwrap();
+        let environment = load(&path).unwrap().environment.expect("the environment image");
+        assert_eq!((environment.width, environment.height, environment.radiance[0]), (4, 2, [0.25, 0.5, 1.0]));
+        std::fs::write(&path, format!("{gltf}sky = \"off\"\nenvironment = \"sky.hdr\"\n")).unwrap();
+        let both = reason(load(&path));
+        assert!(both.contains("sky and environment: give one"), "{both}");
+        std::fs::write(&path, format!("{gltf}environment = \"missing.hdr\"\n")).unwrap();
+        let missing = reason(load(&path));
+        assert!(missing.contains("environment: cannot read") && missing.contains("missing.hdr"), "{missing}");
+    }
+
     fn reason(result: Result<Scene>) -> String {
         match result {
             Err(Error::SceneFile { reason, .. }) => reason,
