@@ -1,4 +1,5 @@
-//! Scene options shared by `render` and `info`: which scene, and what the generators add to it.
+//! Scene options shared by `render` and `info`: which scene, what lights it from afar, and what the
+//! generators add to it.
 
 use std::path::PathBuf;
 
@@ -115,9 +116,7 @@ impl SceneArgs {
         }
         Ok((scene, overlay))
     }
-}
 
-impl SceneArgs {
     /// Gives the scene its environment (--environment) and sky (--sky over the scene file's `sky`),
     /// before any light is generated: generated lights do not count as the scene's own.
     fn light_with_sky(&self, scene: &mut Scene, scene_file_sky: Option<Sky>) -> anyhow::Result<()> {
@@ -126,8 +125,10 @@ impl SceneArgs {
         }
         let sky = match &self.environment {
             Some(path) => {
-                scene.environment = Some(Environment::load(path, &LoadBudget::new())?);
-                scene.source_files.push(path.canonicalize().unwrap_or_else(|_| path.clone()));
+                let budget = LoadBudget::new();
+                scene.environment = Some(Environment::load(path, &budget)?);
+                // No output may overwrite it.
+                scene.source_files.extend(budget.files());
                 Sky::Auto
             }
             None => self.sky.or(scene_file_sky).unwrap_or_default(),

@@ -92,7 +92,8 @@ fn an_environment_image_lights_the_scene_and_fills_the_background() {
     std::fs::create_dir_all(&dir).unwrap();
     // Red above the horizon, dim blue below.
     let path = dir.join("red_sky.hdr");
-    let pixels: Vec<image::Rgb<f32>> = (0..128).map(|i| if i < 64 { image::Rgb([2.0, 0.0, 0.0]) } else { image::Rgb([0.0, 0.0, 0.2]) }).collect();
+    let pixels: Vec<image::Rgb<f32>> =
+        (0..128).map(|i| if i < 64 { image::Rgb([2.0, 0.0, 0.0]) } else { image::Rgb([0.0, 0.0, 0.2]) }).collect();
     image::codecs::hdr::HdrEncoder::new(std::fs::File::create(&path).unwrap()).encode(&pixels, 16, 8).unwrap();
     let mut scene = box_on_floor();
     scene.environment = Some(Environment::load(&path, &LoadBudget::new()).unwrap());
@@ -132,7 +133,10 @@ fn traced_reflections_of_the_sky_replace_its_prefiltered_reflection() {
     let mut scene = Scene {
         meshes: vec![quad_mesh()],
         materials: vec![metal],
-        instances: vec![Instance { mesh: 0, world_from_local: Mat4::from_scale_rotation_translation(Vec3::splat(50.0), face_up, Vec3::ZERO) }],
+        instances: vec![Instance {
+            mesh: 0,
+            world_from_local: Mat4::from_scale_rotation_translation(Vec3::splat(50.0), face_up, Vec3::ZERO),
+        }],
         ..Default::default()
     };
     light_with_sky(&mut scene, Sky::Auto);

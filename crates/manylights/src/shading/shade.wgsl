@@ -18,8 +18,8 @@
 const MAX_RADIANCE: f32 = 1e30;
 
 // Outgoing radiance towards the viewer: emission, the environment's light (where traced reflections
-// replace its specular part, `reflections.wgsl` subtracts it), sun, local and particle lights; `sun_visibility` is the fraction of the sun the point sees
-// (`shading/sun_shadow*.wgsl`).
+// replace its specular part, `reflections.wgsl` subtracts it), sun, local and particle lights;
+// `sun_visibility` is the fraction of the sun the point sees (`shading/sun_shadow*.wgsl`).
 fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
     // The environment (sky, image or uniform ambient) stands in for indirect light.
     var radiance = s.emissive + environment_light(s);
