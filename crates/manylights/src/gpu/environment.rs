@@ -11,6 +11,10 @@ use crate::scene::{
     Environment, Scene,
 };
 
+/// The widest background image kept: 4096 × 2048 texels of RGBA16F are 64 MiB; larger environment
+/// images are shrunk to it (the lighting is filtered from a smaller copy anyway).
+const MAX_BACKGROUND_SIZE: u32 = 4096;
+
 /// The environment's textures and sampler, bound in the scene's group 0.
 pub struct GpuEnvironment {
     pub background: wgpu::TextureView,
@@ -32,8 +36,9 @@ pub struct EnvironmentLighting {
 
 impl GpuEnvironment {
     /// Uploads `scene`'s environment, or a uniform one of its ambient radiance; the background
-    /// image is shrunk to `max_size` texels a side if larger.
-    pub fn upload(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene, max_size: u32) -> Self {
+    /// image is shrunk to the device's largest texture, and [`MAX_BACKGROUND_SIZE`], if larger.
+    pub fn upload(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene, max_texture_size: u32) -> Self {
+        let max_size = max_texture_size.min(MAX_BACKGROUND_SIZE);
         let uniform;
         let environment = match &scene.environment {
             Some(environment) => environment,
