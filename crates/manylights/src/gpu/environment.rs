@@ -47,7 +47,8 @@ impl GpuEnvironment {
                 &uniform
             }
         };
-        let lighting = EnvironmentLighting { irradiance: ibl::irradiance_sh(environment), sun_disc: environment.sun_disc };
+        let pyramid = ibl::Pyramid::new(environment);
+        let lighting = EnvironmentLighting { irradiance: ibl::irradiance_sh(&pyramid), sun_disc: environment.sun_disc };
         let shrunk;
         let background = if environment.width > max_size || environment.height > max_size {
             let scale = (max_size as f32 / environment.width as f32).min(max_size as f32 / environment.height as f32);
@@ -82,7 +83,7 @@ impl GpuEnvironment {
         };
         let half_float = wgpu::TextureFormat::Rgba16Float;
         let background_view = texture("environment", background.width, background.height, 1, half_float, &rgba16(&[background]));
-        let specular = ibl::prefiltered_specular(environment);
+        let specular = ibl::prefiltered_specular(&pyramid);
         let specular_levels: Vec<&Environment> = specular.iter().collect();
         let specular_view = texture(
             "prefiltered environment",

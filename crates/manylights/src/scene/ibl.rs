@@ -31,9 +31,9 @@ const BRDF_SAMPLES: u32 = 256;
 /// convolution and basis constant folded in: irradiance / π at unit normal n is
 /// c0 + c1 y + c2 z + c3 x + c4 xy + c5 yz + c6 (3z² − 1) + c7 xz + c8 (x² − y²). Keep in sync with
 /// `environment_irradiance` in `shading/environment.wgsl`.
-pub fn irradiance_sh(environment: &Environment) -> [Vec3; 9] {
+pub fn irradiance_sh(pyramid: &Pyramid) -> [Vec3; 9] {
     // The finest level: coarser ones leave the higher bands of a uniform environment visibly non-zero.
-    let source = &Pyramid::new(environment).levels[0];
+    let source = &pyramid.levels[0];
     // Cosine lobe convolution per band (Â_l / π) times the basis constant, squared once for the
     // projection and once for the evaluation.
     let band = [1.0, 2.0 / 3.0, 0.25];
@@ -64,8 +64,7 @@ fn sh_polynomials(n: Vec3) -> [f32; 9] {
 }
 
 /// The prefiltered specular environment, [`SPECULAR_LEVELS`] images from [`SPECULAR_WIDTH`] wide.
-pub fn prefiltered_specular(environment: &Environment) -> Vec<Environment> {
-    let pyramid = Pyramid::new(environment);
+pub fn prefiltered_specular(pyramid: &Pyramid) -> Vec<Environment> {
     let base = &pyramid.levels[0];
     let base_texel_solid_angle = 4.0 * PI / (base.width * base.height) as f32;
     let samples: Vec<Vec2> = (0..SPECULAR_SAMPLES).map(|i| hammersley(i, SPECULAR_SAMPLES)).collect();
@@ -172,13 +171,13 @@ fn tangent_basis(n: Vec3) -> glam::Mat3 {
 }
 
 /// The environment resampled to [`PYRAMID_WIDTH`] × half, then box-filtered level by level down to
-/// 2 × 1.
-struct Pyramid {
+/// 2 × 1: what the projection and the filters read.
+pub struct Pyramid {
     levels: Vec<Environment>,
 }
 
 impl Pyramid {
-    fn new(environment: &Environment) -> Self {
+    pub fn new(environment: &Environment) -> Self {
         let mut levels = vec![resample(environment, PYRAMID_WIDTH, PYRAMID_WIDTH / 2)];
         while levels[levels.len() - 1].width > 2 {
             let finer = &levels[levels.len() - 1];
@@ -242,12 +241,13 @@ mod tests {
     fn a_uniform_environment_gives_its_radiance_as_irradiance_and_specular() {
         let radiance = Vec3::new(0.2, 0.5, 1.5);
         let uniform = Environment::uniform(radiance);
-        let sh = irradiance_sh(&uniform);
+        let pyramid = Pyramid::new(&uniform);
+        let sh = irradiance_sh(&pyramid);
         for n in [Vec3::X, Vec3::Y, Vec3::NEG_Z, Vec3::new(1.0, -2.0, 0.5).normalize()] {
             let irradiance = evaluate_irradiance(&sh, n);
             assert!(irradiance.abs_diff_eq(radiance, 2e-3 * radiance.max_element()), "{n}: {irradiance}");
         }
-        for level in prefiltered_specular(&uniform) {
+        for level in prefiltered_specular(&pyramid) {
             assert!(level.radiance.iter().all(|&r| Vec3::from(r).abs_diff_eq(radiance, 1e-4)));
         }
     }
@@ -259,7 +259,7 @@ mod tests {
         let mut sky = Environment::uniform(Vec3::ZERO);
         (sky.width, sky.height) = (64, 32);
         sky.radiance = (0..64 * 32).map(|i| if i < 64 * 16 { [1.0; 3] } else { [0.0; 3] }).collect();
-        let sh = irradiance_sh(&sky);
+        let sh = irradiance_sh(&Pyramid::new(&sky));
         for (n, expected) in [(Vec3::Y, 1.0), (Vec3::NEG_Y, 0.0), (Vec3::X, 0.5)] {
             let irradiance = evaluate_irradiance(&sh, n).x;
             assert!((irradiance - expected).abs() < 0.06, "{n}: {irradiance}");
