@@ -1,16 +1,20 @@
-//! Scene options shared by `render` and `info`: which scene, and what the generators add to it.
+//! Scene options shared by `render` and `info`: which scene, what lights it from afar, and what the
+//! generators add to it.
+
+use std::path::PathBuf;
 
 use anyhow::bail;
 use clap::Args;
 use manylights::{
     accel::{check_scene_capacity, VolumeKind},
+    files::LoadBudget,
     gpu::GpuContext,
     scene::{
         self,
         generators::{ScatterDecals, ScatterLights, ScatterParticles, DEFAULT_ANIMATION_GROUPS},
-        Groups, Scene,
+        Environment, Groups, Scene,
     },
-    settings::SettingsOverlay,
+    settings::{SettingsOverlay, Sky},
 };
 
 use crate::progress;
@@ -44,6 +48,15 @@ pub struct SceneArgs {
     /// Number of groups with --animate (fewer when there are fewer lights or decals).
     #[arg(long, default_value_t = DEFAULT_ANIMATION_GROUPS, requires = "animate")]
     pub groups: usize,
+    /// The daylight sky and its sun, lighting the scene through image-based lighting: where the scene
+    /// has no sun and no lights of its own (auto), always (daylight) or never (off: the scene's
+    /// uniform ambient only). [default: the scene file's, or auto]
+    #[arg(long, value_enum)]
+    pub sky: Option<Sky>,
+    /// Light the scene from an equirectangular HDR image (.hdr or .exr; centre column −Z, top row +Y)
+    /// instead of the sky.
+    #[arg(long, value_name = "FILE")]
+    pub environment: Option<PathBuf>,
 }
 
 impl SceneArgs {
@@ -68,6 +81,7 @@ impl SceneArgs {
                 scene::load(std::path::Path::new(&self.scene))?
             }
         };
+        self.light_with_sky(&mut scene, overlay.sky)?;
         if let Some(ctx) = ctx {
             // One instance slot at least: what the structures need beyond the volumes themselves.
             VolumeKind::Lights.check_capacity(ctx, scene.lights.len() + self.lights as usize, 0, 1)?;
@@ -101,6 +115,26 @@ impl SceneArgs {
             check_scene_capacity(ctx, &scene)?;
         }
         Ok((scene, overlay))
+    }
+
+    /// Gives the scene its environment (--environment) and sky (--sky over the scene file's `sky`),
+    /// before any light is generated: generated lights do not count as the scene's own.
+    fn light_with_sky(&self, scene: &mut Scene, scene_file_sky: Option<Sky>) -> anyhow::Result<()> {
+        if let (Some(sky @ (Sky::Daylight | Sky::Off)), Some(path)) = (self.sky, &self.environment) {
+            bail!("--sky {sky} with --environment {}: give one, the sky or the environment image", path.display());
+        }
+        let sky = match &self.environment {
+            Some(path) => {
+                let budget = LoadBudget::new();
+                scene.environment = Some(Environment::load(path, &budget)?);
+                // No output may overwrite it.
+                scene.source_files.extend(budget.files());
+                Sky::Auto
+            }
+            None => self.sky.or(scene_file_sky).unwrap_or_default(),
+        };
+        scene::sky::light_with_sky(scene, sky);
+        Ok(())
     }
 }
 

@@ -768,3 +768,31 @@ fn scene_file_mistakes_are_one_line_with_the_fix() {
     let empty = write("empty.toml", b"");
     assert!(one_error_line(&["info", "--scene", &empty]).contains("sets nothing to render"));
 }
+
+#[test]
+fn sky_and_environment_flags_render_and_bad_ones_are_refused() {
+    let dir = temp_dir("sky_and_environment");
+    let duck = assets().join("duck/Duck.glb");
+    let duck = duck.to_str().unwrap();
+    for sky in ["auto", "daylight", "off"] {
+        let out = render_to(&dir, &["--scene", duck, "--sky", sky]);
+        assert!(out.status.success(), "--sky {sky}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    let hdr = dir.join("sky.hdr");
+    let pixels = vec![image::Rgb([0.5f32, 0.6, 0.9]); 8];
+    image::codecs::hdr::HdrEncoder::new(std::fs::File::create(&hdr).unwrap()).encode(&pixels, 4, 2).unwrap();
+    let out = render_to(&dir, &["--scene", duck, "--environment", hdr.to_str().unwrap()]);
+    assert!(out.status.success(), "--environment: {}", String::from_utf8_lossy(&out.stderr));
+
+    let small = ["render", "--width", "16", "--height", "16", "--scene", duck];
+    let both = failure(&[&small[..], &["--sky", "off", "--environment", hdr.to_str().unwrap()]].concat());
+    assert!(both.starts_with("error: --sky off with --environment") && both.lines().count() == 1, "{both}");
+    let missing = failure(&[&small[..], &["--environment", "no/such/sky.hdr"]].concat());
+    assert!(missing.contains("no/such/sky.hdr") && missing.contains("check that the path exists"), "{missing}");
+    let png = dir.join("flat.png");
+    std::fs::write(&png, b"\x89PNG\r\n\x1a\n not really").unwrap();
+    let wrong = failure(&[&small[..], &["--environment", png.to_str().unwrap()]].concat());
+    assert!(wrong.contains("not a Radiance HDR (.hdr) or OpenEXR (.exr) image"), "{wrong}");
+    let bad_sky = failure(&[&small[..], &["--sky", "night"]].concat());
+    assert!(bad_sky.contains("--sky") && bad_sky.contains("daylight"), "{bad_sky}");
+}

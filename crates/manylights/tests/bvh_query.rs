@@ -8,7 +8,7 @@ use glam::{Affine3A, Quat, Vec3};
 use manylights::{
     accel::{light_contains, volume_query_probe_shader, VolumeStructure, CPU_TOP_LEVEL_MAX_INSTANCES},
     gpu::{readback, shaders, GpuContext},
-    plan::GroupBuild,
+    plan::{rebuilt_leaves, GroupBuild, StructurePlan},
     scene::{GroupInstance, Groups, Light, LightKind, Spin},
 };
 use rand::{Rng, SeedableRng};
@@ -48,7 +48,9 @@ fn gpu_query(
     points: &[Vec3],
 ) -> Vec<[u32; 4]> {
     let device = &ctx.device;
-    let mut structure = VolumeStructure::for_lights(ctx, lights, groups, build, None).unwrap();
+    // Rebuilt groups get the leaves the plan gives the walk, wider where subgroups walk them.
+    let plan = StructurePlan { build, clustered: false, wide_leaves: false, rebuilt_leaves: rebuilt_leaves(subgroups), cell_lists: false };
+    let mut structure = VolumeStructure::for_lights(ctx, lights, groups, &plan, None).unwrap();
     let gpu_points: Vec<[f32; 4]> = points.iter().map(|p| p.extend(1.0).to_array()).collect();
     let storage = |contents: &[u8], usage| device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents, usage });
     let point_buffer = storage(bytemuck::cast_slice(&gpu_points), wgpu::BufferUsages::STORAGE);

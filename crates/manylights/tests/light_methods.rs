@@ -84,6 +84,21 @@ fn demo_with_many_point_and_spot_lights() {
 }
 
 #[test]
+fn dense_lights_walked_a_subgroup_at_a_time_match_brute_force() {
+    // Large ranges in the demo room: dozens reach every point, past `DENSE_LIGHT_OVERLAP`, so bvh
+    // lights get wide leaves that subgroups share out (built once or rebuilt every frame).
+    let mut scene = demo_scene();
+    scene::generators::add_scattered_lights(
+        &mut scene,
+        &ScatterLights { count: 600, seed: 5, range: Some((2.0, 3.0)), ..Default::default() },
+    )
+    .unwrap();
+    let r = renderer(&scene, config(WIDTH, HEIGHT, LightMethod::Bvh));
+    assert_eq!(r.shading_methods().dense_lights, r.shading_methods().subgroups, "the lights should count as dense");
+    assert_methods_agree(&scene, WIDTH, HEIGHT);
+}
+
+#[test]
 fn sponza_with_thousands_of_lights() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets/sponza/Sponza.gltf");
     let mut scene = with_scattered_lights(scene::load_path(&path).unwrap(), 4000, 3);

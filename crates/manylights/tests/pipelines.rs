@@ -261,3 +261,23 @@ fn pipelines_agree_with_the_visibility_buffer() {
         assert!(p995 <= PIPELINE_P995_TOLERANCE, "{}: 99.5th percentile difference {p995}", pipeline.name());
     }
 }
+
+/// The daylight sky lights every pipeline alike: its image-based lighting, its sun's traced shadows
+/// and traced reflections of it.
+#[test]
+fn pipelines_agree_under_the_daylight_sky() {
+    let size = (128, 72);
+    let mut scene = demo_scene();
+    manylights::scene::sky::light_with_sky(&mut scene, manylights::settings::Sky::Daylight);
+    let rays = RaySettings { sun_shadows: manylights::settings::SunShadows::Hard, reflection_bounces: 1, ..RaySettings::default() };
+    let render_in = |pipeline| render(&scene, RenderConfig { rays, ..configured(pipeline, LightMethod::Brute, DecalMethod::Brute, size) });
+    let visbuffer = render_in(PipelineKind::Visbuffer);
+    for pipeline in [PipelineKind::Forward, PipelineKind::Deferred] {
+        let d = sorted_differences(&visbuffer, &render_in(pipeline));
+        let mean = d.iter().sum::<f32>() / d.len() as f32;
+        let p995 = d[d.len() * 995 / 1000];
+        eprintln!("{} vs visibility buffer under the sky: mean {mean}, 99.5th percentile {p995}", pipeline.name());
+        assert!(mean <= PIPELINE_MEAN_TOLERANCE, "{}: mean difference {mean}", pipeline.name());
+        assert!(p995 <= PIPELINE_P995_TOLERANCE, "{}: 99.5th percentile difference {p995}", pipeline.name());
+    }
+}

@@ -9,6 +9,7 @@ use common::*;
 use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
 use manylights::{
     renderer::Image,
+    scene::ibl::BRDF_TABLE_SIZE,
     scene::ParticleSettings,
     scene::{Camera, Decal, Instance, Light, Material, Scene},
     settings::RaySettings,
@@ -72,8 +73,9 @@ fn red_decal() -> Decal {
     }
 }
 
-/// Where the mirror sends a pixel's camera ray: the point of the panel's plane it reaches, if any.
-fn reflected_panel_point(camera: &Camera, x: f32, y: f32) -> Option<Vec3> {
+/// Where the mirror sends a pixel's camera ray: the floor point it reflects at and the point of the
+/// panel's plane it reaches, if any.
+fn reflected_panel_point(camera: &Camera, x: f32, y: f32) -> Option<(Vec3, Vec3)> {
     let aspect = WIDTH as f32 / HEIGHT as f32;
     let tan_half = (20f32.to_radians()).tan();
     let view = Vec3::new((x / WIDTH as f32 * 2.0 - 1.0) * tan_half * aspect, (1.0 - y / HEIGHT as f32 * 2.0) * tan_half, -1.0);
@@ -81,7 +83,23 @@ fn reflected_panel_point(camera: &Camera, x: f32, y: f32) -> Option<Vec3> {
     let eye = camera.position();
     let floor = eye + dir * (-eye.y / dir.y);
     let mirrored = Vec3::new(dir.x, -dir.y, dir.z);
-    (mirrored.z < 0.0).then(|| floor + mirrored * ((PANEL_Z - floor.z) / mirrored.z))
+    (mirrored.z < 0.0).then(|| (floor, floor + mirrored * ((PANEL_Z - floor.z) / mirrored.z)))
+}
+
+/// The share of a uniform environment the panel (a fully rough dielectric) reflects specularly where
+/// the mirror shows it at pixel (x, y): F0 × scale + bias from the split-sum table at the panel's n·v,
+/// filtered as `shading/environment.wgsl` reads it.
+fn panel_specular_albedo(camera: &Camera, x: u32, y: u32) -> f32 {
+    let (floor, panel) = reflected_panel_point(camera, x as f32 + 0.5, y as f32 + 0.5).expect("the panel");
+    let n_dot_v = (floor - panel).normalize().z;
+    let (table, size) = (manylights::scene::ibl::brdf_table(), BRDF_TABLE_SIZE as usize);
+    let column = n_dot_v.clamp(0.5 / size as f32, 1.0 - 0.5 / size as f32) * size as f32 - 0.5;
+    let at = |i: usize| {
+        let [scale, bias] = table[(size - 1) * size + i.min(size - 1)];
+        0.04 * scale + bias
+    };
+    let (i, t) = (column.floor() as usize, column.fract());
+    at(i) * (1.0 - t) + at(i + 1) * t
 }
 
 /// What the mirror shows at a pixel, if every corner of the pixel agrees.
@@ -94,8 +112,8 @@ enum Reflected {
 
 fn reflected(camera: &Camera, x: u32, y: u32) -> Option<Reflected> {
     let classify = |fx: f32, fy: f32| match reflected_panel_point(camera, fx, fy) {
-        Some(q) if (q.x.abs() <= 2.0) && (q.y - DECAL_CENTRE.y).abs() <= 2.0 => Reflected::Decal,
-        Some(q) if q.x.abs() <= 4.0 && (3.0..=11.0).contains(&q.y) => Reflected::BarePanel,
+        Some((_, q)) if (q.x.abs() <= 2.0) && (q.y - DECAL_CENTRE.y).abs() <= 2.0 => Reflected::Decal,
+        Some((_, q)) if q.x.abs() <= 4.0 && (3.0..=11.0).contains(&q.y) => Reflected::BarePanel,
         _ => Reflected::Elsewhere,
     };
     let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.5)].map(|(dx, dy)| classify(x as f32 + dx, y as f32 + dy));
@@ -114,10 +132,9 @@ fn rgb(p: [f32; 4]) -> Vec3 {
 #[test]
 fn a_mirror_shows_a_decal_outside_the_view_as_the_decal_colours_its_surface() {
     let (scene, camera) = mirror_scene(Vec::new(), vec![red_decal()]);
-    // The mirror's own ambient term (metals keep half) plus the panel's radiance, all of it reflected.
-    let floor = Vec3::splat(0.5 * AMBIENT);
-    let expect_decal = floor + Vec3::new(AMBIENT, 0.0, 0.0);
-    let expect_bare = floor + Vec3::splat(AMBIENT);
+    // The mirror reflects all of the panel's radiance, which replaces its reflection of the uniform
+    // environment; the panel's is its albedo plus its specular share, times the environment's radiance.
+    let panel = |albedo: Vec3, x, y| (albedo + Vec3::splat(panel_specular_albedo(&camera, x, y))) * AMBIENT;
     for pipeline in PipelineKind::ALL {
         let name = pipeline.name();
         let bvh = render(&scene, &camera, pipeline, LightMethod::Off, DecalMethod::Bvh);
@@ -127,6 +144,7 @@ fn a_mirror_shows_a_decal_outside_the_view_as_the_decal_colours_its_surface() {
         let (mut decal_pixels, mut bare_pixels) = (0, 0);
         for y in 0..HEIGHT {
             for x in 0..WIDTH {
+                let (expect_decal, expect_bare) = (panel(Vec3::X, x, y), panel(Vec3::ONE, x, y));
                 let (expected, clustered_expected) = match reflected(&camera, x, y) {
                     Some(Reflected::Decal) => {
                         decal_pixels += 1;

@@ -1,6 +1,6 @@
-//! Per-frame constants: camera matrices, viewport, sun, ambient and the tonemapper.
+//! Per-frame constants: camera matrices, viewport, sun, environment lighting and the tonemapper.
 
-use super::cluster_grid::ClusterGrid;
+use super::{cluster_grid::ClusterGrid, environment::EnvironmentLighting};
 use crate::{
     scene::{Aabb, Camera, Projection},
     settings::{RaySettings, Tonemapper, MAX_PARTICLE_CASCADES},
@@ -16,7 +16,9 @@ pub struct FrameUniforms {
     pub viewport: [f32; 4],
     pub sun_direction: [f32; 4],
     pub sun_radiance: [f32; 4],
-    pub ambient: [f32; 4],
+    /// The environment's irradiance harmonics and flags ([`EnvironmentLighting::uniforms`]).
+    pub environment_irradiance: [[f32; 4]; 9],
+    pub environment: [f32; 4],
     /// Instances of light and decal groups (`accel::structure`), set by the renderer.
     pub light_instance_count: u32,
     pub exposure: f32,
@@ -48,7 +50,7 @@ pub struct FrameUniforms {
 #[derive(Clone, Copy, Debug)]
 pub struct SceneConstants {
     pub sun: Option<crate::scene::Sun>,
-    pub ambient: glam::Vec3,
+    pub environment: EnvironmentLighting,
     /// Bounds of the geometry: the clustered grid's depth slices end at its far side.
     pub bounds: Aabb,
 }
@@ -64,6 +66,7 @@ impl FrameUniforms {
             Some(sun) => (sun.direction.normalize().extend(1.0), (sun.color * sun.illuminance).extend(0.0)),
             None => (glam::Vec4::ZERO, glam::Vec4::ZERO),
         };
+        let (environment_irradiance, environment) = scene.environment.uniforms();
         Self {
             clip_from_world: clip_from_world.to_cols_array_2d(),
             view_from_clip: view_from_clip.to_cols_array_2d(),
@@ -71,7 +74,8 @@ impl FrameUniforms {
             viewport: [width as f32, height as f32, 1.0 / width as f32, 1.0 / height as f32],
             sun_direction: sun_direction.to_array(),
             sun_radiance: sun_radiance.to_array(),
-            ambient: scene.ambient.extend(0.0).to_array(),
+            environment_irradiance,
+            environment,
             light_instance_count: 0,
             exposure,
             tonemapper: tonemapper as u32,

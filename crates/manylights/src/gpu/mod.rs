@@ -4,6 +4,7 @@
 pub mod bindings;
 pub mod cluster_grid;
 pub mod context;
+pub mod environment;
 pub mod frame;
 pub mod loop_limit;
 pub mod readback;

@@ -8,6 +8,7 @@ use wgpu::util::DeviceExt;
 
 use super::{
     bindings,
+    environment::GpuEnvironment,
     frame::SceneConstants,
     textures::{TextureArray, TextureSpace},
     FrameUniforms, GpuContext,
@@ -270,6 +271,7 @@ impl GpuScene {
         });
         let samplers = material_samplers(device, anisotropy);
         let (particle_views, particle_sampler) = particle_grid_bindings(device, particle_grids);
+        let environment = GpuEnvironment::upload(device, &ctx.queue, scene, ctx.limits.max_texture_dimension_2d);
 
         let bind_group_layout = Self::create_bind_group_layout(device);
         let bind_group = bindings::bind_group(
@@ -291,6 +293,8 @@ impl GpuScene {
             .chain([wgpu::BindingResource::Sampler(&particle_sampler)])
             .chain([&ray_node_buffer, &ray_triangle_buffer, &ray_instance_buffer].map(|b| b.as_entire_binding()))
             .chain([&textures.decal_color, &textures.decal_data].map(|t| wgpu::BindingResource::TextureView(&t.view)))
+            .chain([&environment.background, &environment.specular, &environment.brdf_table].map(wgpu::BindingResource::TextureView))
+            .chain([wgpu::BindingResource::Sampler(&environment.sampler)])
             .collect(),
         );
         ctx.check_errors()?;
@@ -301,7 +305,7 @@ impl GpuScene {
             frame_uniforms,
             draw_commands,
             transparent_draw_commands,
-            constants: SceneConstants { sun: scene.sun, ambient: scene.ambient, bounds: scene.bounds() },
+            constants: SceneConstants { sun: scene.sun, environment: environment.lighting, bounds: scene.bounds() },
             triangle_count: scene.drawn_triangle_count() as u64,
             decal_material_base: scene.materials.len() as u32,
             index_buffer,
@@ -392,6 +396,11 @@ impl GpuScene {
         entries.push(bindings::storage_read(21, all)); // ray instances
         entries.push(bindings::texture(22, all, float_array, wgpu::TextureViewDimension::D2Array)); // decal colour textures
         entries.push(bindings::texture(23, all, float_array, wgpu::TextureViewDimension::D2Array)); // decal data textures
+        let d2 = wgpu::TextureViewDimension::D2;
+        entries.push(bindings::texture(24, all, float, d2)); // environment (background)
+        entries.push(bindings::texture(25, all, float, d2)); // prefiltered environment
+        entries.push(bindings::texture(26, all, float, d2)); // split-sum BRDF table
+        entries.push(bindings::sampler(27, all)); // environment sampler
         bindings::layout(device, "scene", &entries)
     }
 
@@ -758,7 +767,8 @@ mod tests {
                 viewport,
                 sun_direction,
                 sun_radiance,
-                ambient,
+                environment_irradiance,
+                environment,
                 light_instance_count,
                 exposure,
                 tonemapper,

@@ -19,6 +19,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/shading_input.wgsl", include_str!("../shading/shading_input.wgsl")),
     ("shading/brdf.wgsl", include_str!("../shading/brdf.wgsl")),
     ("shading/lights.wgsl", include_str!("../shading/lights.wgsl")),
+    ("shading/environment.wgsl", include_str!("../shading/environment.wgsl")),
     ("shading/light_volume.wgsl", include_str!("../shading/light_volume.wgsl")),
     ("shading/material.wgsl", include_str!("../shading/material.wgsl")),
     ("shading/shade.wgsl", include_str!("../shading/shade.wgsl")),

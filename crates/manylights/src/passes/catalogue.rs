@@ -34,8 +34,9 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("passes/ray_shadows.wgsl"),
         ShaderDesc::new("passes/shadow_filter.wgsl"),
     ];
-    for lights in LightMethod::ALL {
-        for decals in DecalMethod::ALL {
+    // `auto` composes as the method it resolves to.
+    for lights in LightMethod::ALL.into_iter().filter(|&m| m != LightMethod::Auto) {
+        for decals in DecalMethod::ALL.into_iter().filter(|&m| m != DecalMethod::Auto) {
             // Every particle method (`Bvh` lights with the particles' lights, which subgroups walk
             // together), with and without reflections, lamp shadows and subgroup walks, and with
             // sparse and dense decals.
@@ -58,6 +59,8 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         light_shadows,
                         subgroups,
                         dense_decals,
+                        // Dense lights walk as a subgroup, as subgroup-walked decals do.
+                        dense_lights: subgroups && lights == LightMethod::Bvh,
                         decal_cell_lists,
                         debug_views: false,
                     };

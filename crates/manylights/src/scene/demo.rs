@@ -44,12 +44,14 @@ pub fn demo_scene() -> Scene {
         place(6, Mat4::from_rotation_translation(turn(-15.0), Vec3::new(1.6, 0.4, -3.4))),
         place(7, upright(Vec3::new(-0.6, 0.0, 1.0).normalize(), Vec3::new(3.4, 1.0, -1.4))),
     ];
+    let lights = lights();
     Scene {
         meshes,
         materials,
         textures,
         instances,
-        lights: lights(),
+        authored_lights: lights.len(),
+        lights,
         cameras: vec![Camera::look_at("demo", Vec3::new(4.6, 3.1, 7.2), Vec3::new(-0.6, 0.9, -1.4), 52f32.to_radians(), 0.05)],
         sun: Some(Sun { direction: Vec3::new(-0.45, -0.35, -0.82).normalize(), color: Vec3::new(1.0, 0.82, 0.62), illuminance: 2.5 }),
         ambient: Vec3::new(0.025, 0.03, 0.04),

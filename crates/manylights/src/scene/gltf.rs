@@ -523,6 +523,7 @@ fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Text
         }
         None => log::warn!("the glTF file has no scene: nothing is placed"),
     }
+    scene.authored_lights = scene.lights.len();
     Ok(scene)
 }
 

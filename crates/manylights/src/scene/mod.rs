@@ -11,11 +11,14 @@ pub mod camera;
 pub mod decal_textures;
 pub mod deform;
 pub mod demo;
+pub mod environment;
 pub mod generators;
 pub mod gltf;
+pub mod ibl;
 pub mod paper_scenes;
 pub mod particles;
 pub mod scene_file;
+pub mod sky;
 mod tangents;
 
 use std::path::Path;
@@ -26,6 +29,7 @@ use crate::settings::SettingsOverlay;
 
 pub use aabb::Aabb;
 pub use camera::{Camera, Projection};
+pub use environment::Environment;
 pub use particles::ParticleSettings;
 
 /// What the image decoder (the `image` crate's default limits) may allocate for one image, in MiB.
@@ -369,14 +373,20 @@ pub struct Scene {
     pub instances: Vec<Instance>,
     /// Lights, in their group's space (`light_groups`).
     pub lights: Vec<Light>,
+    /// How many of `lights`, from the first, are the scene's own (glTF and scene-file lights); the
+    /// generators' follow. Only the scene's own lights keep `settings::Sky::Auto` from the sky.
+    pub authored_lights: usize,
     pub light_groups: Groups,
     /// Decals, in their group's space (`decal_groups`).
     pub decals: Vec<Decal>,
     pub decal_groups: Groups,
     pub cameras: Vec<Camera>,
     pub sun: Option<Sun>,
-    /// Uniform ambient radiance, a stand-in for indirect light.
+    /// Uniform ambient radiance, a stand-in for indirect light where there is no `environment`.
     pub ambient: Vec3,
+    /// Radiance from afar (the daylight sky, `sky::light_with_sky`, or an HDR image): the background
+    /// and image-based lighting. `None`: a uniform environment of `ambient`.
+    pub environment: Option<Environment>,
     /// Moving particle lights (`particles/`), if any.
     pub particles: Option<ParticleSettings>,
     /// Node animation moving mesh instances (glTF animations), if any.
@@ -395,12 +405,14 @@ impl Default for Scene {
             textures: Vec::new(),
             instances: Vec::new(),
             lights: Vec::new(),
+            authored_lights: 0,
             light_groups: Groups::default(),
             decals: Vec::new(),
             decal_groups: Groups::default(),
             cameras: Vec::new(),
             sun: None,
             ambient: Vec3::splat(0.03),
+            environment: None,
             particles: None,
             animation: None,
             deformers: Vec::new(),
@@ -504,6 +516,14 @@ impl Scene {
         }
         if !(self.ambient.is_finite() && self.ambient.min_element() >= 0.0) {
             return err("ambient must be finite and ≥ 0".into());
+        }
+        if let Some(e) = &self.environment {
+            if e.width == 0 || e.height == 0 || e.radiance.len() != (e.width as usize) * (e.height as usize) {
+                return err(format!("environment: {} radiance values for {}×{} texels", e.radiance.len(), e.width, e.height));
+            }
+            if !e.radiance.iter().flatten().all(|c| c.is_finite() && *c >= 0.0) {
+                return err("environment: radiance must be finite and ≥ 0".into());
+            }
         }
         Ok(())
     }

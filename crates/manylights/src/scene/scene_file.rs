@@ -7,7 +7,11 @@
 //! ```toml
 //! gltf = "../shared/assets/sponza/Sponza.gltf"   # absent: an empty scene
 //! exposure = 1.0                  # fixed linear scale before tonemapping; absent: exposed automatically
-//! ambient = [0.03, 0.03, 0.03]    # uniform ambient radiance
+//! //! ambient = [0.03, 0.03, 0.03]    # uniform ambient radiance, where there is no sky or environment
+//! sky = "auto"            # the daylight sky (settings::Sky), unless the command line says: "auto"
+//!                         # (where the scene has no sun and no lights of its own), "daylight" or "off"
+//! environment = "sky.hdr" # an equirectangular Radiance HDR or OpenEXR image lighting the scene
+//!                         # instead of the sky (centre column −Z, top row +Y)
 //!
 //! [camera]                # becomes camera 0; either `index = N` (move glTF camera N to the front) …
 //! position = [-9.0, 1.5, 0.0]     # … or a look-at camera: position and target required
@@ -120,11 +124,11 @@ use serde::Deserialize;
 
 use super::generators::{self, LargeDecals, ScatterDecals, ScatterLights, ScatterParticles};
 use super::{
-    validate_decal, validate_light, Camera, Decal, Light, LightKind, Material, Scene, Sun, Texture, TextureRef, Wrap, DECAL_LAYERS,
-    DEFAULT_LIGHT_CUTOFF,
+    validate_decal, validate_light, Camera, Decal, Environment, Light, LightKind, Material, Scene, Sun, Texture, TextureRef, Wrap,
+    DECAL_LAYERS, DEFAULT_LIGHT_CUTOFF,
 };
 use crate::files::{self, guard, InputKind, LoadBudget};
-use crate::settings::{DecalMethod, LightMethod, MethodOverlay, ParticleOverlay, RayOverlay, SettingsOverlay, Spelling};
+use crate::settings::{DecalMethod, LightMethod, MethodOverlay, ParticleOverlay, RayOverlay, SettingsOverlay, Sky, Spelling};
 use crate::{Error, Result};
 
 /// Loads a TOML scene file and the glTF it references, with the file's choices of how to render it.
@@ -175,6 +179,8 @@ struct SceneFile {
     gltf: Option<PathBuf>,
     exposure: Option<f32>,
     ambient: Option<[f32; 3]>,
+    sky: Option<Sky>,
+    environment: Option<PathBuf>,
     camera: Option<CameraSpec>,
     sun: Option<SunSpec>,
     #[serde(default)]
@@ -440,6 +446,13 @@ impl SceneFile {
         if let Some(ambient) = self.ambient {
             scene.ambient = Vec3::from(ambient);
         }
+        if let (Some(Sky::Daylight | Sky::Off), Some(_)) = (self.sky, &self.environment) {
+            return Err("sky and environment: give one, the daylight sky or an environment image, not both".into());
+        }
+        overlay.sky = self.sky;
+        if let Some(path) = &self.environment {
+            scene.environment = Some(Environment::load(&dir.join(path), budget).map_err(|e| format!("environment: {e}"))?);
+        }
         if let Some(camera) = &self.camera {
             camera.apply(&mut scene.cameras).map_err(|m| format!("camera: {m}"))?;
         }
@@ -454,6 +467,7 @@ impl SceneFile {
             let light = spec.to_light().and_then(|l| validate_light(&l).map(|()| l));
             scene.lights.push(light.map_err(|m| format!("light {i}: {m}"))?);
         }
+        scene.authored_lights = scene.lights.len();
         for (i, spec) in self.scatter_lights.iter().enumerate() {
             generators::add_scattered_lights(scene, &spec.to_params()).map_err(|e| format!("scatter_lights {i}: {}", inner_message(e)))?;
         }
@@ -751,6 +765,27 @@ mod tests {
     /// The scene alone.
     fn load(path: &Path) -> Result<Scene> {
         super::load(path).map(|(scene, _)| scene)
+    }
+
+    #[test]
+    fn sky_and_environment_keys() {
+        let dir = temp_dir("scene_file_environment");
+        let pixels = vec![image::Rgb([0.25f32, 0.5, 1.0]); 8];
+        image::codecs::hdr::HdrEncoder::new(std::fs::File::create(dir.join("sky.hdr")).unwrap()).encode(&pixels, 4, 2).unwrap();
+        let gltf = format!("gltf = {:?}\n", assets_dir().join("box/Box.glb"));
+        let path = dir.join("scene.toml");
+        std::fs::write(&path, format!("{gltf}sky = \"daylight\"\n")).unwrap();
+        let (scene, overlay) = super::load(&path).unwrap();
+        assert_eq!((overlay.sky, scene.environment), (Some(Sky::Daylight), None), "the scene file's sky is an overlay its caller applies");
+        std::fs::write(&path, format!("{gltf}environment = \"sky.hdr\"\n")).unwrap();
+        let environment = load(&path).unwrap().environment.expect("the environment image");
+        assert_eq!((environment.width, environment.height, environment.radiance[0]), (4, 2, [0.25, 0.5, 1.0]));
+        std::fs::write(&path, format!("{gltf}sky = \"off\"\nenvironment = \"sky.hdr\"\n")).unwrap();
+        let both = reason(load(&path));
+        assert!(both.contains("sky and environment: give one"), "{both}");
+        std::fs::write(&path, format!("{gltf}environment = \"missing.hdr\"\n")).unwrap();
+        let missing = reason(load(&path));
+        assert!(missing.contains("environment: cannot read") && missing.contains("missing.hdr"), "{missing}");
     }
 
     fn reason(result: Result<Scene>) -> String {

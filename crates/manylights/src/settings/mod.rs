@@ -7,11 +7,13 @@ pub mod display;
 pub mod methods;
 #[macro_use]
 pub mod named;
+pub mod environment;
 pub mod particles;
 pub mod post;
 pub mod rays;
 
 pub use display::{heat_map, DebugView, Tonemapper};
+pub use environment::Sky;
 pub use methods::{BvhBuild, DecalMethod, LightMethod, MethodOverlay, ParticleMethod, PipelineKind};
 pub use named::Named;
 pub use particles::{ParticleFilter, ParticleOverlay, MAX_PARTICLE_CASCADES, MAX_PARTICLE_SAMPLES, MIN_CASCADE_RESOLUTION};
@@ -43,7 +45,7 @@ impl Spelling {
 }
 
 /// What a scene file asks of the renderer besides its scene: its `[methods]`, `[rays]` and
-/// `[particles]` rendering keys and its fixed `exposure` (a linear scale), each taken unless the
+/// `[particles]` rendering keys, its `sky` and its fixed `exposure` (a linear scale), each taken unless the
 /// command line makes its own choice.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SettingsOverlay {
@@ -51,6 +53,7 @@ pub struct SettingsOverlay {
     pub rays: RayOverlay,
     pub particles: ParticleOverlay,
     pub exposure: Option<f32>,
+    pub sky: Option<Sky>,
 }
 
 /// The device limits the settings are checked against (`GpuContext::device_limits`).

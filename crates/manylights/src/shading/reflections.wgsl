@@ -13,24 +13,13 @@
 #include "shading/triangle_surface.wgsl"
 #include "shading/sun_shadow.wgsl"
 
-// Split-sum environment BRDF for a GGX surface seen at n·v (Karis's analytic fit, "Physically Based
-// Shading on Mobile", 2014): the fraction of the reflected radiance a surface passes to the viewer.
-fn reflection_brdf(f0: vec3<f32>, roughness: f32, n_dot_v: f32) -> vec3<f32> {
-    let c0 = vec4<f32>(-1.0, -0.0275, -0.572, 0.022);
-    let c1 = vec4<f32>(1.0, 0.0425, 1.04, -0.04);
-    let r = roughness * c0 + c1;
-    let a004 = min(r.x * r.x, exp2(-9.28 * n_dot_v)) * r.x + r.y;
-    let ab = vec2<f32>(-1.04, 1.04) * a004 + r.zw;
-    return f0 * ab.x + ab.y;
-}
-
-// How much of the mirror direction's radiance a surface reflects towards its viewer: zero above the
-// roughness threshold, fading in over its last quarter so no edge shows where the threshold cuts.
+// How much of the mirror direction's radiance a surface reflects towards its viewer: the split-sum
+// BRDF's share, as `shade` gives the prefiltered environment, zero above the roughness threshold and
+// fading in over its last quarter so no edge shows where the threshold cuts.
 fn reflection_weight(s: ShadingInput) -> vec3<f32> {
     let threshold = frame.ray_settings.y;
     let fade = saturate((threshold - s.roughness) / (0.25 * threshold));
-    let f0 = mix(vec3<f32>(0.04), s.base_color, s.metallic);
-    return reflection_brdf(f0, s.roughness, saturate(dot(s.normal, s.view_dir))) * fade;
+    return environment_specular_albedo(s) * fade;
 }
 
 // Two unit vectors perpendicular to `d` and to each other.
@@ -72,9 +61,12 @@ fn reflected_radiance(s: ShadingInput, geometric_normal: vec3<f32>, footprint: f
         clearance = 0.0;
         // The cone widens faster off rough surfaces: their reflections are blurrier.
         spread += surface.roughness * surface.roughness;
+        // The traced radiance replaces the prefiltered environment that `shade` gave the surface for
+        // the same share (`weight`).
+        let replaced = environment_specular_radiance(environment_reflection_direction(surface), surface.roughness);
         let hit = trace_closest(origin, dir, 3.0e38);
         if hit.triangle == RAY_NO_HIT {
-            radiance += weight * sky_radiance(dir);
+            radiance += weight * (sky_radiance(dir) - replaced);
             break;
         }
         let instance = ray_instances[hit.instance];
@@ -88,7 +80,7 @@ fn reflected_radiance(s: ShadingInput, geometric_normal: vec3<f32>, footprint: f
         var hit_material = evaluate_material(materials[draw.material], hit_surface.frame, hit_surface.g, position, -dir);
         hit_material.ray_normal = hit_surface.geometric_normal;
         let hit_s = apply_decals(hit_material, hit_surface.dp);
-        radiance += weight * shade(hit_s, sun_visibility_traced(position, hit_surface.geometric_normal, 0.0));
+        radiance += weight * (shade(hit_s, sun_visibility_traced(position, hit_surface.geometric_normal, 0.0)) - replaced);
         weight *= reflection_weight(hit_s);
         surface = hit_s;
         normal = hit_surface.geometric_normal;

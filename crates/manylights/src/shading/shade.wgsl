@@ -6,6 +6,7 @@
 #include "shading/shading_input.wgsl"
 #include "shading/brdf.wgsl"
 #include "shading/lights.wgsl"
+#include "shading/environment.wgsl"
 #include "$LIGHT_ENUMERATION"
 #include "$DECAL_ENUMERATION"
 #include "$PARTICLE_LIGHTING"
@@ -16,13 +17,12 @@
 // as large as any float).
 const MAX_RADIANCE: f32 = 1e30;
 
-// Outgoing radiance towards the viewer; `sun_visibility` is the fraction of the sun the point sees
-// (`shading/sun_shadow*.wgsl`).
+// Outgoing radiance towards the viewer: emission, the environment's light (where traced reflections
+// replace its specular part, `reflections.wgsl` subtracts it), sun, local and particle lights;
+// `sun_visibility` is the fraction of the sun the point sees (`shading/sun_shadow*.wgsl`).
 fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
-    // Ambient stands in for indirect light: diffuse only, with the metal's tint kept as a crude
-    // specular term so metals do not turn black.
-    let ambient_albedo = mix(s.base_color, s.base_color * 0.5, s.metallic);
-    var radiance = s.emissive + frame.ambient.rgb * ambient_albedo;
+    // The environment (sky, image or uniform ambient) stands in for indirect light.
+    var radiance = s.emissive + environment_light(s);
     if frame.sun_direction.w > 0.0 && sun_visibility > 0.0 {
         radiance += frame.sun_radiance.rgb * sun_visibility * brdf_times_cosine(s, -frame.sun_direction.xyz);
     }
@@ -58,10 +58,4 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
             return radiance;
         }
     }
-}
-
-// Radiance seen where no geometry was drawn: a simple sky from the ambient colour.
-fn sky_radiance(view_ray_dir: vec3<f32>) -> vec3<f32> {
-    let up = saturate(view_ray_dir.y * 0.5 + 0.5);
-    return frame.ambient.rgb * mix(0.6, 1.6, up);
 }

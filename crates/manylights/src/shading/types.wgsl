@@ -102,7 +102,11 @@ struct FrameUniforms {
     sun_direction: vec4<f32>,
     // rgb: colour × illuminance
     sun_radiance: vec4<f32>,
-    ambient: vec4<f32>,
+    // The environment's irradiance / π in L2 spherical harmonics (`scene::ibl::irradiance_sh`).
+    environment_irradiance: array<vec4<f32>, 9>,
+    // x: the prefiltered environment's last mip level (roughness 1); y: 1 when the background draws
+    // the sun's disc.
+    environment: vec4<f32>,
     // Instances of light and decal groups (`light_instances`, `decal_instances`).
     light_instance_count: u32,
     exposure: f32,

@@ -127,8 +127,9 @@ pub fn pixel<T: Copy>(image: &Image<T>, x: u32, y: u32) -> T {
 /// The albedo of [`ambient_wall`].
 pub const AMBIENT_WALL_COLOR: Vec3 = Vec3::new(0.2, 0.3, 0.4);
 
-/// A wall at z = 0 facing +Z, lit by white ambient only, so that its linear radiance is its albedo
-/// (times one minus half its metallic); material 0 is the wall's. The camera is 4 m in front of it.
+/// A wall at z = 0 facing +Z, lit by a white uniform environment (`ambient`) only, so that its linear
+/// radiance is its albedo (times one minus its metallic) plus its specular reflection of the
+/// environment; material 0 is the wall's. The camera is 4 m in front of it.
 pub fn ambient_wall() -> (Scene, Camera) {
     let scene = Scene {
         meshes: vec![quad_mesh()],
