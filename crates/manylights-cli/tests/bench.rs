@@ -65,7 +65,7 @@ fn quick_bench_writes_the_configurations_asked_for() {
     let args = [
         "bench", "--quick", "--scene", "demo", "--width", "64", "--height", "36", "--anisotropy", "1",
         "--scenes", "small-decals,small-lights", "--pipelines", "visbuffer,deferred",
-        "--methods", "off,bvh,deferred-decals", "--sweeps", "lights", "--sweep-max", "4096",
+        "--methods", "off,bvh,deferred-decals", "--sweeps", "lights", "--sweep-max", "4096", "--dense", "none",
         // Generous, so that a slow machine still times every configuration.
         "--time-cap-ms", "60000", "--out", out.to_str().unwrap(),
     ];
@@ -148,6 +148,7 @@ fn quick_bench_writes_the_configurations_asked_for() {
         "| 28k small lights |",
         "## Every pipeline with every method",
         "## Sweep: lights",
+        "| bvh ÷ clustered |",
         "](sweep-lights.png)",
     ] {
         assert!(md.contains(needle), "bench.md lacks {needle:?}:\n{md}");
@@ -159,6 +160,48 @@ fn quick_bench_writes_the_configurations_asked_for() {
     let colours: BTreeSet<[u8; 3]> = plot.pixels().map(|p| p.0).collect();
     assert!(colours.len() > 20, "{} colours", colours.len());
     assert!(!out.join("sweep-decals.png").exists());
+}
+
+/// The dense-light suite: a range found for the overlap asked, bvh built once and every frame against
+/// clustered shading, and `auto`, which says what it ran.
+#[test]
+fn dense_bench_compares_bvh_with_clustered_and_auto() {
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench_dense");
+    let _ = std::fs::remove_dir_all(&out);
+    #[rustfmt::skip]
+    let args = [
+        "bench", "--scene", "demo", "--width", "64", "--height", "36", "--anisotropy", "1", "--frames", "3", "--warmup", "1",
+        "--scenes", "none", "--sweeps", "none", "--dense", "overlap-10", "--pipelines", "visbuffer",
+        "--time-cap-ms", "60000", "--out", out.to_str().unwrap(),
+    ];
+    let run = manylights(&args);
+    assert!(run.status.success(), "bench failed: {}", String::from_utf8_lossy(&run.stderr));
+    let json: Value = serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    let results = json["results"].as_array().unwrap();
+    let got: BTreeSet<(String, String)> =
+        results.iter().map(|r| (r["method"].as_str().unwrap().to_owned(), r["bvh_build"].as_str().unwrap().to_owned())).collect();
+    let want: BTreeSet<(String, String)> =
+        [("bvh", "CpuOnce"), ("bvh", "GpuEveryFrame"), ("clustered", "CpuOnce"), ("auto", "CpuOnce"), ("auto", "GpuEveryFrame")]
+            .map(|(m, b)| (m.to_owned(), b.to_owned()))
+            .into_iter()
+            .collect();
+    assert_eq!((got, results.len()), (want, 5));
+    for r in results {
+        assert_eq!(
+            (r["suite"].as_str(), r["scene"].as_str(), r["status"].as_str()),
+            (Some("dense"), Some("overlap-10"), Some("timed")),
+            "{r}"
+        );
+        let overlap = r["mean_overlap"].as_f64().unwrap();
+        assert!((5.0..=20.0).contains(&overlap), "overlap {overlap}, asked about 10");
+        let ran = r["light_method_ran"].as_str().unwrap();
+        match r["method"].as_str().unwrap() {
+            "auto" => assert!(["bvh (auto: ", "clustered (auto: "].iter().any(|m| ran.starts_with(m)), "{ran}"),
+            method => assert_eq!(ran, format!("{method} (asked for)")),
+        }
+    }
+    let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
+    assert!(md.contains("## Dense lights") && md.contains("| overlap-10 |") && !md.contains("## Table 1"), "{md}");
 }
 
 /// A scene that cannot be generated is a failed configuration in the report, not the end of the run.

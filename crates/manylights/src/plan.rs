@@ -563,6 +563,25 @@ mod tests {
     }
 
     #[test]
+    fn crowded_lights_are_walked_by_subgroups_with_wide_leaves() {
+        let bvh = config(LightMethod::Bvh, DecalMethod::Off);
+        let stats = |overlap| SceneStatistics { placed_lights: 28_000, light_overlap: Some(overlap), ..Default::default() };
+        let sparse = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_LIGHT_OVERLAP - 1.0)).unwrap();
+        assert!(!sparse.lights.wide_leaves && !sparse.shading_methods(true).dense_lights);
+        assert_eq!(sparse.lights.rebuilt_leaves, DynamicLeaves::AtMost(8));
+        assert!(!query_walks(sparse.shading_methods(true), ShadingStage::Fragment).lights);
+        let dense = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_LIGHT_OVERLAP)).unwrap();
+        assert!(dense.lights.wide_leaves && dense.shading_methods(true).dense_lights);
+        assert_eq!(dense.lights.rebuilt_leaves, DynamicLeaves::AtMost(32));
+        for stage in [ShadingStage::Compute, ShadingStage::Fragment] {
+            assert!(query_walks(dense.shading_methods(true), stage).lights);
+        }
+        // Without subgroups, nothing is shared out: narrow leaves, walked alone.
+        let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false }, &stats(100.0)).unwrap();
+        assert!(!alone.lights.wide_leaves && !alone.shading_methods(true).dense_lights);
+    }
+
+    #[test]
     fn the_shader_key_carries_every_choice() {
         let mut bvh = config(LightMethod::Bvh, DecalMethod::Brute);
         bvh.rays.reflection_bounces = 2;
@@ -636,10 +655,12 @@ mod tests {
         let why = plan.methods.lights.to_string();
         assert!(why.starts_with("bvh (auto: 28000 reaching 0.45") && why.ends_with("a BVH walk is faster)"), "{why}");
         assert_eq!(plan.methods.decals.to_string(), format!("brute (auto: 3, at most {BRUTE_FORCE_MAX}: a loop over all is cheapest)"));
-        // Overlaps are measured only for `auto`.
+        // Overlaps are measured only for `auto`, and the lights' for `bvh` lights' walks.
         let measured = Measurements::for_settings(&auto(), SUBGROUPS);
         assert!(measured.light_overlap && measured.decal_overlap && measured.decal_centre_overlap);
         let explicit = Measurements::for_settings(&config(LightMethod::Bvh, DecalMethod::Clustered), SUBGROUPS);
-        assert!(!explicit.light_overlap && !explicit.decal_overlap && !explicit.decal_centre_overlap);
+        assert!(explicit.light_overlap && !explicit.decal_overlap && !explicit.decal_centre_overlap);
+        let clustered = Measurements::for_settings(&config(LightMethod::Clustered, DecalMethod::Brute), SUBGROUPS);
+        assert!(!clustered.light_overlap && !clustered.decal_overlap && !clustered.decal_centre_overlap);
     }
 }
