@@ -240,8 +240,10 @@ fn scenes_that_cannot_be_generated_are_reported_failed() {
 fn bad_bench_options_are_clear_errors() {
     let missing = failure(&["bench", "--scene", "/nonexistent/scene.gltf", "--quick"]);
     assert!(missing.contains("/nonexistent/scene.gltf") && missing.contains("--scene"), "{missing}");
-    let nothing = failure(&["bench", "--scene", "demo", "--scenes", "none", "--sweeps", "none"]);
+    let nothing = failure(&["bench", "--scene", "demo", "--scenes", "none", "--sweeps", "none", "--dense", "none"]);
     assert!(nothing.contains("nothing to run"), "{nothing}");
+    let none_and_more = failure(&["bench", "--scene", "demo", "--dense", "none,overlap-10"]);
+    assert!(none_and_more.contains("--dense") && none_and_more.contains("alone"), "{none_and_more}");
     let small = failure(&["bench", "--scene", "demo", "--sweep-max", "100"]);
     assert!(small.contains("--sweep-max 100") && small.contains("1024"), "{small}");
     let cap = failure(&["bench", "--scene", "demo", "--time-cap-ms", "-5"]);

@@ -60,6 +60,30 @@ fn renders_the_demo_and_a_gltf_with_timings() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
 
+/// With no flags, auto methods run and say why in --timings and the JSON, and the exposure is
+/// metered; --exposure fixes it, within its range, and not together with --auto-exposure.
+#[test]
+fn auto_methods_and_exposure_are_the_defaults_and_say_so() {
+    let dir = temp_dir("auto_defaults");
+    let json = dir.join("timings.json");
+    let out = render_to(&dir, &["--lights", "64", "--decals", "4", "--timings", "--timings-json", json.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("lights: bvh (auto: ") && stdout.contains("decals: brute (auto: "), "{stdout}");
+    assert!(stdout.contains("exposure_histogram"), "auto exposure's passes: {stdout}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!((report["light_method"].as_str(), report["decal_method"].as_str()), (Some("bvh"), Some("brute")));
+    assert!(report["light_method_why"].as_str().unwrap().contains("reaching"), "{report}");
+    assert!(report["post"]["exposure"]["auto"].is_object(), "{report}");
+    let fixed = render_to(&dir, &["--exposure", "2", "--timings", "--light-method", "clustered"]);
+    let stdout = String::from_utf8_lossy(&fixed.stdout);
+    assert!(fixed.status.success() && !stdout.contains("exposure_histogram") && stdout.contains("clustered (asked for)"), "{stdout}");
+    let range = failure(&["render", "--exposure", "99", "-o", dir.join("x.png").to_str().unwrap()]);
+    assert!(range.contains("--exposure 99") && range.contains("EV100"), "{range}");
+    let both = failure(&["render", "--exposure", "1", "--auto-exposure", "-o", dir.join("x.png").to_str().unwrap()]);
+    assert!(both.contains("--auto-exposure") && both.contains("--exposure"), "{both}");
+}
+
 #[test]
 fn missing_file() {
     let err = failure(&["render", "--scene", "/nonexistent/scene.gltf"]);

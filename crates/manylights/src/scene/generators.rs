@@ -749,6 +749,44 @@ mod tests {
     }
 
     #[test]
+    fn default_sizes_scale_with_the_scene_and_shrink_for_crowds() {
+        let small = two_floors();
+        let mut large = two_floors();
+        for instance in &mut large.instances {
+            instance.world_from_local = Mat4::from_scale(Vec3::splat(100.0)) * instance.world_from_local;
+        }
+        // The same lights, decals and particles on a scene a hundred times larger are a hundred times
+        // larger, and ten thousand times brighter: the same picture.
+        for count in [16, 20_000] {
+            let (a, b) = (
+                scatter_lights(&small, &ScatterLights { count, ..Default::default() }).unwrap(),
+                scatter_lights(&large, &ScatterLights { count, ..Default::default() }).unwrap(),
+            );
+            for (a, b) in a.iter().zip(&b) {
+                assert!((b.range / a.range - 100.0).abs() < 1e-2 && (b.intensity / a.intensity - 1e4).abs() < 2.0, "{a:?} {b:?}");
+            }
+        }
+        let mut particles = (small.clone(), large.clone());
+        add_particles(&mut particles.0, &ScatterParticles::new(1000, 1, 4)).unwrap();
+        add_particles(&mut particles.1, &ScatterParticles::new(1000, 1, 4)).unwrap();
+        let (a, b) = (particles.0.particles.unwrap(), particles.1.particles.unwrap());
+        assert!((b.radius.1 / a.radius.1 - 100.0).abs() < 1e-2 && (b.intensity / a.intensity - 1e4).abs() < 2.0);
+        // Beyond BRIGHT_PARTICLES, the particles share out the light of that many.
+        let mut many = small.clone();
+        add_particles(&mut many, &ScatterParticles::new(4 * BRIGHT_PARTICLES, 1, 4)).unwrap();
+        assert!((many.particles.unwrap().intensity * 4.0 - a.intensity).abs() < 1e-6);
+        // Many lights shrink to about DEFAULT_LIGHT_OVERLAP reaching a point: N π r² 13/12 over the area.
+        let area = 2.0 * 16.0;
+        let crowded = typical_light_range(small.bounds().diagonal(), area, 20_000);
+        assert!(crowded < small.bounds().diagonal() * 0.04);
+        let overlap = 20_000.0 * std::f32::consts::PI * crowded * crowded * 13.0 / 12.0 / area;
+        assert!((overlap - DEFAULT_LIGHT_OVERLAP).abs() < 1e-3, "{overlap}");
+        let size = typical_decal_size(small.bounds().diagonal(), area, 20_000);
+        assert!((20_000.0 * size * size * 49.0 / 48.0 / area - DEFAULT_DECAL_OVERLAP).abs() < 1e-3);
+        assert_eq!(typical_decal_size(small.bounds().diagonal(), area, 4), small.bounds().diagonal() * 0.025);
+    }
+
+    #[test]
     fn intervals_are_honoured() {
         let params = ScatterLights { count: 64, range: Some((0.5, 2.0)), intensity: Some((3.0, 3.0)), ..Default::default() };
         for l in scatter_lights(&two_floors(), &params).unwrap() {
