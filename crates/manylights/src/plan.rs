@@ -8,17 +8,15 @@ use crate::settings::{BvhBuild, DebugView, DecalMethod, LightMethod, Named, Part
 use crate::{Error, Result};
 
 /// Up to this many lights or decals, `auto` loops over them all: a handful of volumes costs a brute
-/// loop less than a walk or a list (6 large decals: brute 1.175 ms against bvh 1.189 in the
-/// visibility buffer; 100 small decals: 1.521 against 1.174; BENCHMARKS.md, Table 1).
+/// loop less than a walk or a list, which win by 100 (BENCHMARKS.md, Table 1: 6 large and 100 small
+/// decals).
 pub const BRUTE_FORCE_MAX: usize = 8;
 
 /// Whether lights in a BVH rebuilt on the GPU every frame are faster than clustered lists rebuilt
-/// every frame (BENCHMARKS.md, "Dense lights" and "Scaling", H100): where subgroups share dense
-/// lights' leaves out (0.62–0.83× at overlaps 50 and 100, every pipeline), and in compute from
-/// overlap [`REBUILT_BVH_OVERLAP`] for up to [`REBUILT_BVH_MAX_LIGHTS`] lights (28,000 at overlap 10:
-/// 0.91× visibility buffer, 0.97× deferred). Sparser, the LBVH's build costs more than its walk saves
-/// (1.07–1.17× from 0.03 to 2.6); a million lights at overlap 9.8 took 1.07×, their build 0.6 ms;
-/// forward at overlap 10, walked alone, 1.63×.
+/// every frame (BENCHMARKS.md, "Dense lights" and "Scaling"): where subgroups share dense lights'
+/// leaves out, in every pipeline, and in compute from overlap [`REBUILT_BVH_OVERLAP`] for up to
+/// [`REBUILT_BVH_MAX_LIGHTS`] lights. Sparser, or many more, the LBVH's build costs more than its
+/// walk saves; in fragments, lights walked alone diverge too much.
 pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, lights: usize, overlap: f32) -> bool {
     let shared_walks = caps.subgroups && overlap >= DENSE_LIGHT_OVERLAP;
     shared_walks || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP && lights <= REBUILT_BVH_MAX_LIGHTS)
@@ -259,16 +257,15 @@ pub struct QueryWalks {
 pub const DENSE_DECAL_OVERLAP: f32 = 24.0;
 
 /// From how many lights reach a surface point, on average, `bvh` lights count as dense
-/// ([`ShadingMethods::dense_lights`]). On an H100 (benchmarks/LOG.md, topic 1, "Dense lights"),
-/// sharing wide leaves out took overlap 100 from 126 to 69 ms forward and 3.96 to 3.40 ms in the
-/// visibility buffer; at overlap 10 it was even in compute (1.42 against 1.44 ms) and slower rebuilt
-/// every frame (2.5 against 1.8 ms), so the walk changes between the two.
+/// ([`ShadingMethods::dense_lights`]): sharing wide leaves out wins at overlap 100 in every stage
+/// (most in fragments), breaks even at 10 in compute and loses there rebuilt every frame, so the
+/// walk changes between the two (benchmarks/LOG.md, topic 1).
 pub const DENSE_LIGHT_OVERLAP: f32 = 16.0;
 
 /// The leaves of groups rebuilt on the GPU every frame, by how queries walk them: a walk alone tests
-/// every item of a leaf it reaches, and leaves of 8 halved the frame against single-item leaves
-/// (overlap 100: 8.59 to 4.93 ms in the visibility buffer, 328 to 164 ms forward); walks sharing
-/// leaves out test one item a lane, and leaves of 32 were fastest (3.32 and 83 ms).
+/// every item of a leaf it reaches, and leaves of 8 about halved dense lights' frames against
+/// single-item leaves; walks sharing leaves out test one item a lane, and leaves of 32 were fastest
+/// (benchmarks/LOG.md, topic 1).
 pub fn rebuilt_leaves(shared_walks: bool) -> DynamicLeaves {
     if shared_walks {
         DynamicLeaves::AtMost(32)
