@@ -200,6 +200,25 @@ mod tests {
     }
 
     #[test]
+    fn sampled_overlap_is_exact_for_few_volumes_and_close_for_many() {
+        let mut scene = crate::scene::demo::demo_scene();
+        let points = surface_points(&scene, SAMPLED_POINTS, 1);
+        let overlap_of = |scene: &Scene| {
+            let exact = light_overlap(scene, &points).unwrap().mean as f32;
+            (sampled_overlap(&scene.lights, &scene.light_groups, &points, light_aabb, light_contains), exact)
+        };
+        // Up to SAMPLED_VOLUMES placed volumes, every one is tested: the mean itself.
+        let (sampled, exact) = overlap_of(&scene);
+        assert!(scene.lights.len() <= SAMPLED_VOLUMES && exact > 0.0);
+        assert!((sampled - exact).abs() <= 1e-4 * exact, "{sampled} against {exact}");
+        // Beyond, every k-th: an estimate of the same mean, here within 10 %.
+        let params = crate::scene::generators::ScatterLights { count: 20 * SAMPLED_VOLUMES, range: Some((0.5, 1.5)), ..Default::default() };
+        crate::scene::generators::add_scattered_lights(&mut scene, &params).unwrap();
+        let (sampled, exact) = overlap_of(&scene);
+        assert!(exact > 5.0 && (sampled - exact).abs() <= 0.1 * exact, "{sampled} against {exact}");
+    }
+
+    #[test]
     fn centre_overlap_counts_the_boxes_holding_each_centre_in_its_group() {
         let at = |x: f32| Aabb::new(glam::Vec3::new(x, 0.0, 0.0), glam::Vec3::new(x + 1.0, 1.0, 1.0));
         // Ten stacked boxes, a lone one, and ten more stacked in a group built on the GPU.
