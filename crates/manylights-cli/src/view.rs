@@ -23,8 +23,8 @@ use manylights::{
     renderer::Renderer,
     scene::{Camera, Projection, Scene},
     settings::{
-        Bloom, DebugView, DecalMethod, DepthOfField, Exposure, LightMethod, MotionBlur, Named, ParticleMethod, PipelineKind, RenderConfig,
-        SettingsOverlay, SunShadows,
+        Bloom, DebugView, DecalMethod, DepthOfField, Exposure, LightMethod, MotionBlur, Named, ParticleMethod, ParticleOverlay,
+        PipelineKind, RayOverlay, RenderConfig, SettingsOverlay, SunShadows,
     },
 };
 use winit::{
@@ -104,31 +104,42 @@ impl Default for Switches {
 }
 
 impl Switches {
-    /// The switches a scene file's methods and exposure start with.
+    /// The switches a scene file's methods, `[rays]`, `[particles]` and exposure start with.
     fn for_scene(overlay: &SettingsOverlay) -> Self {
         let defaults = Self::default();
         Self {
             light_method: overlay.methods.lights.unwrap_or(defaults.light_method),
             decal_method: overlay.methods.decals.unwrap_or(defaults.decal_method),
+            particle_method: overlay.particles.method.unwrap_or(defaults.particle_method),
+            shadows: overlay.rays.sun_shadows.unwrap_or(defaults.shadows),
+            reflections: overlay.rays.reflection_bounces.is_some_and(|bounces| bounces > 0),
             auto_exposure: overlay.exposure.is_none(),
             fixed_exposure: overlay.exposure.unwrap_or(defaults.fixed_exposure),
             ..defaults
         }
     }
 
-    fn config(&self, (width, height): (u32, u32)) -> RenderConfig {
+    /// The settings of these switches, with the rest of the scene file's `[rays]` and `[particles]`
+    /// (sun angle, ray budgets, the grid's voxels) under them.
+    fn config(&self, (width, height): (u32, u32), overlay: &SettingsOverlay) -> RenderConfig {
+        let bounces = overlay.rays.reflection_bounces.filter(|&bounces| bounces > 0).unwrap_or(1);
+        let rays = RayOverlay {
+            sun_shadows: Some(self.shadows),
+            reflection_bounces: Some(if self.reflections { bounces } else { 0 }),
+            ..overlay.rays
+        };
+        let particles = ParticleOverlay { method: Some(self.particle_method), ..overlay.particles };
         let mut config = RenderConfig {
             width,
             height,
             pipeline: self.pipeline,
             light_method: self.light_method,
             decal_method: self.decal_method,
-            particle_method: self.particle_method,
             debug_view: self.debug_view,
+            rays: rays.settings(),
             ..RenderConfig::default()
-        };
-        config.rays.sun_shadows = self.shadows;
-        config.rays.reflection_bounces = u32::from(self.reflections);
+        }
+        .with_particles(particles);
         config.post.bloom = self.bloom.then(Bloom::default);
         config.post.depth_of_field = self.depth_of_field.then(DepthOfField::default);
         config.post.motion_blur = self.motion_blur.then(MotionBlur::default);
@@ -295,6 +306,9 @@ struct Gpu {
 }
 
 struct App {
+    /// The scene file's rendering choices: the switches start from them, and the settings they do not
+    /// switch come from them.
+    overlay: SettingsOverlay,
     args: ViewArgs,
     scene: Scene,
     /// The counts the scene was generated with, those asked for, and those being edited in the panel.
@@ -361,6 +375,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         wanted_counts: counts,
         edited_counts: counts,
         switches: Switches::for_scene(&overlay),
+        overlay,
         scripted,
         gpu: None,
         keys: Default::default(),
@@ -440,7 +455,7 @@ impl App {
     fn rebuild(&mut self) -> anyhow::Result<()> {
         let Some(gpu) = &mut self.gpu else { return Ok(()) };
         let size = Self::image_size(gpu);
-        match Renderer::new(gpu.ctx.clone(), &self.scene, self.switches.config(size)) {
+        match Renderer::new(gpu.ctx.clone(), &self.scene, self.switches.config(size, &self.overlay)) {
             Ok(mut renderer) => {
                 renderer.time = gpu.renderer.as_ref().map_or(0.0, |r| r.time);
                 let view = renderer.output().create_view(&Default::default());

@@ -520,6 +520,29 @@ fn the_viewer_runs_a_scripted_session_under_xvfb_and_writes_a_screenshot() {
     assert!(distinct.len() > 500, "the screenshot looks blank: {} distinct colours", distinct.len());
 }
 
+/// The viewer starts from a scene file's `[methods]` and `[particles]`: brute-force lights asked for
+/// there cannot light its particles as exact lights, and it says so.
+#[test]
+fn the_viewer_takes_a_scene_files_methods_and_particles() {
+    let dir = temp_dir("view_scene_file");
+    let scene = dir.join("scene.toml");
+    let gltf = assets().join("box/Box.gltf");
+    std::fs::write(
+        &scene,
+        format!("gltf = {:?}\n[methods]\nlights = 'brute'\n[particles]\ncount = 50\nmethod = 'bvh'\n", gltf.to_str().unwrap()),
+    )
+    .unwrap();
+    #[rustfmt::skip]
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 800x600x24", env!("CARGO_BIN_EXE_manylights"), "view", "--width", "320", "--height", "180",
+               "--frames", "2", "--scene", scene.to_str().unwrap()])
+        .output()
+        .expect("xvfb-run (install Xvfb: scripts/ensure-xvfb.sh)");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && out.status.code() != Some(101), "{stderr}");
+    assert!(stderr.contains("--light-method brute") && stderr.contains("--particle-method bvh"), "{stderr}");
+}
+
 #[test]
 fn the_viewer_without_a_display_says_how_to_get_one() {
     let out = Command::new(env!("CARGO_BIN_EXE_manylights"))
