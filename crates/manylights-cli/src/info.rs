@@ -71,7 +71,7 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         show("decals", decals);
     }
     // What `auto` picks with the default settings (and the scene file's), per pipeline.
-    let caps = Capabilities { subgroups: ctx.features.contains(wgpu::Features::SUBGROUP) };
+    let caps = Capabilities::of(&ctx);
     let defaults = RenderConfig::default().with_particles(overlay.particles);
     let stats = scene_statistics(&scene, Measurements::for_settings(&defaults, caps))?;
     for pipeline in PipelineKind::ALL {

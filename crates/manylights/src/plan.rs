@@ -4,6 +4,7 @@
 
 use std::fmt;
 
+use crate::gpu::GpuContext;
 use crate::settings::{BvhBuild, DebugView, DecalMethod, LightMethod, Named, ParticleMethod, PipelineKind, RenderConfig};
 use crate::{Error, Result};
 
@@ -18,8 +19,8 @@ pub const BRUTE_FORCE_MAX: usize = 8;
 /// [`REBUILT_BVH_MAX_LIGHTS`] lights. Sparser, or many more, the LBVH's build costs more than its
 /// walk saves; in fragments, lights walked alone diverge too much.
 pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, lights: usize, overlap: f32) -> bool {
-    let shared_walks = caps.subgroups && overlap >= DENSE_LIGHT_OVERLAP;
-    shared_walks || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP && lights <= REBUILT_BVH_MAX_LIGHTS)
+    lights_shared_out(caps, overlap)
+        || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP && lights <= REBUILT_BVH_MAX_LIGHTS)
 }
 
 pub const REBUILT_BVH_OVERLAP: f32 = 4.0;
@@ -45,8 +46,8 @@ pub enum Why {
     RebuiltEveryFrame,
     /// The mean overlap at surface points, where a BVH is faster: built once at every overlap
     /// measured (up to 100), or rebuilt every frame over lights dense enough that subgroups share
-    /// their leaves out.
-    Overlap { count: usize, overlap: f32 },
+    /// their leaves out (`shared_out`: lights walked so, [`ShadingMethods::dense_lights`]).
+    Overlap { count: usize, overlap: f32, shared_out: bool },
 }
 
 impl fmt::Display for Why {
@@ -58,10 +59,12 @@ impl fmt::Display for Why {
             Why::ParticleLights => f.write_str("particles are lights in the lights' BVH, which only bvh reads"),
             Why::Reflections => f.write_str("reflections shade points outside the view, where clustered lists do not reach"),
             Why::RebuiltEveryFrame => f.write_str("rebuilt every frame over sparse volumes, where clustered lists are faster than a BVH"),
-            Why::Overlap { count, overlap } if overlap >= DENSE_LIGHT_OVERLAP => {
+            Why::Overlap { count, overlap, shared_out: true } => {
                 write!(f, "{count} reaching {overlap:.2} a surface point on average: a BVH walk, its leaves shared out, is faster")
             }
-            Why::Overlap { count, overlap } => write!(f, "{count} reaching {overlap:.2} a surface point on average: a BVH walk is faster"),
+            Why::Overlap { count, overlap, shared_out: false } => {
+                write!(f, "{count} reaching {overlap:.2} a surface point on average: a BVH walk is faster")
+            }
         }
     }
 }
@@ -99,6 +102,7 @@ impl MethodChoice {
                 let particle_lights = stats.particles > 0 && config.particle_method == ParticleMethod::Bvh;
                 let overlap = stats.light_overlap.unwrap_or(0.0);
                 let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, stats.placed_lights, overlap);
+                let shared_out = lights_shared_out(caps, overlap);
                 let (method, why) = match (particle_lights, stats.placed_lights, stats.light_overlap) {
                     (true, _, _) => (LightMethod::Bvh, Why::ParticleLights),
                     (false, 0, _) => (LightMethod::Off, Why::NoVolumes),
@@ -107,7 +111,7 @@ impl MethodChoice {
                     _ if config.light_bvh_build == BvhBuild::GpuEveryFrame && !rebuilt_bvh_wins => {
                         (LightMethod::Clustered, Why::RebuiltEveryFrame)
                     }
-                    (false, count, overlap) => (LightMethod::Bvh, Why::Overlap { count, overlap: overlap.unwrap_or(0.0) }),
+                    (false, count, _) => (LightMethod::Bvh, Why::Overlap { count, overlap, shared_out }),
                 };
                 Chosen { method, why }
             }
@@ -120,7 +124,7 @@ impl MethodChoice {
                     (n, _) if n <= BRUTE_FORCE_MAX => (DecalMethod::Brute, Why::Few(n)),
                     _ if reflections => (DecalMethod::Bvh, Why::Reflections),
                     _ if config.decal_bvh_build == BvhBuild::GpuEveryFrame => (DecalMethod::Clustered, Why::RebuiltEveryFrame),
-                    (count, overlap) => (DecalMethod::Bvh, Why::Overlap { count, overlap: overlap.unwrap_or(0.0) }),
+                    (count, overlap) => (DecalMethod::Bvh, Why::Overlap { count, overlap: overlap.unwrap_or(0.0), shared_out: false }),
                 };
                 Chosen { method, why }
             }
@@ -262,6 +266,12 @@ pub const DENSE_DECAL_OVERLAP: f32 = 24.0;
 /// walk changes between the two (benchmarks/LOG.md, topic 1).
 pub const DENSE_LIGHT_OVERLAP: f32 = 16.0;
 
+/// Whether `bvh` lights reaching `overlap` of them a surface point are dense: walked a subgroup at a
+/// time, their leaves shared out.
+pub fn lights_shared_out(caps: Capabilities, overlap: f32) -> bool {
+    caps.subgroups && overlap >= DENSE_LIGHT_OVERLAP
+}
+
 /// The leaves of groups rebuilt on the GPU every frame, by how queries walk them: a walk alone tests
 /// every item of a leaf it reaches, and leaves of 8 about halved dense lights' frames against
 /// single-item leaves; walks sharing leaves out test one item a lane, and leaves of 32 were fastest
@@ -311,6 +321,13 @@ pub fn dynamic_leaves(subgroup_walks: bool) -> DynamicLeaves {
 pub struct Capabilities {
     /// Subgroup operations (`wgpu::Features::SUBGROUP`).
     pub subgroups: bool,
+}
+
+impl Capabilities {
+    /// The capabilities of `ctx`'s device.
+    pub fn of(ctx: &GpuContext) -> Self {
+        Self { subgroups: ctx.features.contains(wgpu::Features::SUBGROUP) }
+    }
 }
 
 /// What the plan needs of the scene, measured at load ([`Measurements`] says which).
@@ -425,9 +442,8 @@ impl FramePlan {
             debug_views: config.debug_view != DebugView::Off,
         };
         // Lights crowded enough get wide leaves, walked a subgroup at a time, their leaves shared out.
-        let dense_lights = caps.subgroups
-            && config.light_method == LightMethod::Bvh
-            && stats.light_overlap.is_some_and(|overlap| overlap >= DENSE_LIGHT_OVERLAP);
+        let dense_lights =
+            config.light_method == LightMethod::Bvh && stats.light_overlap.is_some_and(|overlap| lights_shared_out(caps, overlap));
         let lights = StructurePlan {
             build: group_build(
                 config.light_method == LightMethod::Bvh,

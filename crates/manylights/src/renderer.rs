@@ -100,7 +100,7 @@ impl Renderer {
         config.validate(&ctx.device_limits())?;
         // Before anything is built from it (the ray hierarchy, the light and decal structures).
         scene.validate()?;
-        let caps = Capabilities { subgroups: ctx.features.contains(wgpu::Features::SUBGROUP) };
+        let caps = Capabilities::of(&ctx);
         let stats = crate::accel::overlap::scene_statistics(scene, Measurements::for_settings(&config, caps))?;
         let plan = FramePlan::resolve(&config, caps, &stats)?;
         // From here on the methods that run stand in the settings; `methods_chosen` says why.

@@ -79,7 +79,7 @@ pub fn sampled_overlap<T>(
     contains: impl Fn(&T, Vec3) -> bool,
 ) -> f32 {
     let (ranges, instances) = groups.resolve(items.len());
-    let placed: usize = instances.iter().map(|i| ranges[i.group].len()).sum();
+    let placed = groups.placed_count(items.len());
     if points.is_empty() || placed == 0 {
         return 0.0;
     }
@@ -115,9 +115,8 @@ pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<Sce
     } else {
         None
     };
-    let (light_ranges, light_instances) = scene.light_groups.resolve(scene.lights.len());
-    let placed_lights = light_instances.iter().map(|i| light_ranges[i.group].len()).sum();
-    let placed_decals = instances.iter().map(|i| ranges[i.group].len()).sum();
+    let placed_lights = scene.light_groups.placed_count(scene.lights.len());
+    let placed_decals = scene.decal_groups.placed_count(scene.decals.len());
     let points =
         if measurements.light_overlap || measurements.decal_overlap { surface_points(scene, SAMPLED_POINTS, 1) } else { Vec::new() };
     let light_overlap =

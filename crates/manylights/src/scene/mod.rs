@@ -298,6 +298,12 @@ impl Groups {
         (ranges, self.instances.clone())
     }
 
+    /// The items as placed, for `item_count` items: each group's once per instance of it.
+    pub fn placed_count(&self, item_count: usize) -> usize {
+        let (ranges, instances) = self.resolve(item_count);
+        instances.iter().map(|i| ranges[i.group].len()).sum()
+    }
+
     /// Whether any instance moves over time.
     pub fn is_animated(&self) -> bool {
         self.instances.iter().any(|i| i.spin.is_some())
