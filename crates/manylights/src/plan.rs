@@ -384,6 +384,10 @@ pub struct StructurePlan {
     pub wide_leaves: bool,
     /// The leaves of groups rebuilt on the GPU every frame ([`rebuilt_leaves`]).
     pub rebuilt_leaves: DynamicLeaves,
+    /// Groups rebuilt on the GPU every frame get entry grids (`accel/rebuilt_grid.rs`), rebuilt after
+    /// them: where the opaque surfaces' queries walk alone, the only walks that start at a grid's
+    /// cells in an LBVH.
+    pub rebuilt_grids: bool,
     /// The one placed group gets cell lists where they fit its budget (`accel/cell_lists.rs`); shading
     /// then reads them instead of walking ([`FramePlan::shading_methods`]).
     pub cell_lists: bool,
@@ -453,6 +457,7 @@ impl FramePlan {
             clustered: config.light_method == LightMethod::Clustered,
             wide_leaves: dense_lights,
             rebuilt_leaves: rebuilt_leaves(dense_lights),
+            rebuilt_grids: false,
             cell_lists: false,
         };
         // Decals crowded enough that their queries share leaves out get wide leaves, and, as one
@@ -469,8 +474,13 @@ impl FramePlan {
             clustered: config.decal_method == DecalMethod::Clustered,
             wide_leaves: dense_decals,
             rebuilt_leaves: rebuilt_leaves(false),
+            rebuilt_grids: false,
             cell_lists: dense_decals && stats.placed_decal_groups == 1,
         };
+        let opaque_stage = if config.pipeline == PipelineKind::Forward { ShadingStage::Fragment } else { ShadingStage::Compute };
+        let walks = query_walks(ShadingMethods { dense_lights, dense_decals, ..unlisted }, opaque_stage);
+        let lights = StructurePlan { rebuilt_grids: !walks.lights, ..lights };
+        let decals = StructurePlan { rebuilt_grids: !walks.decals, ..decals };
         let particles = match (has_particles, config.particle_method) {
             (false, _) | (true, ParticleMethod::Off) => ParticlePlan::None,
             (true, ParticleMethod::Grid) => ParticlePlan::Grid,
@@ -592,6 +602,18 @@ mod tests {
         // Without subgroups, nothing is shared out: narrow leaves, walked alone.
         let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false }, &stats(100.0)).unwrap();
         assert!(!alone.lights.wide_leaves && !alone.shading_methods(true).dense_lights);
+        // Rebuilt groups get entry grids exactly where their queries walk alone.
+        assert!(sparse.lights.rebuilt_grids && alone.lights.rebuilt_grids && !dense.lights.rebuilt_grids);
+    }
+
+    #[test]
+    fn rebuilt_decals_get_entry_grids_where_their_queries_walk_alone() {
+        let decals = |pipeline| RenderConfig { pipeline, ..config(LightMethod::Off, DecalMethod::Bvh) };
+        let stats = SceneStatistics { placed_decals: 1000, placed_decal_groups: 1, ..Default::default() };
+        let plan = |pipeline, caps| FramePlan::resolve(&decals(pipeline), caps, &stats).unwrap().decals.rebuilt_grids;
+        // Fragments walk decals a subgroup at a time where they can.
+        assert!(plan(PipelineKind::Visbuffer, SUBGROUPS) && plan(PipelineKind::Deferred, SUBGROUPS));
+        assert!(!plan(PipelineKind::Forward, SUBGROUPS) && plan(PipelineKind::Forward, Capabilities { subgroups: false }));
     }
 
     #[test]

@@ -49,7 +49,14 @@ fn gpu_query(
 ) -> Vec<[u32; 4]> {
     let device = &ctx.device;
     // Rebuilt groups get the leaves the plan gives the walk, wider where subgroups walk them.
-    let plan = StructurePlan { build, clustered: false, wide_leaves: false, rebuilt_leaves: rebuilt_leaves(subgroups), cell_lists: false };
+    let plan = StructurePlan {
+        build,
+        clustered: false,
+        wide_leaves: false,
+        rebuilt_leaves: rebuilt_leaves(subgroups),
+        rebuilt_grids: true,
+        cell_lists: false,
+    };
     let mut structure = VolumeStructure::for_lights(ctx, lights, groups, &plan, None).unwrap();
     let gpu_points: Vec<[f32; 4]> = points.iter().map(|p| p.extend(1.0).to_array()).collect();
     let storage = |contents: &[u8], usage| device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents, usage });

@@ -274,7 +274,14 @@ fn decals_keep_their_layers_in_leaf_order_and_gpu_rebuilds_refuse_cpu_ordered_us
     let frame_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
     let grid = ClusterGrid::for_resolution(64, 36);
     let structure = |build, clustered: bool| {
-        let plan = StructurePlan { build, clustered, wide_leaves: false, rebuilt_leaves: rebuilt_leaves(false), cell_lists: false };
+        let plan = StructurePlan {
+            build,
+            clustered,
+            wide_leaves: false,
+            rebuilt_leaves: rebuilt_leaves(false),
+            rebuilt_grids: true,
+            cell_lists: false,
+        };
         VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, &plan, clustered.then_some((grid, &frame_layout)), 0)
     };
     let message = structure(GroupBuild::GpuEveryFrame, true).err().expect("clustered lists over GPU rebuilds are an error").to_string();

@@ -48,6 +48,11 @@ struct FirstInstance {
 // Set in `VolumeInstance::blas_root` when the group has an entry grid (`accel/entry_grid.rs`).
 const ENTRY_GRID_FLAG: u32 = 0x80000000u;
 
+// Set in an entry-grid header's `skip`, above the cells per axis, when the grid is of a group rebuilt
+// on the GPU (`accel/rebuilt_grid.rs`): its cells name single subtrees of an LBVH, which walks alone
+// start at; walks merging their lanes' cells into one range start at the root instead.
+const ENTRY_GRID_REBUILT: u32 = 0x40000000u;
+
 // Set in an entry-grid cell's second word when the cell names a cover of several subtrees
 // (`accel/entry_grid.rs`, `CELL_COVER`): bits 27–30 hold their count − 1, bits 0–26 the primitive
 // index where their (start, stop) pairs begin.

@@ -7,8 +7,8 @@
 //! a few walks just those, a cell reached by none ends the query at once — and still finds exactly
 //! what a query from the root finds.
 //!
-//! Built on the CPU with the group's BVH (`BvhBuild::CpuOnce`); groups rebuilt on the GPU start at
-//! their root. `structure.rs` stores the cells after the primitive indices and the grid's placement in
+//! Built on the CPU with the group's BVH (`BvhBuild::CpuOnce`); groups rebuilt on the GPU get a
+//! coarser grid of single subtrees, rebuilt after each build (`rebuilt_grid.rs`). `structure.rs` stores the cells after the primitive indices and the grid's placement in
 //! a header node before the group's root (flagged in the instances' `blas_root`);
 //! `volume_query.wgsl` looks the cell up and walks its cover as [`EntryGrid::cover`] says here.
 
@@ -196,7 +196,7 @@ impl EntryGrid {
 }
 
 /// Cells per axis, proportional to the extent, about `target` in all; flat axes get one.
-fn grid_dims(extent: Vec3, target: f64) -> UVec3 {
+pub(super) fn grid_dims(extent: Vec3, target: f64) -> UVec3 {
     let axes: Vec<f64> = extent.to_array().iter().map(|&e| f64::from(e)).filter(|&e| e > 0.0).collect();
     if axes.is_empty() {
         return UVec3::ONE;

@@ -7,7 +7,8 @@
 //! query, which serve static groups and are the oracle for the GPU. `volumes.rs` bounds each light's
 //! and decal's volume. `lbvh.rs` builds BVHs on the GPU (Karras LBVH) in the same layout, and
 //! `leaf_order.rs` puts a rebuilt group's items in the order of its leaves.
-//! `entry_grid.rs` tells a query where to start in a CPU-built group's BVH, and `cell_lists.rs` lists
+//! `entry_grid.rs` tells a query where to start in a CPU-built group's BVH, `rebuilt_grid.rs` in a
+//! rebuilt one's, and `cell_lists.rs` lists
 //! what reaches each cell of a grid over a group of crowded volumes, which queries read instead.
 //! `structure.rs` is the two-level structure the shaders query (`accel/volume_query.wgsl`): a BVH
 //! per group of volumes and a top level over the groups' instances. `clusters.rs` builds the
@@ -21,6 +22,7 @@ pub mod lbvh;
 pub mod leaf_order;
 pub mod overlap;
 pub mod radix_sort;
+pub mod rebuilt_grid;
 pub mod structure;
 pub mod volumes;
 

@@ -5,12 +5,20 @@
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext};
 use crate::{Error, Result};
 
-/// Keep in sync with `radix_sort.wgsl`.
-const TILE: u32 = 2048;
+/// Threads of a tile's workgroup, each taking one pair a round. Keep in sync with `radix_sort.wgsl`.
+const THREADS: u32 = 256;
 const DIGITS: u64 = 256;
 const DIGIT_BITS: u32 = 8;
 const MAX_PASSES: usize = 4;
 const PASSES: [&str; 3] = ["sort_count", "sort_offsets", "sort_scatter"];
+
+/// Rounds of a tile (its `ROUNDS`, a pipeline constant), by the sort's capacity: about 256 tiles, at
+/// least 2 rounds and at most 8. A tile's workgroup takes its rounds one after another, so fewer
+/// rounds in more tiles sort few pairs sooner; at a million, tiles of 8 rounds were faster, and at
+/// 262,144, of 4 (benchmarks/LOG.md, topic 5).
+fn tile_rounds(capacity: u32) -> u32 {
+    (capacity / (THREADS * 256)).next_power_of_two().clamp(2, 8)
+}
 
 pub struct GpuRadixSort {
     pipelines: Vec<wgpu::ComputePipeline>,
@@ -22,6 +30,8 @@ pub struct GpuRadixSort {
     pairs: wgpu::Buffer,
     scratch: wgpu::Buffer,
     capacity: u32,
+    /// Pairs per tile.
+    tile: u32,
     count: u32,
     key_bits: u32,
 }
@@ -39,7 +49,9 @@ impl GpuRadixSort {
         let buffer = |label, size: u64, usage| {
             device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
         };
-        let tiles = u64::from(capacity.div_ceil(TILE).max(1));
+        let rounds = tile_rounds(capacity);
+        let tile = THREADS * rounds;
+        let tiles = u64::from(capacity.div_ceil(tile).max(1));
         let tile_digits = buffer("radix sort tile digits", tiles * DIGITS * 4, U::STORAGE);
         let digit_totals = buffer("radix sort digit totals", MAX_PASSES as u64 * DIGITS * 4, U::STORAGE | U::COPY_DST);
         let compute = wgpu::ShaderStages::COMPUTE;
@@ -70,7 +82,11 @@ impl GpuRadixSort {
             })
             .collect();
         let shader = ShaderDesc::new("accel/radix_sort.wgsl");
-        let pipelines = PASSES.iter().map(|entry| bindings::compute_pipeline(device, entry, &shader, &[&layout])).collect::<Result<_>>()?;
+        let rounds = [("ROUNDS", f64::from(rounds))];
+        let pipelines = PASSES
+            .iter()
+            .map(|entry| bindings::compute_pipeline_with_constants(device, entry, &shader, &[&layout], &rounds))
+            .collect::<Result<_>>()?;
         Ok(Self {
             pipelines,
             pass_params,
@@ -79,6 +95,7 @@ impl GpuRadixSort {
             pairs: pairs.clone(),
             scratch: scratch.clone(),
             capacity,
+            tile,
             count: 0,
             key_bits: 0,
         })
@@ -100,7 +117,7 @@ impl GpuRadixSort {
         self.count = count;
         self.key_bits = key_bits;
         for (index, params) in self.pass_params.iter().take(self.pass_count()).enumerate() {
-            let info = [count, index as u32 * DIGIT_BITS, count.div_ceil(TILE), index as u32];
+            let info = [count, index as u32 * DIGIT_BITS, count.div_ceil(self.tile), index as u32];
             queue.write_buffer(params, 0, bytemuck::cast_slice(&info));
         }
         Ok(())
@@ -112,7 +129,7 @@ impl GpuRadixSort {
             return;
         }
         encoder.clear_buffer(&self.digit_totals, 0, None);
-        let tiles = self.count.div_ceil(TILE);
+        let tiles = self.count.div_ceil(self.tile);
         // One compute pass: wgpu orders the dispatches within it.
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("radix sort"), timestamp_writes: None });
         for bind_group in &self.bind_groups[..self.pass_count()] {

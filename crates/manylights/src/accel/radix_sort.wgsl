@@ -1,8 +1,8 @@
 // Stable LSD radix sort of (key, value) pairs by the key, 8 bits per pass, three dispatches a pass:
 // count each tile's digits, turn the counts into each tile's output offsets, scatter. A tile is
-// TILE consecutive pairs; the scatter ranks pairs of one digit in a tile by position with bit masks
-// in workgroup memory, so it needs neither subgroup operations nor progress guarantees between
-// workgroups (lavapipe runs it as the GPUs do).
+// THREADS * ROUNDS consecutive pairs; the scatter ranks pairs of one digit in a tile by position with
+// bit masks in workgroup memory, so it needs neither subgroup operations nor progress guarantees
+// between workgroups (lavapipe runs it as the GPUs do).
 
 #include "accel/workgroup_scan.wgsl"
 
@@ -17,8 +17,8 @@ struct SortPass {
 
 // Threads per workgroup: one per digit in `sort_offsets` and `sort_scatter`.
 const THREADS: u32 = SCAN_THREADS;
-const ROUNDS: u32 = 8u;
-const TILE: u32 = THREADS * ROUNDS;
+// Rounds of THREADS pairs a tile takes, set per sort by its capacity (`radix_sort.rs`).
+override ROUNDS: u32 = 8u;
 const DIGITS: u32 = 256u;
 // Bit mask words per digit: one bit per thread of a round.
 const WORDS: u32 = THREADS / 32u;
@@ -41,7 +41,7 @@ var<workgroup> counts: array<atomic<u32>, DIGITS>;
 fn sort_count(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) local: u32) {
     atomicStore(&counts[local], 0u);
     workgroupBarrier();
-    let tile_start = group.x * TILE;
+    let tile_start = group.x * (THREADS * ROUNDS);
     for (var round = 0u; round < ROUNDS; round += 1u) {
         let position = tile_start + round * THREADS + local;
         if position < pass_info.count {
@@ -92,7 +92,7 @@ fn sort_scatter(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocati
     // pairs of that digit in earlier rounds plus those at lower threads in its own, which keeps the sort
     // stable.
     for (var round = 0u; round < ROUNDS; round += 1u) {
-        let position = group.x * TILE + round * THREADS + local;
+        let position = group.x * (THREADS * ROUNDS) + round * THREADS + local;
         let valid = position < pass_info.count;
         var pair = vec2<u32>(0u);
         var digit = 0u;

@@ -30,7 +30,9 @@ use super::{
     entry_grid::{self, EntryGrid},
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
     leaf_order::{LeafOrder, LeafOrderTarget},
-    light_aabb, Aabb, Bvh, BvhNode,
+    light_aabb,
+    rebuilt_grid::{GridPlacement, RebuiltGrids, RebuiltGroup},
+    Aabb, Bvh, BvhNode,
 };
 use crate::{
     gpu::{
@@ -210,12 +212,14 @@ impl VolumeKind {
                 top_level: "light_tlas_build",
                 groups: "light_blas_build",
                 leaf_order: "light_leaf_order",
+                rebuilt_grids: "light_entry_grid_build",
                 clusters: "light_cluster_build",
             },
             VolumeKind::Decals => Scopes {
                 top_level: "decal_tlas_build",
                 groups: "decal_blas_build",
                 leaf_order: "decal_leaf_order",
+                rebuilt_grids: "decal_entry_grid_build",
                 clusters: "decal_cluster_build",
             },
         }
@@ -257,6 +261,7 @@ struct Scopes {
     top_level: &'static str,
     groups: &'static str,
     leaf_order: &'static str,
+    rebuilt_grids: &'static str,
     clusters: &'static str,
 }
 
@@ -271,6 +276,8 @@ pub struct Volumes<'a> {
     pub wide_leaves: bool,
     /// The leaves of groups rebuilt on the GPU every frame (`plan::StructurePlan::rebuilt_leaves`).
     pub rebuilt_leaves: DynamicLeaves,
+    /// Groups rebuilt on the GPU every frame get entry grids (`plan::StructurePlan::rebuilt_grids`).
+    pub rebuilt_grids: bool,
     /// The one placed group gets cell lists where they fit (`plan::StructurePlan::cell_lists`).
     pub cell_lists: bool,
     pub groups: &'a Groups,
@@ -318,6 +325,8 @@ pub struct VolumeStructure {
     cell_lists: bool,
     /// Puts the items in leaf order after GPU rebuilds (none when every group is built on the CPU).
     leaf_order: Option<LeafOrder>,
+    /// Rebuilds the entry grids of groups rebuilt on the GPU, after their builds.
+    rebuilt_grids: Option<RebuiltGrids>,
     /// Present for the clustered method; its buffers are bindings 4 and 5, placeholders otherwise.
     clusters: Option<ClusterLists>,
     groups: Vec<Group>,
@@ -357,6 +366,7 @@ impl VolumeStructure {
             boxes: &boxes,
             wide_leaves: plan.wide_leaves,
             rebuilt_leaves: plan.rebuilt_leaves,
+            rebuilt_grids: plan.rebuilt_grids,
             cell_lists: false,
             groups,
             dynamic: None,
@@ -385,6 +395,7 @@ impl VolumeStructure {
             boxes: &boxes,
             wide_leaves: plan.wide_leaves,
             rebuilt_leaves: plan.rebuilt_leaves,
+            rebuilt_grids: plan.rebuilt_grids,
             cell_lists: false,
             groups,
             dynamic: Some(dynamic),
@@ -429,6 +440,7 @@ impl VolumeStructure {
             boxes: &boxes,
             wide_leaves: plan.wide_leaves,
             rebuilt_leaves: plan.rebuilt_leaves,
+            rebuilt_grids: plan.rebuilt_grids,
             cell_lists: plan.cell_lists,
             groups,
             dynamic: None,
@@ -493,7 +505,9 @@ impl VolumeStructure {
                 "clustered lists bin the {label}s in the order the CPU stores them, which GPU rebuilds change every frame; build the {label}s' BVH once on the CPU"
             )));
         }
-        let cell_words: u64 = cpu_groups.iter().flatten().filter_map(|g| g.grid.as_ref()).map(|g| g.gpu_len() as u64).sum();
+        let rebuilt_grids = rebuilt_grid_placements(volumes, &layout, build);
+        let cell_words: u64 = cpu_groups.iter().flatten().filter_map(|g| g.grid.as_ref()).map(|g| g.gpu_len() as u64).sum::<u64>()
+            + rebuilt_grids.iter().flatten().map(|p| 2 * u64::from(p.cells())).sum::<u64>();
         let cell_lists = cpu_groups.iter().flatten().any(|g| matches!(g.grid, Some(GroupGrid::Lists(_))));
         let primitive_count = layout.primitive_count();
         if primitive_count + cell_words > u64::from(entry_grid::CELL_COVER_OFFSET_MASK) {
@@ -520,7 +534,10 @@ impl VolumeStructure {
         if !scene_indices.is_empty() {
             ctx.queue.write_buffer(&buffers.primitives, u64::from(layout.instance_slots) * 4, bytemuck::cast_slice(&scene_indices));
         }
-        let mut groups = place_groups(ctx, volumes, &layout, &buffers, build, cpu_groups)?;
+        let (mut groups, rebuilt) = place_groups(ctx, volumes, &layout, &buffers, build, cpu_groups, rebuilt_grids)?;
+        let rebuilt_grids = (!rebuilt.is_empty())
+            .then(|| RebuiltGrids::new(ctx, volumes.kind.scopes().rebuilt_grids, &buffers.nodes, &buffers.primitives, &rebuilt))
+            .transpose()?;
         if let Some(dynamic) = layout.dynamic {
             groups.push(dynamic_group(ctx, &layout, &buffers, dynamic)?);
         }
@@ -547,6 +564,7 @@ impl VolumeStructure {
             wide_leaves,
             cell_lists,
             leaf_order,
+            rebuilt_grids,
             clusters,
             groups,
             instances: layout.instances,
@@ -624,6 +642,9 @@ impl VolumeStructure {
         }
         if let Some(leaf_order) = &self.leaf_order {
             leaf_order.record(encoder, timer.as_deref_mut());
+        }
+        if let Some(grids) = &self.rebuilt_grids {
+            grids.record(encoder, timer.as_deref_mut());
         }
         let moved = match self.built_for {
             None => true,
@@ -877,11 +898,13 @@ fn place_groups(
     buffers: &Buffers,
     build: GroupBuild,
     cpu_groups: Vec<Option<CpuGroup>>,
-) -> Result<Vec<Group>> {
+    rebuilt_grids: Vec<Option<GridPlacement>>,
+) -> Result<(Vec<Group>, Vec<RebuiltGroup>)> {
     let node_offset = |node: u32| u64::from(node) * std::mem::size_of::<BvhNode>() as u64;
     let mut next_cell = layout.primitive_count() as u32;
     let mut groups = Vec::with_capacity(layout.ranges.len() + 1);
-    for ((range, &blas_root), cpu_group) in layout.ranges.iter().zip(&layout.group_roots).zip(cpu_groups) {
+    let mut rebuilt = Vec::new();
+    for (((range, &blas_root), cpu_group), placement) in layout.ranges.iter().zip(&layout.group_roots).zip(cpu_groups).zip(rebuilt_grids) {
         let items = range.start as u32..range.end as u32;
         let boxes = &volumes.boxes[range.clone()];
         let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
@@ -905,12 +928,37 @@ fn place_groups(
                 let leaves = max_leaf_size(volumes.rebuilt_leaves);
                 let mut builder = GpuLbvh::with_target(ctx, boxes.len() as u32, target)?.with_max_leaf_size(leaves);
                 builder.set_boxes(&ctx.queue, boxes)?;
+                if let Some(placement) = placement {
+                    let node = placement.header(next_cell);
+                    ctx.queue.write_buffer(&buffers.nodes, node_offset(blas_root - 1), bytemuck::bytes_of(&node));
+                    grid = Some(GridHeader { node, flag: ENTRY_GRID_FLAG });
+                    rebuilt.push(RebuiltGroup {
+                        placement,
+                        first_cell: next_cell,
+                        root: blas_root,
+                        node_end: blas_root + builder.node_count(),
+                    });
+                    next_cell += 2 * placement.cells();
+                }
                 Some(builder)
             }
         };
         groups.push(Group { items, blas_root, grid, dynamic: false, bounds, builder });
     }
-    Ok(groups)
+    Ok((groups, rebuilt))
+}
+
+/// Each group's entry grid where it is rebuilt on the GPU and `volumes.rebuilt_grids` asks for one.
+fn rebuilt_grid_placements(volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Vec<Option<GridPlacement>> {
+    layout
+        .ranges
+        .iter()
+        .map(|range| {
+            let boxes = &volumes.boxes[range.clone()];
+            let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
+            (build == GroupBuild::GpuEveryFrame && volumes.rebuilt_grids).then(|| GridPlacement::for_group(&bounds, boxes.len())).flatten()
+        })
+        .collect()
 }
 
 /// The most boxes a leaf of a GPU build holds, as the plan's `leaves` say.

@@ -17,9 +17,10 @@
 // `VOLUMES_walk_lane_u32` / `_vec4(value, lane)`: one lane's trivial versions where each invocation
 // walks alone.
 //
-// Inside a group the query starts where the group's entry grid says, if it has one (CPU-built groups,
-// laid out depth first, so every step of a walk moves to a higher node), and ends at or past the node
-// after that subtree; where the cell names several subtrees (a cover), it walks each in turn.
+// Inside a group the query starts where the group's entry grid says, if it has one, and ends at or
+// past the node after that subtree: CPU-built groups are laid out depth first, so every step of a walk
+// moves to a higher node; a rebuilt group's LBVH keeps each subtree below the node after it
+// (`accel/lbvh.wgsl`). Where the cell names several subtrees (a cover), it walks each in turn.
 //
 // A cursor: `VOLUMES_query_next_leaf` returns every group leaf whose box contains the point (and,
 // walking as a subgroup, the other lanes' leaves, below), as the range of items it holds (items are stored in leaf order, `accel/structure.rs`), and the caller
@@ -106,6 +107,12 @@ fn VOLUMES_query_enter(instance_index: u32, instance: VolumeInstance, first: boo
         var header = VOLUMES_first_instance.entry_grid_header;
         if !first {
             header = VOLUMES_nodes[root - 1u];
+        }
+        // A rebuilt group's cells name LBVH subtrees, whose nodes do not lie in walk order: lanes
+        // merging their cells into one range (`VOLUMES_walk_covers()` false) start at the root.
+        if !VOLUMES_walk_covers() && (header.skip & ENTRY_GRID_REBUILT) != 0u {
+            VOLUMES_query_in_group = true;
+            return;
         }
         let cell = entry_grid_cell(header, VOLUMES_query_point);
         let start = select(VOLUMES_primitives[cell], BVH_END, VOLUMES_primitives[cell] < root);

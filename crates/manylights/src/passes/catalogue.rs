@@ -22,6 +22,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         crate::accel::volume_query_probe_shader(true),
         ShaderDesc::new("accel/lbvh.wgsl"),
         ShaderDesc::new("accel/leaf_order.wgsl"),
+        ShaderDesc::new("accel/rebuilt_grid.wgsl"),
         ShaderDesc::new("accel/radix_sort.wgsl"),
         ShaderDesc::new("accel/cluster_build.wgsl"),
         ShaderDesc::new("passes/deferred_decals.wgsl"),
