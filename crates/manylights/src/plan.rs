@@ -15,16 +15,14 @@ pub const BRUTE_FORCE_MAX: usize = 8;
 
 /// Whether lights in a BVH rebuilt on the GPU every frame are faster than clustered lists rebuilt
 /// every frame (BENCHMARKS.md, "Dense lights" and "Scaling"): where subgroups share dense lights'
-/// leaves out, in every pipeline, and in compute from overlap [`REBUILT_BVH_OVERLAP`] for up to
-/// [`REBUILT_BVH_MAX_LIGHTS`] lights. Sparser, or many more, the LBVH's build costs more than its
-/// walk saves; in fragments, lights walked alone diverge too much.
-pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, lights: usize, overlap: f32) -> bool {
-    lights_shared_out(caps, overlap)
-        || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP && lights <= REBUILT_BVH_MAX_LIGHTS)
+/// leaves out, in every pipeline, and in compute from overlap [`REBUILT_BVH_OVERLAP`] (28k lights at
+/// 10, a million at 9.8). Sparser, the LBVH's build and its coarser start cost more than its walk
+/// saves; in fragments, lights walked alone diverge too much.
+pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, overlap: f32) -> bool {
+    lights_shared_out(caps, overlap) || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP)
 }
 
 pub const REBUILT_BVH_OVERLAP: f32 = 4.0;
-pub const REBUILT_BVH_MAX_LIGHTS: usize = 262_144;
 
 /// Why `auto` chose a method, or that it was asked for: one line for `info`, `--timings` and the
 /// timings JSON.
@@ -101,7 +99,7 @@ impl MethodChoice {
             LightMethod::Auto => {
                 let particle_lights = stats.particles > 0 && config.particle_method == ParticleMethod::Bvh;
                 let overlap = stats.light_overlap.unwrap_or(0.0);
-                let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, stats.placed_lights, overlap);
+                let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, overlap);
                 let shared_out = lights_shared_out(caps, overlap);
                 let (method, why) = match (particle_lights, stats.placed_lights, stats.light_overlap) {
                     (true, _, _) => (LightMethod::Bvh, Why::ParticleLights),
@@ -663,7 +661,8 @@ mod tests {
         assert_eq!(chosen(&rebuilt, scene(1000, 0.1, 1000, 0.1)), (LightMethod::Clustered, DecalMethod::Clustered));
         assert_eq!(chosen(&rebuilt, scene(1000, DENSE_LIGHT_OVERLAP, 1000, 50.0)), (LightMethod::Bvh, DecalMethod::Clustered));
         assert_eq!(chosen(&rebuilt, scene(28_000, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
-        assert_eq!(chosen(&rebuilt, scene(1 << 20, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
+        assert_eq!(chosen(&rebuilt, scene(1 << 20, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
+        assert_eq!(chosen(&rebuilt, scene(1 << 18, REBUILT_BVH_OVERLAP - 1.5, 0, 0.0)).0, LightMethod::Clustered);
         let forward = RenderConfig { pipeline: PipelineKind::Forward, ..rebuilt.clone() };
         assert_eq!(chosen(&forward, scene(28_000, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
         let alone = MethodChoice::resolve(&forward, Capabilities { subgroups: false }, &scene(1000, 50.0, 0, 0.0));

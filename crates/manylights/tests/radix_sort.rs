@@ -33,33 +33,38 @@ fn sort_on_gpu(
 #[test]
 fn sorts_stably_by_the_key_bits() {
     let ctx = GpuContext::new().expect("a GPU adapter");
-    let capacity = 70_000;
-    let buffer = |label| {
-        ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: capacity as u64 * 8,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        })
-    };
-    let buffers = (buffer("pairs"), buffer("scratch"));
-    let mut sort = GpuRadixSort::new(&ctx, &buffers.0, &buffers.1, capacity).unwrap();
     let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
-    // One tile is 2048 pairs; 8, 16, 24 and 32 bits take 1 to 4 passes (even counts end with a copy).
-    for (count, key_bits) in [(0, 24), (1, 24), (2, 30), (255, 8), (2048, 16), (2049, 24), (5000, 30), (70_000, 24), (70_000, 32)] {
-        // Few distinct keys in some cases, so equal keys must keep their order.
-        let distinct = if count % 2 == 0 { 7 } else { u64::MAX };
-        let pairs: Vec<[u32; 2]> = (0..count as u32)
-            .map(|value| {
-                let key = (rng.random::<u64>() % distinct) as u32;
-                [if key_bits == 32 { key } else { key & ((1 << key_bits) - 1) }, value]
+    // Capacities whose tiles take 2, 4 and 8 rounds of 256 pairs.
+    for (capacity, tile) in [(70_000, 512), (200_000, 1024), (600_000, 2048)] {
+        let buffer = |label| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: capacity as u64 * 8,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
             })
-            .collect();
-        let mut expected = pairs.clone();
-        expected.sort_by_key(|pair| pair[0]);
-        let sorted = sort_on_gpu(&ctx, &mut sort, &buffers, &pairs, key_bits);
-        assert!(sorted == expected, "{count} pairs by {key_bits} bits: not sorted stably");
+        };
+        let buffers = (buffer("pairs"), buffer("scratch"));
+        let mut sort = GpuRadixSort::new(&ctx, &buffers.0, &buffers.1, capacity).unwrap();
+        assert_eq!(sort.tile_size(), tile, "tiles for a capacity of {capacity}");
+        // 8, 16, 24 and 32 bits take 1 to 4 passes (even counts end with a copy).
+        let small = [(0, 24), (1, 24), (2, 30), (255, 8), (tile, 16), (tile + 1, 24), (5000, 30)];
+        let cases: &[(u32, u32)] = if capacity == 70_000 { &small } else { &[(tile + 1, 24)] };
+        for &(count, key_bits) in cases.iter().chain(&[(capacity, 24), (capacity, 32)]) {
+            // Few distinct keys in some cases, so equal keys must keep their order.
+            let distinct = if count % 2 == 0 { 7 } else { u64::MAX };
+            let pairs: Vec<[u32; 2]> = (0..count)
+                .map(|value| {
+                    let key = (rng.random::<u64>() % distinct) as u32;
+                    [if key_bits == 32 { key } else { key & ((1 << key_bits) - 1) }, value]
+                })
+                .collect();
+            let mut expected = pairs.clone();
+            expected.sort_by_key(|pair| pair[0]);
+            let sorted = sort_on_gpu(&ctx, &mut sort, &buffers, &pairs, key_bits);
+            assert!(sorted == expected, "{count} pairs by {key_bits} bits (capacity {capacity}): not sorted stably");
+        }
+        assert!(sort.set_problem(&ctx.queue, capacity + 1, 24).is_err());
+        assert!(sort.set_problem(&ctx.queue, 10, 0).is_err());
     }
-    assert!(sort.set_problem(&ctx.queue, capacity + 1, 24).is_err());
-    assert!(sort.set_problem(&ctx.queue, 10, 0).is_err());
 }

@@ -259,7 +259,7 @@ var<workgroup> block_max: array<vec3<f32>, BLOCK>;
 // boxes of the block's topmost nodes (and of leaves whose parent spans blocks) are carried on
 // globally. Looping over ranges of up to 256 boxes in workgroup memory built up to 65k boxes as fast
 // or up to 5 % sooner than carrying each leaf's box up the block's nodes with workgroup atomics, which
-// contend near the block's top (benchmarks/LOG.md, topic 5).
+// contend near the block's top (benchmarks/LOG.md, topic 1).
 @compute @workgroup_size(256)
 fn lbvh_bounds(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) local: u32) {
     let n = params.count;

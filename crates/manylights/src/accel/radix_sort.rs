@@ -15,7 +15,7 @@ const PASSES: [&str; 3] = ["sort_count", "sort_offsets", "sort_scatter"];
 /// Rounds of a tile (its `ROUNDS`, a pipeline constant), by the sort's capacity: about 256 tiles, at
 /// least 2 rounds and at most 8. A tile's workgroup takes its rounds one after another, so fewer
 /// rounds in more tiles sort few pairs sooner; at a million, tiles of 8 rounds were faster, and at
-/// 262,144, of 4 (benchmarks/LOG.md, topic 5).
+/// 262,144, of 4 (benchmarks/LOG.md, topic 1).
 fn tile_rounds(capacity: u32) -> u32 {
     (capacity / (THREADS * 256)).next_power_of_two().clamp(2, 8)
 }
@@ -99,6 +99,11 @@ impl GpuRadixSort {
             count: 0,
             key_bits: 0,
         })
+    }
+
+    /// Pairs per tile: a multiple of 256 that the capacity chose ([`tile_rounds`]).
+    pub fn tile_size(&self) -> u32 {
+        self.tile
     }
 
     fn pass_count(&self) -> usize {
