@@ -14,12 +14,13 @@ use crate::{Error, Result};
 pub const BRUTE_FORCE_MAX: usize = 8;
 
 /// Whether lights in a BVH rebuilt on the GPU every frame are faster than clustered lists rebuilt
-/// every frame (BENCHMARKS.md, "Dense lights" and "Scaling"): where subgroups share dense lights'
-/// leaves out, in every pipeline, and in compute from overlap [`REBUILT_BVH_OVERLAP`] (28k lights at
+/// every frame (BENCHMARKS.md, "Dense lights" and "Scaling"): from overlap [`DENSE_LIGHT_OVERLAP`]
+/// where subgroups share their leaves out, in every pipeline (forward lights shared out from overlap
+/// 10 still lose there, 1.15×), and in compute from overlap [`REBUILT_BVH_OVERLAP`] (28k lights at
 /// 10, a million at 9.8). Sparser, the LBVH's build and its coarser start cost more than its walk
 /// saves; in fragments, lights walked alone diverge too much.
 pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, overlap: f32) -> bool {
-    lights_shared_out(caps, overlap) || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP)
+    (caps.subgroups && overlap >= DENSE_LIGHT_OVERLAP) || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP)
 }
 
 pub const REBUILT_BVH_OVERLAP: f32 = 4.0;
@@ -100,7 +101,7 @@ impl MethodChoice {
                 let particle_lights = stats.particles > 0 && config.particle_method == ParticleMethod::Bvh;
                 let overlap = stats.light_overlap.unwrap_or(0.0);
                 let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, overlap);
-                let shared_out = lights_shared_out(caps, overlap);
+                let shared_out = lights_shared_out(caps, config.pipeline, overlap);
                 let (method, why) = match (particle_lights, stats.placed_lights, stats.light_overlap) {
                     (true, _, _) => (LightMethod::Bvh, Why::ParticleLights),
                     (false, 0, _) => (LightMethod::Off, Why::NoVolumes),
@@ -259,15 +260,20 @@ pub struct QueryWalks {
 pub const DENSE_DECAL_OVERLAP: f32 = 24.0;
 
 /// From how many lights reach a surface point, on average, `bvh` lights count as dense
-/// ([`ShadingMethods::dense_lights`]): sharing wide leaves out wins at overlap 100 in every stage
-/// (most in fragments), breaks even at 10 in compute and loses there rebuilt every frame, so the
-/// walk changes between the two (benchmarks/LOG.md, topic 1).
+/// ([`ShadingMethods::dense_lights`]) in the compute pipelines: sharing wide leaves out wins at
+/// overlap 100, breaks even at 10 and loses there rebuilt every frame, so the walk changes between
+/// the two (benchmarks/LOG.md, topic 1).
 pub const DENSE_LIGHT_OVERLAP: f32 = 16.0;
+/// The same in the forward pipeline, whose lanes walking alone diverge more: sharing out wins at
+/// overlap 10 (built once 0.94× walking alone, rebuilt every frame 0.79×) and loses at 0.45 (1.15×,
+/// 1.24×).
+pub const DENSE_FRAGMENT_LIGHT_OVERLAP: f32 = 10.0;
 
-/// Whether `bvh` lights reaching `overlap` of them a surface point are dense: walked a subgroup at a
-/// time, their leaves shared out.
-pub fn lights_shared_out(caps: Capabilities, overlap: f32) -> bool {
-    caps.subgroups && overlap >= DENSE_LIGHT_OVERLAP
+/// Whether `bvh` lights reaching `overlap` of them a surface point are dense in `pipeline`: walked a
+/// subgroup at a time, their leaves shared out.
+pub fn lights_shared_out(caps: Capabilities, pipeline: PipelineKind, overlap: f32) -> bool {
+    let dense = if pipeline == PipelineKind::Forward { DENSE_FRAGMENT_LIGHT_OVERLAP } else { DENSE_LIGHT_OVERLAP };
+    caps.subgroups && overlap >= dense
 }
 
 /// The leaves of groups rebuilt on the GPU every frame, by how queries walk them: a walk alone tests
@@ -444,8 +450,8 @@ impl FramePlan {
             debug_views: config.debug_view != DebugView::Off,
         };
         // Lights crowded enough get wide leaves, walked a subgroup at a time, their leaves shared out.
-        let dense_lights =
-            config.light_method == LightMethod::Bvh && stats.light_overlap.is_some_and(|overlap| lights_shared_out(caps, overlap));
+        let dense_lights = config.light_method == LightMethod::Bvh
+            && stats.light_overlap.is_some_and(|overlap| lights_shared_out(caps, config.pipeline, overlap));
         let lights = StructurePlan {
             build: group_build(
                 config.light_method == LightMethod::Bvh,
@@ -602,6 +608,12 @@ mod tests {
         assert!(!alone.lights.wide_leaves && !alone.shading_methods(true).dense_lights);
         // Rebuilt groups get entry grids exactly where their queries walk alone.
         assert!(sparse.lights.rebuilt_grids && alone.lights.rebuilt_grids && !dense.lights.rebuilt_grids);
+        // Forward lanes diverge more: lights are shared out from a lower overlap.
+        let forward = RenderConfig { pipeline: PipelineKind::Forward, ..bvh.clone() };
+        let shared = FramePlan::resolve(&forward, SUBGROUPS, &stats(DENSE_FRAGMENT_LIGHT_OVERLAP)).unwrap();
+        assert!(shared.lights.wide_leaves && shared.shading_methods(true).dense_lights && !shared.lights.rebuilt_grids);
+        let walked_alone = FramePlan::resolve(&forward, SUBGROUPS, &stats(DENSE_FRAGMENT_LIGHT_OVERLAP - 1.0)).unwrap();
+        assert!(!walked_alone.shading_methods(true).dense_lights);
     }
 
     #[test]
@@ -665,6 +677,8 @@ mod tests {
         assert_eq!(chosen(&rebuilt, scene(1 << 18, REBUILT_BVH_OVERLAP - 1.5, 0, 0.0)).0, LightMethod::Clustered);
         let forward = RenderConfig { pipeline: PipelineKind::Forward, ..rebuilt.clone() };
         assert_eq!(chosen(&forward, scene(28_000, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
+        assert_eq!(chosen(&forward, scene(28_000, DENSE_FRAGMENT_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
+        assert_eq!(chosen(&forward, scene(28_000, DENSE_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
         let alone = MethodChoice::resolve(&forward, Capabilities { subgroups: false }, &scene(1000, 50.0, 0, 0.0));
         assert_eq!(alone.lights.method, LightMethod::Clustered);
         let mut reflecting = rebuilt.clone();
