@@ -266,8 +266,8 @@ pub const DENSE_DECAL_OVERLAP: f32 = 24.0;
 pub const DENSE_LIGHT_OVERLAP: f32 = 16.0;
 /// The same in the forward pipeline, whose lanes walking alone diverge more: sharing out wins at
 /// overlap 10 (built once 0.94× walking alone, rebuilt every frame 0.79×) and loses at 0.45 (1.15×,
-/// 1.24×).
-pub const DENSE_FRAGMENT_LIGHT_OVERLAP: f32 = 10.0;
+/// 1.24×); 8 leaves room for the sampled overlap's error (`accel::overlap`, within 10 %).
+pub const DENSE_FRAGMENT_LIGHT_OVERLAP: f32 = 8.0;
 
 /// Whether `bvh` lights reaching `overlap` of them a surface point are dense in `pipeline`: walked a
 /// subgroup at a time, their leaves shared out.
