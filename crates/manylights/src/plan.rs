@@ -477,7 +477,7 @@ impl FramePlan {
             build: decal_build,
             clustered: config.decal_method == DecalMethod::Clustered,
             wide_leaves: dense_decals,
-            rebuilt_leaves: rebuilt_leaves(false),
+            rebuilt_leaves: rebuilt_leaves(dense_decals && caps.subgroups),
             rebuilt_grids: false,
             cell_lists: dense_decals && stats.placed_decal_groups == 1,
         };
