@@ -357,8 +357,9 @@ pub struct SceneStatistics {
 /// Which statistics the plan reads for these settings, so that nothing else is measured.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Measurements {
-    /// The decals' centre overlap: only `bvh` decals (asked for, or maybe `auto`'s) built on the CPU
-    /// for a device whose queries can share leaves out may get wide leaves.
+    /// The decals' centre overlap: only `bvh` decals (asked for, or maybe `auto`'s) on a device whose
+    /// queries can share leaves out may be walked so, with wide leaves where built on the CPU and
+    /// leaves of 32 where rebuilt on the GPU.
     pub decal_centre_overlap: bool,
     /// The overlaps at surface points, which `auto` reads, and `bvh` lights for their walks.
     pub light_overlap: bool,
@@ -368,9 +369,7 @@ pub struct Measurements {
 impl Measurements {
     pub fn for_settings(config: &RenderConfig, caps: Capabilities) -> Self {
         Self {
-            decal_centre_overlap: matches!(config.decal_method, DecalMethod::Bvh | DecalMethod::Auto)
-                && config.decal_bvh_build == BvhBuild::CpuOnce
-                && caps.subgroups,
+            decal_centre_overlap: matches!(config.decal_method, DecalMethod::Bvh | DecalMethod::Auto) && caps.subgroups,
             light_overlap: matches!(config.light_method, LightMethod::Auto | LightMethod::Bvh),
             decal_overlap: config.decal_method == DecalMethod::Auto,
         }
@@ -479,7 +478,7 @@ impl FramePlan {
             wide_leaves: dense_decals,
             rebuilt_leaves: rebuilt_leaves(dense_decals && caps.subgroups),
             rebuilt_grids: false,
-            cell_lists: dense_decals && stats.placed_decal_groups == 1,
+            cell_lists: dense_decals && stats.placed_decal_groups == 1 && decal_build == GroupBuild::CpuOnce,
         };
         let opaque_stage = if config.pipeline == PipelineKind::Forward { ShadingStage::Fragment } else { ShadingStage::Compute };
         let walks = query_walks(ShadingMethods { dense_lights, dense_decals, ..unlisted }, opaque_stage);
@@ -553,7 +552,7 @@ mod tests {
         assert!(Measurements::for_settings(&bvh, SUBGROUPS).decal_centre_overlap);
         assert!(!Measurements::for_settings(&bvh, Capabilities { subgroups: false }).decal_centre_overlap);
         let gpu_built = RenderConfig { decal_bvh_build: BvhBuild::GpuEveryFrame, ..bvh.clone() };
-        assert!(!Measurements::for_settings(&gpu_built, SUBGROUPS).decal_centre_overlap);
+        assert!(Measurements::for_settings(&gpu_built, SUBGROUPS).decal_centre_overlap);
         let stats =
             |overlap, placed| SceneStatistics { decal_centre_overlap: Some(overlap), placed_decal_groups: placed, ..Default::default() };
         let sparse = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 0.5, 1)).unwrap();
@@ -567,6 +566,10 @@ mod tests {
         assert!(!dense.shading_methods(false).decal_cell_lists && dense.shading_methods(false).dense_decals);
         let instanced = FramePlan::resolve(&bvh, SUBGROUPS, &stats(40.0, 3)).unwrap();
         assert!(instanced.decals.wide_leaves && !instanced.decals.cell_lists);
+        // Rebuilt every frame, dense decals are shared out from leaves of 32, with no grid.
+        let rebuilt = FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP, 1)).unwrap();
+        assert!(rebuilt.shading_methods(true).dense_decals && !rebuilt.decals.rebuilt_grids && !rebuilt.decals.cell_lists);
+        assert_eq!(rebuilt.decals.rebuilt_leaves, DynamicLeaves::AtMost(32));
         // An overlap measured for other settings decides nothing.
         let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false }, &stats(40.0, 1)).unwrap();
         assert!(!alone.decals.wide_leaves && !alone.shading_methods(true).dense_decals);
