@@ -40,8 +40,8 @@ pub enum Why {
     /// Reflections shade points outside the view, which clustered lists do not cover.
     Reflections,
     /// The BVH would be rebuilt on the GPU every frame where clustered lists, rebuilt every frame too,
-    /// are faster: lights as [`rebuilt_bvh_wins`] says, decals at every count measured (BENCHMARKS.md,
-    /// "Scaling").
+    /// are faster: lights as [`rebuilt_bvh_wins`] says, decals unless subgroups share them out
+    /// (BENCHMARKS.md, "Scaling").
     RebuiltEveryFrame,
     /// The mean overlap at surface points, where a BVH is faster: built once at every overlap
     /// measured (up to 100), or rebuilt every frame over lights dense enough that subgroups share
@@ -118,12 +118,17 @@ impl MethodChoice {
         };
         let decals = match config.decal_method {
             DecalMethod::Auto => {
+                // Dense decals rebuilt every frame, shared out, beat clustered lists from 262k in the
+                // sweeps (0.90×); sparser ones lose (1.09–1.12×) or come level.
+                let shared_out = caps.subgroups && stats.decal_centre_overlap.is_some_and(|overlap| overlap >= DENSE_DECAL_OVERLAP);
                 let (method, why) = match (stats.placed_decals, stats.decal_overlap) {
                     (0, _) => (DecalMethod::Off, Why::NoVolumes),
                     (n, _) if n <= BRUTE_FORCE_MAX => (DecalMethod::Brute, Why::Few(n)),
                     _ if reflections => (DecalMethod::Bvh, Why::Reflections),
-                    _ if config.decal_bvh_build == BvhBuild::GpuEveryFrame => (DecalMethod::Clustered, Why::RebuiltEveryFrame),
-                    (count, overlap) => (DecalMethod::Bvh, Why::Overlap { count, overlap: overlap.unwrap_or(0.0), shared_out: false }),
+                    _ if config.decal_bvh_build == BvhBuild::GpuEveryFrame && !shared_out => {
+                        (DecalMethod::Clustered, Why::RebuiltEveryFrame)
+                    }
+                    (count, overlap) => (DecalMethod::Bvh, Why::Overlap { count, overlap: overlap.unwrap_or(0.0), shared_out }),
                 };
                 Chosen { method, why }
             }
@@ -570,6 +575,12 @@ mod tests {
         let rebuilt = FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP, 1)).unwrap();
         assert!(rebuilt.shading_methods(true).dense_decals && !rebuilt.decals.rebuilt_grids && !rebuilt.decals.cell_lists);
         assert_eq!(rebuilt.decals.rebuilt_leaves, DynamicLeaves::AtMost(32));
+        // And `auto` walks them rather than listing them in clusters.
+        let auto_rebuilt = RenderConfig { decal_method: DecalMethod::Auto, ..gpu_built.clone() };
+        let placed = |centre| SceneStatistics { placed_decals: 262_144, ..stats(centre, 1) };
+        assert_eq!(MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP)).decals.method, DecalMethod::Bvh);
+        let sparse_rebuilt = MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP - 1.0));
+        assert_eq!(sparse_rebuilt.decals.method, DecalMethod::Clustered);
         // An overlap measured for other settings decides nothing.
         let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false }, &stats(40.0, 1)).unwrap();
         assert!(!alone.decals.wide_leaves && !alone.shading_methods(true).dense_decals);
