@@ -147,15 +147,25 @@ fn dense_decals_under_opaque_layers_agree_with_brute_force() {
     assert_dense_decals_agree(&scene, true, 0.0);
 }
 
-/// Crowded decals in spinning groups get wide leaves and no cell lists: shading walks them a subgroup
-/// at a time, sharing each leaf's decals out among the lanes (`passes::query_walks`,
-/// `decal_leaves_shared_out.wgsl`), and still gives the brute-force image.
+/// Crowded decals in spinning groups get wide leaves and no cell lists (rebuilt every frame, leaves of
+/// 32): shading walks them a subgroup at a time, sharing each leaf's decals out among the lanes
+/// (`passes::query_walks`, `decal_leaves_shared_out.wgsl`), and still gives the brute-force image.
 #[test]
 fn dense_grouped_decals_shared_out_among_lanes_agree_with_brute_force() {
     let mut scene = demo_scene();
     generators::add_scattered_decals(&mut scene, &ScatterDecals { count: 3000, seed: 4, size: Some(1.5) }).unwrap();
     generators::group_for_animation(&mut scene, 6, 2).unwrap();
     assert_dense_decals_agree(&scene, false, 0.7);
+    // Rebuilt on the GPU every frame, they are shared out from the LBVH's leaves.
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Forward] {
+        let config = |method| RenderConfig { pipeline, ..decal_config(128, 72, method, BvhBuild::GpuEveryFrame) };
+        let mut bvh = renderer(&scene, config(DecalMethod::Bvh));
+        assert!(bvh.shading_methods().dense_decals, "{}: rebuilt dense decals are not shared out", pipeline.name());
+        bvh.time = 0.7;
+        bvh.render(&scene.cameras[0]).expect("frame");
+        let difference = max_abs_difference(&render_at(&scene, config(DecalMethod::Brute), 0.7), &bvh.read_hdr().expect("hdr"));
+        assert!(difference <= TOLERANCE, "{}: rebuilt bvh differs from brute force by {difference}", pipeline.name());
+    }
 }
 
 /// Wall-sized decals reach more froxels than one thread walks: the clustered build spreads them over
