@@ -33,6 +33,11 @@ sponza=.bench/sponza_lite/Sponza.gltf
 for n in 28000 100000 1000000; do
   printf 'gltf = "sponza_lite/Sponza.gltf"\n[camera]\nindex = 0\n[[scatter_lights]]\ncount = %s\nseed = 1\nrange = [0.1, 0.3]\n' $n >.bench/small_$n.toml
 done
+# Particles as the tables in BENCHMARKS.md measured them: 256 emitters, ranges of 0.5–1.5 m (the
+# generator's default now scales with the scene: 0.85–2.56 m over Sponza).
+for n in 262144 1048576; do
+  printf 'gltf = "sponza_lite/Sponza.gltf"\n[camera]\nindex = 0\n[particles]\ncount = %s\nseed = 1\nemitters = 256\nradius = [0.5, 1.5]\nintensity = 0.2\n' $n >.bench/particles_$n.toml
+done
 nvidia-smi --query-gpu=name,driver_version --format=csv | tee "$out/gpu.txt"
 # Timings compare configurations: the exposure is fixed (auto exposure's passes left out) unless
 # FIX_EXPOSURE is set, empty to meter as `render` does with no flags.
@@ -101,18 +106,18 @@ particles() {
   local n p
   for n in 262144 1048576; do
     for p in visbuffer deferred forward; do
-      run "particles_${n}_$p" 200 --scene $sponza --particles $n --particle-emitters 256 --pipeline $p --light-method off --decal-method off
+      run "particles_${n}_$p" 200 --scene .bench/particles_$n.toml --pipeline $p --light-method off --decal-method off
     done
-    run "particles_${n}_visbuffer_half_metre" 200 --scene $sponza --particles $n --particle-emitters 256 --particle-voxel-size 0.5 \
+    run "particles_${n}_visbuffer_half_metre" 200 --scene .bench/particles_$n.toml --particle-voxel-size 0.5 \
       --light-method off --decal-method off
     # The exact method: every particle a point light in the light BVH, rebuilt every frame.
     for p in visbuffer deferred forward; do
-      run "particles_${n}_${p}_exact" 100 --scene $sponza --particles $n --particle-emitters 256 --pipeline $p --particle-method bvh \
+      run "particles_${n}_${p}_exact" 100 --scene .bench/particles_$n.toml --pipeline $p --particle-method bvh \
         --light-method bvh --decal-method off
     done
   done
   echo "== particle-error 262144"
-  timeout 300 $bin particle-error --scene $sponza --particles 262144 --particle-emitters 256 --width 1920 --height 1080 \
+  timeout 300 $bin particle-error --scene .bench/particles_262144.toml --width 1920 --height 1080 \
     --voxel-sizes 1,0.5,0.25 --filters nearest,trilinear,tricubic --samples 1,8 2>&1 | grep -v "^GPU"
 }
 
@@ -122,11 +127,11 @@ exact() {
   local n p
   for n in 262144 1048576; do
     for p in visbuffer deferred; do
-      WARMUP=10 run "exact_${n}_$p" 60 --scene $sponza --particles $n --particle-emitters 256 --pipeline $p --particle-method bvh \
+      WARMUP=10 run "exact_${n}_$p" 60 --scene .bench/particles_$n.toml --pipeline $p --particle-method bvh \
         --light-method bvh --decal-method off
     done
   done
-  WARMUP=1 run exact_262144_forward 3 --scene $sponza --particles 262144 --particle-emitters 256 --pipeline forward --particle-method bvh \
+  WARMUP=1 run exact_262144_forward 3 --scene .bench/particles_262144.toml --pipeline forward --particle-method bvh \
     --light-method bvh --decal-method off
 }
 
@@ -134,13 +139,13 @@ exact() {
 clipmap() {
   local n=1048576 v
   for v in 1 0.5; do
-    run "particles_${n}_visbuffer_world_$v" 200 --scene $sponza --particles $n --particle-emitters 256 --particle-voxel-size $v \
+    run "particles_${n}_visbuffer_world_$v" 200 --scene .bench/particles_$n.toml --particle-voxel-size $v \
       --light-method off --decal-method off
-    run "particles_${n}_visbuffer_clipmap4x64_$v" 200 --scene $sponza --particles $n --particle-emitters 256 --particle-voxel-size $v \
+    run "particles_${n}_visbuffer_clipmap4x64_$v" 200 --scene .bench/particles_$n.toml --particle-voxel-size $v \
       --particle-cascades 4 --particle-cascade-resolution 64 --light-method off --decal-method off
   done
   echo "== particle-error 262144, cascades"
-  timeout 300 $bin particle-error --scene $sponza --particles 262144 --particle-emitters 256 --width 1920 --height 1080 \
+  timeout 300 $bin particle-error --scene .bench/particles_262144.toml --width 1920 --height 1080 \
     --voxel-sizes 1,0.5 --filters trilinear --samples 1 --cascades 0,2,4 --cascade-resolution 64 2>&1 | grep -v "^GPU"
 }
 
