@@ -164,3 +164,33 @@ impl RebuiltGrids {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn placements_fit_their_groups_and_mark_their_headers() {
+        let room = Aabb::new(Vec3::new(-15.0, 0.0, -7.0), Vec3::new(15.0, 12.0, 7.0));
+        assert_eq!(GridPlacement::for_group(&room, entry_grid::MIN_PRIMITIVES - 1), None, "small groups start at their root");
+        let infinite = Aabb::new(Vec3::splat(f32::NEG_INFINITY), Vec3::ZERO);
+        assert_eq!(GridPlacement::for_group(&infinite, 1000), None);
+        for items in [16, 28_000, 1 << 20] {
+            let grid = GridPlacement::for_group(&room, items).unwrap();
+            let cells = f64::from(grid.cells());
+            // Cubic cells: the counts per axis round, so allow a factor either side of the aim.
+            assert!((MIN_CELLS / 2.0..=MAX_CELLS * 2.0).contains(&cells), "{items} items: {cells} cells");
+            assert!(
+                (grid.min - room.min).length() == 0.0
+                    && (grid.cells_per_unit * (room.max - room.min) - grid.dims.as_vec3()).abs().max_element() < 1e-3
+            );
+            let header = grid.header(77);
+            assert_eq!((header.entry, header.skip & ENTRY_GRID_REBUILT), (77, ENTRY_GRID_REBUILT));
+            assert_eq!(header.skip & !ENTRY_GRID_REBUILT, grid.dims.x | grid.dims.y << 10 | grid.dims.z << 20);
+        }
+        // A flat group gets one cell across its flat axis.
+        let floor = Aabb::new(Vec3::new(-15.0, 0.0, -7.0), Vec3::new(15.0, 0.0, 7.0));
+        let grid = GridPlacement::for_group(&floor, 28_000).unwrap();
+        assert_eq!((grid.dims.y, grid.cells_per_unit.y), (1, 0.0));
+    }
+}
