@@ -120,7 +120,7 @@ impl MethodChoice {
             DecalMethod::Auto => {
                 // Dense decals rebuilt every frame, shared out, beat clustered lists from 262k in the
                 // sweeps (0.90×); sparser ones lose (1.09–1.12×) or come level.
-                let shared_out = caps.subgroups && stats.decal_centre_overlap.is_some_and(|overlap| overlap >= DENSE_DECAL_OVERLAP);
+                let shared_out = decals_shared_out(caps, stats.decal_centre_overlap);
                 let (method, why) = match (stats.placed_decals, stats.decal_overlap) {
                     (0, _) => (DecalMethod::Off, Why::NoVolumes),
                     (n, _) if n <= BRUTE_FORCE_MAX => (DecalMethod::Brute, Why::Few(n)),
@@ -279,6 +279,12 @@ pub const DENSE_FRAGMENT_LIGHT_OVERLAP: f32 = 8.0;
 pub fn lights_shared_out(caps: Capabilities, pipeline: PipelineKind, overlap: f32) -> bool {
     let dense = if pipeline == PipelineKind::Forward { DENSE_FRAGMENT_LIGHT_OVERLAP } else { DENSE_LIGHT_OVERLAP };
     caps.subgroups && overlap >= dense
+}
+
+/// Whether decals whose centres `centre_overlap` of their boxes hold, on average, are dense: walked a
+/// subgroup at a time, their leaves shared out.
+pub fn decals_shared_out(caps: Capabilities, centre_overlap: Option<f32>) -> bool {
+    caps.subgroups && centre_overlap.is_some_and(|overlap| overlap >= DENSE_DECAL_OVERLAP)
 }
 
 /// The leaves of groups rebuilt on the GPU every frame, by how queries walk them: a walk alone tests
@@ -453,9 +459,15 @@ impl FramePlan {
             decal_cell_lists: false,
             debug_views: config.debug_view != DebugView::Off,
         };
-        // Lights crowded enough get wide leaves, walked a subgroup at a time, their leaves shared out.
+        // Lights and decals crowded enough get wide leaves, walked a subgroup at a time, their leaves
+        // shared out; decals, as one group placed once, cell lists too. Groups rebuilt every frame get
+        // entry grids where the opaque surfaces' queries walk alone.
         let dense_lights = config.light_method == LightMethod::Bvh
             && stats.light_overlap.is_some_and(|overlap| lights_shared_out(caps, config.pipeline, overlap));
+        let dense_decals =
+            Measurements::for_settings(config, caps).decal_centre_overlap && decals_shared_out(caps, stats.decal_centre_overlap);
+        let opaque_stage = if config.pipeline == PipelineKind::Forward { ShadingStage::Fragment } else { ShadingStage::Compute };
+        let walks = query_walks(ShadingMethods { dense_lights, dense_decals, ..unlisted }, opaque_stage);
         let lights = StructurePlan {
             build: group_build(
                 config.light_method == LightMethod::Bvh,
@@ -465,13 +477,9 @@ impl FramePlan {
             clustered: config.light_method == LightMethod::Clustered,
             wide_leaves: dense_lights,
             rebuilt_leaves: rebuilt_leaves(dense_lights),
-            rebuilt_grids: false,
+            rebuilt_grids: !walks.lights,
             cell_lists: false,
         };
-        // Decals crowded enough that their queries share leaves out get wide leaves, and, as one
-        // group placed once, cell lists.
-        let dense_decals = stats.decal_centre_overlap.is_some_and(|overlap| overlap >= DENSE_DECAL_OVERLAP)
-            && Measurements::for_settings(config, caps).decal_centre_overlap;
         let decal_build = group_build(
             config.decal_method == DecalMethod::Bvh,
             matches!(config.decal_method, DecalMethod::Clustered | DecalMethod::DeferredDecals),
@@ -481,14 +489,10 @@ impl FramePlan {
             build: decal_build,
             clustered: config.decal_method == DecalMethod::Clustered,
             wide_leaves: dense_decals,
-            rebuilt_leaves: rebuilt_leaves(dense_decals && caps.subgroups),
-            rebuilt_grids: false,
+            rebuilt_leaves: rebuilt_leaves(dense_decals),
+            rebuilt_grids: !walks.decals,
             cell_lists: dense_decals && stats.placed_decal_groups == 1 && decal_build == GroupBuild::CpuOnce,
         };
-        let opaque_stage = if config.pipeline == PipelineKind::Forward { ShadingStage::Fragment } else { ShadingStage::Compute };
-        let walks = query_walks(ShadingMethods { dense_lights, dense_decals, ..unlisted }, opaque_stage);
-        let lights = StructurePlan { rebuilt_grids: !walks.lights, ..lights };
-        let decals = StructurePlan { rebuilt_grids: !walks.decals, ..decals };
         let particles = match (has_particles, config.particle_method) {
             (false, _) | (true, ParticleMethod::Off) => ParticlePlan::None,
             (true, ParticleMethod::Grid) => ParticlePlan::Grid,

@@ -950,13 +950,13 @@ fn place_groups(
 
 /// Each group's entry grid where it is rebuilt on the GPU and `volumes.rebuilt_grids` asks for one.
 fn rebuilt_grid_placements(volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Vec<Option<GridPlacement>> {
+    let gridded = build == GroupBuild::GpuEveryFrame && volumes.rebuilt_grids;
     layout
         .ranges
         .iter()
         .map(|range| {
             let boxes = &volumes.boxes[range.clone()];
-            let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
-            (build == GroupBuild::GpuEveryFrame && volumes.rebuilt_grids).then(|| GridPlacement::for_group(&bounds, boxes.len())).flatten()
+            gridded.then(|| GridPlacement::for_group(&boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x)), boxes.len())).flatten()
         })
         .collect()
 }
