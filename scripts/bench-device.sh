@@ -19,6 +19,7 @@
 #   scripts/bench-device.sh post         the post chain's effects, alone and together, on Sponza (issue 7)
 #   scripts/bench-device.sh deform       Sponza's curtains waving: GPU deformation and BLAS refit (issue 7)
 #   scripts/bench-device.sh soak         10,000 frames of everything rebuilt per frame, memory sampled (issue 31)
+#   scripts/bench-device.sh direct       shadowed local lights: exact, reference and restir on 4,096 and 28k lights (issue 34)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -262,6 +263,31 @@ assets() {
 }
 
 # The bench command's own report (bench.md, .json, .csv, plots) lands in the archive under bench-<set>/.
+# Shadowed local lights (issue 34): scenes/shadowed-lights.toml (4,096 lights of 1–3 m) and the
+# paper's 28k small lights, each light found lighting the point unshadowed (exact), with a shadow ray
+# of its own (reference) or sampled with one and four shadow rays (restir), restir in every pipeline;
+# and how restir and the reference grow from 256 to 65,536 lights of the same ranges.
+direct() {
+  local p n scene=.bench/shadowed_4096.toml
+  sed 's#"../../shared/assets/sponza/Sponza.gltf"#"sponza_lite/Sponza.gltf"#' scenes/shadowed-lights.toml >$scene
+  for p in visbuffer deferred forward; do
+    run "direct_${p}_4096_exact" 100 --scene $scene --pipeline $p --direct-lighting exact
+    run "direct_${p}_4096_restir1" 100 --scene $scene --pipeline $p
+  done
+  run direct_visbuffer_4096_restir4 100 --scene $scene --restir-shadow-rays 4
+  run direct_visbuffer_4096_reference 30 --scene $scene --direct-lighting reference
+  run direct_deferred_4096_reference 30 --scene $scene --pipeline deferred --direct-lighting reference
+  for n in 256 1024 16384 65536; do
+    sed "s/^count = 4096/count = $n/" $scene >.bench/shadowed_$n.toml
+    run "direct_visbuffer_${n}_exact" 100 --scene .bench/shadowed_$n.toml --direct-lighting exact
+    run "direct_visbuffer_${n}_restir1" 100 --scene .bench/shadowed_$n.toml
+    run "direct_visbuffer_${n}_reference" 20 --scene .bench/shadowed_$n.toml --direct-lighting reference
+  done
+  run direct_visbuffer_small28k_exact 100 --scene .bench/small_28000.toml --direct-lighting exact
+  run direct_visbuffer_small28k_restir1 100 --scene .bench/small_28000.toml --direct-lighting restir
+  run direct_visbuffer_small28k_reference 30 --scene .bench/small_28000.toml --direct-lighting reference
+}
+
 bench() { # set name, then bench arguments
   local name=$1; shift
   echo "== bench $name"
@@ -281,11 +307,12 @@ for set in "${@:-structures}"; do
     post) post ;;
     deform) deform ;;
     soak) soak ;;
+    direct) direct ;;
     table) bench table --sweeps none --dense none ;;
     sweeps) bench sweeps --scenes none --dense none ;;
     dense) bench dense --scenes none --sweeps none ;;
     assets) assets ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform or soak)" >&2; exit 2 ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform, soak or direct)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

@@ -4,6 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 MANYLIGHTS_NEED_LAVAPIPE=1 scripts/ensure-vulkan.sh
+scripts/ensure-cxx.sh
 # The viewer's test opens a window under Xvfb.
 scripts/ensure-xvfb.sh
 export WGPU_ADAPTER_NAME="${WGPU_ADAPTER_NAME:-llvmpipe}"

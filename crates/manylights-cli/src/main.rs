@@ -2,6 +2,7 @@
 
 mod bench;
 mod info;
+mod light_error;
 mod particle_error;
 mod progress;
 mod render;
@@ -36,6 +37,10 @@ enum Command {
     /// particles as point lights through the BVH): error of the particles' light and PSNR.
     #[command(allow_negative_numbers = true)]
     ParticleError(particle_error::ParticleErrorArgs),
+    /// Compare `--direct-lighting restir` with `reference` (every light with its own shadow ray) frame by
+    /// frame, over a still camera and a moving one: FLIP, relative MSE, PSNR and flicker.
+    #[command(allow_negative_numbers = true)]
+    LightError(light_error::LightErrorArgs),
     /// List GPU adapters, the one manylights would choose, its driver and the features it uses; then
     /// what the scene (with the same scene options as `render`) holds.
     #[command(allow_negative_numbers = true)]
@@ -54,6 +59,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(&args),
         Command::Info(args) => info::run(&args),
         Command::ParticleError(args) => particle_error::run(&args),
+        Command::LightError(args) => light_error::run(&args),
         Command::View(args) => view::run(args),
     };
     match result {

@@ -8,24 +8,18 @@ use manylights::{
     gpu::GpuContext,
     renderer::{Image, Renderer},
     scene::Scene,
-    settings::{DecalMethod, LightMethod, ParticleFilter, ParticleMethod, PipelineKind, RenderConfig},
+    settings::{DecalMethod, LightMethod, ParticleFilter, ParticleMethod, RenderConfig},
 };
 
 use crate::render::choose_camera;
-use crate::scene_args::SceneArgs;
+use crate::scene_args::{ComparedView, SceneArgs};
 
 #[derive(Args)]
 pub struct ParticleErrorArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    #[arg(long, default_value_t = 640)]
-    width: u32,
-    #[arg(long, default_value_t = 360)]
-    height: u32,
-    #[arg(long)]
-    camera: Option<usize>,
-    #[arg(long, value_enum, default_value_t = PipelineKind::Visbuffer)]
-    pipeline: PipelineKind,
+    #[command(flatten)]
+    view: ComparedView,
     /// Scene time of the compared frame, in seconds.
     #[arg(long, default_value_t = 1.0)]
     time: f32,
@@ -58,11 +52,11 @@ pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
     if !(args.time.is_finite() && args.time >= 0.0) {
         bail!("--time {}: give a finite time ≥ 0 in seconds", args.time);
     }
-    let camera = choose_camera(&scene, args.camera)?;
+    let camera = choose_camera(&scene, args.view.camera)?;
     let config = |particle_method| RenderConfig {
-        width: args.width,
-        height: args.height,
-        pipeline: args.pipeline,
+        width: args.view.width,
+        height: args.view.height,
+        pipeline: args.view.pipeline,
         light_method: LightMethod::Bvh,
         decal_method: DecalMethod::Bvh,
         particle_method,
@@ -104,8 +98,8 @@ pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
     println!(
         "{} particles, {}×{}, {} s; error: Σ|grid − exact| / Σ|exact − no particles| (luminance), PSNR of the tonemapped image",
         particle_count(&scene),
-        args.width,
-        args.height,
+        args.view.width,
+        args.view.height,
         args.time
     );
     println!("{:>8} {:>8} {:>10} {:>8} {:>12} {:>9}", "cascades", "voxel m", "filter", "samples", "error %", "PSNR dB");

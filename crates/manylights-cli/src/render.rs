@@ -11,10 +11,10 @@ use manylights::{
     renderer::{FrameTiming, Renderer},
     scene::{Camera, Scene},
     settings::{
-        AutoExposure, Bloom, BvhBuild, DebugView, DecalMethod, DepthOfField, Exposure, LightMethod, MotionBlur, ParticleFilter,
-        ParticleMethod, ParticleOverlay, PipelineKind, PostSettings, RayOverlay, RaySettings, RenderConfig, SunShadows, Tonemapper,
-        EV100_RANGE, MAX_ANISOTROPY, MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH, MAX_MOTION_BLUR_SAMPLES, MAX_REFLECTION_BOUNCES,
-        MAX_SHADOW_RAYS,
+        AutoExposure, Bloom, BvhBuild, DebugView, DecalMethod, DepthOfField, DirectLighting, Exposure, LightMethod, MotionBlur,
+        ParticleFilter, ParticleMethod, ParticleOverlay, PipelineKind, PostSettings, RayOverlay, RaySettings, RenderConfig, RestirReuse,
+        SunShadows, Tonemapper, EV100_RANGE, MAX_ANISOTROPY, MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH, MAX_MOTION_BLUR_SAMPLES,
+        MAX_REFLECTION_BOUNCES, MAX_RESTIR_SHADOW_RAYS, MAX_SHADOW_RAYS,
     },
 };
 
@@ -213,6 +213,12 @@ pub(crate) struct RayArgs {
     reflection_roughness: Option<f32>,
     #[arg(long, help = format!("Shadow rays each shading point may trace towards local lights that cast shadows (glTF and scene-file lights; scattered ones do not), 0 to {}, in the order the light method finds them. [default: the scene file's, or {}]", MAX_SHADOW_RAYS, RaySettings::default().light_shadow_rays))]
     light_shadow_rays: Option<u32>,
+    #[arg(long, value_enum, help = format!("How local lights light a point: every light found, unshadowed but for --light-shadow-rays (exact); every light with its own shadow ray, the ground truth (reference); or resampled importance sampling with --restir-shadow-rays shadow rays (restir). [default: the scene file's, or {}]", RaySettings::default().direct_lighting))]
+    direct_lighting: Option<DirectLighting>,
+    #[arg(long, help = format!("Samples per shading point with --direct-lighting restir, each with one shadow ray (1 to {}). [default: the scene file's, or {}]", MAX_RESTIR_SHADOW_RAYS, RaySettings::default().restir_shadow_rays))]
+    restir_shadow_rays: Option<u32>,
+    #[arg(long, value_enum, help = format!("What --direct-lighting restir reuses at each pixel's surface from the frame before: nothing, its own reservoir (found by reprojection), or that and its neighbours'. [default: the scene file's, or {}]", RaySettings::default().restir_reuse))]
+    restir_reuse: Option<RestirReuse>,
 }
 
 impl RayArgs {
@@ -232,6 +238,9 @@ impl RayArgs {
             reflection_bounces,
             reflection_roughness: self.reflection_roughness,
             light_shadow_rays: self.light_shadow_rays,
+            direct_lighting: self.direct_lighting,
+            restir_shadow_rays: self.restir_shadow_rays,
+            restir_reuse: self.restir_reuse,
         };
         Ok(command_line.over(*file).settings())
     }
@@ -409,14 +418,18 @@ impl TimingReport {
                 built.triangles, built.instances, built.nodes, built.blas_build_ms, built.tlas_build_ms
             );
             println!(
-                "sun shadows {}{}, light shadow rays {}, reflections: {}",
+                "sun shadows {}{}, direct lighting {}, reflections: {}",
                 rays.sun_shadows.name(),
                 if rays.sun_shadows == SunShadows::Soft {
                     format!(" ({} rays, sun {}°)", rays.shadow_rays, rays.sun_angle_degrees)
                 } else {
                     String::new()
                 },
-                rays.light_shadow_rays,
+                match rays.direct_lighting {
+                    DirectLighting::Exact => format!("exact ({} light shadow rays)", rays.light_shadow_rays),
+                    DirectLighting::Reference => "reference (a shadow ray per light)".into(),
+                    DirectLighting::Restir => format!("restir ({} shadow rays, {} reuse)", rays.restir_shadow_rays, rays.restir_reuse),
+                },
                 if rays.reflection_bounces > 0 {
                     format!("{} bounce(s) below roughness {}", rays.reflection_bounces, rays.reflection_roughness)
                 } else {
@@ -526,6 +539,9 @@ fn rays_json(renderer: &Renderer) -> serde_json::Value {
         "reflection_bounces": rays.reflection_bounces,
         "reflection_roughness": rays.reflection_roughness,
         "light_shadow_rays": rays.light_shadow_rays,
+        "direct_lighting": rays.direct_lighting.name(),
+        "restir_shadow_rays": rays.restir_shadow_rays,
+        "restir_reuse": rays.restir_reuse.name(),
     });
     if let Some(built) = renderer.ray_structure() {
         json["hierarchy"] = serde_json::json!({

@@ -14,10 +14,24 @@ use manylights::{
         generators::{ScatterDecals, ScatterLights, ScatterParticles, DEFAULT_ANIMATION_GROUPS},
         Environment, Groups, Scene,
     },
-    settings::{SettingsOverlay, Sky},
+    settings::{PipelineKind, SettingsOverlay, Sky},
 };
 
 use crate::progress;
+
+/// The view the error tools (`particle-error`, `light-error`) compare images in.
+#[derive(Args, Clone)]
+pub struct ComparedView {
+    #[arg(long, default_value_t = 640)]
+    pub width: u32,
+    #[arg(long, default_value_t = 360)]
+    pub height: u32,
+    /// The scene's camera to compare from [default: its first, or one framing the scene].
+    #[arg(long)]
+    pub camera: Option<usize>,
+    #[arg(long, value_enum, default_value_t = PipelineKind::Visbuffer)]
+    pub pipeline: PipelineKind,
+}
 
 #[derive(Args, Clone)]
 pub struct SceneArgs {

@@ -23,8 +23,8 @@ use manylights::{
     renderer::Renderer,
     scene::{Camera, Projection, Scene},
     settings::{
-        Bloom, DebugView, DecalMethod, DepthOfField, Exposure, LightMethod, MotionBlur, Named, ParticleMethod, ParticleOverlay,
-        PipelineKind, RayOverlay, RenderConfig, SettingsOverlay, SunShadows,
+        Bloom, DebugView, DecalMethod, DepthOfField, DirectLighting, Exposure, LightMethod, MotionBlur, Named, ParticleMethod,
+        ParticleOverlay, PipelineKind, RayOverlay, RenderConfig, SettingsOverlay, SunShadows,
     },
 };
 use winit::{
@@ -56,7 +56,7 @@ pub struct ViewArgs {
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
     /// A switch at a frame, as the panel would make it: FRAME:KEY=VALUE, KEY one of pipeline,
-    /// light-method, decal-method, particle-method, shadows, reflections, bloom, depth-of-field,
+    /// light-method, decal-method, particle-method, shadows, direct-lighting, reflections, bloom, depth-of-field,
     /// motion-blur, auto-exposure (on/off), vignette (0 to 1), debug-view (a --debug-view name), or
     /// the scattered lights, decals or particles (a count: the scene is generated again), or window
     /// (WIDTHxHEIGHT: the window is resized). Repeatable.
@@ -73,6 +73,7 @@ struct Switches {
     particle_method: ParticleMethod,
     debug_view: DebugView,
     shadows: SunShadows,
+    direct_lighting: DirectLighting,
     reflections: bool,
     bloom: bool,
     depth_of_field: bool,
@@ -92,6 +93,7 @@ impl Default for Switches {
             particle_method: ParticleMethod::Grid,
             debug_view: DebugView::Off,
             shadows: SunShadows::Off,
+            direct_lighting: DirectLighting::Exact,
             reflections: false,
             bloom: false,
             depth_of_field: false,
@@ -112,6 +114,7 @@ impl Switches {
             decal_method: overlay.methods.decals.unwrap_or(defaults.decal_method),
             particle_method: overlay.particles.method.unwrap_or(defaults.particle_method),
             shadows: overlay.rays.sun_shadows.unwrap_or(defaults.shadows),
+            direct_lighting: overlay.rays.direct_lighting.unwrap_or(defaults.direct_lighting),
             reflections: overlay.rays.reflection_bounces.is_some_and(|bounces| bounces > 0),
             auto_exposure: overlay.exposure.is_none(),
             fixed_exposure: overlay.exposure.unwrap_or(defaults.fixed_exposure),
@@ -125,6 +128,7 @@ impl Switches {
         let bounces = overlay.rays.reflection_bounces.filter(|&bounces| bounces > 0).unwrap_or(1);
         let rays = RayOverlay {
             sun_shadows: Some(self.shadows),
+            direct_lighting: Some(self.direct_lighting),
             reflection_bounces: Some(if self.reflections { bounces } else { 0 }),
             ..overlay.rays
         };
@@ -162,6 +166,7 @@ impl Switches {
             "particle-method" => self.particle_method = choose(key, value)?,
             "debug-view" => self.debug_view = choose(key, value)?,
             "shadows" => self.shadows = choose(key, value)?,
+            "direct-lighting" => self.direct_lighting = choose(key, value)?,
             "reflections" => self.reflections = on()?,
             "bloom" => self.bloom = on()?,
             "depth-of-field" => self.depth_of_field = on()?,
@@ -170,7 +175,7 @@ impl Switches {
             // Its range is checked with the rest of the settings when the renderer is built.
             "vignette" => self.vignette = value.parse().with_context(|| format!("vignette={value}: give a number"))?,
             _ => bail!(
-                "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, debug-view, shadows, reflections, bloom, \
+                "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, debug-view, shadows, direct-lighting, reflections, bloom, \
                  depth-of-field, motion-blur, auto-exposure, vignette, lights, decals or particles"
             ),
         }
@@ -781,6 +786,7 @@ fn panel(ui: &mut egui::Ui, asks: &mut PanelAsks, edited: &mut Counts, shown: &P
     choice(ui, "particles", &mut switches.particle_method);
     choice(ui, "debug view", &mut switches.debug_view);
     choice(ui, "sun shadows", &mut switches.shadows);
+    choice(ui, "direct lighting", &mut switches.direct_lighting);
     ui.checkbox(&mut switches.reflections, "reflections");
     ui.separator();
     ui.checkbox(&mut switches.auto_exposure, "auto exposure");
@@ -935,6 +941,20 @@ mod tests {
         let names: Vec<PathBuf> = (0..3).map(|_| free_screenshot_path(&dir, &mut last)).collect();
         assert_eq!(names, [3, 5, 6].map(|n| dir.join(format!("manylights-screenshot-{n}.png"))));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_direct_lighting_switch_starts_from_the_scene_file_and_reaches_the_settings() {
+        let mut overlay = SettingsOverlay::default();
+        overlay.rays.direct_lighting = Some(DirectLighting::Reference);
+        overlay.rays.restir_shadow_rays = Some(3);
+        let mut switches = Switches::for_scene(&overlay);
+        assert_eq!(switches.direct_lighting, DirectLighting::Reference);
+        switches.set("direct-lighting", "restir").unwrap();
+        let rays = switches.config((64, 36), &overlay).rays;
+        // The switch, with the scene file's budget under it.
+        assert_eq!((rays.direct_lighting, rays.restir_shadow_rays), (DirectLighting::Restir, 3));
+        assert!(switches.set("direct-lighting", "sampled").unwrap_err().to_string().contains("restir"));
     }
 
     #[test]

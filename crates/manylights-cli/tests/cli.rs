@@ -229,6 +229,41 @@ fn particle_error_compares_grid_settings_with_the_exact_method() {
 }
 
 #[test]
+fn light_error_compares_restir_with_the_reference_over_a_still_and_a_moving_camera() {
+    let dir = temp_dir("light_error");
+    let json = dir.join("light-error.json");
+    #[rustfmt::skip]
+    let out = manylights(&[
+        "light-error", "--lights", "64", "--width", "64", "--height", "36", "--frames", "3", "--path-length", "0.5",
+        "--restir-reuse", "spatiotemporal", "--json", json.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!((report["restir_reuse"].as_str(), report["path_length_m"].as_f64()), (Some("spatiotemporal"), Some(0.5)));
+    for path in ["still", "moving"] {
+        let frames = report["paths"][path]["frames"].as_array().unwrap_or_else(|| panic!("no {path} frames: {report}"));
+        assert_eq!(frames.len(), 3, "{path}");
+        for (i, frame) in frames.iter().enumerate() {
+            let flip = frame["flip"].as_f64().unwrap();
+            // Sampled shadows of 64 lights differ from the reference somewhere, and far from everywhere.
+            assert!(flip > 0.0 && flip < 0.5, "{path} frame {i}: FLIP {flip}");
+            assert!(frame["relative_mse"].as_f64().unwrap() > 0.0 && frame["psnr"].as_f64().unwrap() > 10.0, "{path} frame {i}: {frame}");
+            // Flicker compares a still camera's frame with the one before.
+            assert_eq!(frame["flicker"].is_f64(), path == "still" && i > 0, "{path} frame {i}: {frame}");
+        }
+    }
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.lines().filter(|l| l.contains("mean")).count() == 2, "{stdout}");
+    let frames = failure(&["light-error", "--frames", "0"]);
+    assert!(frames.contains("--frames 0") && frames.contains("1 to 1024"), "{frames}");
+    let length = failure(&["light-error", "--path-length", "-1"]);
+    assert!(length.contains("--path-length -1"), "{length}");
+    let boxed = assets().join("box/Box.gltf");
+    let unlit = failure(&["light-error", "--scene", boxed.to_str().unwrap(), "--width", "16", "--height", "16"]);
+    assert!(unlit.contains("no local lights") && unlit.contains("--lights"), "{unlit}");
+}
+
+#[test]
 fn huge_frame_counts_are_refused_not_allocated() {
     let err = failure(&["render", "--frames", "4294967295", "--width", "64", "--height", "36"]);
     assert!(err.contains("--frames must be between 1 and"), "{err}");
@@ -429,6 +464,13 @@ fn ray_traced_effects_render_with_their_passes_timed() {
         );
         assert_eq!(rays["light_shadow_rays"].as_u64(), Some(2));
     }
+    // Shadowed local lights, sampled: the ray hierarchy is built for them alone.
+    let out = render_to(&dir, &["--direct-lighting", "restir", "--restir-shadow-rays", "2", "--timings-json", json.to_str().unwrap()]);
+    assert!(out.status.success(), "restir: {}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rays = &report["rays"];
+    assert_eq!((rays["direct_lighting"].as_str(), rays["restir_shadow_rays"].as_u64()), (Some("restir"), Some(2)));
+    assert!(rays["hierarchy"]["triangles"].as_u64().unwrap() > 0, "restir traces rays: {rays}");
 }
 
 #[test]
@@ -451,6 +493,13 @@ fn bad_ray_options_are_refused() {
     assert!(roughness.contains("roughness threshold 0") && roughness.contains("--reflection-roughness"), "{roughness}");
     let lamps = run(&["--light-shadow-rays", "65"]);
     assert!(lamps.contains("65 shadow rays per point towards lights") && lamps.contains("--light-shadow-rays"), "{lamps}");
+    let samples = run(&["--direct-lighting", "restir", "--restir-shadow-rays", "5"]);
+    assert!(
+        samples.contains("5 restir shadow rays") && samples.contains("1 to 4") && samples.contains("--restir-shadow-rays"),
+        "{samples}"
+    );
+    let lighting = run(&["--direct-lighting", "stochastic"]);
+    assert!(lighting.contains("--direct-lighting") && lighting.contains("reference") && lighting.contains("restir"), "{lighting}");
     let mode = run(&["--shadows", "ambient"]);
     assert!(mode.contains("--shadows") && mode.contains("hard") && mode.contains("soft"), "{mode}");
 }
@@ -625,6 +674,8 @@ fn scene_file_ray_settings_yield_to_flags_and_bad_ones_name_their_key() {
         ("shadows = 'blurry'\n", ["rays", "blurry", "\"soft\""]),
         ("sun_angle = 120.0\n", ["rays", "sun angle 120", "sun_angle"]),
         ("light_shadow_rays = 100\n", ["rays", "100 shadow rays per point", "light_shadow_rays"]),
+        ("restir_shadow_rays = 0\n", ["rays", "0 restir shadow rays", "restir_shadow_rays"]),
+        ("direct_lighting = 'sampled'\n", ["rays", "sampled", "\"restir\""]),
     ] {
         write(bad);
         let err = failure(&["render", "--scene", scene.to_str().unwrap(), "--width", "16", "--height", "16"]);

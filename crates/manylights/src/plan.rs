@@ -5,7 +5,9 @@
 use std::fmt;
 
 use crate::gpu::GpuContext;
-use crate::settings::{BvhBuild, DebugView, DecalMethod, LightMethod, Named, ParticleMethod, PipelineKind, RenderConfig};
+use crate::settings::{
+    BvhBuild, DebugView, DecalMethod, DirectLighting, LightMethod, Named, ParticleMethod, PipelineKind, RaySettings, RenderConfig,
+};
 use crate::{Error, Result};
 
 /// Up to this many lights or decals, `auto` loops over them all: a handful of volumes costs a brute
@@ -164,17 +166,58 @@ pub enum DynamicLeaves {
     AtMost(u32),
 }
 
+/// How the shading core's light loops light a point with each light they find (`$DIRECT_LIGHTING`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum DirectShading {
+    /// `exact` without shadow rays: every light lights the point.
+    #[default]
+    Unshadowed,
+    /// `exact` with shadow rays towards lights that cast them, within `--light-shadow-rays`.
+    Budget,
+    /// A shadow ray towards every light.
+    Reference,
+    /// Resampled importance sampling, a shadow ray per sample.
+    Restir,
+}
+
+impl DirectShading {
+    /// How `rays` ask local lights to be shaded.
+    pub fn of(rays: &RaySettings) -> Self {
+        match rays.direct_lighting {
+            DirectLighting::Exact if rays.light_shadow_rays > 0 => Self::Budget,
+            DirectLighting::Exact => Self::Unshadowed,
+            DirectLighting::Reference => Self::Reference,
+            DirectLighting::Restir => Self::Restir,
+        }
+    }
+
+    /// The shading core's module for it (`shading/direct/`).
+    pub fn module(self) -> &'static str {
+        match self {
+            Self::Unshadowed => "shading/direct/unshadowed.wgsl",
+            Self::Budget => "shading/direct/budget.wgsl",
+            Self::Reference => "shading/direct/reference.wgsl",
+            Self::Restir => "shading/direct/restir.wgsl",
+        }
+    }
+}
+
 /// The shader variant of the shading core: the methods it is composed with, one per kind of light
-/// source and for decals, whether glossy surfaces trace reflections (`shading/reflections.wgsl`) and
-/// points trace shadow rays towards lamps (`shading/light_shadows.wgsl`), and how point queries walk.
+/// source and for decals, whether glossy surfaces trace reflections (`shading/reflections.wgsl`), how
+/// local lights are shadowed or sampled (`shading/direct/`), and how point queries walk.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub struct ShadingMethods {
     pub lights: LightMethod,
     pub decals: DecalMethod,
     pub particles: ParticleMethod,
     pub reflections: bool,
-    /// Shadow rays towards local lights that cast them (`--light-shadow-rays` above 0).
-    pub light_shadows: bool,
+    /// How each light found lights the point: unshadowed, shadowed within a budget, each with its
+    /// shadow ray, or sampled.
+    pub direct: DirectShading,
+    /// The opaque surfaces' shading keeps per-pixel state from frame to frame (`restir`'s reservoirs,
+    /// [`FramePlan::keeps_reservoirs`]): fragment shaders then test depth before they run, so hidden
+    /// fragments write nothing.
+    pub keeps_pixel_state: bool,
     /// The device has subgroup operations: passes may walk BVHs a subgroup at a time
     /// (`accel/volume_query_subgroup.wgsl`), where that is faster ([`query_walks`]).
     pub subgroups: bool,
@@ -336,12 +379,17 @@ pub fn dynamic_leaves(subgroup_walks: bool) -> DynamicLeaves {
 pub struct Capabilities {
     /// Subgroup operations (`wgpu::Features::SUBGROUP`).
     pub subgroups: bool,
+    /// Fragment shaders may test depth before they run (`wgpu::Features::SHADER_EARLY_DEPTH_TEST`).
+    pub early_depth_test: bool,
 }
 
 impl Capabilities {
     /// The capabilities of `ctx`'s device.
     pub fn of(ctx: &GpuContext) -> Self {
-        Self { subgroups: ctx.features.contains(wgpu::Features::SUBGROUP) }
+        Self {
+            subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
+            early_depth_test: ctx.features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST),
+        }
     }
 }
 
@@ -426,6 +474,10 @@ pub struct FramePlan {
     pub particles: ParticlePlan,
     /// The frame traces rays: the scene's triangles get a ray hierarchy.
     pub traces_rays: bool,
+    /// `restir` keeps each pixel's reservoir for the next frame to reuse: where its settings ask for
+    /// reuse and, in the forward pipeline, where fragment shaders can test depth before they run
+    /// (others would let hidden fragments overwrite the visible surface's reservoir).
+    pub keeps_reservoirs: bool,
     /// The light and decal methods that run, and why.
     pub methods: MethodChoice,
     /// The shading core's variant, with the decals' cell lists as planned
@@ -447,12 +499,14 @@ impl FramePlan {
                 config.light_method.name()
             )));
         }
+        let keeps_reservoirs = config.rays.keeps_reservoirs() && (config.pipeline != PipelineKind::Forward || caps.early_depth_test);
         let unlisted = ShadingMethods {
             lights: config.light_method,
             decals: config.decal_method,
             particles: config.particle_method,
             reflections: config.rays.reflection_bounces > 0,
-            light_shadows: config.rays.light_shadow_rays > 0,
+            direct: DirectShading::of(&config.rays),
+            keeps_pixel_state: keeps_reservoirs,
             subgroups: caps.subgroups,
             dense_decals: false,
             dense_lights: false,
@@ -506,6 +560,7 @@ impl FramePlan {
             decals,
             particles,
             traces_rays: config.rays.traces_rays(),
+            keeps_reservoirs,
             methods,
             planned_methods: ShadingMethods { dense_decals, dense_lights, decal_cell_lists: decals.cell_lists, ..unlisted },
         })
@@ -534,8 +589,9 @@ fn group_build(walks_bvh: bool, reads_items_in_leaf_order: bool, asked: BvhBuild
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::settings::RestirReuse;
 
-    const SUBGROUPS: Capabilities = Capabilities { subgroups: true };
+    const SUBGROUPS: Capabilities = Capabilities { subgroups: true, early_depth_test: true };
 
     fn config(lights: LightMethod, decals: DecalMethod) -> RenderConfig {
         RenderConfig { light_method: lights, decal_method: decals, ..Default::default() }
@@ -559,7 +615,7 @@ mod tests {
     fn crowded_decals_get_wide_leaves_and_one_placed_group_cell_lists() {
         let bvh = config(LightMethod::Bvh, DecalMethod::Bvh);
         assert!(Measurements::for_settings(&bvh, SUBGROUPS).decal_centre_overlap);
-        assert!(!Measurements::for_settings(&bvh, Capabilities { subgroups: false }).decal_centre_overlap);
+        assert!(!Measurements::for_settings(&bvh, Capabilities { subgroups: false, early_depth_test: true }).decal_centre_overlap);
         let gpu_built = RenderConfig { decal_bvh_build: BvhBuild::GpuEveryFrame, ..bvh.clone() };
         assert!(Measurements::for_settings(&gpu_built, SUBGROUPS).decal_centre_overlap);
         let stats =
@@ -586,7 +642,7 @@ mod tests {
         let sparse_rebuilt = MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP - 1.0));
         assert_eq!(sparse_rebuilt.decals.method, DecalMethod::Clustered);
         // An overlap measured for other settings decides nothing.
-        let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false }, &stats(40.0, 1)).unwrap();
+        let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true }, &stats(40.0, 1)).unwrap();
         assert!(!alone.decals.wide_leaves && !alone.shading_methods(true).dense_decals);
     }
 
@@ -596,7 +652,7 @@ mod tests {
         let exact = RenderConfig { particle_method: ParticleMethod::Bvh, ..config(LightMethod::Bvh, DecalMethod::Off) };
         let plan = FramePlan::resolve(&exact, SUBGROUPS, &with_particles).unwrap();
         assert_eq!(plan.particles, ParticlePlan::Lights(DynamicLeaves::Widest));
-        let alone = FramePlan::resolve(&exact, Capabilities { subgroups: false }, &with_particles).unwrap();
+        let alone = FramePlan::resolve(&exact, Capabilities { subgroups: false, early_depth_test: true }, &with_particles).unwrap();
         assert_eq!(alone.particles, ParticlePlan::Lights(DynamicLeaves::AtMost(16)));
         let brute = RenderConfig { light_method: LightMethod::Brute, ..exact.clone() };
         let err = FramePlan::resolve(&brute, SUBGROUPS, &with_particles).unwrap_err().to_string();
@@ -622,7 +678,7 @@ mod tests {
             assert!(query_walks(dense.shading_methods(true), stage).lights);
         }
         // Without subgroups, nothing is shared out: narrow leaves, walked alone.
-        let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false }, &stats(100.0)).unwrap();
+        let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true }, &stats(100.0)).unwrap();
         assert!(!alone.lights.wide_leaves && !alone.shading_methods(true).dense_lights);
         // Rebuilt groups get entry grids exactly where their queries walk alone.
         assert!(sparse.lights.rebuilt_grids && alone.lights.rebuilt_grids && !dense.lights.rebuilt_grids);
@@ -641,7 +697,10 @@ mod tests {
         let plan = |pipeline, caps| FramePlan::resolve(&decals(pipeline), caps, &stats).unwrap().decals.rebuilt_grids;
         // Fragments walk decals a subgroup at a time where they can.
         assert!(plan(PipelineKind::Visbuffer, SUBGROUPS) && plan(PipelineKind::Deferred, SUBGROUPS));
-        assert!(!plan(PipelineKind::Forward, SUBGROUPS) && plan(PipelineKind::Forward, Capabilities { subgroups: false }));
+        assert!(
+            !plan(PipelineKind::Forward, SUBGROUPS)
+                && plan(PipelineKind::Forward, Capabilities { subgroups: false, early_depth_test: true })
+        );
     }
 
     #[test]
@@ -651,9 +710,42 @@ mod tests {
         bvh.rays.light_shadow_rays = 1;
         bvh.debug_view = DebugView::LightWork;
         let methods = FramePlan::resolve(&bvh, SUBGROUPS, &SceneStatistics::default()).unwrap().shading_methods(true);
-        assert!(methods.reflections && methods.light_shadows && methods.debug_views && methods.subgroups);
+        assert!(methods.reflections && methods.direct == DirectShading::Budget && methods.debug_views && methods.subgroups);
         assert_eq!(methods.light_enumeration_module(), "shading/enumerate/lights_bvh.wgsl");
         assert_eq!(methods.debug_views_constant(), ("DEBUG_VIEWS", 1.0));
+    }
+
+    #[test]
+    fn shadowed_direct_lighting_traces_rays() {
+        let plan = |direct_lighting, light_shadow_rays| {
+            let mut config = config(LightMethod::Bvh, DecalMethod::Off);
+            config.rays.direct_lighting = direct_lighting;
+            config.rays.light_shadow_rays = light_shadow_rays;
+            let plan = FramePlan::resolve(&config, SUBGROUPS, &SceneStatistics::default()).unwrap();
+            (plan.shading_methods(true).direct, plan.traces_rays)
+        };
+        assert_eq!(plan(DirectLighting::Exact, 0), (DirectShading::Unshadowed, false));
+        assert_eq!(plan(DirectLighting::Exact, 2), (DirectShading::Budget, true));
+        // The budget is `exact`'s alone.
+        assert_eq!(plan(DirectLighting::Reference, 2), (DirectShading::Reference, true));
+        assert_eq!(plan(DirectLighting::Restir, 0), (DirectShading::Restir, true));
+    }
+
+    #[test]
+    fn restir_keeps_reservoirs_where_it_reuses_them_and_forward_fragments_test_depth_first() {
+        let keeps = |pipeline, reuse, caps| {
+            let mut config = RenderConfig { pipeline, ..config(LightMethod::Bvh, DecalMethod::Off) };
+            config.rays.direct_lighting = DirectLighting::Restir;
+            config.rays.restir_reuse = reuse;
+            let plan = FramePlan::resolve(&config, caps, &SceneStatistics::default()).unwrap();
+            assert_eq!(plan.keeps_reservoirs, plan.shading_methods(true).keeps_pixel_state);
+            plan.keeps_reservoirs
+        };
+        let late = Capabilities { subgroups: true, early_depth_test: false };
+        assert!(keeps(PipelineKind::Visbuffer, RestirReuse::Spatiotemporal, late));
+        assert!(keeps(PipelineKind::Forward, RestirReuse::Temporal, SUBGROUPS));
+        assert!(!keeps(PipelineKind::Forward, RestirReuse::Spatiotemporal, late));
+        assert!(!keeps(PipelineKind::Deferred, RestirReuse::Off, SUBGROUPS));
     }
 
     fn scene(lights: usize, light_overlap: f32, decals: usize, decal_overlap: f32) -> SceneStatistics {
@@ -697,7 +789,7 @@ mod tests {
         assert_eq!(chosen(&forward, scene(28_000, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
         assert_eq!(chosen(&forward, scene(28_000, DENSE_FRAGMENT_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
         assert_eq!(chosen(&forward, scene(28_000, DENSE_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
-        let alone = MethodChoice::resolve(&forward, Capabilities { subgroups: false }, &scene(1000, 50.0, 0, 0.0));
+        let alone = MethodChoice::resolve(&forward, Capabilities { subgroups: false, early_depth_test: true }, &scene(1000, 50.0, 0, 0.0));
         assert_eq!(alone.lights.method, LightMethod::Clustered);
         let mut reflecting = rebuilt.clone();
         reflecting.rays.reflection_bounces = 1;

@@ -51,6 +51,8 @@ pub struct Renderer {
     pub time: f32,
     /// Frames rendered so far: a deformed mesh's BLAS copy is the frame's parity.
     frame_index: u64,
+    /// `restir` keeps each pixel's reservoir for the next frame (`FramePlan::keeps_reservoirs`).
+    keeps_reservoirs: bool,
     /// The camera of the last frame rendered, for motion blur's velocities; `None` before the first.
     previous_camera: Option<Camera>,
     /// Test mode: after every frame, read the ray hierarchy back and check that the frame traced
@@ -125,6 +127,7 @@ impl Renderer {
             effective_anisotropy(&ctx, &config),
             grid_particles.as_ref().and_then(ParticleSystem::grid_textures),
             rays.as_ref().filter(|r| !r.nodes.is_empty()).unwrap_or(&no_rays).buffers(),
+            if plan.keeps_reservoirs { u64::from(config.width) * u64::from(config.height) } else { 0 },
         )?;
         // Clustered lists are built every frame only where the method reads them.
         let grid = ClusterGrid::for_resolution(config.width, config.height);
@@ -193,6 +196,7 @@ impl Renderer {
             motion,
             deform,
             refit,
+            keeps_reservoirs: plan.keeps_reservoirs,
             time: 0.0,
             frame_index: 0,
             previous_camera: None,
@@ -290,6 +294,8 @@ impl Renderer {
             self.frame_index = start_frame;
             self.previous_camera = start_camera.clone();
             self.pipeline.post().restore_state(&self.ctx);
+            // The reservoirs kept before these frames were overwritten: they start afresh.
+            self.scene.clear_reservoirs(&self.ctx);
         }
     }
 
@@ -314,7 +320,6 @@ impl Renderer {
                 uniforms.particle_cascades = volume.gpu_cascades(camera.position());
             }
         }
-        self.scene.write_frame(&self.ctx.queue, &uniforms);
         let mut timings = Vec::new();
         let mut cpu_ms = Vec::with_capacity(count as usize);
         for _ in 0..count {
@@ -328,6 +333,14 @@ impl Renderer {
             // From here to the submit is the CPU's work for the frame (waits for the timer are before).
             let recording = std::time::Instant::now();
             let parity = (self.frame_index % 2) as usize;
+            // Each frame draws its own light samples and reprojects from the camera before: the uniforms
+            // are written again before its submit.
+            let rays = &self.config.rays;
+            let reuse = if self.keeps_reservoirs { rays.restir_reuse as u32 } else { 0 };
+            uniforms.direct_lighting = [self.frame_index as u32, rays.restir_shadow_rays, parity as u32, reuse];
+            let previous = self.previous_camera.as_ref().unwrap_or(camera);
+            uniforms.previous_clip_from_world = previous.clip_from_world(self.config.width, self.config.height).to_cols_array_2d();
+            self.scene.write_frame(&self.ctx.queue, &uniforms);
             self.move_instances(self.time, parity)?;
             // Deformed meshes first: every pass after draws or traces them.
             if let Some(deform) = &mut self.deform {

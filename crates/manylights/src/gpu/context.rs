@@ -22,7 +22,9 @@ const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::FLOAT32_BLENDABLE)
     .union(wgpu::Features::SUBGROUP)
     // Our SPIR-V for shaders whose variables need no zeroing (`gpu/spirv.rs`).
-    .union(wgpu::Features::PASSTHROUGH_SHADERS);
+    .union(wgpu::Features::PASSTHROUGH_SHADERS)
+    // Forward fragments keeping `restir`'s reservoirs test depth first (`plan::FramePlan::keeps_reservoirs`).
+    .union(wgpu::Features::SHADER_EARLY_DEPTH_TEST);
 
 /// Clones share the device: several renderers (a benchmark's configurations) can use one.
 #[derive(Clone)]

@@ -44,6 +44,12 @@ pub struct FrameUniforms {
     pub ray_settings: [f32; 4],
     /// The debug view (`settings::DebugView`) and the count its heat map tops out at; zero: none.
     pub debug_view: [u32; 4],
+    /// Direct lighting's sampling (`shading/direct/restir.wgsl`): x the frame's number, which seeds
+    /// each frame's samples; y samples per shading point; z the half of the reservoirs the frame
+    /// writes; w what is reused (`RestirReuse`, 0: nothing).
+    pub direct_lighting: [u32; 4],
+    /// The previous frame's camera, for reprojection.
+    pub previous_clip_from_world: [[f32; 4]; 4],
 }
 
 /// What a frame needs of the scene besides its buffers, kept by `GpuScene` from the CPU scene.
@@ -59,7 +65,7 @@ impl FrameUniforms {
     /// `exposure` is the fixed scale before tonemapping (1 under auto exposure, whose meter scales).
     pub fn new(camera: &Camera, width: u32, height: u32, scene: &SceneConstants, exposure: f32, tonemapper: Tonemapper) -> Self {
         let clip_from_view = camera.clip_from_view(width as f32 / height as f32);
-        let clip_from_world = clip_from_view * camera.world_from_view.inverse();
+        let clip_from_world = camera.clip_from_world(width, height);
         // Invert in f64: reverse-Z projections lose visible precision when inverted in f32.
         let view_from_clip = clip_from_view.as_dmat4().inverse().as_mat4();
         let (sun_direction, sun_radiance) = match scene.sun {
@@ -89,6 +95,8 @@ impl FrameUniforms {
             ray_options: [0; 4],
             ray_settings: [0.0; 4],
             debug_view: [0; 4],
+            direct_lighting: [0; 4],
+            previous_clip_from_world: clip_from_world.to_cols_array_2d(),
         }
     }
 }

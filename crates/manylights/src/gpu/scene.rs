@@ -68,6 +68,19 @@ pub struct GpuLight {
 /// Set in `GpuLight::flags` (`LIGHT_CASTS_SHADOWS` in `shading/types.wgsl`).
 pub const LIGHT_CASTS_SHADOWS: u32 = 1;
 
+/// One pixel's reservoir of `restir` (`Reservoir` in `shading/types.wgsl`), written and read on the
+/// GPU alone: here for its size.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuReservoir {
+    pub light: u32,
+    pub instance: u32,
+    pub light_hash: u32,
+    pub weight: f32,
+    pub position: [f32; 3],
+    pub normal_count: u32,
+}
+
 impl From<&Light> for GpuLight {
     fn from(l: &Light) -> Self {
         let (kind, spot_scale, spot_offset) = match l.kind {
@@ -200,6 +213,8 @@ pub struct GpuScene {
     /// blur's velocity (`post/velocity.rs`), and which draws belong to animated instances.
     pub previous_transforms: wgpu::Buffer,
     moving_draws: Vec<bool>,
+    /// `restir`'s reservoirs, two per pixel (`GpuReservoir`), or one placeholder.
+    restir_reservoirs: wgpu::Buffer,
 }
 
 impl GpuScene {
@@ -231,7 +246,8 @@ impl GpuScene {
     /// Uploads `scene`. `max_texture_size` caps the layer size of the texture arrays; `anisotropy` is
     /// the sampler's maximum anisotropy (1 = trilinear); `particle_grids` are the particle system's
     /// colour and direction textures, bound for shading (1×1×1 placeholders without particles);
-    /// `rays` is the scene's ray-tracing hierarchy, for ray-traced effects (`rays::RayStructure`).
+    /// `rays` is the scene's ray-tracing hierarchy, for ray-traced effects (`rays::RayStructure`);
+    /// `reservoir_pixels` the pixels `restir` keeps a reservoir for (0: none).
     pub fn upload(
         ctx: &GpuContext,
         scene: &Scene,
@@ -239,6 +255,7 @@ impl GpuScene {
         anisotropy: u16,
         particle_grids: Option<[&wgpu::Texture; 2]>,
         rays: RayBuffers,
+        reservoir_pixels: u64,
     ) -> Result<Self> {
         scene.validate()?;
         let device = &ctx.device;
@@ -263,6 +280,7 @@ impl GpuScene {
         let ray_node_buffer = storage_records(device, "ray hierarchy nodes", rays.nodes, limit, copy)?;
         let ray_triangle_buffer = storage_records(device, "ray triangles", rays.triangles, limit, copy)?;
         let ray_instance_buffer = storage_records(device, "ray instances", rays.instances, limit, copy)?;
+        let restir_reservoirs = reservoir_buffer(device, reservoir_pixels, limit)?;
         let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
             size: std::mem::size_of::<FrameUniforms>() as u64,
@@ -295,6 +313,7 @@ impl GpuScene {
             .chain([&textures.decal_color, &textures.decal_data].map(|t| wgpu::BindingResource::TextureView(&t.view)))
             .chain([&environment.background, &environment.specular, &environment.brdf_table].map(wgpu::BindingResource::TextureView))
             .chain([wgpu::BindingResource::Sampler(&environment.sampler)])
+            .chain([restir_reservoirs.as_entire_binding()])
             .collect(),
         );
         ctx.check_errors()?;
@@ -319,7 +338,15 @@ impl GpuScene {
             ray_triangle_buffer,
             ray_instance_buffer,
             primitive_ranges,
+            restir_reservoirs,
         })
+    }
+
+    /// Empties `restir`'s kept reservoirs, so the next frame reuses nothing.
+    pub fn clear_reservoirs(&self, ctx: &GpuContext) {
+        let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("clear reservoirs") });
+        encoder.clear_buffer(&self.restir_reservoirs, 0, None);
+        ctx.queue.submit([encoder.finish()]);
     }
 
     /// Moves scene instances: `moved` holds (instance, world from local), `previous` the same
@@ -401,6 +428,8 @@ impl GpuScene {
         entries.push(bindings::texture(25, all, float, d2)); // prefiltered environment
         entries.push(bindings::texture(26, all, float, d2)); // split-sum BRDF table
         entries.push(bindings::sampler(27, all)); // environment sampler
+                                                  // Written by shading, which no vertex stage does.
+        entries.push(bindings::storage_read_write(28, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE)); // restir's reservoirs
         bindings::layout(device, "scene", &entries)
     }
 
@@ -630,6 +659,25 @@ fn storage_buffer<T: bytemuck::Pod>(
     storage_records(device, label, Records::of(data), limit, usage)
 }
 
+/// `restir`'s reservoirs: two for each of `pixels` pixels (the frame's and the one before), zeroed,
+/// which reads as empty; one placeholder for none.
+fn reservoir_buffer(device: &wgpu::Device, pixels: u64, limit: u64) -> Result<wgpu::Buffer> {
+    let bytes = (2 * pixels).max(1) * std::mem::size_of::<GpuReservoir>() as u64;
+    if bytes > limit {
+        return Err(Error::InvalidConfig(format!(
+            "restir's reservoirs for {pixels} pixels take {:.1} MiB, over this GPU's storage binding limit of {:.1} MiB; render fewer pixels or use --restir-reuse off",
+            bytes as f64 / 1048576.0,
+            limit as f64 / 1048576.0
+        )));
+    }
+    Ok(device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("restir reservoirs"),
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    }))
+}
+
 fn storage_records(device: &wgpu::Device, label: &str, records: Records, limit: u64, usage: wgpu::BufferUsages) -> Result<wgpu::Buffer> {
     let bytes = records.bytes.len() as u64;
     if bytes > limit {
@@ -755,6 +803,7 @@ mod tests {
         );
         check!("Light", GpuLight, [position, range, radiant, kind, direction, spot_scale, spot_offset, flags]);
         check!("Decal", GpuDecal, [decal_from_group, material, layer, weight]);
+        check!("Reservoir", GpuReservoir, [light, instance, light_hash, weight, position, normal_count]);
         check!("RayTriangle", crate::rays::RayTriangle, [v0, draw_offset, e1, triangle, e2]);
         check!("RayInstance", crate::rays::RayInstance, [local_from_world, blas_root, first_draw, scene_instance]);
         check!(
@@ -781,7 +830,9 @@ mod tests {
                 particle_cascades,
                 ray_options,
                 ray_settings,
-                debug_view
+                debug_view,
+                direct_lighting,
+                previous_clip_from_world
             ]
         );
     }

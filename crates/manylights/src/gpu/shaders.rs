@@ -88,9 +88,13 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/sun_shadow.wgsl", include_str!("../shading/sun_shadow.wgsl")),
     ("shading/sun_shadow_mask.wgsl", include_str!("../shading/sun_shadow_mask.wgsl")),
     ("shading/reflections.wgsl", include_str!("../shading/reflections.wgsl")),
-    ("shading/light_shadows.wgsl", include_str!("../shading/light_shadows.wgsl")),
     ("shading/reflections_off.wgsl", include_str!("../shading/reflections_off.wgsl")),
-    ("shading/light_shadows_off.wgsl", include_str!("../shading/light_shadows_off.wgsl")),
+    ("shading/direct/unshadowed.wgsl", include_str!("../shading/direct/unshadowed.wgsl")),
+    ("shading/direct/budget.wgsl", include_str!("../shading/direct/budget.wgsl")),
+    ("shading/direct/reference.wgsl", include_str!("../shading/direct/reference.wgsl")),
+    ("shading/direct/restir.wgsl", include_str!("../shading/direct/restir.wgsl")),
+    ("shading/direct/shadow_ray.wgsl", include_str!("../shading/direct/shadow_ray.wgsl")),
+    ("shading/shading_pixel.wgsl", include_str!("../shading/shading_pixel.wgsl")),
     ("rays/ray_types.wgsl", include_str!("../rays/ray_types.wgsl")),
     ("rays/trace.wgsl", include_str!("../rays/trace.wgsl")),
     ("rays/trace_probe.wgsl", include_str!("../rays/trace_probe.wgsl")),
@@ -103,15 +107,25 @@ const SOURCES: &[(&str, &str)] = &[
 pub struct ShaderDesc {
     pub entry: &'static str,
     pub substitutions: Vec<(&'static str, &'static str)>,
+    /// Every fragment entry point tests depth before it runs (`@early_depth_test(force)`, which needs
+    /// `wgpu::Features::SHADER_EARLY_DEPTH_TEST`).
+    pub early_depth_test: bool,
 }
 
 impl ShaderDesc {
     pub fn new(entry: &'static str) -> Self {
-        Self { entry, substitutions: Vec::new() }
+        Self { entry, substitutions: Vec::new(), early_depth_test: false }
     }
 
     pub fn with(mut self, name: &'static str, path: &'static str) -> Self {
         self.substitutions.push((name, path));
+        self
+    }
+
+    /// Fragment entry points test depth before they run, as shaders writing storage need where a
+    /// fragment that fails the test must write nothing (a late test would discard only its colour).
+    pub fn testing_depth_first(mut self, early: bool) -> Self {
+        self.early_depth_test = early;
         self
     }
 
@@ -120,6 +134,9 @@ impl ShaderDesc {
         let mut out = String::new();
         let mut seen = HashSet::new();
         self.append(self.entry, None, &mut out, &mut seen, &mut Vec::new())?;
+        if self.early_depth_test {
+            out = out.replace("@fragment\n", "@fragment\n@early_depth_test(force)\n");
+        }
         Ok(out)
     }
 
@@ -276,6 +293,9 @@ mod tests {
         // Subgroup built-ins need no `enable` in wgpu's WGSL (naga rejects the standard's).
         if ["subgroupAny(", "subgroupBallot("].iter().any(|op| source.contains(op)) {
             capabilities |= naga::valid::Capabilities::SUBGROUP;
+        }
+        if source.contains("@early_depth_test") {
+            capabilities |= naga::valid::Capabilities::EARLY_DEPTH_TEST;
         }
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
             .validate(&module)

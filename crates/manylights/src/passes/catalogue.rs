@@ -1,7 +1,7 @@
 //! Every shader the renderer builds, for the tests that validate and compile them all.
 
 use crate::gpu::shaders::ShaderDesc;
-use crate::plan::ShadingMethods;
+use crate::plan::{DirectShading, ShadingMethods};
 use crate::settings::{DecalMethod, LightMethod, ParticleMethod, PipelineKind};
 
 /// Every shader the renderer builds, with every substitution it uses: the naga test validates each.
@@ -39,12 +39,14 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
     for lights in LightMethod::ALL.into_iter().filter(|&m| m != LightMethod::Auto) {
         for decals in DecalMethod::ALL.into_iter().filter(|&m| m != DecalMethod::Auto) {
             // Every particle method (`Bvh` lights with the particles' lights, which subgroups walk
-            // together), with and without reflections, lamp shadows and subgroup walks, and with
-            // sparse and dense decals.
-            let flags = [false, true];
-            let variants: Vec<_> =
-                ParticleMethod::ALL.iter().flat_map(|&p| flags.iter().flat_map(move |&r| flags.map(move |s| (p, r, s)))).collect();
-            for (particles, reflections, light_shadows) in variants {
+            // together), with and without reflections, every direct-lighting module, with and
+            // without subgroup walks, and with sparse and dense decals.
+            let directs = [DirectShading::Unshadowed, DirectShading::Budget, DirectShading::Reference, DirectShading::Restir];
+            let variants: Vec<_> = ParticleMethod::ALL
+                .iter()
+                .flat_map(|&p| [false, true].into_iter().flat_map(move |r| directs.map(move |d| (p, r, d))))
+                .collect();
+            for (particles, reflections, direct) in variants {
                 // Dense decals, and their cell lists, change only the BVH's shader.
                 let densities: &[(bool, bool, bool)] = if decals == DecalMethod::Bvh {
                     &[(false, false, false), (true, false, false), (true, true, false), (true, true, true)]
@@ -57,7 +59,9 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         decals,
                         particles,
                         reflections,
-                        light_shadows,
+                        direct,
+                        // Forward fragments keeping restir's reservoirs test depth first.
+                        keeps_pixel_state: direct == DirectShading::Restir,
                         subgroups,
                         dense_decals,
                         // Dense lights walk as a subgroup, as subgroup-walked decals do.

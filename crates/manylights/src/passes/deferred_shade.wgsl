@@ -53,7 +53,7 @@ fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {
 
     let dp = gbuffer_position_gradients(pixel, relative_position, s.normal);
     let decaled = apply_decals(s, dp);
-    var radiance = shade(decaled, sun_visibility(id.xy));
+    var radiance = shade_pixel(decaled, sun_visibility(id.xy), id.xy);
     if frame.ray_options.z > 0u {
         radiance += reflected_radiance(decaled, s.ray_normal, pixel_footprint(relative_position));
     }

@@ -16,6 +16,7 @@ use crate::Result;
 /// The shader for a set of shading methods.
 pub fn shader(methods: ShadingMethods) -> ShaderDesc {
     super::shading_core_shader("passes/forward_shade.wgsl", methods, crate::plan::ShadingStage::Fragment)
+        .testing_depth_first(methods.keeps_pixel_state)
 }
 
 pub struct ForwardShade {

@@ -1,7 +1,9 @@
 // Forward shading in the fragment stage, after the depth prepass (EQUAL depth test, so each pixel is
 // shaded once): the same shading core as the visibility-buffer resolve — material, decals, lights —
 // with the fragment stage's derivatives instead of analytic ones for texture and decal gradients, in
-// the sun's ray-traced shadow and with ray-traced reflections when the frame has them.
+// the sun's ray-traced shadow and with ray-traced reflections when the frame has them. Where shading
+// keeps per-pixel state (`restir`'s reservoirs), the entry points test depth before they run
+// (`ShaderDesc::testing_depth_first`): a hidden fragment must not overwrite the visible one's.
 // A full-screen triangle at the cleared depth fills the sky.
 #include "shading/shade.wgsl"
 #include "shading/camera.wgsl"
@@ -14,7 +16,7 @@
 
 fn forward_radiance(in: ForwardVertex, front_facing: bool, g: UvGradients, dp: PositionGradients) -> vec3<f32> {
     let s = apply_decals(fragment_shading_surface(in, front_facing, g, dp), dp);
-    var radiance = shade(s, sun_visibility(vec2<u32>(in.clip_position.xy)));
+    var radiance = shade_pixel(s, sun_visibility(vec2<u32>(in.clip_position.xy)), vec2<u32>(in.clip_position.xy));
     if frame.ray_options.z > 0u {
         radiance += reflected_radiance(s, s.ray_normal, pixel_footprint(in.relative_position));
     }

@@ -62,7 +62,7 @@ fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     material_surface.ray_normal = surface.geometric_normal;
     material_surface.ray_clearance = surface_clearance(surface.relative_position);
     let s = apply_decals(material_surface, surface.dp);
-    var radiance = shade(s, sun_visibility(id.xy));
+    var radiance = shade_pixel(s, sun_visibility(id.xy), id.xy);
     radiance += reflected_radiance(s, surface.geometric_normal, pixel_footprint(surface.relative_position));
     textureStore(hdr_output, id.xy, vec4<f32>(radiance, 1.0));
 }

@@ -97,6 +97,11 @@ impl Camera {
         }
     }
 
+    /// World space to clip space for an image of `width` × `height` pixels.
+    pub fn clip_from_world(&self, width: u32, height: u32) -> Mat4 {
+        self.clip_from_view(width as f32 / height as f32) * self.world_from_view.inverse()
+    }
+
     /// A camera that frames `bounds` from the front-right and above.
     pub fn framing(bounds: &super::Aabb) -> Self {
         let center = bounds.center();

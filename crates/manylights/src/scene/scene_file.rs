@@ -100,6 +100,9 @@
 //! reflections = 1         # reflection bounces on glossy surfaces, 0 (none) to 8; default 0
 //! reflection_roughness = 0.3      # surfaces below this perceptual roughness reflect; default 0.3
 //! light_shadow_rays = 4   # shadow rays per shading point towards lights that cast shadows; default 0
+//! direct_lighting = "restir"  # local lights: "exact" (default), "reference" (a shadow ray each) or "restir"
+//! restir_shadow_rays = 1  # samples, each with its shadow ray, per point with "restir", 1 to 4; default 1
+//! restir_reuse = "temporal"  # what "restir" reuses: "off", "temporal" (default) or "spatiotemporal"
 //!
 //! [[deform]]              # a travelling wave deforming every mesh of a name (scene::deform::Wave)
 //! mesh = "Curtain"        # required: the glTF mesh name
@@ -256,11 +259,16 @@ struct RaysSpec {
     reflections: Option<u32>,
     reflection_roughness: Option<f32>,
     light_shadow_rays: Option<u32>,
+    direct_lighting: Option<String>,
+    restir_shadow_rays: Option<u32>,
+    restir_reuse: Option<String>,
 }
 
 impl RaysSpec {
     fn overlay(&self) -> Result<RayOverlay, String> {
         let sun_shadows = self.shadows.as_deref().map(str::parse).transpose().map_err(|e| format!("shadows {e}"))?;
+        let direct_lighting = self.direct_lighting.as_deref().map(str::parse).transpose().map_err(|e| format!("direct_lighting {e}"))?;
+        let restir_reuse = self.restir_reuse.as_deref().map(str::parse).transpose().map_err(|e| format!("restir_reuse {e}"))?;
         let overlay = RayOverlay {
             sun_shadows,
             sun_angle_degrees: self.sun_angle,
@@ -268,6 +276,9 @@ impl RaysSpec {
             reflection_bounces: self.reflections,
             reflection_roughness: self.reflection_roughness,
             light_shadow_rays: self.light_shadow_rays,
+            direct_lighting,
+            restir_shadow_rays: self.restir_shadow_rays,
+            restir_reuse,
         };
         overlay.settings().validate(Spelling::Key).map_err(inner_message)?;
         Ok(overlay)

@@ -32,6 +32,12 @@ named_enum! {
         /// grid's colour sums where pixels' rays cross it before their surface, the scene dimmed
         /// elsewhere.
         ParticleGridSlice(5) = "particle-grid-slice",
+        /// Shadow rays traced towards local lights at each point (`--direct-lighting`; with restir,
+        /// its samples' and those its reuse asks of neighbours), up to 16.
+        ShadowRays(6) = "shadow-rays",
+        /// The confidence of the reservoir restir keeps at each pixel (candidates' worth of samples,
+        /// its own and reused), up to 32.
+        RestirConfidence(7) = "restir-confidence",
     }
 }
 
@@ -39,7 +45,8 @@ impl DebugView {
     /// The count a heat map tops out at; 0 for views that are not heat maps.
     pub fn scale(self) -> u32 {
         match self {
-            DebugView::LightsReaching | DebugView::DecalsCovering => 16,
+            DebugView::LightsReaching | DebugView::DecalsCovering | DebugView::ShadowRays => 16,
+            DebugView::RestirConfidence => 32,
             DebugView::LightWork => 128,
             DebugView::Off | DebugView::ParticleLight | DebugView::ParticleGridSlice => 0,
         }

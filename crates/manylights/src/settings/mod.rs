@@ -21,7 +21,9 @@ pub use post::{
     AutoExposure, Bloom, DepthOfField, Exposure, MotionBlur, PostSettings, EV100_RANGE, MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH,
     MAX_MOTION_BLUR_SAMPLES, POST_TILE,
 };
-pub use rays::{RayOverlay, RaySettings, SunShadows, MAX_REFLECTION_BOUNCES, MAX_SHADOW_RAYS};
+pub use rays::{
+    DirectLighting, RayOverlay, RaySettings, RestirReuse, SunShadows, MAX_REFLECTION_BOUNCES, MAX_RESTIR_SHADOW_RAYS, MAX_SHADOW_RAYS,
+};
 
 use crate::{Error, Result};
 

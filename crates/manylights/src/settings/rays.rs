@@ -1,4 +1,5 @@
-//! Ray-traced effects: sun shadows, reflections and shadow rays towards lamps, and their budgets.
+//! Ray-traced effects: sun shadows, reflections, shadow rays towards lamps and how local lights are
+//! shadowed (`DirectLighting`), and their budgets.
 
 use super::Spelling;
 use crate::{Error, Result};
@@ -18,9 +19,46 @@ named_enum! {
     }
 }
 
+named_enum! {
+    /// How local lights — scattered, glTF, scene-file and exact particle lights, whichever method
+    /// enumerates them — light a shading point. The sun, the environment, decals and the particle grid
+    /// are the same in every mode.
+    pub enum DirectLighting {
+        /// Every enumerated light, unshadowed but for the lights that cast shadows, within the point's
+        /// budget of `light_shadow_rays`.
+        #[default]
+        Exact = "exact",
+        /// Every enumerated light with a shadow ray of its own: the ground truth, whatever it costs.
+        Reference = "reference",
+        /// Resampled importance sampling of the enumerated lights by their unshadowed contribution,
+        /// a shadow ray for each of `restir_shadow_rays` samples (`shading/direct/restir.wgsl`).
+        Restir = "restir",
+    }
+}
+
+named_enum! {
+    /// Which earlier samples `restir` reuses at a pixel's surface (`shading/direct/restir.wgsl`). Keep
+    /// the discriminants in sync with `RESTIR_REUSE_*` there.
+    pub enum RestirReuse {
+        /// None: each frame samples afresh.
+        Off(0) = "off",
+        /// The previous frame's reservoir at the surface, found by reprojection: no ray beyond the
+        /// pixel's own under a still camera.
+        #[default]
+        Temporal(1) = "temporal",
+        /// That one and a few of its neighbours' (`RESTIR_REUSED`), each neighbour asked with a ray
+        /// whether it sees the light chosen: four rays a pixel more, which cost more than the
+        /// reference's ray per light at 6 lights a point (BENCHMARKS.md, "Shadowed local lights").
+        Spatiotemporal(2) = "spatiotemporal",
+    }
+}
+
 /// Most rays per pixel towards the sun's disc, and most reflection bounces.
 pub const MAX_SHADOW_RAYS: u32 = 64;
 pub const MAX_REFLECTION_BOUNCES: u32 = 8;
+/// Most samples, each with its shadow ray, that `restir` draws per shading point. Keep in sync with
+/// `RESTIR_MAX_SAMPLES` in `shading/direct/restir.wgsl`.
+pub const MAX_RESTIR_SHADOW_RAYS: u32 = 4;
 
 /// The ray-traced effects a frame renders, and their budgets.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,6 +79,13 @@ pub struct RaySettings {
     /// (`Light::cast_shadows`), 0 (none) to [`MAX_SHADOW_RAYS`]: lights beyond the budget, in the
     /// order the light method enumerates them, light the point unshadowed.
     pub light_shadow_rays: u32,
+    /// How local lights light a point, and whether they cast shadows.
+    pub direct_lighting: DirectLighting,
+    /// Samples per shading point with `DirectLighting::Restir`, each with one shadow ray, 1 to
+    /// [`MAX_RESTIR_SHADOW_RAYS`].
+    pub restir_shadow_rays: u32,
+    /// What `restir` reuses at the pixels' surfaces from earlier frames.
+    pub restir_reuse: RestirReuse,
 }
 
 impl Default for RaySettings {
@@ -52,6 +97,9 @@ impl Default for RaySettings {
             reflection_bounces: 0,
             reflection_roughness: 0.3,
             light_shadow_rays: 0,
+            direct_lighting: DirectLighting::Exact,
+            restir_shadow_rays: 1,
+            restir_reuse: RestirReuse::Temporal,
         }
     }
 }
@@ -66,6 +114,9 @@ pub struct RayOverlay {
     pub reflection_bounces: Option<u32>,
     pub reflection_roughness: Option<f32>,
     pub light_shadow_rays: Option<u32>,
+    pub direct_lighting: Option<DirectLighting>,
+    pub restir_shadow_rays: Option<u32>,
+    pub restir_reuse: Option<RestirReuse>,
 }
 
 impl RayOverlay {
@@ -78,6 +129,9 @@ impl RayOverlay {
             reflection_bounces: self.reflection_bounces.or(below.reflection_bounces),
             reflection_roughness: self.reflection_roughness.or(below.reflection_roughness),
             light_shadow_rays: self.light_shadow_rays.or(below.light_shadow_rays),
+            direct_lighting: self.direct_lighting.or(below.direct_lighting),
+            restir_shadow_rays: self.restir_shadow_rays.or(below.restir_shadow_rays),
+            restir_reuse: self.restir_reuse.or(below.restir_reuse),
         }
     }
 
@@ -91,14 +145,25 @@ impl RayOverlay {
             reflection_bounces: self.reflection_bounces.unwrap_or(defaults.reflection_bounces),
             reflection_roughness: self.reflection_roughness.unwrap_or(defaults.reflection_roughness),
             light_shadow_rays: self.light_shadow_rays.unwrap_or(defaults.light_shadow_rays),
+            direct_lighting: self.direct_lighting.unwrap_or(defaults.direct_lighting),
+            restir_shadow_rays: self.restir_shadow_rays.unwrap_or(defaults.restir_shadow_rays),
+            restir_reuse: self.restir_reuse.unwrap_or(defaults.restir_reuse),
         }
     }
 }
 
 impl RaySettings {
+    /// Whether `restir` keeps each pixel's reservoir for the next frame.
+    pub fn keeps_reservoirs(&self) -> bool {
+        self.direct_lighting == DirectLighting::Restir && self.restir_reuse != RestirReuse::Off
+    }
+
     /// Whether any effect traces rays, so the scene needs its ray hierarchy.
     pub fn traces_rays(&self) -> bool {
-        self.sun_shadows != SunShadows::Off || self.reflection_bounces > 0 || self.light_shadow_rays > 0
+        self.sun_shadows != SunShadows::Off
+            || self.reflection_bounces > 0
+            || self.light_shadow_rays > 0
+            || self.direct_lighting != DirectLighting::Exact
     }
 
     /// Checks every setting; messages name the option as `spelling` spells it.
@@ -124,6 +189,13 @@ impl RaySettings {
                 "{} shadow rays per point towards lights: give 0 (none) to {MAX_SHADOW_RAYS} ({})",
                 self.light_shadow_rays,
                 name("--light-shadow-rays", "light_shadow_rays")
+            ));
+        }
+        if !(1..=MAX_RESTIR_SHADOW_RAYS).contains(&self.restir_shadow_rays) {
+            return invalid(format!(
+                "{} restir shadow rays per point: give 1 to {MAX_RESTIR_SHADOW_RAYS} ({})",
+                self.restir_shadow_rays,
+                name("--restir-shadow-rays", "restir_shadow_rays")
             ));
         }
         if self.reflection_bounces > MAX_REFLECTION_BOUNCES {

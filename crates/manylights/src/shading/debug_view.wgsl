@@ -17,6 +17,13 @@ const DEBUG_VIEW_PARTICLE_LIGHT: u32 = 4u;
 // pixel's ray crosses it before its surface, the grid's colour sum there; elsewhere the surface,
 // dimmed.
 const DEBUG_VIEW_PARTICLE_GRID_SLICE: u32 = 5u;
+// Shadow rays the direct lighting traced for the point towards local lights (`shading/direct/`):
+// lamps within the budget, one per light for `reference`, restir's samples and the rays its reuse
+// asks of neighbours.
+const DEBUG_VIEW_SHADOW_RAYS: u32 = 6u;
+// The confidence M of the reservoir `restir` keeps at the pixel: how many candidates' worth of
+// samples, its own and reused, its choice stands on (0 where nothing is kept).
+const DEBUG_VIEW_RESTIR_CONFIDENCE: u32 = 7u;
 
 // Whether this pipeline shows a debug view (`ShadingMethods::debug_views`): otherwise the counters are
 // compiled out, as counting every node, light and decal slows shading (benchmarks/LOG.md, topic 4).
@@ -25,6 +32,8 @@ override DEBUG_VIEWS: bool = false;
 var<private> debug_lights_reaching: u32;
 var<private> debug_light_work: u32;
 var<private> debug_decals_covering: u32;
+var<private> debug_shadow_rays: u32;
+var<private> debug_restir_confidence: u32;
 
 fn heat_map(count: u32, scale: u32) -> vec3<f32> {
     if count == 0u {

@@ -44,3 +44,6 @@
 @group(0) @binding(25) var environment_prefiltered: texture_2d<f32>;
 @group(0) @binding(26) var environment_brdf_table: texture_2d<f32>;
 @group(0) @binding(27) var environment_sampler: sampler;
+// `restir`'s reservoirs (`shading/direct/restir.wgsl`): two halves of one per pixel, the frames
+// alternating which half they write and which they reuse. One placeholder where nothing is kept.
+@group(0) @binding(28) var<storage, read_write> restir_reservoirs: array<Reservoir>;

@@ -11,6 +11,7 @@
 #include "$DECAL_ENUMERATION"
 #include "$PARTICLE_LIGHTING"
 #include "shading/debug_view.wgsl"
+#include "shading/shading_pixel.wgsl"
 
 // The most radiance a point sends: far above any light a scene means, and far enough below the
 // largest float that the sums and blends after shading stay finite (a glTF emissive strength may be
@@ -22,6 +23,10 @@ const MAX_RADIANCE: f32 = 1e30;
 // `sun_visibility` is the fraction of the sun the point sees (`shading/sun_shadow*.wgsl`).
 fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
     // The environment (sky, image or uniform ambient) stands in for indirect light.
+    if DEBUG_VIEWS {
+        debug_shadow_rays = 0u;
+        debug_restir_confidence = 0u;
+    }
     var radiance = s.emissive + environment_light(s);
     if frame.sun_direction.w > 0.0 && sun_visibility > 0.0 {
         radiance += frame.sun_radiance.rgb * sun_visibility * brdf_times_cosine(s, -frame.sun_direction.xyz);
@@ -42,6 +47,12 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
         case DEBUG_VIEW_DECALS_COVERING: {
             return heat_map(debug_decals_covering, frame.debug_view.y);
         }
+        case DEBUG_VIEW_SHADOW_RAYS: {
+            return heat_map(debug_shadow_rays, frame.debug_view.y);
+        }
+        case DEBUG_VIEW_RESTIR_CONFIDENCE: {
+            return heat_map(debug_restir_confidence, frame.debug_view.y);
+        }
         case DEBUG_VIEW_PARTICLE_LIGHT: {
             return particles;
         }
@@ -58,4 +69,13 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
             return radiance;
         }
     }
+}
+
+// `shade` for the opaque surface a pixel shows: what the shading core keeps per pixel from frame to
+// frame (`shading/shading_pixel.wgsl`) is read and written for `pixel`.
+fn shade_pixel(s: ShadingInput, sun_visibility: f32, pixel: vec2<u32>) -> vec3<f32> {
+    shading_pixel = pixel;
+    let radiance = shade(s, sun_visibility);
+    shading_pixel = vec2<u32>(NO_PIXEL);
+    return radiance;
 }

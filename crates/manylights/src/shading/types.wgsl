@@ -138,6 +138,25 @@ struct FrameUniforms {
     // x: the debug view (`shading/debug_view.wgsl`, DEBUG_VIEW_*; 0: none), y: the count its heat map
     // tops out at.
     debug_view: vec4<u32>,
+    // Direct lighting's sampling (`shading/direct/restir.wgsl`): x the frame's number, which seeds each
+    // frame's samples; y samples per shading point; z the half of `restir_reservoirs` this frame writes
+    // (the frame's number mod 2); w what is reused (RESTIR_REUSE_*, 0: nothing).
+    direct_lighting: vec4<u32>,
+    // The previous frame's camera, for reprojection.
+    previous_clip_from_world: mat4x4<f32>,
+}
+
+// A pixel's reservoir for `restir` (`shading/direct/restir.wgsl`), kept for the next frame: the chosen
+// light (RESTIR_NO_LIGHT: none) and its instance, a hash of its record, the unbiased contribution
+// weight W, and the surface it was made for — position, octahedral normal (12 + 12 bits) and the
+// reservoir's confidence M (the top 8 bits).
+struct Reservoir {
+    light: u32,
+    instance: u32,
+    light_hash: u32,
+    weight: f32,
+    position: vec3<f32>,
+    normal_count: u32,
 }
 
 // Keep in sync with `SunShadows` in `rays/mod.rs`.

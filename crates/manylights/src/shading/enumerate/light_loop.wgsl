@@ -1,8 +1,9 @@
 // One light of a light enumeration loop, shared by every method (`lights_*.wgsl`): the range test,
-// then the light's contribution, counted for the debug views, times its shadow ray's visibility.
+// then the light's contribution, counted for the debug views, handed to the direct-lighting module
+// (`$DIRECT_LIGHTING`, `shading/direct/*.wgsl`), which shadows or samples it.
 #include "shading/light_bindings.wgsl"
 #include "shading/lights.wgsl"
-#include "$LIGHT_SHADOWS"
+#include "$DIRECT_LIGHTING"
 #include "shading/debug_view.wgsl"
 
 // A light's sphere of influence: its position and range, the record's first 16 bytes. Most lights a
@@ -34,33 +35,33 @@ fn sphere_meets_box(sphere: vec4<f32>, low: vec3<f32>, high: vec3<f32>) -> bool 
     return dot(gap, gap) < sphere.w * sphere.w;
 }
 
-// The radiance light `index`, of the group `instance` places, adds at the surface: `local` is the
-// surface `s` in the group's space (`shading_input_in_group`), `falloff` undoes the instance's scale,
-// and `shadow_rays` is what is left of the point's budget of lamp-shadow rays.
+// The radiance light `index`, of the group that instance `instance_index` (`instance`) places, adds at
+// the surface: `local` is the surface `s` in the group's space (`shading_input_in_group`), and
+// `falloff` undoes the instance's scale.
 fn local_light_radiance(
     index: u32,
+    instance_index: u32,
     instance: VolumeInstance,
     s: ShadingInput,
     local: ShadingInput,
     falloff: f32,
-    shadow_rays: ptr<function, u32>,
 ) -> vec3<f32> {
     let sphere = light_sphere(index);
     if !sphere_reaches(sphere, local.position) {
         return vec3<f32>(0.0);
     }
-    return light_radiance_in_range(index, sphere, instance, s, local, falloff, shadow_rays);
+    return light_radiance_in_range(index, sphere, instance_index, instance, s, local, falloff);
 }
 
 // `local_light_radiance` for a light within range of the surface, its sphere read already.
 fn light_radiance_in_range(
     index: u32,
     sphere: vec4<f32>,
+    instance_index: u32,
     instance: VolumeInstance,
     s: ShadingInput,
     local: ShadingInput,
     falloff: f32,
-    shadow_rays: ptr<function, u32>,
 ) -> vec3<f32> {
     let contribution = light_contribution(index, sphere, local);
     if !any(contribution > vec3<f32>(0.0)) {
@@ -69,7 +70,7 @@ fn light_radiance_in_range(
     if DEBUG_VIEWS {
         debug_lights_reaching += 1u;
     }
-    return contribution * falloff * light_visibility(index, sphere, instance, s, shadow_rays);
+    return direct_light(index, instance_index, sphere, instance, s, contribution * falloff);
 }
 
 // Radiance light `index`, whose sphere is `sphere`, reflects towards the viewer from the surface `s`;

@@ -5,7 +5,7 @@
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
-    var shadow_rays = frame.ray_options.w;
+    direct_lights_begin(s);
     debug_lights_reaching = 0u;
     debug_light_work = 0u;
     for (var i = 0u; i < frame.light_instance_count; i += 1u) {
@@ -14,8 +14,8 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
         let falloff = instance_light_falloff(instance);
         debug_light_work += instance.item_count;
         for (var k = instance.first_item; k < instance.first_item + instance.item_count; k += 1u) {
-            radiance += local_light_radiance(k, instance, s, local, falloff, &shadow_rays);
+            radiance += local_light_radiance(k, i, instance, s, local, falloff);
         }
     }
-    return radiance;
+    return radiance + direct_lights_end(s);
 }

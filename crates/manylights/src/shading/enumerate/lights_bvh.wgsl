@@ -24,7 +24,7 @@ fn light_query_entered(instance: VolumeInstance) {
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
-    var shadow_rays = frame.ray_options.w;
+    direct_lights_begin(s);
     debug_lights_reaching = 0u;
     light_surface = s;
     light_query_begin(s.position, frame.light_instance_count);
@@ -33,10 +33,11 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     // (docs/ARCHITECTURE.md, "Acceleration structures", the point query: helper lanes, reflections).
     let lanes = light_walk_lanes();
     for (var leaf = light_query_next_leaf(); leaf.x != BVH_END; leaf = light_query_next_leaf()) {
-        let instance = light_instances[light_query_instance_index];
+        let instance_index = light_query_instance_index;
+        let instance = light_instances[instance_index];
         if !light_walk_shared() {
             for (var k = leaf.x; k < leaf.y; k += 1u) {
-                radiance += local_light_radiance(k, instance, s, light_surface_in_group, light_falloff, &shadow_rays);
+                radiance += local_light_radiance(k, instance_index, instance, s, light_surface_in_group, light_falloff);
             }
             continue;
         }
@@ -56,12 +57,12 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
                     let light = light_walk_lane_u32(k, lane);
                     let lane_sphere = light_walk_lane_vec4(sphere, lane);
                     if sphere_may_light(lane_sphere, light_surface_in_group) {
-                        radiance += light_radiance_in_range(light, lane_sphere, instance, s, light_surface_in_group, light_falloff, &shadow_rays);
+                        radiance += light_radiance_in_range(light, lane_sphere, instance_index, instance, s, light_surface_in_group, light_falloff);
                     }
                 }
             }
         }
     }
     debug_light_work = light_query_visits;
-    return radiance;
+    return radiance + direct_lights_end(s);
 }

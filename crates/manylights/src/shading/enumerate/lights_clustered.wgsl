@@ -12,7 +12,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
     var falloff = 1.0;
     var entered = 0xffffffffu;
     var instance: VolumeInstance;
-    var shadow_rays = frame.ray_options.w;
+    direct_lights_begin(s);
     let range = light_cluster_ranges[cluster_of(s.position)];
     debug_lights_reaching = 0u;
     debug_light_work = range.y;
@@ -24,7 +24,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
             local = shading_input_in_group(s, instance);
             falloff = instance_light_falloff(instance);
         }
-        radiance += local_light_radiance(entry.y, instance, s, local, falloff, &shadow_rays);
+        radiance += local_light_radiance(entry.y, entry.x, instance, s, local, falloff);
     }
-    return radiance;
+    return radiance + direct_lights_end(s);
 }

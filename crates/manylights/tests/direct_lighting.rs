@@ -1,0 +1,223 @@
+//! Direct lighting (`settings::DirectLighting`, `shading/direct/`): `reference` shadows every light
+//! as a budget of lamp-shadow rays large enough for all of them does, in every pipeline and light
+//! method, and the pipelines agree on it; `restir` is the reference itself where one light reaches a
+//! point, with reservoirs reused under a still and a moving camera (no ghost where surfaces come into
+//! view), and converges to it, unbiased, over frames where several do.
+
+mod common;
+
+use common::*;
+use glam::{Mat4, Quat, Vec3};
+use manylights::{
+    renderer::Image,
+    scene::{Camera, Instance, Light, Scene},
+    settings::{heat_map, DebugView, DirectLighting, LightMethod, PipelineKind, RaySettings, RenderConfig, RestirReuse},
+};
+
+const SIZE: (u32, u32) = (96, 54);
+
+/// The wall of `common::wall_scene` lit by `lamps` (position, colour) that cast shadows if `casts`,
+/// behind an opaque 1 m square at z = 1.5 before the wall, which each lamp shadows on its own.
+fn lamps_and_blocker(lamps: &[(Vec3, Vec3)], casts: bool) -> (Scene, Camera) {
+    let lights = lamps.iter().map(|&(position, color)| Light { cast_shadows: casts, color, ..point_light(position, 6.0, 8.0) }).collect();
+    let (mut scene, camera) = wall_scene(lights);
+    scene.meshes.push(quad_mesh());
+    scene.instances.push(Instance {
+        mesh: 1,
+        world_from_local: Mat4::from_scale_rotation_translation(Vec3::new(0.5, 0.5, 1.0), Quat::IDENTITY, Vec3::new(0.0, 0.0, 1.5)),
+    });
+    (scene, camera)
+}
+
+/// Six lamps of different colours around the blocker, their ranges overlapping over the wall.
+fn six_lamps() -> Vec<(Vec3, Vec3)> {
+    vec![
+        (Vec3::new(2.0, 0.0, 3.0), Vec3::ONE),
+        (Vec3::new(-2.0, 1.0, 2.5), Vec3::new(1.0, 0.6, 0.3)),
+        (Vec3::new(0.0, -2.0, 3.5), Vec3::ONE),
+        (Vec3::new(1.5, 1.5, 2.0), Vec3::new(0.4, 0.7, 1.0)),
+        (Vec3::new(-1.0, -1.5, 2.5), Vec3::ONE),
+        (Vec3::new(0.3, 2.5, 3.0), Vec3::new(0.8, 1.0, 0.6)),
+    ]
+}
+
+fn config(pipeline: PipelineKind, method: LightMethod, rays: RaySettings) -> RenderConfig {
+    RenderConfig { pipeline, rays, ..common::config(SIZE.0, SIZE.1, method) }
+}
+
+fn lighting(direct_lighting: DirectLighting) -> RaySettings {
+    RaySettings { direct_lighting, ..Default::default() }
+}
+
+/// The largest difference of any channel relative to the larger of the two values (at least 1e-3).
+fn max_relative_difference(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>) -> f32 {
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs() / p[c].abs().max(q[c].abs()).max(1e-3)))
+        .fold(0.0, f32::max)
+}
+
+/// Σ |a − b| over Σ |b|, every channel of every pixel.
+fn relative_l1(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
+    let (mut difference, mut total) = (0.0f64, 0.0f64);
+    for (p, q) in a.iter().zip(b) {
+        for c in 0..3 {
+            difference += f64::from((p[c] - q[c]).abs());
+            total += f64::from(q[c].abs());
+        }
+    }
+    (difference / total) as f32
+}
+
+/// (Σ a − Σ b) / Σ b over every channel of every pixel.
+fn relative_bias(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
+    let sum = |image: &[[f32; 4]]| image.iter().map(|p| f64::from(p[0] + p[1] + p[2])).sum::<f64>();
+    ((sum(a) - sum(b)) / sum(b)) as f32
+}
+
+#[test]
+fn reference_shadows_every_light_as_a_budget_for_all_of_them_does_in_every_pipeline_and_method() {
+    let lamps = six_lamps();
+    // `reference` shadows lights whether or not they are flagged to cast shadows; the budget only
+    // those flagged.
+    let (unflagged, camera) = lamps_and_blocker(&lamps, false);
+    let (flagged, _) = lamps_and_blocker(&lamps, true);
+    let budget = RaySettings { light_shadow_rays: 64, ..Default::default() };
+    let mut first: Option<Image<[f32; 4]>> = None;
+    for pipeline in PipelineKind::ALL {
+        for method in [LightMethod::Brute, LightMethod::Bvh, LightMethod::Clustered] {
+            let what = format!("{} {}", pipeline.name(), method.name());
+            let reference = render_with(&unflagged, &camera, config(pipeline, method, lighting(DirectLighting::Reference))).1;
+            let shadowed = render_with(&flagged, &camera, config(pipeline, method, budget)).1;
+            let difference = max_relative_difference(&reference, &shadowed);
+            assert!(difference <= 1e-4, "{what}: reference differs from a full budget by {difference}");
+            let unshadowed = render_with(&unflagged, &camera, config(pipeline, method, RaySettings::default())).1;
+            let darker = reference.pixels.iter().zip(&unshadowed.pixels).filter(|(r, u)| luminance(**r) < 0.98 * luminance(**u)).count();
+            assert!(darker > 300, "{what}: only {darker} pixels in some lamp's shadow");
+            match &first {
+                None => first = Some(reference),
+                // The pipelines differ only by their texture derivatives, which this untextured wall
+                // does not have.
+                Some(first) => {
+                    let difference = relative_l1(&reference.pixels, &first.pixels);
+                    assert!(difference <= 1e-3, "{what}: reference differs from the first pipeline's by {difference}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn restir_is_the_reference_where_one_light_reaches_a_point_with_a_still_and_a_moving_camera() {
+    let (scene, camera) = lamps_and_blocker(&six_lamps()[..1], false);
+    // The camera moves sideways, so surfaces the blocker hid come into view: kept reservoirs of other
+    // surfaces must not be reused there (a ghost would darken or brighten them).
+    let moved = |frame: u32| {
+        let eye = Vec3::new(0.15 * frame as f32, 0.05 * frame as f32, 4.0);
+        Camera::look_at("moving", eye, eye - Vec3::Z * 4.0, 60f32.to_radians(), 0.1)
+    };
+    for pipeline in PipelineKind::ALL {
+        let reference =
+            |camera: &Camera| render_with(&scene, camera, config(pipeline, LightMethod::Bvh, lighting(DirectLighting::Reference))).1;
+        let still = reference(&camera);
+        let references: Vec<_> = (1..5).map(|frame| reference(&moved(frame))).collect();
+        for reuse in RestirReuse::ALL {
+            let mut restir = renderer(&scene, config(pipeline, LightMethod::Bvh, restir(1, reuse)));
+            let views = (0..3).map(|_| camera.clone()).chain((1..5).map(moved));
+            for (frame, view) in views.enumerate() {
+                restir.render(&view).unwrap();
+                let expected = if frame < 3 { &still } else { &references[frame - 3] };
+                let difference = max_relative_difference(&restir.read_hdr().unwrap(), expected);
+                assert!(difference <= 1e-4, "{} {reuse} frame {frame}: restir differs from the reference by {difference}", pipeline.name());
+            }
+        }
+    }
+}
+
+/// The mean of `frames` frames of `restir` with `rays`, and the last frame alone.
+fn restir_mean(scene: &Scene, camera: &Camera, pipeline: PipelineKind, rays: RaySettings, frames: u32) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+    let mut restir = renderer(scene, config(pipeline, LightMethod::Bvh, rays));
+    let mut sum = vec![[0.0f32; 4]; (SIZE.0 * SIZE.1) as usize];
+    let mut last = Vec::new();
+    for _ in 0..frames {
+        restir.render(camera).unwrap();
+        last = restir.read_hdr().unwrap().pixels;
+        for (total, p) in sum.iter_mut().zip(&last) {
+            (0..4).for_each(|c| total[c] += p[c]);
+        }
+    }
+    (sum.into_iter().map(|p| p.map(|v| v / frames as f32)).collect(), last)
+}
+
+fn restir(samples: u32, reuse: RestirReuse) -> RaySettings {
+    RaySettings { restir_shadow_rays: samples, restir_reuse: reuse, ..lighting(DirectLighting::Restir) }
+}
+
+#[test]
+fn restir_converges_to_the_reference_without_bias() {
+    let (scene, camera) = lamps_and_blocker(&six_lamps(), false);
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Forward] {
+        let what = pipeline.name();
+        let reference = render_with(&scene, &camera, config(pipeline, LightMethod::Bvh, lighting(DirectLighting::Reference))).1.pixels;
+        // Each frame on its own: one frame is noisy where lamps are hidden from some points and not
+        // others; 64 independent frames' error falls as 1/√64, and their mean keeps no bias.
+        let (mean, one) = restir_mean(&scene, &camera, pipeline, restir(1, RestirReuse::Off), 64);
+        let (one_error, mean_error, bias) =
+            (relative_l1(&one, &reference), relative_l1(&mean, &reference), relative_bias(&mean, &reference));
+        assert!(one_error > 0.02, "{what}: one frame's error {one_error} (are lamps sampled at all?)");
+        assert!(mean_error <= 0.3 * one_error, "{what}: 64 frames' error {mean_error} against one frame's {one_error}");
+        assert!(bias.abs() <= 0.005, "{what}: bias {bias}");
+        // Four samples a frame: about half the error of one.
+        let (_, four) = restir_mean(&scene, &camera, pipeline, restir(4, RestirReuse::Off), 1);
+        let four_error = relative_l1(&four, &reference);
+        assert!(four_error <= 0.7 * one_error, "{what}: four samples' error {four_error} against one's {one_error}");
+        // Reusing reservoirs keeps the estimate unbiased, but frames and, spatially, pixels share
+        // samples, so their mean converges more slowly: over 128 frames, temporal reuse's bias is
+        // within a few tenths of a percent; spatial reuse spreads samples over 16 pixels (a sixth of
+        // this image), so it takes 1,024 frames to bring its mean within about 1 % (a darkening of
+        // 15 % and more shows where reservoirs that could not have chosen a light are counted in Z).
+        for (reuse, frames, tolerance) in [(RestirReuse::Temporal, 128, 0.01), (RestirReuse::Spatiotemporal, 1024, 0.04)] {
+            let (mean, _) = restir_mean(&scene, &camera, pipeline, restir(1, reuse), frames);
+            let (mean_error, bias) = (relative_l1(&mean, &reference), relative_bias(&mean, &reference));
+            assert!(
+                mean_error <= 0.75 * one_error,
+                "{what}, {reuse} reuse: {frames} frames' error {mean_error} against one frame's {one_error}"
+            );
+            assert!(bias.abs() <= tolerance, "{what}, {reuse} reuse: bias {bias} over {frames} frames");
+        }
+    }
+}
+
+#[test]
+fn debug_views_count_each_points_shadow_rays_and_restirs_confidence() {
+    let (scene, camera) = lamps_and_blocker(&six_lamps(), false);
+    let color = |count, view: DebugView| heat_map(count, view.scale());
+    for pipeline in PipelineKind::ALL {
+        let what = pipeline.name();
+        let view =
+            |debug_view, rays| render_with(&scene, &camera, RenderConfig { debug_view, ..config(pipeline, LightMethod::Bvh, rays) }).1;
+        // The reference traces a ray to each light reaching a point: restir's candidates.
+        let reaching = view(DebugView::LightsReaching, lighting(DirectLighting::Reference));
+        let traced = view(DebugView::ShadowRays, lighting(DirectLighting::Reference));
+        assert_eq!(traced.pixels, reaching.pixels, "{what}: reference's rays against the lights reaching");
+        assert!(reaching.pixels.iter().any(|p| p[..3] == color(6, DebugView::LightsReaching)), "{what}: no point reached by every lamp");
+        // Restir without reuse traces one ray where any light reaches.
+        let sampled = view(DebugView::ShadowRays, restir(1, RestirReuse::Off));
+        for (got, reached) in sampled.pixels.iter().zip(&reaching.pixels) {
+            let expected = color(u32::from(reached[..3] != [0.0; 3]), DebugView::ShadowRays);
+            assert_eq!(got[..3], expected, "{what}: restir's rays");
+        }
+        // Under a still camera, temporal reuse adds the frame before's confidence: 3 at the third frame.
+        let config = RenderConfig {
+            debug_view: DebugView::RestirConfidence,
+            ..config(pipeline, LightMethod::Bvh, restir(1, RestirReuse::Temporal))
+        };
+        let mut restir = renderer(&scene, config);
+        for _ in 0..3 {
+            restir.render(&camera).unwrap();
+        }
+        let confidence = restir.read_hdr().unwrap();
+        assert!(confidence.pixels.iter().all(|p| p[..3] == color(3, DebugView::RestirConfidence)), "{what}: restir's confidence");
+    }
+}
