@@ -48,7 +48,8 @@ named_enum! {
         Temporal(1) = "temporal",
         /// That one and a few of its neighbours' (`RESTIR_REUSED`), each neighbour asked with a ray
         /// whether it sees the light chosen: four rays a pixel more, which cost more than the
-        /// reference's ray per light at 6 lights a point (BENCHMARKS.md, "Shadowed local lights").
+        /// reference's ray per light at 6 lights a point, and rare high-weight samples spread
+        /// (BENCHMARKS.md, "Shadowed local lights").
         Spatiotemporal(2) = "spatiotemporal",
     }
 }
