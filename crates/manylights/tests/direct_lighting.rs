@@ -190,7 +190,7 @@ fn restir_converges_to_the_reference_without_bias() {
 }
 
 #[test]
-fn debug_views_count_each_points_shadow_rays_and_restirs_confidence() {
+fn debug_views_count_each_points_shadow_rays_and_show_restirs_weight_and_confidence() {
     let (scene, camera) = lamps_and_blocker(&six_lamps(), false);
     let color = |count, view: DebugView| heat_map(count, view.scale());
     for pipeline in PipelineKind::ALL {
@@ -202,11 +202,14 @@ fn debug_views_count_each_points_shadow_rays_and_restirs_confidence() {
         let traced = view(DebugView::ShadowRays, lighting(DirectLighting::Reference));
         assert_eq!(traced.pixels, reaching.pixels, "{what}: reference's rays against the lights reaching");
         assert!(reaching.pixels.iter().any(|p| p[..3] == color(6, DebugView::LightsReaching)), "{what}: no point reached by every lamp");
-        // Restir without reuse traces one ray where any light reaches.
+        // Restir without reuse traces one ray where any light reaches, and its sample's weight is the
+        // pixel's own sum: 1, 4 quarters.
         let sampled = view(DebugView::ShadowRays, restir(1, RestirReuse::Off));
-        for (got, reached) in sampled.pixels.iter().zip(&reaching.pixels) {
-            let expected = color(u32::from(reached[..3] != [0.0; 3]), DebugView::ShadowRays);
-            assert_eq!(got[..3], expected, "{what}: restir's rays");
+        let weighed = view(DebugView::RestirWeight, restir(1, RestirReuse::Off));
+        for ((got, weight), reached) in sampled.pixels.iter().zip(&weighed.pixels).zip(&reaching.pixels) {
+            let lit = reached[..3] != [0.0; 3];
+            assert_eq!(got[..3], color(u32::from(lit), DebugView::ShadowRays), "{what}: restir's rays");
+            assert_eq!(weight[..3], color(if lit { 4 } else { 0 }, DebugView::RestirWeight), "{what}: restir's weight");
         }
         // Under a still camera, temporal reuse adds the frame before's confidence: 3 at the third frame.
         let config = RenderConfig {

@@ -38,6 +38,9 @@ named_enum! {
         /// The confidence of the reservoir restir keeps at each pixel (candidates' worth of samples,
         /// its own and reused), up to 32.
         RestirConfidence(7) = "restir-confidence",
+        /// The weight of the sample restir shades each pixel with, as its unshadowed estimate over
+        /// the pixel's own candidates' sum, in quarters up to 4 (1 is cyan: reuse agrees).
+        RestirWeight(8) = "restir-weight",
     }
 }
 
@@ -45,7 +48,7 @@ impl DebugView {
     /// The count a heat map tops out at; 0 for views that are not heat maps.
     pub fn scale(self) -> u32 {
         match self {
-            DebugView::LightsReaching | DebugView::DecalsCovering | DebugView::ShadowRays => 16,
+            DebugView::LightsReaching | DebugView::DecalsCovering | DebugView::ShadowRays | DebugView::RestirWeight => 16,
             DebugView::RestirConfidence => 32,
             DebugView::LightWork => 128,
             DebugView::Off | DebugView::ParticleLight | DebugView::ParticleGridSlice => 0,

@@ -24,6 +24,10 @@ const DEBUG_VIEW_SHADOW_RAYS: u32 = 6u;
 // The confidence M of the reservoir `restir` keeps at the pixel: how many candidates' worth of
 // samples, its own and reused, its choice stands on (0 where nothing is kept).
 const DEBUG_VIEW_RESTIR_CONFIDENCE: u32 = 7u;
+// The weight of the sample `restir` shades the pixel with, as its unshadowed estimate p̂(y) W over the
+// pixel's own Σ p̂, in quarters: 4 where reuse agrees with the pixel's own candidates, more where a
+// reused sample weighs more (a firefly), 0 where nothing lights the pixel.
+const DEBUG_VIEW_RESTIR_WEIGHT: u32 = 8u;
 
 // Whether this pipeline shows a debug view (`ShadingMethods::debug_views`): otherwise the counters are
 // compiled out, as counting every node, light and decal slows shading (benchmarks/LOG.md, topic 4).
@@ -34,6 +38,7 @@ var<private> debug_light_work: u32;
 var<private> debug_decals_covering: u32;
 var<private> debug_shadow_rays: u32;
 var<private> debug_restir_confidence: u32;
+var<private> debug_restir_weight: u32;
 
 fn heat_map(count: u32, scale: u32) -> vec3<f32> {
     if count == 0u {

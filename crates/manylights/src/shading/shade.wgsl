@@ -26,6 +26,7 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
     if DEBUG_VIEWS {
         debug_shadow_rays = 0u;
         debug_restir_confidence = 0u;
+        debug_restir_weight = 0u;
     }
     var radiance = s.emissive + environment_light(s);
     if frame.sun_direction.w > 0.0 && sun_visibility > 0.0 {
@@ -52,6 +53,9 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
         }
         case DEBUG_VIEW_RESTIR_CONFIDENCE: {
             return heat_map(debug_restir_confidence, frame.debug_view.y);
+        }
+        case DEBUG_VIEW_RESTIR_WEIGHT: {
+            return heat_map(debug_restir_weight, frame.debug_view.y);
         }
         case DEBUG_VIEW_PARTICLE_LIGHT: {
             return particles;

@@ -274,6 +274,9 @@ fn direct_lights_end(s: ShadingInput) -> vec3<f32> {
         weight = reused.x;
         count = u32(reused.y);
     }
+    if DEBUG_VIEWS && restir_weight_sum > 0.0 {
+        debug_restir_weight = u32(round(4.0 * choice.target_value * weight / restir_weight_sum));
+    }
     let visible = weight > 0.0 && !light_occluded(choice.position, s);
     if visible {
         radiance += choice.radiance * weight;
