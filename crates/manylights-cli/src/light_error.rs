@@ -16,6 +16,7 @@ use manylights::{
     settings::{DirectLighting, Exposure, PostSettings, RaySettings, RenderConfig},
 };
 
+use crate::metrics::{luminance, mean_abs_difference, psnr};
 use crate::render::{choose_camera, RayArgs};
 use crate::scene_args::{ComparedView, SceneArgs};
 
@@ -214,10 +215,6 @@ fn sideways(camera: &Camera, distance: f32) -> Camera {
     Camera { world_from_view: glam::Mat4::from_translation(right * distance) * camera.world_from_view, ..camera.clone() }
 }
 
-fn luminance(p: &[f32; 4]) -> f32 {
-    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
-}
-
 /// The exposure scale that maps `image`'s log-average luminance to middle grey (0.18); 1 for a black
 /// image.
 fn middle_grey_scale(image: &Image<[f32; 4]>) -> f32 {
@@ -246,24 +243,6 @@ fn relative_mse(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>) -> f64 {
         .zip(&b.pixels)
         .flat_map(|(p, q)| (0..3).map(move |c| f64::from(p[c] - q[c]).powi(2) / (f64::from(q[c]).powi(2) + 0.01)))
         .sum();
-    sum / (a.pixels.len() * 3) as f64
-}
-
-/// Peak signal-to-noise ratio of two 8-bit images' colour channels, in dB (infinite when equal).
-fn psnr(a: &Image<[u8; 4]>, b: &Image<[u8; 4]>) -> f64 {
-    let mse = mean_abs_squared(a, b);
-    10.0 * (1.0 / mse).log10()
-}
-
-fn mean_abs_squared(a: &Image<[u8; 4]>, b: &Image<[u8; 4]>) -> f64 {
-    let sum: f64 =
-        a.pixels.iter().zip(&b.pixels).flat_map(|(p, q)| (0..3).map(move |c| ((f64::from(p[c]) - f64::from(q[c])) / 255.0).powi(2))).sum();
-    sum / (a.pixels.len() * 3) as f64
-}
-
-/// Mean |a − b| of two 8-bit images' colour channels, 0 to 1.
-fn mean_abs_difference(a: &Image<[u8; 4]>, b: &Image<[u8; 4]>) -> f64 {
-    let sum: f64 = a.pixels.iter().zip(&b.pixels).flat_map(|(p, q)| (0..3).map(move |c| f64::from(p[c].abs_diff(q[c])) / 255.0)).sum();
     sum / (a.pixels.len() * 3) as f64
 }
 

@@ -3,6 +3,7 @@
 mod bench;
 mod info;
 mod light_error;
+mod metrics;
 mod particle_error;
 mod progress;
 mod render;

@@ -11,6 +11,7 @@ use manylights::{
     settings::{DecalMethod, LightMethod, ParticleFilter, ParticleMethod, RenderConfig},
 };
 
+use crate::metrics::{luminance, psnr};
 use crate::render::choose_camera;
 use crate::scene_args::{ComparedView, SceneArgs};
 
@@ -120,16 +121,4 @@ pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
 
 fn particle_count(scene: &Scene) -> u32 {
     scene.particles.as_ref().map_or(0, |p| p.count)
-}
-
-fn luminance(p: &[f32; 4]) -> f32 {
-    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
-}
-
-/// Peak signal-to-noise ratio of two 8-bit images' colour channels, in dB (infinite when equal).
-fn psnr(a: &Image<[u8; 4]>, b: &Image<[u8; 4]>) -> f64 {
-    let squared: f64 =
-        a.pixels.iter().zip(&b.pixels).flat_map(|(p, q)| (0..3).map(move |c| (f64::from(p[c]) - f64::from(q[c])).powi(2))).sum();
-    let mse = squared / (a.pixels.len() * 3) as f64;
-    10.0 * (255.0 * 255.0 / mse).log10()
 }

@@ -428,8 +428,8 @@ impl GpuScene {
         entries.push(bindings::texture(25, all, float, d2)); // prefiltered environment
         entries.push(bindings::texture(26, all, float, d2)); // split-sum BRDF table
         entries.push(bindings::sampler(27, all)); // environment sampler
-                                                  // Written by shading, which no vertex stage does.
-        entries.push(bindings::storage_read_write(28, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE)); // restir's reservoirs
+                                                  // restir's reservoirs, written by shading, which no vertex stage does
+        entries.push(bindings::storage_read_write(28, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE));
         bindings::layout(device, "scene", &entries)
     }
 

@@ -22,12 +22,12 @@ const MAX_RADIANCE: f32 = 1e30;
 // replace its specular part, `reflections.wgsl` subtracts it), sun, local and particle lights;
 // `sun_visibility` is the fraction of the sun the point sees (`shading/sun_shadow*.wgsl`).
 fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
-    // The environment (sky, image or uniform ambient) stands in for indirect light.
     if DEBUG_VIEWS {
         debug_shadow_rays = 0u;
         debug_restir_confidence = 0u;
         debug_restir_weight = 0u;
     }
+    // The environment (sky, image or uniform ambient) stands in for indirect light.
     var radiance = s.emissive + environment_light(s);
     if frame.sun_direction.w > 0.0 && sun_visibility > 0.0 {
         radiance += frame.sun_radiance.rgb * sun_visibility * brdf_times_cosine(s, -frame.sun_direction.xyz);

@@ -157,13 +157,21 @@ struct RestirChoice {
     position: vec3<f32>,
 }
 
-// Combines the pixel's own reservoir (`choice`, weighing `weight`) with those kept at and around where
-// its surface was a frame before: the chosen light becomes `choice`; returns its W and the
-// confidence of all combined, for the reservoir kept.
-fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> vec2<f32> {
-    let size = vec2<u32>(frame.viewport.xy);
-    let pixels = size.x * size.y;
-    let parity = frame.direct_lighting.z;
+// Where pixel `pixel`'s reservoir lies in `restir_reservoirs`, in half `half` (0 or 1).
+fn restir_reservoir_index(half: u32, pixel: vec2<u32>) -> u32 {
+    let width = u32(frame.viewport.x);
+    return (half * u32(frame.viewport.y) + pixel.y) * width + pixel.x;
+}
+
+// A combination's result: the chosen light's W, and the confidence of all it combined.
+struct RestirReused {
+    weight: f32,
+    count: u32,
+}
+
+// Combines the pixel's own reservoir (`choice`, whose weight sum is `restir_weight_sum`) with those
+// kept at and around where its surface was a frame before; the chosen light becomes `choice`.
+fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> RestirReused {
     // The pixel's own candidates: one reservoir of confidence 1 whose weight sum is Σ p̂.
     var weight_sum = restir_weight_sum;
     var count = 1u;
@@ -174,8 +182,7 @@ fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> vec2<f3
     var reused = 0u;
     // Which reused reservoir the choice came from (RESTIR_REUSED: the pixel's own).
     var source = RESTIR_REUSED;
-    let eye = frame.world_from_view[3].xyz;
-    let plane_tolerance = RESTIR_MAX_PLANE_DISTANCE * length(s.position - eye);
+    let plane_tolerance = RESTIR_MAX_PLANE_DISTANCE * length(s.position - frame.world_from_view[3].xyz);
     let previous = restir_previous_pixel(s.position);
     let tries = select(1u, RESTIR_REUSED, frame.direct_lighting.w == RESTIR_REUSE_SPATIOTEMPORAL);
     for (var t = 0u; t < tries; t += 1u) {
@@ -187,7 +194,7 @@ fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> vec2<f3
         if any(at < vec2<f32>(0.0)) || any(at >= frame.viewport.xy) {
             continue;
         }
-        let kept = restir_reservoirs[(1u - parity) * pixels + u32(at.y) * size.x + u32(at.x)];
+        let kept = restir_reservoirs[restir_reservoir_index(1u - frame.direct_lighting.z, vec2<u32>(at))];
         let kept_count = min(kept.normal_count >> 24u, RESTIR_MAX_CONFIDENCE);
         let kept_normal = restir_unpack_normal(kept.normal_count);
         if kept_count == 0u || dot(kept_normal, s.normal) < RESTIR_MIN_NORMAL_COSINE
@@ -235,7 +242,7 @@ fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> vec2<f3
         }
         weight = weight_sum / (f32(z) * (*choice).target_value);
     }
-    return vec2<f32>(weight, f32(count));
+    return RestirReused(weight, count);
 }
 
 // Keeps the pixel's reservoir for the next frame: `choice` with weight `weight` and confidence `count`.
@@ -247,9 +254,7 @@ fn restir_keep(s: ShadingInput, choice: RestirChoice, weight: f32, count: u32) {
     if choice.light != RESTIR_NO_LIGHT {
         light_hash = restir_light_hash(choice.light);
     }
-    let size = vec2<u32>(frame.viewport.xy);
-    let index = frame.direct_lighting.z * size.x * size.y + shading_pixel.y * size.x + shading_pixel.x;
-    restir_reservoirs[index] = Reservoir(choice.light, choice.instance, light_hash, weight, s.position, restir_pack_normal_count(s.normal, count));
+    restir_reservoirs[restir_reservoir_index(frame.direct_lighting.z, shading_pixel)] = Reservoir(choice.light, choice.instance, light_hash, weight, s.position, restir_pack_normal_count(s.normal, count));
 }
 
 fn direct_lights_end(s: ShadingInput) -> vec3<f32> {
@@ -271,8 +276,8 @@ fn direct_lights_end(s: ShadingInput) -> vec3<f32> {
     var count = 1u;
     if keeps {
         let reused = restir_reuse(s, &choice);
-        weight = reused.x;
-        count = u32(reused.y);
+        weight = reused.weight;
+        count = reused.count;
     }
     if DEBUG_VIEWS && restir_weight_sum > 0.0 {
         debug_restir_weight = u32(round(4.0 * choice.target_value * weight / restir_weight_sum));
