@@ -20,6 +20,7 @@
 #   scripts/bench-device.sh deform       Sponza's curtains waving: GPU deformation and BLAS refit (issue 7)
 #   scripts/bench-device.sh soak         10,000 frames of everything rebuilt per frame, memory sampled (issue 31)
 #   scripts/bench-device.sh direct       shadowed local lights: exact, reference and restir on 4,096 and 28k lights (issue 34)
+#   scripts/bench-device.sh direct_error restir's error against the reference, sampled and denoised (light-error)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -274,6 +275,8 @@ direct() {
     run "direct_${p}_4096_exact" 100 --scene $scene --pipeline $p --direct-lighting exact
     run "direct_${p}_4096_restir1" 100 --scene $scene --pipeline $p
   done
+  run direct_visbuffer_4096_restir1_sampled 100 --scene $scene --denoise off
+  run direct_visbuffer_4096_restir1_spatiotemporal 100 --scene $scene --restir-reuse spatiotemporal
   run direct_visbuffer_4096_restir4 100 --scene $scene --restir-shadow-rays 4
   run direct_visbuffer_4096_reference 30 --scene $scene --direct-lighting reference
   run direct_deferred_4096_reference 30 --scene $scene --pipeline deferred --direct-lighting reference
@@ -286,6 +289,20 @@ direct() {
   run direct_visbuffer_small28k_exact 100 --scene .bench/small_28000.toml --direct-lighting exact
   run direct_visbuffer_small28k_restir1 100 --scene .bench/small_28000.toml --direct-lighting restir
   run direct_visbuffer_small28k_reference 30 --scene .bench/small_28000.toml --direct-lighting reference
+}
+
+# restir's error against the reference (`light-error`), sampled and denoised: 4,096 lights at
+# 1920×1080, and 256 to 65,536 lights at 960×540.
+direct_error() {
+  local n scene=.bench/shadowed_4096.toml
+  sed 's#"../../shared/assets/sponza/Sponza.gltf"#"sponza_lite/Sponza.gltf"#' scenes/shadowed-lights.toml >$scene
+  echo "== light-error 4096"
+  timeout 300 $bin light-error --scene $scene --width 1920 --height 1080 --frames 16 --json "$out/light_error_4096.json" | tail -4
+  for n in 256 1024 16384 65536; do
+    sed "s/^count = 4096/count = $n/" $scene >.bench/shadowed_$n.toml
+    echo "== light-error $n (960×540)"
+    timeout 200 $bin light-error --scene .bench/shadowed_$n.toml --width 960 --height 540 --frames 16 --json "$out/light_error_$n.json" | tail -4
+  done
 }
 
 bench() { # set name, then bench arguments
@@ -308,6 +325,7 @@ for set in "${@:-structures}"; do
     deform) deform ;;
     soak) soak ;;
     direct) direct ;;
+    direct_error) direct_error ;;
     table) bench table --sweeps none --dense none ;;
     sweeps) bench sweeps --scenes none --dense none ;;
     dense) bench dense --scenes none --sweeps none ;;

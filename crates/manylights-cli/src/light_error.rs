@@ -1,6 +1,6 @@
-//! `manylights light-error`: how far `--direct-lighting restir` is from `reference` (every light with
-//! a shadow ray of its own) on a scene, frame by frame, over a still camera and along a camera moving
-//! sideways: FLIP (NVIDIA's perceptual difference, through the `nv-flip` crate) and PSNR of the
+//! `manylights light-error`: how far `--direct-lighting restir`, as sampled and denoised, is from
+//! `reference` (every light with a shadow ray of its own) on a scene, frame by frame, over a still
+//! camera and along a camera moving sideways: FLIP (NVIDIA's perceptual difference, through the `nv-flip` crate) and PSNR of the
 //! tonemapped images, the relative MSE of the linear ones, and the still camera's flicker from one
 //! frame to the next. Both are tonemapped at one fixed exposure, the reference's middle grey.
 
@@ -13,7 +13,7 @@ use manylights::{
     gpu::GpuContext,
     renderer::{Image, Renderer},
     scene::{Camera, Scene},
-    settings::{DirectLighting, Exposure, PostSettings, RaySettings, RenderConfig},
+    settings::{Denoise, DirectLighting, Exposure, PostSettings, RaySettings, RenderConfig},
 };
 
 use crate::metrics::{luminance, mean_abs_difference, psnr};
@@ -40,7 +40,7 @@ pub struct LightErrorArgs {
     #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
     path_length: Option<f32>,
     /// The ray settings: `--restir-shadow-rays` and `--restir-reuse` shape restir; `--direct-lighting`
-    /// is set for each image.
+    /// is set for each image, and restir is measured both without the denoiser and with it.
     #[command(flatten)]
     rays: RayArgs,
     /// Write the figures, every frame's and their means, as JSON.
@@ -103,14 +103,14 @@ pub fn run(args: &LightErrorArgs) -> anyhow::Result<()> {
     let camera = choose_camera(&scene, args.view.camera)?;
     let rays = args.rays.settings(&overlay.rays)?;
     // The scene file's methods and particle settings, as `render` takes them.
-    let config = |direct_lighting, exposure| {
+    let config = |direct_lighting, denoise, exposure| {
         RenderConfig {
             width: args.view.width,
             height: args.view.height,
             pipeline: args.view.pipeline,
             light_method: overlay.methods.lights.unwrap_or_default(),
             decal_method: overlay.methods.decals.unwrap_or_default(),
-            rays: RaySettings { direct_lighting, ..rays },
+            rays: RaySettings { direct_lighting, denoise, ..rays },
             post: PostSettings { exposure, ..PostSettings::default() },
             ..RenderConfig::default()
         }
@@ -118,20 +118,24 @@ pub fn run(args: &LightErrorArgs) -> anyhow::Result<()> {
     };
     // Every setting is checked before the first frame, so a bad one fails at once.
     for direct_lighting in [DirectLighting::Reference, DirectLighting::Restir] {
-        config(direct_lighting, Exposure::Fixed(1.0)).validate(&ctx.device_limits())?;
+        config(direct_lighting, Denoise::Svgf, Exposure::Fixed(1.0)).validate(&ctx.device_limits())?;
     }
-    // One exposure for both: the reference's log-average luminance to middle grey.
-    let mut reference = Renderer::new(ctx.clone(), &scene, config(DirectLighting::Reference, Exposure::Fixed(1.0)))?;
+    // One exposure for all: the reference's log-average luminance to middle grey.
+    let mut reference = Renderer::new(ctx.clone(), &scene, config(DirectLighting::Reference, Denoise::Off, Exposure::Fixed(1.0)))?;
     reference.render(&camera)?;
     let exposure = Exposure::Fixed(middle_grey_scale(&reference.read_hdr()?));
-    let mut reference = Renderer::new(ctx.clone(), &scene, config(DirectLighting::Reference, exposure))?;
+    let mut reference = Renderer::new(ctx.clone(), &scene, config(DirectLighting::Reference, Denoise::Off, exposure))?;
     let path_length = args.path_length.unwrap_or(0.02 * scene.bounds().diagonal());
-    let mut paths =
-        vec![("still", measure(&ctx, &scene, &mut reference, config(DirectLighting::Restir, exposure), args.frames, |_| camera.clone())?)];
-    if path_length > 0.0 {
-        let step = path_length / args.frames as f32;
-        let moved = |frame: u32| sideways(&camera, step * frame as f32);
-        paths.push(("moving", measure(&ctx, &scene, &mut reference, config(DirectLighting::Restir, exposure), args.frames, moved)?));
+    let step = path_length / args.frames as f32;
+    let camera_paths: &[(&str, &dyn Fn(u32) -> Camera)] =
+        &[("still", &|_| camera.clone()), ("moving", &|frame| sideways(&camera, step * frame as f32))];
+    let mut paths = Vec::new();
+    for &(name, camera_at) in camera_paths.iter().filter(|(name, _)| path_length > 0.0 || *name == "still") {
+        for denoise in [Denoise::Off, Denoise::Svgf] {
+            let restir = config(DirectLighting::Restir, denoise, exposure);
+            let error = measure(&ctx, &scene, &mut reference, restir, args.frames, camera_at)?;
+            paths.push((name, denoise, error));
+        }
     }
 
     println!("GPU: {}", ctx.describe());
@@ -144,12 +148,12 @@ pub fn run(args: &LightErrorArgs) -> anyhow::Result<()> {
         rays.restir_shadow_rays,
         rays.restir_reuse.name()
     );
-    println!("{:<8} {:>6} {:>8} {:>12} {:>9} {:>9}", "camera", "frame", "FLIP", "rel. MSE", "PSNR dB", "flicker");
-    for (name, path) in &paths {
+    println!("{:<8} {:<8} {:>6} {:>8} {:>12} {:>9} {:>9}", "camera", "restir", "frame", "FLIP", "rel. MSE", "PSNR dB", "flicker");
+    for (name, denoise, path) in &paths {
         for (i, frame) in path.frames.iter().enumerate() {
-            print_row(name, &(i + 1).to_string(), frame);
+            print_row(name, denoise_key(*denoise), &(i + 1).to_string(), frame);
         }
-        print_row(name, "mean", &path.mean);
+        print_row(name, denoise_key(*denoise), "mean", &path.mean);
     }
     if let Some(path) = &args.json {
         let json = serde_json::json!({
@@ -161,7 +165,7 @@ pub fn run(args: &LightErrorArgs) -> anyhow::Result<()> {
             "restir_shadow_rays": rays.restir_shadow_rays,
             "restir_reuse": rays.restir_reuse.name(),
             "path_length_m": path_length,
-            "paths": paths.iter().map(|(name, path)| (name.to_string(), serde_json::to_value(path).unwrap())).collect::<serde_json::Map<_, _>>(),
+            "paths": json_paths(&paths)?,
         });
         let mut staged = StagedOutputs::new();
         staged.stage(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
@@ -170,9 +174,27 @@ pub fn run(args: &LightErrorArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn print_row(camera: &str, frame: &str, e: &FrameError) {
+fn print_row(camera: &str, restir: &str, frame: &str, e: &FrameError) {
     let flicker = e.flicker.map_or(String::new(), |f| format!("{f:.5}"));
-    println!("{camera:<8} {frame:>6} {:>8.4} {:>12.5} {:>9.2} {flicker:>9}", e.flip, e.relative_mse, e.psnr);
+    println!("{camera:<8} {restir:<8} {frame:>6} {:>8.4} {:>12.5} {:>9.2} {flicker:>9}", e.flip, e.relative_mse, e.psnr);
+}
+
+/// How the figures name restir without and with the denoiser.
+fn denoise_key(denoise: Denoise) -> &'static str {
+    match denoise {
+        Denoise::Off => "sampled",
+        Denoise::Svgf => "denoised",
+    }
+}
+
+/// `{camera path: {sampled: …, denoised: …}}`.
+fn json_paths(paths: &[(&str, Denoise, PathError)]) -> anyhow::Result<serde_json::Value> {
+    let mut json = serde_json::Map::new();
+    for (name, denoise, path) in paths {
+        let entry = json.entry(name.to_string()).or_insert_with(|| serde_json::json!({}));
+        entry[denoise_key(*denoise)] = serde_json::to_value(path)?;
+    }
+    Ok(json.into())
 }
 
 /// `frames` frames of restir (`config`) along `camera_at(1..=frames)`, each against the reference.

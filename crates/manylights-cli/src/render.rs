@@ -11,7 +11,7 @@ use manylights::{
     renderer::{FrameTiming, Renderer},
     scene::{Camera, Scene},
     settings::{
-        AutoExposure, Bloom, BvhBuild, DebugView, DecalMethod, DepthOfField, DirectLighting, Exposure, LightMethod, MotionBlur,
+        AutoExposure, Bloom, BvhBuild, DebugView, DecalMethod, Denoise, DepthOfField, DirectLighting, Exposure, LightMethod, MotionBlur,
         ParticleFilter, ParticleMethod, ParticleOverlay, PipelineKind, PostSettings, RayOverlay, RaySettings, RenderConfig, RestirReuse,
         SunShadows, Tonemapper, EV100_RANGE, MAX_ANISOTROPY, MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH, MAX_MOTION_BLUR_SAMPLES,
         MAX_REFLECTION_BOUNCES, MAX_RESTIR_SHADOW_RAYS, MAX_SHADOW_RAYS,
@@ -219,6 +219,8 @@ pub(crate) struct RayArgs {
     restir_shadow_rays: Option<u32>,
     #[arg(long, value_enum, help = format!("What --direct-lighting restir reuses at each pixel's surface from the frame before: nothing, its own reservoir (found by reprojection), or that and its neighbours'. [default: the scene file's, or {}]", RaySettings::default().restir_reuse))]
     restir_reuse: Option<RestirReuse>,
+    #[arg(long, value_enum, help = format!("How --direct-lighting restir's lighting is denoised at the pixels' opaque surfaces: not at all, for error studies (off), or by temporal accumulation and a variance-guided spatial filter (svgf). [default: the scene file's, or {}]", RaySettings::default().denoise))]
+    denoise: Option<Denoise>,
 }
 
 impl RayArgs {
@@ -241,6 +243,7 @@ impl RayArgs {
             direct_lighting: self.direct_lighting,
             restir_shadow_rays: self.restir_shadow_rays,
             restir_reuse: self.restir_reuse,
+            denoise: self.denoise,
         };
         Ok(command_line.over(*file).settings())
     }
@@ -428,7 +431,8 @@ impl TimingReport {
                 match rays.direct_lighting {
                     DirectLighting::Exact => format!("exact ({} light shadow rays)", rays.light_shadow_rays),
                     DirectLighting::Reference => "reference (a shadow ray per light)".into(),
-                    DirectLighting::Restir => format!("restir ({} shadow rays, {} reuse)", rays.restir_shadow_rays, rays.restir_reuse),
+                    DirectLighting::Restir =>
+                        format!("restir ({} shadow rays, {} reuse, denoise {})", rays.restir_shadow_rays, rays.restir_reuse, rays.denoise),
                 },
                 if rays.reflection_bounces > 0 {
                     format!("{} bounce(s) below roughness {}", rays.reflection_bounces, rays.reflection_roughness)
@@ -542,6 +546,7 @@ fn rays_json(renderer: &Renderer) -> serde_json::Value {
         "direct_lighting": rays.direct_lighting.name(),
         "restir_shadow_rays": rays.restir_shadow_rays,
         "restir_reuse": rays.restir_reuse.name(),
+        "denoise": rays.denoise.name(),
     });
     if let Some(built) = renderer.ray_structure() {
         json["hierarchy"] = serde_json::json!({

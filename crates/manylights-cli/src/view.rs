@@ -23,7 +23,7 @@ use manylights::{
     renderer::Renderer,
     scene::{Camera, Projection, Scene},
     settings::{
-        Bloom, DebugView, DecalMethod, DepthOfField, DirectLighting, Exposure, LightMethod, MotionBlur, Named, ParticleMethod,
+        Bloom, DebugView, DecalMethod, Denoise, DepthOfField, DirectLighting, Exposure, LightMethod, MotionBlur, Named, ParticleMethod,
         ParticleOverlay, PipelineKind, RayOverlay, RenderConfig, SettingsOverlay, SunShadows,
     },
 };
@@ -56,7 +56,7 @@ pub struct ViewArgs {
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
     /// A switch at a frame, as the panel would make it: FRAME:KEY=VALUE, KEY one of pipeline,
-    /// light-method, decal-method, particle-method, shadows, direct-lighting, reflections, bloom, depth-of-field,
+    /// light-method, decal-method, particle-method, shadows, direct-lighting, denoise, reflections, bloom, depth-of-field,
     /// motion-blur, auto-exposure (on/off), vignette (0 to 1), debug-view (a --debug-view name), or
     /// the scattered lights, decals or particles (a count: the scene is generated again), or window
     /// (WIDTHxHEIGHT: the window is resized). Repeatable.
@@ -74,6 +74,7 @@ struct Switches {
     debug_view: DebugView,
     shadows: SunShadows,
     direct_lighting: DirectLighting,
+    denoise: Denoise,
     reflections: bool,
     bloom: bool,
     depth_of_field: bool,
@@ -94,6 +95,7 @@ impl Default for Switches {
             debug_view: DebugView::Off,
             shadows: SunShadows::Off,
             direct_lighting: DirectLighting::Exact,
+            denoise: Denoise::Svgf,
             reflections: false,
             bloom: false,
             depth_of_field: false,
@@ -115,6 +117,7 @@ impl Switches {
             particle_method: overlay.particles.method.unwrap_or(defaults.particle_method),
             shadows: overlay.rays.sun_shadows.unwrap_or(defaults.shadows),
             direct_lighting: overlay.rays.direct_lighting.unwrap_or(defaults.direct_lighting),
+            denoise: overlay.rays.denoise.unwrap_or(defaults.denoise),
             reflections: overlay.rays.reflection_bounces.is_some_and(|bounces| bounces > 0),
             auto_exposure: overlay.exposure.is_none(),
             fixed_exposure: overlay.exposure.unwrap_or(defaults.fixed_exposure),
@@ -129,6 +132,7 @@ impl Switches {
         let rays = RayOverlay {
             sun_shadows: Some(self.shadows),
             direct_lighting: Some(self.direct_lighting),
+            denoise: Some(self.denoise),
             reflection_bounces: Some(if self.reflections { bounces } else { 0 }),
             ..overlay.rays
         };
@@ -167,6 +171,7 @@ impl Switches {
             "debug-view" => self.debug_view = choose(key, value)?,
             "shadows" => self.shadows = choose(key, value)?,
             "direct-lighting" => self.direct_lighting = choose(key, value)?,
+            "denoise" => self.denoise = choose(key, value)?,
             "reflections" => self.reflections = on()?,
             "bloom" => self.bloom = on()?,
             "depth-of-field" => self.depth_of_field = on()?,
@@ -175,7 +180,7 @@ impl Switches {
             // Its range is checked with the rest of the settings when the renderer is built.
             "vignette" => self.vignette = value.parse().with_context(|| format!("vignette={value}: give a number"))?,
             _ => bail!(
-                "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, debug-view, shadows, direct-lighting, reflections, bloom, \
+                "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, debug-view, shadows, direct-lighting, denoise, reflections, bloom, \
                  depth-of-field, motion-blur, auto-exposure, vignette, lights, decals or particles"
             ),
         }
@@ -787,6 +792,7 @@ fn panel(ui: &mut egui::Ui, asks: &mut PanelAsks, edited: &mut Counts, shown: &P
     choice(ui, "debug view", &mut switches.debug_view);
     choice(ui, "sun shadows", &mut switches.shadows);
     choice(ui, "direct lighting", &mut switches.direct_lighting);
+    choice(ui, "denoise", &mut switches.denoise);
     ui.checkbox(&mut switches.reflections, "reflections");
     ui.separator();
     ui.checkbox(&mut switches.auto_exposure, "auto exposure");
@@ -948,10 +954,13 @@ mod tests {
         let mut overlay = SettingsOverlay::default();
         overlay.rays.direct_lighting = Some(DirectLighting::Reference);
         overlay.rays.restir_shadow_rays = Some(3);
+        overlay.rays.denoise = Some(Denoise::Off);
         let mut switches = Switches::for_scene(&overlay);
-        assert_eq!(switches.direct_lighting, DirectLighting::Reference);
+        assert_eq!((switches.direct_lighting, switches.denoise), (DirectLighting::Reference, Denoise::Off));
         switches.set("direct-lighting", "restir").unwrap();
+        switches.set("denoise", "svgf").unwrap();
         let rays = switches.config((64, 36), &overlay).rays;
+        assert_eq!(rays.denoise, Denoise::Svgf);
         // The switch, with the scene file's budget under it.
         assert_eq!((rays.direct_lighting, rays.restir_shadow_rays), (DirectLighting::Restir, 3));
         assert!(switches.set("direct-lighting", "sampled").unwrap_err().to_string().contains("restir"));

@@ -241,19 +241,23 @@ fn light_error_compares_restir_with_the_reference_over_a_still_and_a_moving_came
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!((report["restir_reuse"].as_str(), report["path_length_m"].as_f64()), (Some("spatiotemporal"), Some(0.5)));
     for path in ["still", "moving"] {
-        let frames = report["paths"][path]["frames"].as_array().unwrap_or_else(|| panic!("no {path} frames: {report}"));
-        assert_eq!(frames.len(), 3, "{path}");
-        for (i, frame) in frames.iter().enumerate() {
-            let flip = frame["flip"].as_f64().unwrap();
-            // Sampled shadows of 64 lights differ from the reference somewhere, and far from everywhere.
-            assert!(flip > 0.0 && flip < 0.5, "{path} frame {i}: FLIP {flip}");
-            assert!(frame["relative_mse"].as_f64().unwrap() > 0.0 && frame["psnr"].as_f64().unwrap() > 10.0, "{path} frame {i}: {frame}");
-            // Flicker compares a still camera's frame with the one before.
-            assert_eq!(frame["flicker"].is_f64(), path == "still" && i > 0, "{path} frame {i}: {frame}");
+        for restir in ["sampled", "denoised"] {
+            let frames =
+                report["paths"][path][restir]["frames"].as_array().unwrap_or_else(|| panic!("no {path} {restir} frames: {report}"));
+            assert_eq!(frames.len(), 3, "{path} {restir}");
+            for (i, frame) in frames.iter().enumerate() {
+                let flip = frame["flip"].as_f64().unwrap();
+                // Sampled shadows of 64 lights differ from the reference somewhere, and far from everywhere.
+                assert!(flip > 0.0 && flip < 0.5, "{path} {restir} frame {i}: FLIP {flip}");
+                let (relative_mse, psnr) = (frame["relative_mse"].as_f64().unwrap(), frame["psnr"].as_f64().unwrap());
+                assert!(relative_mse > 0.0 && psnr > 10.0, "{path} {restir} frame {i}: {frame}");
+                // Flicker compares a still camera's frame with the one before.
+                assert_eq!(frame["flicker"].is_f64(), path == "still" && i > 0, "{path} {restir} frame {i}: {frame}");
+            }
         }
     }
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.lines().filter(|l| l.contains("mean")).count() == 2, "{stdout}");
+    assert!(stdout.lines().filter(|l| l.contains("mean")).count() == 4, "{stdout}");
     let frames = failure(&["light-error", "--frames", "0"]);
     assert!(frames.contains("--frames 0") && frames.contains("1 to 1024"), "{frames}");
     let length = failure(&["light-error", "--path-length", "-1"]);

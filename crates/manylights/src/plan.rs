@@ -214,10 +214,14 @@ pub struct ShadingMethods {
     /// How each light found lights the point: unshadowed, shadowed within a budget, each with its
     /// shadow ray, or sampled.
     pub direct: DirectShading,
-    /// The opaque surfaces' shading keeps per-pixel state from frame to frame (`restir`'s reservoirs,
-    /// [`FramePlan::keeps_reservoirs`]): fragment shaders then test depth before they run, so hidden
-    /// fragments write nothing.
+    /// The opaque surfaces' shading writes per-pixel state (`restir`'s reservoirs,
+    /// [`FramePlan::keeps_reservoirs`]; the denoiser's samples, [`FramePlan::denoises`]): fragment
+    /// shaders then test depth before they run, so hidden fragments write nothing.
     pub keeps_pixel_state: bool,
+    /// `restir`'s lighting at pixels' opaque surfaces goes to the denoiser's samples rather than into
+    /// the radiance (`DENOISED_LIGHTING` in `shading/shading_pixel.wgsl`, a pipeline constant:
+    /// [`ShadingMethods::denoised_constant`]).
+    pub denoised: bool,
     /// The device has subgroup operations: passes may walk BVHs a subgroup at a time
     /// (`accel/volume_query_subgroup.wgsl`), where that is faster ([`query_walks`]).
     pub subgroups: bool,
@@ -241,6 +245,11 @@ impl ShadingMethods {
     /// The shading core's pipeline constant for its debug views' counters.
     pub fn debug_views_constant(&self) -> (&'static str, f64) {
         ("DEBUG_VIEWS", f64::from(u8::from(self.debug_views)))
+    }
+
+    /// The shading core's pipeline constant for where `restir`'s lighting goes.
+    pub fn denoised_constant(&self) -> (&'static str, f64) {
+        ("DENOISED_LIGHTING", f64::from(u8::from(self.denoised)))
     }
 
     /// The WGSL module that defines `shade_local_lights`.
@@ -381,6 +390,8 @@ pub struct Capabilities {
     pub subgroups: bool,
     /// Fragment shaders may test depth before they run (`wgpu::Features::SHADER_EARLY_DEPTH_TEST`).
     pub early_depth_test: bool,
+    /// Raster passes may blend into 32-bit float images (`wgpu::Features::FLOAT32_BLENDABLE`).
+    pub float32_blendable: bool,
 }
 
 impl Capabilities {
@@ -389,6 +400,7 @@ impl Capabilities {
         Self {
             subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
             early_depth_test: ctx.features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST),
+            float32_blendable: ctx.features.contains(wgpu::Features::FLOAT32_BLENDABLE),
         }
     }
 }
@@ -478,6 +490,11 @@ pub struct FramePlan {
     /// reuse and, in the forward pipeline, where fragment shaders can test depth before they run
     /// (others would let hidden fragments overwrite the visible surface's reservoir).
     pub keeps_reservoirs: bool,
+    /// `restir`'s lighting at the pixels' opaque surfaces goes to the denoiser (`passes/denoise/`)
+    /// rather than into the image: where its settings ask for it, where pixels' surfaces write their
+    /// samples alone (as for [`FramePlan::keeps_reservoirs`]), and where the denoised light can be
+    /// blended into the f32 HDR image.
+    pub denoises: bool,
     /// The light and decal methods that run, and why.
     pub methods: MethodChoice,
     /// The shading core's variant, with the decals' cell lists as planned
@@ -499,14 +516,17 @@ impl FramePlan {
                 config.light_method.name()
             )));
         }
-        let keeps_reservoirs = config.rays.keeps_reservoirs() && (config.pipeline != PipelineKind::Forward || caps.early_depth_test);
+        let pixels_write_alone = config.pipeline != PipelineKind::Forward || caps.early_depth_test;
+        let keeps_reservoirs = config.rays.keeps_reservoirs() && pixels_write_alone;
+        let denoises = config.rays.denoises() && pixels_write_alone && caps.float32_blendable;
         let unlisted = ShadingMethods {
             lights: config.light_method,
             decals: config.decal_method,
             particles: config.particle_method,
             reflections: config.rays.reflection_bounces > 0,
             direct: DirectShading::of(&config.rays),
-            keeps_pixel_state: keeps_reservoirs,
+            keeps_pixel_state: keeps_reservoirs || denoises,
+            denoised: denoises,
             subgroups: caps.subgroups,
             dense_decals: false,
             dense_lights: false,
@@ -561,6 +581,7 @@ impl FramePlan {
             particles,
             traces_rays: config.rays.traces_rays(),
             keeps_reservoirs,
+            denoises,
             methods,
             planned_methods: ShadingMethods { dense_decals, dense_lights, decal_cell_lists: decals.cell_lists, ..unlisted },
         })
@@ -589,9 +610,9 @@ fn group_build(walks_bvh: bool, reads_items_in_leaf_order: bool, asked: BvhBuild
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::settings::RestirReuse;
+    use crate::settings::{Denoise, RestirReuse};
 
-    const SUBGROUPS: Capabilities = Capabilities { subgroups: true, early_depth_test: true };
+    const SUBGROUPS: Capabilities = Capabilities { subgroups: true, early_depth_test: true, float32_blendable: true };
 
     fn config(lights: LightMethod, decals: DecalMethod) -> RenderConfig {
         RenderConfig { light_method: lights, decal_method: decals, ..Default::default() }
@@ -615,7 +636,10 @@ mod tests {
     fn crowded_decals_get_wide_leaves_and_one_placed_group_cell_lists() {
         let bvh = config(LightMethod::Bvh, DecalMethod::Bvh);
         assert!(Measurements::for_settings(&bvh, SUBGROUPS).decal_centre_overlap);
-        assert!(!Measurements::for_settings(&bvh, Capabilities { subgroups: false, early_depth_test: true }).decal_centre_overlap);
+        assert!(
+            !Measurements::for_settings(&bvh, Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true })
+                .decal_centre_overlap
+        );
         let gpu_built = RenderConfig { decal_bvh_build: BvhBuild::GpuEveryFrame, ..bvh.clone() };
         assert!(Measurements::for_settings(&gpu_built, SUBGROUPS).decal_centre_overlap);
         let stats =
@@ -642,7 +666,9 @@ mod tests {
         let sparse_rebuilt = MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP - 1.0));
         assert_eq!(sparse_rebuilt.decals.method, DecalMethod::Clustered);
         // An overlap measured for other settings decides nothing.
-        let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true }, &stats(40.0, 1)).unwrap();
+        let alone =
+            FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true }, &stats(40.0, 1))
+                .unwrap();
         assert!(!alone.decals.wide_leaves && !alone.shading_methods(true).dense_decals);
     }
 
@@ -652,7 +678,9 @@ mod tests {
         let exact = RenderConfig { particle_method: ParticleMethod::Bvh, ..config(LightMethod::Bvh, DecalMethod::Off) };
         let plan = FramePlan::resolve(&exact, SUBGROUPS, &with_particles).unwrap();
         assert_eq!(plan.particles, ParticlePlan::Lights(DynamicLeaves::Widest));
-        let alone = FramePlan::resolve(&exact, Capabilities { subgroups: false, early_depth_test: true }, &with_particles).unwrap();
+        let alone =
+            FramePlan::resolve(&exact, Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true }, &with_particles)
+                .unwrap();
         assert_eq!(alone.particles, ParticlePlan::Lights(DynamicLeaves::AtMost(16)));
         let brute = RenderConfig { light_method: LightMethod::Brute, ..exact.clone() };
         let err = FramePlan::resolve(&brute, SUBGROUPS, &with_particles).unwrap_err().to_string();
@@ -678,7 +706,9 @@ mod tests {
             assert!(query_walks(dense.shading_methods(true), stage).lights);
         }
         // Without subgroups, nothing is shared out: narrow leaves, walked alone.
-        let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true }, &stats(100.0)).unwrap();
+        let alone =
+            FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true }, &stats(100.0))
+                .unwrap();
         assert!(!alone.lights.wide_leaves && !alone.shading_methods(true).dense_lights);
         // Rebuilt groups get entry grids exactly where their queries walk alone.
         assert!(sparse.lights.rebuilt_grids && alone.lights.rebuilt_grids && !dense.lights.rebuilt_grids);
@@ -699,7 +729,7 @@ mod tests {
         assert!(plan(PipelineKind::Visbuffer, SUBGROUPS) && plan(PipelineKind::Deferred, SUBGROUPS));
         assert!(
             !plan(PipelineKind::Forward, SUBGROUPS)
-                && plan(PipelineKind::Forward, Capabilities { subgroups: false, early_depth_test: true })
+                && plan(PipelineKind::Forward, Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true })
         );
     }
 
@@ -737,15 +767,39 @@ mod tests {
             let mut config = RenderConfig { pipeline, ..config(LightMethod::Bvh, DecalMethod::Off) };
             config.rays.direct_lighting = DirectLighting::Restir;
             config.rays.restir_reuse = reuse;
+            config.rays.denoise = Denoise::Off;
             let plan = FramePlan::resolve(&config, caps, &SceneStatistics::default()).unwrap();
             assert_eq!(plan.keeps_reservoirs, plan.shading_methods(true).keeps_pixel_state);
             plan.keeps_reservoirs
         };
-        let late = Capabilities { subgroups: true, early_depth_test: false };
+        let late = Capabilities { subgroups: true, early_depth_test: false, float32_blendable: true };
         assert!(keeps(PipelineKind::Visbuffer, RestirReuse::Spatiotemporal, late));
         assert!(keeps(PipelineKind::Forward, RestirReuse::Temporal, SUBGROUPS));
         assert!(!keeps(PipelineKind::Forward, RestirReuse::Spatiotemporal, late));
         assert!(!keeps(PipelineKind::Deferred, RestirReuse::Off, SUBGROUPS));
+    }
+
+    #[test]
+    fn restir_is_denoised_where_pixels_write_their_samples_alone_and_float_images_blend() {
+        let denoised = |pipeline, direct_lighting, denoise, caps| {
+            let mut config = RenderConfig { pipeline, ..config(LightMethod::Bvh, DecalMethod::Off) };
+            config.rays.direct_lighting = direct_lighting;
+            config.rays.restir_reuse = RestirReuse::Off;
+            config.rays.denoise = denoise;
+            let plan = FramePlan::resolve(&config, caps, &SceneStatistics::default()).unwrap();
+            let methods = plan.shading_methods(true);
+            assert_eq!((plan.denoises, plan.denoises), (methods.denoised, methods.keeps_pixel_state));
+            assert_eq!(methods.denoised_constant(), ("DENOISED_LIGHTING", f64::from(u8::from(plan.denoises))));
+            plan.denoises
+        };
+        let late = Capabilities { subgroups: true, early_depth_test: false, float32_blendable: true };
+        let unblended = Capabilities { float32_blendable: false, ..SUBGROUPS };
+        assert!(denoised(PipelineKind::Visbuffer, DirectLighting::Restir, Denoise::Svgf, late));
+        assert!(denoised(PipelineKind::Forward, DirectLighting::Restir, Denoise::Svgf, SUBGROUPS));
+        assert!(!denoised(PipelineKind::Forward, DirectLighting::Restir, Denoise::Svgf, late));
+        assert!(!denoised(PipelineKind::Deferred, DirectLighting::Restir, Denoise::Svgf, unblended));
+        assert!(!denoised(PipelineKind::Deferred, DirectLighting::Restir, Denoise::Off, SUBGROUPS));
+        assert!(!denoised(PipelineKind::Visbuffer, DirectLighting::Reference, Denoise::Svgf, SUBGROUPS));
     }
 
     fn scene(lights: usize, light_overlap: f32, decals: usize, decal_overlap: f32) -> SceneStatistics {
@@ -789,7 +843,11 @@ mod tests {
         assert_eq!(chosen(&forward, scene(28_000, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
         assert_eq!(chosen(&forward, scene(28_000, DENSE_FRAGMENT_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
         assert_eq!(chosen(&forward, scene(28_000, DENSE_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
-        let alone = MethodChoice::resolve(&forward, Capabilities { subgroups: false, early_depth_test: true }, &scene(1000, 50.0, 0, 0.0));
+        let alone = MethodChoice::resolve(
+            &forward,
+            Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true },
+            &scene(1000, 50.0, 0, 0.0),
+        );
         assert_eq!(alone.lights.method, LightMethod::Clustered);
         let mut reflecting = rebuilt.clone();
         reflecting.rays.reflection_bounces = 1;

@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use crate::{
     accel::VolumeStructure,
-    gpu::{cluster_grid::ClusterGrid, readback, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
+    gpu::{cluster_grid::ClusterGrid, readback, scene::PixelStateSize, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
     particles::{ParticleGrid, ParticleSystem, ParticleVolume},
     passes::{deform::Deform, FrameInputs, Structures},
     pipelines::{FramePipeline, FrameSetup},
@@ -127,7 +127,13 @@ impl Renderer {
             effective_anisotropy(&ctx, &config),
             grid_particles.as_ref().and_then(ParticleSystem::grid_textures),
             rays.as_ref().filter(|r| !r.nodes.is_empty()).unwrap_or(&no_rays).buffers(),
-            if plan.keeps_reservoirs { u64::from(config.width) * u64::from(config.height) } else { 0 },
+            {
+                let pixels = u64::from(config.width) * u64::from(config.height);
+                PixelStateSize {
+                    reservoirs: if plan.keeps_reservoirs { pixels } else { 0 },
+                    denoise_samples: if plan.denoises { pixels } else { 0 },
+                }
+            },
         )?;
         // Clustered lists are built every frame only where the method reads them.
         let grid = ClusterGrid::for_resolution(config.width, config.height);
@@ -294,8 +300,10 @@ impl Renderer {
             self.frame_index = start_frame;
             self.previous_camera = start_camera.clone();
             self.pipeline.post().restore_state(&self.ctx);
-            // The reservoirs kept before these frames were overwritten: they start afresh.
+            // The reservoirs and the denoiser's history kept before these frames were overwritten:
+            // they start afresh.
             self.scene.clear_reservoirs(&self.ctx);
+            self.pipeline.clear_denoiser_history(&self.ctx);
         }
     }
 
@@ -370,7 +378,7 @@ impl Renderer {
             if let Some(particles) = &self.particles {
                 particles.record_lights(&mut encoder, self.timer.as_mut());
             }
-            let inputs = FrameInputs { scene: &self.scene, lights: &self.lights, decals: &self.decals, eye: camera.position() };
+            let inputs = FrameInputs { scene: &self.scene, lights: &self.lights, decals: &self.decals, eye: camera.position(), parity };
             self.pipeline.record(&mut encoder, self.timer.as_mut(), &inputs);
             if let Some(timer) = &self.timer {
                 timer.resolve(&mut encoder);

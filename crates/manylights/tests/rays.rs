@@ -26,7 +26,7 @@ struct GpuHit {
 fn trace_on_gpu(scene: &Scene, rays: &[(Vec3, f32, Vec3, bool)]) -> Vec<GpuHit> {
     let ctx = GpuContext::new().expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)");
     let structure = RayStructure::build(scene).unwrap();
-    let gpu_scene = GpuScene::upload(&ctx, scene, 64, 1, None, structure.buffers(), 0).unwrap();
+    let gpu_scene = GpuScene::upload(&ctx, scene, 64, 1, None, structure.buffers(), Default::default()).unwrap();
     let device = &ctx.device;
     let packed: Vec<[f32; 4]> = rays
         .iter()

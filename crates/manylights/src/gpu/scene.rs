@@ -81,6 +81,19 @@ pub struct GpuReservoir {
     pub normal_count: u32,
 }
 
+/// One pixel's sample of sampled lighting for the denoiser (`DenoiseSample` in `shading/types.wgsl`),
+/// written by the shading core and read by `passes/denoise/` on the GPU alone: here for its size.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuDenoiseSample {
+    pub diffuse: [f32; 3],
+    pub normal: u32,
+    pub specular: [f32; 3],
+    pub albedo: u32,
+    pub position: [f32; 3],
+    pub specular_albedo: u32,
+}
+
 impl From<&Light> for GpuLight {
     fn from(l: &Light) -> Self {
         let (kind, spot_scale, spot_offset) = match l.kind {
@@ -215,6 +228,8 @@ pub struct GpuScene {
     moving_draws: Vec<bool>,
     /// `restir`'s reservoirs, two per pixel (`GpuReservoir`), or one placeholder.
     restir_reservoirs: wgpu::Buffer,
+    /// The denoiser's samples, one per pixel (`GpuDenoiseSample`), or one placeholder.
+    pub denoise_samples: wgpu::Buffer,
 }
 
 impl GpuScene {
@@ -247,7 +262,7 @@ impl GpuScene {
     /// the sampler's maximum anisotropy (1 = trilinear); `particle_grids` are the particle system's
     /// colour and direction textures, bound for shading (1×1×1 placeholders without particles);
     /// `rays` is the scene's ray-tracing hierarchy, for ray-traced effects (`rays::RayStructure`);
-    /// `reservoir_pixels` the pixels `restir` keeps a reservoir for (0: none).
+    /// `pixel_state` the pixels `restir` keeps a reservoir and the denoiser a sample for (0: none).
     pub fn upload(
         ctx: &GpuContext,
         scene: &Scene,
@@ -255,7 +270,7 @@ impl GpuScene {
         anisotropy: u16,
         particle_grids: Option<[&wgpu::Texture; 2]>,
         rays: RayBuffers,
-        reservoir_pixels: u64,
+        pixel_state: PixelStateSize,
     ) -> Result<Self> {
         scene.validate()?;
         let device = &ctx.device;
@@ -280,7 +295,22 @@ impl GpuScene {
         let ray_node_buffer = storage_records(device, "ray hierarchy nodes", rays.nodes, limit, copy)?;
         let ray_triangle_buffer = storage_records(device, "ray triangles", rays.triangles, limit, copy)?;
         let ray_instance_buffer = storage_records(device, "ray instances", rays.instances, limit, copy)?;
-        let restir_reservoirs = reservoir_buffer(device, reservoir_pixels, limit)?;
+        let restir_reservoirs = pixel_buffer(
+            device,
+            "restir's reservoirs",
+            2 * pixel_state.reservoirs,
+            std::mem::size_of::<GpuReservoir>(),
+            limit,
+            "--restir-reuse off",
+        )?;
+        let denoise_samples = pixel_buffer(
+            device,
+            "the denoiser's samples",
+            pixel_state.denoise_samples,
+            std::mem::size_of::<GpuDenoiseSample>(),
+            limit,
+            "--denoise off",
+        )?;
         let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
             size: std::mem::size_of::<FrameUniforms>() as u64,
@@ -313,7 +343,7 @@ impl GpuScene {
             .chain([&textures.decal_color, &textures.decal_data].map(|t| wgpu::BindingResource::TextureView(&t.view)))
             .chain([&environment.background, &environment.specular, &environment.brdf_table].map(wgpu::BindingResource::TextureView))
             .chain([wgpu::BindingResource::Sampler(&environment.sampler)])
-            .chain([restir_reservoirs.as_entire_binding()])
+            .chain([restir_reservoirs.as_entire_binding(), denoise_samples.as_entire_binding()])
             .collect(),
         );
         ctx.check_errors()?;
@@ -339,6 +369,7 @@ impl GpuScene {
             ray_instance_buffer,
             primitive_ranges,
             restir_reservoirs,
+            denoise_samples,
         })
     }
 
@@ -430,6 +461,7 @@ impl GpuScene {
         entries.push(bindings::sampler(27, all)); // environment sampler
                                                   // restir's reservoirs, written by shading, which no vertex stage does
         entries.push(bindings::storage_read_write(28, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE));
+        entries.push(bindings::storage_read_write(29, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE)); // the denoiser's samples
         bindings::layout(device, "scene", &entries)
     }
 
@@ -659,19 +691,34 @@ fn storage_buffer<T: bytemuck::Pod>(
     storage_records(device, label, Records::of(data), limit, usage)
 }
 
-/// `restir`'s reservoirs: two for each of `pixels` pixels (the frame's and the one before), zeroed,
-/// which reads as empty; one placeholder for none.
-fn reservoir_buffer(device: &wgpu::Device, pixels: u64, limit: u64) -> Result<wgpu::Buffer> {
-    let bytes = (2 * pixels).max(1) * std::mem::size_of::<GpuReservoir>() as u64;
+/// Per-pixel state the shading core writes: how many pixels keep a `restir` reservoir (two each:
+/// the frame's and the one before) and a denoiser's sample (0: none, one placeholder record).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PixelStateSize {
+    pub reservoirs: u64,
+    pub denoise_samples: u64,
+}
+
+/// `records` zeroed records of `record_size` bytes for pixels (one placeholder for none); the error
+/// names `what` and the option, `lighter`, that does without it.
+pub fn pixel_buffer(
+    device: &wgpu::Device,
+    what: &str,
+    records: u64,
+    record_size: usize,
+    limit: u64,
+    lighter: &str,
+) -> Result<wgpu::Buffer> {
+    let bytes = records.max(1) * record_size as u64;
     if bytes > limit {
         return Err(Error::InvalidConfig(format!(
-            "restir's reservoirs for {pixels} pixels take {:.1} MiB, over this GPU's storage binding limit of {:.1} MiB; render fewer pixels or use --restir-reuse off",
+            "{what} take {:.1} MiB, over this GPU's storage binding limit of {:.1} MiB; render fewer pixels or use {lighter}",
             bytes as f64 / 1048576.0,
             limit as f64 / 1048576.0
         )));
     }
     Ok(device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("restir reservoirs"),
+        label: Some(what),
         size: bytes,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
@@ -804,6 +851,7 @@ mod tests {
         check!("Light", GpuLight, [position, range, radiant, kind, direction, spot_scale, spot_offset, flags]);
         check!("Decal", GpuDecal, [decal_from_group, material, layer, weight]);
         check!("Reservoir", GpuReservoir, [light, instance, light_hash, weight, position, normal_count]);
+        check!("DenoiseSample", GpuDenoiseSample, [diffuse, normal, specular, albedo, position, specular_albedo]);
         check!("RayTriangle", crate::rays::RayTriangle, [v0, draw_offset, e1, triangle, e2]);
         check!("RayInstance", crate::rays::RayInstance, [local_from_world, blas_root, first_draw, scene_instance]);
         check!(

@@ -34,6 +34,10 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("rays/trace_probe.wgsl"),
         ShaderDesc::new("passes/ray_shadows.wgsl"),
         ShaderDesc::new("passes/shadow_filter.wgsl"),
+        ShaderDesc::new("passes/denoise/temporal.wgsl"),
+        ShaderDesc::new("passes/denoise/variance.wgsl"),
+        ShaderDesc::new("passes/denoise/filter.wgsl"),
+        ShaderDesc::new("passes/denoise/compose.wgsl"),
     ];
     // `auto` composes as the method it resolves to.
     for lights in LightMethod::ALL.into_iter().filter(|&m| m != LightMethod::Auto) {
@@ -62,6 +66,8 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         direct,
                         // Forward fragments keeping restir's reservoirs test depth first.
                         keeps_pixel_state: direct == DirectShading::Restir,
+                        // A pipeline constant: the same composed shader either way.
+                        denoised: direct == DirectShading::Restir,
                         subgroups,
                         dense_decals,
                         // Dense lights walk as a subgroup, as subgroup-walked decals do.

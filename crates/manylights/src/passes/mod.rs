@@ -18,6 +18,7 @@ pub mod catalogue;
 pub mod deferred_decals;
 pub mod deferred_shade;
 pub mod deform;
+pub mod denoise;
 pub mod depth_prepass;
 pub mod forward_shade;
 pub mod gbuffer_raster;
@@ -52,13 +53,15 @@ pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: 
 }
 
 /// What a frame reads besides its pipeline's own images: the scene, the light and decal structures
-/// (bound as groups 2 and 3 by the shading passes), and the eye, which orders draws front to back.
+/// (bound as groups 2 and 3 by the shading passes), the eye, which orders draws front to back, and
+/// the frame's parity, which picks the halves of what passes keep from frame to frame.
 #[derive(Clone, Copy)]
 pub struct FrameInputs<'a> {
     pub scene: &'a GpuScene,
     pub lights: &'a VolumeStructure,
     pub decals: &'a VolumeStructure,
     pub eye: glam::Vec3,
+    pub parity: usize,
 }
 
 /// The light and decal structures, bound as groups 2 and 3 by the shading passes.

@@ -14,6 +14,9 @@
 //!             deferred_shade (decals, lights) ─▶ hdr (Rgba32Float)
 //!                                   │
 //!                                   ▼
+//!             denoiser, with restir (`passes/denoise/`) ─▶ denoised light added to hdr
+//!                                   │
+//!                                   ▼
 //!             transparent_shade (BLEND draws, back to front, fragments) ─▶ blended over hdr
 //!                                   │
 //!                                   ▼
@@ -21,6 +24,7 @@
 //! ```
 
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
+use crate::passes::denoise::Denoiser;
 use crate::passes::{
     deferred_decals::DeferredDecals,
     deferred_shade::{DeferredShade, DeferredShadeImages},
@@ -47,6 +51,8 @@ pub struct DeferredPipeline {
     /// Present when the sun casts ray-traced shadows.
     shadows: Option<RayShadows>,
     shade: DeferredShade,
+    /// Present when `restir`'s lighting is denoised (`plan::FramePlan::denoises`).
+    pub(super) denoiser: Option<Denoiser>,
     /// Present when the scene has transparent draws.
     transparent: Option<TransparentShade>,
     /// Depth of field, motion blur, exposure, bloom, vignette and tonemapping (`post/`).
@@ -93,6 +99,7 @@ impl DeferredPipeline {
                 DeferredShadeImages { depth: &depth_view, gbuffer: &gbuffer, hdr: &hdr_view },
             )?,
             shadows,
+            denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, (width, height))).transpose()?,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
             targets,
@@ -114,6 +121,9 @@ impl DeferredPipeline {
             shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (width, height));
         }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
+        if let Some(denoiser) = &self.denoiser {
+            denoiser.record(encoder, timer.as_deref_mut(), inputs, &self.hdr_view);
+        }
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
         }

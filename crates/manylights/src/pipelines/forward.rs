@@ -15,6 +15,9 @@
 //!             forward_shade (EQUAL depth; material, decals, lights; then sky) ─▶ hdr (Rgba32Float)
 //!                                   │
 //!                                   ▼
+//!             denoiser, with restir (`passes/denoise/`) ─▶ denoised light added to hdr
+//!                                   │
+//!                                   ▼
 //!             transparent_shade (BLEND draws, back to front) ─▶ blended over hdr
 //!                                   │
 //!                                   ▼
@@ -22,6 +25,7 @@
 //! ```
 
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
+use crate::passes::denoise::Denoiser;
 use crate::passes::{
     depth_prepass::DepthPrepass, forward_shade::ForwardShade, ray_shadows::RayShadows, transparent_shade::TransparentShade,
 };
@@ -40,6 +44,8 @@ pub struct ForwardPipeline {
     /// Present when the sun casts ray-traced shadows.
     shadows: Option<RayShadows>,
     shade: ForwardShade,
+    /// Present when `restir`'s lighting is denoised (`plan::FramePlan::denoises`).
+    pub(super) denoiser: Option<Denoiser>,
     /// Present when the scene has transparent draws.
     transparent: Option<TransparentShade>,
     /// Depth of field, motion blur, exposure, bloom, vignette and tonemapping (`post/`).
@@ -57,6 +63,7 @@ impl ForwardPipeline {
             prepass: DepthPrepass::new(ctx, scene)?,
             shade: ForwardShade::new(ctx, scene, methods, structures, shadows.as_ref())?,
             shadows,
+            denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, (width, height))).transpose()?,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
             targets,
@@ -72,6 +79,9 @@ impl ForwardPipeline {
             shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (self.targets.width, self.targets.height));
         }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
+        if let Some(denoiser) = &self.denoiser {
+            denoiser.record(encoder, timer.as_deref_mut(), inputs, &self.hdr_view);
+        }
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
         }

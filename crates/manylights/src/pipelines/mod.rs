@@ -54,6 +54,18 @@ impl FramePipeline {
         }
     }
 
+    /// Forgets the denoiser's history, if the pipeline has a denoiser: the next frame starts afresh.
+    pub fn clear_denoiser_history(&self, ctx: &GpuContext) {
+        let denoiser = match self {
+            Self::Visbuffer(p) => p.denoiser.as_ref(),
+            Self::Deferred(p) => p.denoiser.as_ref(),
+            Self::Forward(p) => p.denoiser.as_ref(),
+        };
+        if let Some(denoiser) = denoiser {
+            denoiser.clear_history(ctx);
+        }
+    }
+
     /// The post chain every pipeline ends with.
     pub fn post(&self) -> &PostChain {
         match self {

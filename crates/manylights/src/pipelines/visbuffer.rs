@@ -13,6 +13,9 @@
 //!             visbuffer_shade (material, decals, lights; reflections) ─▶ hdr (Rgba32Float)
 //!                                   │
 //!                                   ▼
+//!             denoiser, with restir (`passes/denoise/`) ─▶ denoised light added to hdr
+//!                                   │
+//!                                   ▼
 //!             transparent_shade (BLEND draws, back to front, fragments) ─▶ blended over hdr
 //!                                   │
 //!                                   ▼
@@ -20,6 +23,7 @@
 //! ```
 
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
+use crate::passes::denoise::Denoiser;
 use crate::passes::{
     ray_shadows::RayShadows,
     transparent_shade::TransparentShade,
@@ -42,6 +46,8 @@ pub struct VisbufferPipeline {
     /// Present when the sun casts ray-traced shadows.
     shadows: Option<RayShadows>,
     shade: VisbufferShade,
+    /// Present when `restir`'s lighting is denoised (`plan::FramePlan::denoises`).
+    pub(super) denoiser: Option<Denoiser>,
     /// Present when the scene has transparent draws.
     transparent: Option<TransparentShade>,
     /// Depth of field, motion blur, exposure, bloom, vignette and tonemapping (`post/`).
@@ -68,6 +74,7 @@ impl VisbufferPipeline {
                 VisbufferShadeImages { visibility: &visibility_view, depth: &depth_view, hdr: &hdr_view },
             )?,
             shadows,
+            denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, (width, height))).transpose()?,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
             targets,
@@ -86,6 +93,9 @@ impl VisbufferPipeline {
             shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (width, height));
         }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
+        if let Some(denoiser) = &self.denoiser {
+            denoiser.record(encoder, timer.as_deref_mut(), inputs, &self.hdr_view);
+        }
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
         }

@@ -54,6 +54,19 @@ named_enum! {
     }
 }
 
+named_enum! {
+    /// Whether sampled direct lighting (`restir`) is denoised at the pixels' opaque surfaces
+    /// (`passes/denoise/`).
+    pub enum Denoise {
+        /// The samples as they are: for error studies.
+        Off = "off",
+        /// Temporal accumulation with per-pixel moments, then a variance-guided à-trous filter on
+        /// demodulated diffuse and specular light, guided by depth and normals (Schied et al. 2017).
+        #[default]
+        Svgf = "svgf",
+    }
+}
+
 /// Most rays per pixel towards the sun's disc, and most reflection bounces.
 pub const MAX_SHADOW_RAYS: u32 = 64;
 pub const MAX_REFLECTION_BOUNCES: u32 = 8;
@@ -87,6 +100,8 @@ pub struct RaySettings {
     pub restir_shadow_rays: u32,
     /// What `restir` reuses at the pixels' surfaces from earlier frames.
     pub restir_reuse: RestirReuse,
+    /// How `restir`'s lighting is denoised.
+    pub denoise: Denoise,
 }
 
 impl Default for RaySettings {
@@ -101,6 +116,7 @@ impl Default for RaySettings {
             direct_lighting: DirectLighting::Exact,
             restir_shadow_rays: 1,
             restir_reuse: RestirReuse::Temporal,
+            denoise: Denoise::Svgf,
         }
     }
 }
@@ -118,6 +134,7 @@ pub struct RayOverlay {
     pub direct_lighting: Option<DirectLighting>,
     pub restir_shadow_rays: Option<u32>,
     pub restir_reuse: Option<RestirReuse>,
+    pub denoise: Option<Denoise>,
 }
 
 impl RayOverlay {
@@ -133,6 +150,7 @@ impl RayOverlay {
             direct_lighting: self.direct_lighting.or(below.direct_lighting),
             restir_shadow_rays: self.restir_shadow_rays.or(below.restir_shadow_rays),
             restir_reuse: self.restir_reuse.or(below.restir_reuse),
+            denoise: self.denoise.or(below.denoise),
         }
     }
 
@@ -149,6 +167,7 @@ impl RayOverlay {
             direct_lighting: self.direct_lighting.unwrap_or(defaults.direct_lighting),
             restir_shadow_rays: self.restir_shadow_rays.unwrap_or(defaults.restir_shadow_rays),
             restir_reuse: self.restir_reuse.unwrap_or(defaults.restir_reuse),
+            denoise: self.denoise.unwrap_or(defaults.denoise),
         }
     }
 }
@@ -157,6 +176,11 @@ impl RaySettings {
     /// Whether `restir` keeps each pixel's reservoir for the next frame.
     pub fn keeps_reservoirs(&self) -> bool {
         self.direct_lighting == DirectLighting::Restir && self.restir_reuse != RestirReuse::Off
+    }
+
+    /// Whether `restir`'s lighting is to be denoised.
+    pub fn denoises(&self) -> bool {
+        self.direct_lighting == DirectLighting::Restir && self.denoise != Denoise::Off
     }
 
     /// Whether any effect traces rays, so the scene needs its ray hierarchy.

@@ -25,12 +25,18 @@ fn f_schlick(f0: vec3<f32>, v_dot_h: f32) -> vec3<f32> {
     return f0 + (vec3<f32>(1.0) - f0) * f;
 }
 
+// The BRDF's two lobes, each times n·l.
+struct BrdfLobes {
+    diffuse: vec3<f32>,
+    specular: vec3<f32>,
+}
+
 // Reflected radiance for unit irradiance from direction `light_dir` (towards the light), already
-// multiplied by n·l. Zero below the horizon.
-fn brdf_times_cosine(s: ShadingInput, light_dir: vec3<f32>) -> vec3<f32> {
+// multiplied by n·l, lobe by lobe. Zero below the horizon.
+fn brdf_lobes_times_cosine(s: ShadingInput, light_dir: vec3<f32>) -> BrdfLobes {
     let n_dot_l = dot(s.normal, light_dir);
     if n_dot_l <= 0.0 {
-        return vec3<f32>(0.0);
+        return BrdfLobes(vec3<f32>(0.0), vec3<f32>(0.0));
     }
     let n_dot_v = max(dot(s.normal, s.view_dir), 1e-4);
     let h = normalize(light_dir + s.view_dir);
@@ -43,5 +49,11 @@ fn brdf_times_cosine(s: ShadingInput, light_dir: vec3<f32>) -> vec3<f32> {
     let fresnel = f_schlick(f0, v_dot_h);
     let specular = d_ggx(n_dot_h, alpha) * v_smith_ggx_correlated(n_dot_v, n_dot_l, alpha) * fresnel;
     let diffuse = (vec3<f32>(1.0) - fresnel) * s.base_color * (1.0 - s.metallic) / PI;
-    return (diffuse + specular) * n_dot_l;
+    return BrdfLobes(diffuse * n_dot_l, specular * n_dot_l);
+}
+
+// Both lobes together.
+fn brdf_times_cosine(s: ShadingInput, light_dir: vec3<f32>) -> vec3<f32> {
+    let lobes = brdf_lobes_times_cosine(s, light_dir);
+    return lobes.diffuse + lobes.specular;
 }

@@ -47,3 +47,6 @@
 // `restir`'s reservoirs (`shading/direct/restir.wgsl`): two halves of one per pixel, the frames
 // alternating which half they write and which they reuse. One placeholder where nothing is kept.
 @group(0) @binding(28) var<storage, read_write> restir_reservoirs: array<Reservoir>;
+// The denoiser's samples (`shading/shading_pixel.wgsl`, `passes/denoise/`): one per pixel, written by
+// the shading of its opaque surface. One placeholder where nothing is denoised.
+@group(0) @binding(29) var<storage, read_write> denoise_samples: array<DenoiseSample>;

@@ -77,9 +77,15 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
 
 // `shade` for the opaque surface a pixel shows: what the shading core keeps per pixel from frame to
 // frame (`shading/shading_pixel.wgsl`) is read and written for `pixel`.
+// Where the frame is denoised, the pixel's sampled light goes to the denoiser's sample instead.
 fn shade_pixel(s: ShadingInput, sun_visibility: f32, pixel: vec2<u32>) -> vec3<f32> {
     shading_pixel = pixel;
+    sampled_diffuse = vec3<f32>(0.0);
+    sampled_specular = vec3<f32>(0.0);
     let radiance = shade(s, sun_visibility);
+    if DENOISED_LIGHTING {
+        keep_denoise_sample(s, !DEBUG_VIEWS || frame.debug_view.x == DEBUG_VIEW_OFF);
+    }
     shading_pixel = vec2<u32>(NO_PIXEL);
     return radiance;
 }

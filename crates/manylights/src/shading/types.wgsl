@@ -159,6 +159,20 @@ struct Reservoir {
     normal_count: u32,
 }
 
+// One pixel's sampled lighting for the denoiser (`passes/denoise/`): its diffuse and specular parts,
+// each divided by its albedo (rgba8 unorm, the same quantised albedo multiplies them back), and the
+// surface that guides the filters: its octahedral normal (16 + 16 bits), world position and
+// perceptual roughness (the diffuse albedo's fourth byte).
+// Keep in sync with `GpuDenoiseSample` in `gpu/scene.rs`.
+struct DenoiseSample {
+    diffuse: vec3<f32>,
+    normal: u32,
+    specular: vec3<f32>,
+    albedo: u32,
+    position: vec3<f32>,
+    specular_albedo: u32,
+}
+
 // Keep in sync with `SunShadows` in `rays/mod.rs`.
 const RAY_SHADOWS_OFF: u32 = 0u;
 const RAY_SHADOWS_HARD: u32 = 1u;

@@ -25,6 +25,7 @@
 #include "shading/light_bindings.wgsl"
 #include "shading/direct/shadow_ray.wgsl"
 #include "shading/shading_pixel.wgsl"
+#include "shading/octahedral.wgsl"
 
 // Keep in sync with `settings::MAX_RESTIR_SHADOW_RAYS`.
 const RESTIR_MAX_SAMPLES: u32 = 4u;
@@ -111,21 +112,11 @@ fn restir_light_hash(index: u32) -> u32 {
 
 // A unit vector in 12 + 12 bits (octahedral), with a confidence of up to 255 in the top 8.
 fn restir_pack_normal_count(n: vec3<f32>, count: u32) -> u32 {
-    var o = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
-    if n.z < 0.0 {
-        o = (1.0 - abs(o.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), o >= vec2<f32>(0.0));
-    }
-    let q = vec2<u32>(round(saturate(o * 0.5 + 0.5) * 4095.0));
-    return q.x | (q.y << 12u) | (min(count, 255u) << 24u);
+    return octahedral_pack(n, 12u) | (min(count, 255u) << 24u);
 }
 
 fn restir_unpack_normal(packed: u32) -> vec3<f32> {
-    let o = vec2<f32>(f32(packed & 0xfffu), f32((packed >> 12u) & 0xfffu)) / 4095.0 * 2.0 - 1.0;
-    var n = vec3<f32>(o, 1.0 - abs(o.x) - abs(o.y));
-    if n.z < 0.0 {
-        n = vec3<f32>((1.0 - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0)), n.z);
-    }
-    return normalize(n);
+    return octahedral_unpack(packed, 12u);
 }
 
 // Whether light `index`, placed by `instance`, lights the surface at `position` facing `normal` (world
@@ -262,7 +253,7 @@ fn direct_lights_end(s: ShadingInput) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
     for (var k = 1u; k < samples; k += 1u) {
         if restir_weight_sum > 0.0 && !light_occluded(restir_light[k], s) {
-            radiance += restir_radiance[k] * restir_weight_sum;
+            radiance += add_sampled_light(s, restir_light[k], restir_radiance[k] * restir_weight_sum / f32(samples));
         }
     }
     // The first sample: the pixel's own choice, or the one its reuse makes.
@@ -284,11 +275,11 @@ fn direct_lights_end(s: ShadingInput) -> vec3<f32> {
     }
     let visible = weight > 0.0 && !light_occluded(choice.position, s);
     if visible {
-        radiance += choice.radiance * weight;
+        radiance += add_sampled_light(s, choice.position, choice.radiance * weight / f32(samples));
     }
     if keeps {
         // Visibility reuse: a reservoir whose light its surface does not see keeps no weight.
         restir_keep(s, choice, select(0.0, weight, visible), count);
     }
-    return radiance / f32(samples);
+    return radiance;
 }

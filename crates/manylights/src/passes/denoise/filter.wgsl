@@ -1,0 +1,94 @@
+// One step of the denoiser's edge-avoiding à-trous wavelet filter (SVGF, Schied et al. 2017; Dammertz
+// et al. 2010): a 5×5 B-spline kernel whose taps lie `step` pixels apart (1, 2, 4, … over the
+// steps), each tap weighed by its surface (`denoise_surface_weight`) and, per lobe, by how far its
+// luminance lies from the pixel's in units of the pixel's standard deviation (its variance
+// prefiltered over 3×3), so that noise is smoothed where the variance says it is noise and edges in
+// the light stay. Variance is filtered with the squared weights. Specular light spreads over fewer
+// pixels the smoother the surface (`denoise_specular_reach`): a glossy highlight is small. Unlike
+// SVGF, no step's result feeds the next frame's history: the history stays the unblurred temporal
+// mean, which converges to the pixel's own light under a still camera (measured: FLIP after 16 still
+// frames 0.115 against 0.140 with SVGF's feedback; BENCHMARKS.md).
+#include "passes/denoise/denoise_types.wgsl"
+
+@group(1) @binding(0) var depth: texture_depth_2d;
+@group(1) @binding(1) var<storage, read> input: array<DenoiseLight>;
+@group(1) @binding(2) var<storage, read_write> output: array<DenoiseLight>;
+// x: the step between taps in pixels.
+@group(1) @binding(3) var<uniform> filter_step: vec4<u32>;
+
+// SVGF's σ_l: luminance differences of this many standard deviations weigh 1/e.
+const DENOISE_LUMINANCE_SIGMA: f32 = 2.0;
+
+fn denoise_kernel(offset: i32) -> f32 {
+    return select(select(1.0 / 16.0, 1.0 / 4.0, abs(offset) == 1), 3.0 / 8.0, offset == 0);
+}
+
+// The lobes' variance around the pixel, over 3×3 with a Gaussian's weights.
+fn denoise_local_variance(pixel: vec2<i32>, size: vec2<i32>) -> vec2<f32> {
+    var variance = vec2<f32>(0.0);
+    for (var dy = -1; dy <= 1; dy += 1) {
+        for (var dx = -1; dx <= 1; dx += 1) {
+            let q = clamp(pixel + vec2<i32>(dx, dy), vec2<i32>(0), size - 1);
+            let light = input[denoise_index(vec2<u32>(q))];
+            let w = select(0.5, 1.0, dx == 0) * select(0.5, 1.0, dy == 0) / 4.0;
+            variance += w * vec2<f32>(light.diffuse.w, light.specular.w);
+        }
+    }
+    return variance;
+}
+
+// How far, in pixels, specular light may spread at a surface of perceptual roughness `roughness`:
+// the Gaussian width of the extra weight its taps get, from a pixel for mirrors to 64 for the roughest.
+fn denoise_specular_reach(roughness: f32) -> f32 {
+    return 1.0 + 64.0 * roughness * roughness;
+}
+
+@compute @workgroup_size(8, 8)
+fn denoise_filter(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = vec2<i32>(frame.viewport.xy);
+    let pixel = vec2<i32>(id.xy);
+    if any(pixel >= size) {
+        return;
+    }
+    let index = denoise_index(id.xy);
+    let own = input[index];
+    if textureLoad(depth, pixel, 0) == 0.0 {
+        output[index] = own;
+        return;
+    }
+    let sample = denoise_samples[index];
+    let normal = denoise_normal(sample);
+    let footprint = denoise_footprint(sample.position);
+    let deviation = sqrt(denoise_local_variance(pixel, size));
+    let luminance_scale = 1.0 / (DENOISE_LUMINANCE_SIGMA * deviation + 1e-6);
+    let own_luminance = vec2<f32>(dot(own.diffuse.rgb, DENOISE_LUMINANCE), dot(own.specular.rgb, DENOISE_LUMINANCE));
+    let step = i32(filter_step.x);
+    let reach = denoise_specular_reach(unpack4x8unorm(sample.albedo).a);
+    let centre = denoise_kernel(0) * denoise_kernel(0);
+    var diffuse = centre * vec4<f32>(own.diffuse.rgb, centre * own.diffuse.w);
+    var specular = centre * vec4<f32>(own.specular.rgb, centre * own.specular.w);
+    var weights = vec2<f32>(centre);
+    for (var dy = -2; dy <= 2; dy += 1) {
+        for (var dx = -2; dx <= 2; dx += 1) {
+            let q = pixel + vec2<i32>(dx, dy) * step;
+            if (dx == 0 && dy == 0) || any(q < vec2<i32>(0)) || any(q >= size) || textureLoad(depth, q, 0) == 0.0 {
+                continue;
+            }
+            let other = denoise_index(vec2<u32>(q));
+            let light = input[other];
+            let apart = f32(step) * length(vec2<f32>(f32(dx), f32(dy)));
+            let surface = denoise_surface_weight(normal, sample.position, footprint, denoise_samples[other], apart);
+            let luminance = vec2<f32>(dot(light.diffuse.rgb, DENOISE_LUMINANCE), dot(light.specular.rgb, DENOISE_LUMINANCE));
+            let glossy = vec2<f32>(1.0, exp(-0.5 * apart * apart / (reach * reach)));
+            let w = denoise_kernel(dx) * denoise_kernel(dy) * surface * glossy * exp(-abs(luminance - own_luminance) * luminance_scale);
+            diffuse += w.x * vec4<f32>(light.diffuse.rgb, w.x * light.diffuse.w);
+            specular += w.y * vec4<f32>(light.specular.rgb, w.y * light.specular.w);
+            weights += w;
+        }
+    }
+    let filtered = DenoiseLight(
+        vec4<f32>(diffuse.rgb / weights.x, diffuse.w / (weights.x * weights.x)),
+        vec4<f32>(specular.rgb / weights.y, specular.w / (weights.y * weights.y)),
+    );
+    output[index] = filtered;
+}

@@ -1,0 +1,89 @@
+//! The denoiser of sampled direct lighting (`restir`), after SVGF (Schied et al. 2017) on demodulated
+//! diffuse and specular light, with its history clamped to the frame's samples around each pixel and
+//! kept unfiltered. The shading core writes each pixel's sample (`DenoiseSample`: its
+//! sampled light divided by the albedos, its normal and position; `shading/shading_pixel.wgsl`)
+//! instead of adding that light to the image; then, in compute:
+//!
+//! ```text
+//! samples + history (previous frame's half) ─▶ temporal ─▶ history (this frame's half: moments, surface)
+//!                                                  │        + light A (lobes and their variance)
+//!                                                  ▼
+//!                                      variance (short histories: spatial moments) ─▶ light B
+//!                                                  │
+//!                                                  ▼
+//!            filter × FILTER_STEPS (à-trous, steps 1, 2, 4, …) ─▶ light A/B
+//!                                                  │
+//!                                                  ▼
+//!                 compose (one triangle, additive blend: light × albedos) ─▶ + hdr
+//! ```
+//!
+//! The history's two halves alternate with the frame's parity. Pixels without a surface (depth 0)
+//! keep nothing and add nothing.
+
+pub mod compose;
+pub mod filter;
+pub mod temporal;
+pub mod variance;
+
+use crate::gpu::{scene::pixel_buffer, GpuContext, GpuScene, GpuTimer};
+use crate::passes::FrameInputs;
+use crate::Result;
+
+/// À-trous steps: taps 1 to 16 pixels apart, a 65-pixel-wide footprint, as in SVGF.
+pub const FILTER_STEPS: u32 = 5;
+/// A pixel's history (`DenoiseHistory` in `denoise_types.wgsl`) and its light between the filters
+/// (`DenoiseLight`).
+const HISTORY_BYTES: usize = 64;
+const LIGHT_BYTES: usize = 32;
+
+pub struct Denoiser {
+    temporal: temporal::Temporal,
+    variance: variance::Variance,
+    filter: filter::Filter,
+    compose: compose::Compose,
+    /// Two halves, the frames alternating which they write and which they read.
+    history: [wgpu::Buffer; 2],
+    size: (u32, u32),
+}
+
+impl Denoiser {
+    /// The denoiser for images of `size` whose depth is `depth`.
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, depth: &wgpu::TextureView, size: (u32, u32)) -> Result<Self> {
+        let device = &ctx.device;
+        let pixels = u64::from(size.0) * u64::from(size.1);
+        let limit = ctx.limits.max_storage_buffer_binding_size;
+        let buffer = |what, bytes| pixel_buffer(device, what, pixels, bytes, limit, "--denoise off");
+        let history = [buffer("the denoiser's history", HISTORY_BYTES)?, buffer("the denoiser's history", HISTORY_BYTES)?];
+        let light = [buffer("the denoiser's light", LIGHT_BYTES)?, buffer("the denoiser's light", LIGHT_BYTES)?];
+        let temporal = temporal::Temporal::new(ctx, scene, depth, &history, &light[0])?;
+        let variance = variance::Variance::new(ctx, scene, depth, &history, [&light[0], &light[1]])?;
+        let filter = filter::Filter::new(ctx, scene, depth, &light)?;
+        let compose = compose::Compose::new(ctx, scene, filter.result(&light))?;
+        Ok(Self { temporal, variance, filter, compose, history, size })
+    }
+
+    /// Denoises the frame's samples and adds the light to `hdr`.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        mut timer: Option<&mut GpuTimer>,
+        inputs: &FrameInputs,
+        hdr: &wgpu::TextureView,
+    ) {
+        let workgroups = super::dispatch_size(self.size.0, self.size.1);
+        let scene = &inputs.scene.bind_group;
+        self.temporal.record(encoder, timer.as_deref_mut(), scene, inputs.parity, workgroups);
+        self.variance.record(encoder, timer.as_deref_mut(), scene, inputs.parity, workgroups);
+        self.filter.record(encoder, timer.as_deref_mut(), scene, workgroups);
+        self.compose.record(encoder, timer, scene, hdr);
+    }
+
+    /// Forgets every pixel's history: the next frame starts afresh.
+    pub fn clear_history(&self, ctx: &GpuContext) {
+        let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("clear denoiser history") });
+        for half in &self.history {
+            encoder.clear_buffer(half, 0, None);
+        }
+        ctx.queue.submit([encoder.finish()]);
+    }
+}
