@@ -390,8 +390,6 @@ pub struct Capabilities {
     pub subgroups: bool,
     /// Fragment shaders may test depth before they run (`wgpu::Features::SHADER_EARLY_DEPTH_TEST`).
     pub early_depth_test: bool,
-    /// Raster passes may blend into 32-bit float images (`wgpu::Features::FLOAT32_BLENDABLE`).
-    pub float32_blendable: bool,
 }
 
 impl Capabilities {
@@ -400,7 +398,6 @@ impl Capabilities {
         Self {
             subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
             early_depth_test: ctx.features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST),
-            float32_blendable: ctx.features.contains(wgpu::Features::FLOAT32_BLENDABLE),
         }
     }
 }
@@ -491,9 +488,8 @@ pub struct FramePlan {
     /// (others would let hidden fragments overwrite the visible surface's reservoir).
     pub keeps_reservoirs: bool,
     /// `restir`'s lighting at the pixels' opaque surfaces goes to the denoiser (`passes/denoise/`)
-    /// rather than into the image: where its settings ask for it, where pixels' surfaces write their
-    /// samples alone (as for [`FramePlan::keeps_reservoirs`]), and where the denoised light can be
-    /// blended into the f32 HDR image.
+    /// rather than into the image: where its settings ask for it and where pixels' surfaces write their
+    /// samples alone (as for [`FramePlan::keeps_reservoirs`]).
     pub denoises: bool,
     /// The light and decal methods that run, and why.
     pub methods: MethodChoice,
@@ -518,7 +514,7 @@ impl FramePlan {
         }
         let pixels_write_alone = config.pipeline != PipelineKind::Forward || caps.early_depth_test;
         let keeps_reservoirs = config.rays.keeps_reservoirs() && pixels_write_alone;
-        let denoises = config.rays.denoises() && pixels_write_alone && caps.float32_blendable;
+        let denoises = config.rays.denoises() && pixels_write_alone;
         let unlisted = ShadingMethods {
             lights: config.light_method,
             decals: config.decal_method,
@@ -612,7 +608,7 @@ mod tests {
     use super::*;
     use crate::settings::{Denoise, RestirReuse};
 
-    const SUBGROUPS: Capabilities = Capabilities { subgroups: true, early_depth_test: true, float32_blendable: true };
+    const SUBGROUPS: Capabilities = Capabilities { subgroups: true, early_depth_test: true };
 
     fn config(lights: LightMethod, decals: DecalMethod) -> RenderConfig {
         RenderConfig { light_method: lights, decal_method: decals, ..Default::default() }
@@ -636,10 +632,7 @@ mod tests {
     fn crowded_decals_get_wide_leaves_and_one_placed_group_cell_lists() {
         let bvh = config(LightMethod::Bvh, DecalMethod::Bvh);
         assert!(Measurements::for_settings(&bvh, SUBGROUPS).decal_centre_overlap);
-        assert!(
-            !Measurements::for_settings(&bvh, Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true })
-                .decal_centre_overlap
-        );
+        assert!(!Measurements::for_settings(&bvh, Capabilities { subgroups: false, early_depth_test: true }).decal_centre_overlap);
         let gpu_built = RenderConfig { decal_bvh_build: BvhBuild::GpuEveryFrame, ..bvh.clone() };
         assert!(Measurements::for_settings(&gpu_built, SUBGROUPS).decal_centre_overlap);
         let stats =
@@ -666,9 +659,7 @@ mod tests {
         let sparse_rebuilt = MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP - 1.0));
         assert_eq!(sparse_rebuilt.decals.method, DecalMethod::Clustered);
         // An overlap measured for other settings decides nothing.
-        let alone =
-            FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true }, &stats(40.0, 1))
-                .unwrap();
+        let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true }, &stats(40.0, 1)).unwrap();
         assert!(!alone.decals.wide_leaves && !alone.shading_methods(true).dense_decals);
     }
 
@@ -678,9 +669,7 @@ mod tests {
         let exact = RenderConfig { particle_method: ParticleMethod::Bvh, ..config(LightMethod::Bvh, DecalMethod::Off) };
         let plan = FramePlan::resolve(&exact, SUBGROUPS, &with_particles).unwrap();
         assert_eq!(plan.particles, ParticlePlan::Lights(DynamicLeaves::Widest));
-        let alone =
-            FramePlan::resolve(&exact, Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true }, &with_particles)
-                .unwrap();
+        let alone = FramePlan::resolve(&exact, Capabilities { subgroups: false, early_depth_test: true }, &with_particles).unwrap();
         assert_eq!(alone.particles, ParticlePlan::Lights(DynamicLeaves::AtMost(16)));
         let brute = RenderConfig { light_method: LightMethod::Brute, ..exact.clone() };
         let err = FramePlan::resolve(&brute, SUBGROUPS, &with_particles).unwrap_err().to_string();
@@ -706,9 +695,7 @@ mod tests {
             assert!(query_walks(dense.shading_methods(true), stage).lights);
         }
         // Without subgroups, nothing is shared out: narrow leaves, walked alone.
-        let alone =
-            FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true }, &stats(100.0))
-                .unwrap();
+        let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true }, &stats(100.0)).unwrap();
         assert!(!alone.lights.wide_leaves && !alone.shading_methods(true).dense_lights);
         // Rebuilt groups get entry grids exactly where their queries walk alone.
         assert!(sparse.lights.rebuilt_grids && alone.lights.rebuilt_grids && !dense.lights.rebuilt_grids);
@@ -729,7 +716,7 @@ mod tests {
         assert!(plan(PipelineKind::Visbuffer, SUBGROUPS) && plan(PipelineKind::Deferred, SUBGROUPS));
         assert!(
             !plan(PipelineKind::Forward, SUBGROUPS)
-                && plan(PipelineKind::Forward, Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true })
+                && plan(PipelineKind::Forward, Capabilities { subgroups: false, early_depth_test: true })
         );
     }
 
@@ -772,7 +759,7 @@ mod tests {
             assert_eq!(plan.keeps_reservoirs, plan.shading_methods(true).keeps_pixel_state);
             plan.keeps_reservoirs
         };
-        let late = Capabilities { subgroups: true, early_depth_test: false, float32_blendable: true };
+        let late = Capabilities { subgroups: true, early_depth_test: false };
         assert!(keeps(PipelineKind::Visbuffer, RestirReuse::Spatiotemporal, late));
         assert!(keeps(PipelineKind::Forward, RestirReuse::Temporal, SUBGROUPS));
         assert!(!keeps(PipelineKind::Forward, RestirReuse::Spatiotemporal, late));
@@ -780,7 +767,7 @@ mod tests {
     }
 
     #[test]
-    fn restir_is_denoised_where_pixels_write_their_samples_alone_and_float_images_blend() {
+    fn restir_is_denoised_where_pixels_write_their_samples_alone() {
         let denoised = |pipeline, direct_lighting, denoise, caps| {
             let mut config = RenderConfig { pipeline, ..config(LightMethod::Bvh, DecalMethod::Off) };
             config.rays.direct_lighting = direct_lighting;
@@ -792,12 +779,10 @@ mod tests {
             assert_eq!(methods.denoised_constant(), ("DENOISED_LIGHTING", f64::from(u8::from(plan.denoises))));
             plan.denoises
         };
-        let late = Capabilities { subgroups: true, early_depth_test: false, float32_blendable: true };
-        let unblended = Capabilities { float32_blendable: false, ..SUBGROUPS };
+        let late = Capabilities { subgroups: true, early_depth_test: false };
         assert!(denoised(PipelineKind::Visbuffer, DirectLighting::Restir, Denoise::Svgf, late));
         assert!(denoised(PipelineKind::Forward, DirectLighting::Restir, Denoise::Svgf, SUBGROUPS));
         assert!(!denoised(PipelineKind::Forward, DirectLighting::Restir, Denoise::Svgf, late));
-        assert!(!denoised(PipelineKind::Deferred, DirectLighting::Restir, Denoise::Svgf, unblended));
         assert!(!denoised(PipelineKind::Deferred, DirectLighting::Restir, Denoise::Off, SUBGROUPS));
         assert!(!denoised(PipelineKind::Visbuffer, DirectLighting::Reference, Denoise::Svgf, SUBGROUPS));
     }
@@ -843,11 +828,7 @@ mod tests {
         assert_eq!(chosen(&forward, scene(28_000, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
         assert_eq!(chosen(&forward, scene(28_000, DENSE_FRAGMENT_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
         assert_eq!(chosen(&forward, scene(28_000, DENSE_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
-        let alone = MethodChoice::resolve(
-            &forward,
-            Capabilities { subgroups: false, early_depth_test: true, float32_blendable: true },
-            &scene(1000, 50.0, 0, 0.0),
-        );
+        let alone = MethodChoice::resolve(&forward, Capabilities { subgroups: false, early_depth_test: true }, &scene(1000, 50.0, 0, 0.0));
         assert_eq!(alone.lights.method, LightMethod::Clustered);
         let mut reflecting = rebuilt.clone();
         reflecting.rays.reflection_bounces = 1;

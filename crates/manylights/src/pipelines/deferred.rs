@@ -99,7 +99,7 @@ impl DeferredPipeline {
                 DeferredShadeImages { depth: &depth_view, gbuffer: &gbuffer, hdr: &hdr_view },
             )?,
             shadows,
-            denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, (width, height))).transpose()?,
+            denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, &targets.hdr, (width, height))).transpose()?,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
             targets,
@@ -122,7 +122,7 @@ impl DeferredPipeline {
         }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
         if let Some(denoiser) = &self.denoiser {
-            denoiser.record(encoder, timer.as_deref_mut(), inputs, &self.hdr_view);
+            denoiser.record(encoder, timer.as_deref_mut(), inputs);
         }
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });

@@ -63,7 +63,7 @@ impl ForwardPipeline {
             prepass: DepthPrepass::new(ctx, scene)?,
             shade: ForwardShade::new(ctx, scene, methods, structures, shadows.as_ref())?,
             shadows,
-            denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, (width, height))).transpose()?,
+            denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, &targets.hdr, (width, height))).transpose()?,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
             targets,
@@ -80,7 +80,7 @@ impl ForwardPipeline {
         }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
         if let Some(denoiser) = &self.denoiser {
-            denoiser.record(encoder, timer.as_deref_mut(), inputs, &self.hdr_view);
+            denoiser.record(encoder, timer.as_deref_mut(), inputs);
         }
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });

@@ -74,7 +74,7 @@ impl VisbufferPipeline {
                 VisbufferShadeImages { visibility: &visibility_view, depth: &depth_view, hdr: &hdr_view },
             )?,
             shadows,
-            denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, (width, height))).transpose()?,
+            denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, &targets.hdr, (width, height))).transpose()?,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
             targets,
@@ -94,7 +94,7 @@ impl VisbufferPipeline {
         }
         self.shade.record(encoder, timer.as_deref_mut(), inputs, (width, height));
         if let Some(denoiser) = &self.denoiser {
-            denoiser.record(encoder, timer.as_deref_mut(), inputs, &self.hdr_view);
+            denoiser.record(encoder, timer.as_deref_mut(), inputs);
         }
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });

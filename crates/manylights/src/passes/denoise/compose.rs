@@ -1,61 +1,48 @@
-//! Adds the denoised light to the HDR image: one triangle over it, blended additively (the HDR image
-//! is f32, written by compute or fragments before, so it is blended into rather than read).
-//! See `compose.wgsl`.
+//! Adds the denoised light to the HDR image, in compute. The image is copied first and read from the
+//! copy: a pass cannot read and write one f32 image portably. See `compose.wgsl`.
 
-use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
-use crate::passes::visbuffer_shade::HDR_FORMAT;
+use crate::gpu::{bindings, shaders::ShaderDesc, textures::target, GpuContext, GpuScene, GpuTimer};
+use crate::passes::{builder::ComputeStep, visbuffer_shade::HDR_FORMAT};
 use crate::Result;
 
 pub struct Compose {
-    pipeline: wgpu::RenderPipeline,
+    step: ComputeStep,
     bind_group: wgpu::BindGroup,
+    /// The HDR image as shading left it.
+    shaded: wgpu::Texture,
 }
 
 impl Compose {
-    /// Reads `denoised`, the filters' result, and the scene's samples' albedos.
-    pub fn new(ctx: &GpuContext, scene: &GpuScene, denoised: &wgpu::Buffer) -> Result<Self> {
+    /// Reads `denoised`, the filters' result, the scene's samples' albedos and a copy of `hdr`;
+    /// writes `hdr`.
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, denoised: &wgpu::Buffer, hdr: &wgpu::Texture) -> Result<Self> {
         let device = &ctx.device;
-        let layout = bindings::layout(device, "denoise_compose", &[bindings::storage_read(0, wgpu::ShaderStages::FRAGMENT)]);
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let layout = bindings::layout(
+            device,
+            "denoise_compose",
+            &[
+                bindings::storage_read(0, compute), // denoised light
+                bindings::texture(1, compute, wgpu::TextureSampleType::Float { filterable: false }, wgpu::TextureViewDimension::D2), // shaded
+                bindings::storage_texture_write(2, compute, HDR_FORMAT), // HDR output
+            ],
+        );
         let shader = ShaderDesc::new("passes/denoise/compose.wgsl");
-        let module = shaders::create_module(device, &shader)?;
-        let add = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
-        // The HDR image's alpha stays 1.
-        let keep = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::Zero,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("denoise_compose"),
-            layout: Some(&bindings::pipeline_layout(device, "denoise_compose", &[&scene.bind_group_layout, &layout])),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("denoise_compose_vertex"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("denoise_compose"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: HDR_FORMAT,
-                    blend: Some(wgpu::BlendState { color: add, alpha: keep }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let bind_group = bindings::bind_group(device, "denoise_compose", &layout, vec![denoised.as_entire_binding()]);
-        Ok(Self { pipeline, bind_group })
+        let step = ComputeStep::new(device, &shader, "denoise_compose", &[&scene.bind_group_layout, &layout], &[])?;
+        let usage = wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING;
+        let shaded = target(device, "shaded hdr", hdr.width(), hdr.height(), HDR_FORMAT, usage);
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let bind_group = bindings::bind_group(
+            device,
+            "denoise_compose",
+            &layout,
+            vec![
+                denoised.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&view(&shaded)),
+                wgpu::BindingResource::TextureView(&view(hdr)),
+            ],
+        );
+        Ok(Self { step, bind_group, shaded })
     }
 
     pub fn record(
@@ -63,24 +50,10 @@ impl Compose {
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&mut GpuTimer>,
         scene: &wgpu::BindGroup,
-        hdr: &wgpu::TextureView,
+        hdr: &wgpu::Texture,
+        workgroups: (u32, u32),
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("denoise_compose"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: hdr,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: timer.map(|t| t.render_pass("denoise_compose")),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, scene, &[]);
-        pass.set_bind_group(1, &self.bind_group, &[]);
-        pass.draw(0..3, 0..1);
+        encoder.copy_texture_to_texture(hdr.as_image_copy(), self.shaded.as_image_copy(), hdr.size());
+        self.step.record(encoder, timer, &[scene, &self.bind_group], workgroups);
     }
 }

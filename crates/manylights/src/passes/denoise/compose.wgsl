@@ -1,20 +1,21 @@
 // The denoised light back into the image: each pixel's filtered lobes times the albedos its sample
-// was divided by, added to the HDR image by the blender (the pass draws one triangle over the image).
+// was divided by, added to the HDR image as shading left it (a copy: the image is written here).
 // Pixels without a surface have no light to add.
 #include "passes/denoise/denoise_types.wgsl"
 
 @group(1) @binding(0) var<storage, read> denoised: array<DenoiseLight>;
+@group(1) @binding(1) var shaded: texture_2d<f32>;
+@group(1) @binding(2) var hdr_output: texture_storage_2d<rgba32float, write>;
 
-@vertex
-fn denoise_compose_vertex(@builtin(vertex_index) vertex: u32) -> @builtin(position) vec4<f32> {
-    let corner = vec2<f32>(f32((vertex << 1u) & 2u), f32(vertex & 2u));
-    return vec4<f32>(corner * 2.0 - 1.0, 0.0, 1.0);
-}
-
-@fragment
-fn denoise_compose(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
-    let index = denoise_index(vec2<u32>(position.xy));
+@compute @workgroup_size(8, 8)
+fn denoise_compose(@builtin(global_invocation_id) id: vec3<u32>) {
+    if any(id.xy >= vec2<u32>(frame.viewport.xy)) {
+        return;
+    }
+    let index = denoise_index(id.xy);
     let light = denoised[index];
     let sample = denoise_samples[index];
-    return vec4<f32>(light.diffuse.rgb * unpack4x8unorm(sample.albedo).rgb + light.specular.rgb * unpack4x8unorm(sample.specular_albedo).rgb, 0.0);
+    let added = light.diffuse.rgb * unpack4x8unorm(sample.albedo).rgb + light.specular.rgb * unpack4x8unorm(sample.specular_albedo).rgb;
+    let shaded_radiance = textureLoad(shaded, id.xy, 0);
+    textureStore(hdr_output, id.xy, vec4<f32>(shaded_radiance.rgb + added, shaded_radiance.a));
 }

@@ -45,12 +45,19 @@ fn denoise_footprint(position: vec3<f32>) -> f32 {
     return max(pixel_footprint(position - frame.world_from_view[3].xyz), 1e-6);
 }
 
+// A pixel's surface as the spatial passes read it, 16 bytes rather than the sample's 48: its world
+// position, and its normal in 16 + 16 bits (`octahedral_pack`) as the fourth word. Written by the
+// temporal pass.
+fn denoise_guide(sample: DenoiseSample) -> vec4<u32> {
+    return vec4<u32>(bitcast<vec3<u32>>(sample.position), sample.normal);
+}
+
 // How much the surface of another pixel, `pixels_apart` pixels away, counts in a filter at a pixel
 // whose surface is at `position` facing `normal`, a pixel `footprint` wide: normals alike (cos¹²⁸, as
 // in SVGF), and the other surface near the pixel's tangent plane, relative to the ground between
 // them, so no light crosses edges in depth.
-fn denoise_surface_weight(normal: vec3<f32>, position: vec3<f32>, footprint: f32, other: DenoiseSample, pixels_apart: f32) -> f32 {
-    let normals = pow(max(0.0, dot(normal, denoise_normal(other))), 128.0);
-    let plane_distance = abs(dot(normal, other.position - position));
+fn denoise_surface_weight(normal: vec3<f32>, position: vec3<f32>, footprint: f32, other: vec4<u32>, pixels_apart: f32) -> f32 {
+    let normals = pow(max(0.0, dot(normal, octahedral_unpack(other.w, 16u))), 128.0);
+    let plane_distance = abs(dot(normal, bitcast<vec3<f32>>(other.xyz) - position));
     return normals * exp(-plane_distance / (footprint * max(pixels_apart, 1.0)));
 }

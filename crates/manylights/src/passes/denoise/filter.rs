@@ -13,8 +13,15 @@ pub struct Filter {
 }
 
 impl Filter {
-    /// Reads the frame's `depth` and the variance estimate's `light[1]`; ping-pongs between the two.
-    pub fn new(ctx: &GpuContext, scene: &GpuScene, depth: &wgpu::TextureView, light: &[wgpu::Buffer; 2]) -> Result<Self> {
+    /// Reads the frame's `depth`, `guides` and the variance estimate's `light[1]`; ping-pongs
+    /// between the two.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::TextureView,
+        light: &[wgpu::Buffer; 2],
+        guides: &wgpu::Buffer,
+    ) -> Result<Self> {
         let device = &ctx.device;
         let compute = wgpu::ShaderStages::COMPUTE;
         let layout = bindings::layout(
@@ -25,6 +32,7 @@ impl Filter {
                 bindings::storage_read(1, compute),                                                            // light in
                 bindings::storage_read_write(2, compute),                                                      // light out
                 bindings::uniform(3, compute),                                                                 // the step
+                bindings::storage_read(4, compute),                                                            // the pixels' surfaces
             ],
         );
         let shader = ShaderDesc::new("passes/denoise/filter.wgsl");
@@ -49,6 +57,7 @@ impl Filter {
                         light[(k + 1) % 2].as_entire_binding(),
                         light[k % 2].as_entire_binding(),
                         steps[k].as_entire_binding(),
+                        guides.as_entire_binding(),
                     ],
                 )
             })

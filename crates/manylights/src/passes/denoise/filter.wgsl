@@ -1,5 +1,5 @@
 // One step of the denoiser's edge-avoiding à-trous wavelet filter (SVGF, Schied et al. 2017; Dammertz
-// et al. 2010): a 5×5 B-spline kernel whose taps lie `step` pixels apart (1, 2, 4, … over the
+// et al. 2010): a 5×5 B-spline kernel whose taps lie `step` pixels apart (1, 2, 4, 8 over the
 // steps), each tap weighed by its surface (`denoise_surface_weight`) and, per lobe, by how far its
 // luminance lies from the pixel's in units of the pixel's standard deviation (its variance
 // prefiltered over 3×3), so that noise is smoothed where the variance says it is noise and edges in
@@ -15,6 +15,7 @@
 @group(1) @binding(2) var<storage, read_write> output: array<DenoiseLight>;
 // x: the step between taps in pixels.
 @group(1) @binding(3) var<uniform> filter_step: vec4<u32>;
+@group(1) @binding(4) var<storage, read> guides: array<vec4<u32>>;
 
 // SVGF's σ_l: luminance differences of this many standard deviations weigh 1/e.
 const DENOISE_LUMINANCE_SIGMA: f32 = 2.0;
@@ -56,14 +57,15 @@ fn denoise_filter(@builtin(global_invocation_id) id: vec3<u32>) {
         output[index] = own;
         return;
     }
-    let sample = denoise_samples[index];
-    let normal = denoise_normal(sample);
-    let footprint = denoise_footprint(sample.position);
+    let guide = guides[index];
+    let position = bitcast<vec3<f32>>(guide.xyz);
+    let normal = octahedral_unpack(guide.w, 16u);
+    let footprint = denoise_footprint(position);
     let deviation = sqrt(denoise_local_variance(pixel, size));
     let luminance_scale = 1.0 / (DENOISE_LUMINANCE_SIGMA * deviation + 1e-6);
     let own_luminance = vec2<f32>(dot(own.diffuse.rgb, DENOISE_LUMINANCE), dot(own.specular.rgb, DENOISE_LUMINANCE));
     let step = i32(filter_step.x);
-    let reach = denoise_specular_reach(unpack4x8unorm(sample.albedo).a);
+    let reach = denoise_specular_reach(unpack4x8unorm(denoise_samples[index].albedo).a);
     let centre = denoise_kernel(0) * denoise_kernel(0);
     var diffuse = centre * vec4<f32>(own.diffuse.rgb, centre * own.diffuse.w);
     var specular = centre * vec4<f32>(own.specular.rgb, centre * own.specular.w);
@@ -77,7 +79,7 @@ fn denoise_filter(@builtin(global_invocation_id) id: vec3<u32>) {
             let other = denoise_index(vec2<u32>(q));
             let light = input[other];
             let apart = f32(step) * length(vec2<f32>(f32(dx), f32(dy)));
-            let surface = denoise_surface_weight(normal, sample.position, footprint, denoise_samples[other], apart);
+            let surface = denoise_surface_weight(normal, position, footprint, guides[other], apart);
             let luminance = vec2<f32>(dot(light.diffuse.rgb, DENOISE_LUMINANCE), dot(light.specular.rgb, DENOISE_LUMINANCE));
             let glossy = vec2<f32>(1.0, exp(-0.5 * apart * apart / (reach * reach)));
             let w = denoise_kernel(dx) * denoise_kernel(dy) * surface * glossy * exp(-abs(luminance - own_luminance) * luminance_scale);

@@ -6,7 +6,7 @@
 //!
 //! ```text
 //! samples + history (previous frame's half) ─▶ temporal ─▶ history (this frame's half: moments, surface)
-//!                                                  │        + light A (lobes and their variance)
+//!                                                  │        + light A (lobes and their variance) + guides
 //!                                                  ▼
 //!                                      variance (short histories: spatial moments) ─▶ light B
 //!                                                  │
@@ -14,7 +14,7 @@
 //!            filter × FILTER_STEPS (à-trous, steps 1, 2, 4, …) ─▶ light A/B
 //!                                                  │
 //!                                                  ▼
-//!                 compose (one triangle, additive blend: light × albedos) ─▶ + hdr
+//!                 compose (light × albedos, added to a copy of hdr) ─▶ hdr
 //! ```
 //!
 //! The history's two halves alternate with the frame's parity. Pixels without a surface (depth 0)
@@ -29,12 +29,15 @@ use crate::gpu::{scene::pixel_buffer, GpuContext, GpuScene, GpuTimer};
 use crate::passes::FrameInputs;
 use crate::Result;
 
-/// À-trous steps: taps 1 to 16 pixels apart, a 65-pixel-wide footprint, as in SVGF.
-pub const FILTER_STEPS: u32 = 5;
+/// À-trous steps: taps 1 to 8 pixels apart, a 33-pixel-wide footprint (SVGF's fifth step, 16 apart,
+/// changed the error little: BENCHMARKS.md).
+pub const FILTER_STEPS: u32 = 4;
 /// A pixel's history (`DenoiseHistory` in `denoise_types.wgsl`) and its light between the filters
 /// (`DenoiseLight`).
 const HISTORY_BYTES: usize = 64;
 const LIGHT_BYTES: usize = 32;
+/// A pixel's surface as the spatial passes read it (`denoise_guide`).
+const GUIDE_BYTES: usize = 16;
 
 pub struct Denoiser {
     temporal: temporal::Temporal,
@@ -43,39 +46,36 @@ pub struct Denoiser {
     compose: compose::Compose,
     /// Two halves, the frames alternating which they write and which they read.
     history: [wgpu::Buffer; 2],
+    /// The frame's HDR image, which `compose` adds the light to.
+    hdr: wgpu::Texture,
     size: (u32, u32),
 }
 
 impl Denoiser {
-    /// The denoiser for images of `size` whose depth is `depth`.
-    pub fn new(ctx: &GpuContext, scene: &GpuScene, depth: &wgpu::TextureView, size: (u32, u32)) -> Result<Self> {
+    /// The denoiser for images of `size` whose depth is `depth` and HDR image `hdr`.
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, depth: &wgpu::TextureView, hdr: &wgpu::Texture, size: (u32, u32)) -> Result<Self> {
         let device = &ctx.device;
         let pixels = u64::from(size.0) * u64::from(size.1);
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let buffer = |what, bytes| pixel_buffer(device, what, pixels, bytes, limit, "--denoise off");
         let history = [buffer("the denoiser's history", HISTORY_BYTES)?, buffer("the denoiser's history", HISTORY_BYTES)?];
         let light = [buffer("the denoiser's light", LIGHT_BYTES)?, buffer("the denoiser's light", LIGHT_BYTES)?];
-        let temporal = temporal::Temporal::new(ctx, scene, depth, &history, &light[0])?;
-        let variance = variance::Variance::new(ctx, scene, depth, &history, [&light[0], &light[1]])?;
-        let filter = filter::Filter::new(ctx, scene, depth, &light)?;
-        let compose = compose::Compose::new(ctx, scene, filter.result(&light))?;
-        Ok(Self { temporal, variance, filter, compose, history, size })
+        let guides = buffer("the denoiser's guides", GUIDE_BYTES)?;
+        let temporal = temporal::Temporal::new(ctx, scene, depth, &history, &light[0], &guides)?;
+        let variance = variance::Variance::new(ctx, scene, depth, &history, [&light[0], &light[1]], &guides)?;
+        let filter = filter::Filter::new(ctx, scene, depth, &light, &guides)?;
+        let compose = compose::Compose::new(ctx, scene, filter.result(&light), hdr)?;
+        Ok(Self { temporal, variance, filter, compose, history, hdr: hdr.clone(), size })
     }
 
-    /// Denoises the frame's samples and adds the light to `hdr`.
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        mut timer: Option<&mut GpuTimer>,
-        inputs: &FrameInputs,
-        hdr: &wgpu::TextureView,
-    ) {
+    /// Denoises the frame's samples and adds the light to the HDR image.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         let workgroups = super::dispatch_size(self.size.0, self.size.1);
         let scene = &inputs.scene.bind_group;
         self.temporal.record(encoder, timer.as_deref_mut(), scene, inputs.parity, workgroups);
         self.variance.record(encoder, timer.as_deref_mut(), scene, inputs.parity, workgroups);
         self.filter.record(encoder, timer.as_deref_mut(), scene, workgroups);
-        self.compose.record(encoder, timer, scene, hdr);
+        self.compose.record(encoder, timer, scene, &self.hdr, workgroups);
     }
 
     /// Forgets every pixel's history: the next frame starts afresh.

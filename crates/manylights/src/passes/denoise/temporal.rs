@@ -11,13 +11,15 @@ pub struct Temporal {
 }
 
 impl Temporal {
-    /// Reads the frame's `depth` and the scene's samples; writes a half of `history` and `integrated`.
+    /// Reads the frame's `depth` and the scene's samples; writes a half of `history`, `integrated`
+    /// and `guides`.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         depth: &wgpu::TextureView,
         history: &[wgpu::Buffer; 2],
         integrated: &wgpu::Buffer,
+        guides: &wgpu::Buffer,
     ) -> Result<Self> {
         let device = &ctx.device;
         let compute = wgpu::ShaderStages::COMPUTE;
@@ -29,6 +31,7 @@ impl Temporal {
                 bindings::storage_read(1, compute),       // the previous frame's history
                 bindings::storage_read_write(2, compute), // this frame's history
                 bindings::storage_read_write(3, compute), // integrated light and variance
+                bindings::storage_read_write(4, compute), // the pixels' surfaces, for the spatial passes
             ],
         );
         let shader = ShaderDesc::new("passes/denoise/temporal.wgsl");
@@ -43,6 +46,7 @@ impl Temporal {
                     history[1 - parity].as_entire_binding(),
                     history[parity].as_entire_binding(),
                     integrated.as_entire_binding(),
+                    guides.as_entire_binding(),
                 ],
             )
         });

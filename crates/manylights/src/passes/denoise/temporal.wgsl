@@ -6,13 +6,14 @@
 // exponential moving average with weight 1/n over the
 // n frames accumulated, n at most DENOISE_MAX_HISTORY, gives each lobe's light and luminance moments;
 // a disocclusion starts afresh. Output: the history of this frame (for the next) and each lobe's light
-// with its variance from the moments, for the filters.
+// with its variance from the moments, for the filters, and the pixel's surface as they read it.
 #include "passes/denoise/denoise_types.wgsl"
 
 @group(1) @binding(0) var depth: texture_depth_2d;
 @group(1) @binding(1) var<storage, read> previous: array<DenoiseHistory>;
 @group(1) @binding(2) var<storage, read_write> history: array<DenoiseHistory>;
 @group(1) @binding(3) var<storage, read_write> integrated: array<DenoiseLight>;
+@group(1) @binding(4) var<storage, read_write> guides: array<vec4<u32>>;
 
 // The most frames averaged: a still surface's light converges like 1/n up to this, then follows
 // changes within about as many frames.
@@ -83,6 +84,7 @@ fn denoise_temporal(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let sample = denoise_samples[index];
+    guides[index] = denoise_guide(sample);
     let normal = denoise_normal(sample);
     let tolerance = max(DENOISE_MAX_PLANE_DISTANCE * length(sample.position - frame.world_from_view[3].xyz), denoise_footprint(sample.position));
 

@@ -11,13 +11,14 @@ pub struct Variance {
 }
 
 impl Variance {
-    /// Reads the frame's `depth`, its half of `history` and `light[0]`; writes `light[1]`.
+    /// Reads the frame's `depth`, its half of `history`, `light[0]` and `guides`; writes `light[1]`.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         depth: &wgpu::TextureView,
         history: &[wgpu::Buffer; 2],
         light: [&wgpu::Buffer; 2],
+        guides: &wgpu::Buffer,
     ) -> Result<Self> {
         let device = &ctx.device;
         let compute = wgpu::ShaderStages::COMPUTE;
@@ -29,6 +30,7 @@ impl Variance {
                 bindings::storage_read(1, compute),                                                            // this frame's history
                 bindings::storage_read(2, compute),       // integrated light and variance
                 bindings::storage_read_write(3, compute), // estimated light and variance
+                bindings::storage_read(4, compute),       // the pixels' surfaces
             ],
         );
         let shader = ShaderDesc::new("passes/denoise/variance.wgsl");
@@ -43,6 +45,7 @@ impl Variance {
                     history[parity].as_entire_binding(),
                     light[0].as_entire_binding(),
                     light[1].as_entire_binding(),
+                    guides.as_entire_binding(),
                 ],
             )
         });

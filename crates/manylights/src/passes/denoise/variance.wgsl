@@ -9,6 +9,7 @@
 @group(1) @binding(1) var<storage, read> history: array<DenoiseHistory>;
 @group(1) @binding(2) var<storage, read> integrated: array<DenoiseLight>;
 @group(1) @binding(3) var<storage, read_write> estimated: array<DenoiseLight>;
+@group(1) @binding(4) var<storage, read> guides: array<vec4<u32>>;
 
 const DENOISE_SHORT_HISTORY: u32 = 4u;
 const DENOISE_VARIANCE_RADIUS: i32 = 3;
@@ -25,9 +26,10 @@ fn denoise_variance(@builtin(global_invocation_id) id: vec3<u32>) {
         estimated[index] = integrated[index];
         return;
     }
-    let sample = denoise_samples[index];
-    let normal = denoise_normal(sample);
-    let footprint = denoise_footprint(sample.position);
+    let guide = guides[index];
+    let position = bitcast<vec3<f32>>(guide.xyz);
+    let normal = octahedral_unpack(guide.w, 16u);
+    let footprint = denoise_footprint(position);
     var moments = vec4<f32>(0.0);
     var diffuse = vec3<f32>(0.0);
     var specular = vec3<f32>(0.0);
@@ -39,7 +41,7 @@ fn denoise_variance(@builtin(global_invocation_id) id: vec3<u32>) {
                 continue;
             }
             let other = denoise_index(vec2<u32>(q));
-            let w = denoise_surface_weight(normal, sample.position, footprint, denoise_samples[other], length(vec2<f32>(f32(dx), f32(dy))));
+            let w = denoise_surface_weight(normal, position, footprint, guides[other], length(vec2<f32>(f32(dx), f32(dy))));
             moments += w * history[other].moments;
             diffuse += w * integrated[other].diffuse.rgb;
             specular += w * integrated[other].specular.rgb;
