@@ -2,7 +2,8 @@
 //! as a budget of lamp-shadow rays large enough for all of them does, in every pipeline and light
 //! method, and the pipelines agree on it; `restir` is the reference itself where one light reaches a
 //! point, with reservoirs reused under a still and a moving camera (no ghost where surfaces come into
-//! view), and converges to it, unbiased, over frames where several do.
+//! view), and converges to it, unbiased, over frames where several do; the denoiser leaves exact
+//! lighting as it is and brings sampled lighting closer to the reference.
 
 mod common;
 
@@ -11,7 +12,7 @@ use glam::{Mat4, Quat, Vec3};
 use manylights::{
     renderer::Image,
     scene::{Camera, Instance, Light, Scene},
-    settings::{heat_map, DebugView, DirectLighting, LightMethod, PipelineKind, RaySettings, RenderConfig, RestirReuse},
+    settings::{heat_map, DebugView, Denoise, DirectLighting, LightMethod, PipelineKind, RaySettings, RenderConfig, RestirReuse},
 };
 
 const SIZE: (u32, u32) = (96, 54);
@@ -150,8 +151,49 @@ fn restir_mean(scene: &Scene, camera: &Camera, pipeline: PipelineKind, rays: Ray
     (sum.into_iter().map(|p| p.map(|v| v / frames as f32)).collect(), last)
 }
 
+/// `restir`'s samples as they are, without the denoiser.
 fn restir(samples: u32, reuse: RestirReuse) -> RaySettings {
-    RaySettings { restir_shadow_rays: samples, restir_reuse: reuse, ..lighting(DirectLighting::Restir) }
+    RaySettings { restir_shadow_rays: samples, restir_reuse: reuse, denoise: Denoise::Off, ..lighting(DirectLighting::Restir) }
+}
+
+/// `restir` with temporal reuse, denoised.
+fn denoised() -> RaySettings {
+    RaySettings { denoise: Denoise::Svgf, ..restir(1, RestirReuse::Temporal) }
+}
+
+#[test]
+fn the_denoiser_leaves_exact_lighting_as_it_is_and_brings_sampled_lighting_closer_to_the_reference() {
+    // One lamp: restir's estimate is exact, with nothing for the denoiser to remove, in every pipeline.
+    // Once a pixel has the history whose moments give its variance (four frames; before, the
+    // variance is estimated from the pixels around, where the light's own falloff reads as noise),
+    // the filters leave it alone.
+    let (one, camera) = lamps_and_blocker(&six_lamps()[..1], false);
+    for pipeline in PipelineKind::ALL {
+        let reference = render_with(&one, &camera, config(pipeline, LightMethod::Bvh, lighting(DirectLighting::Reference))).1;
+        let mut denoising = renderer(&one, config(pipeline, LightMethod::Bvh, denoised()));
+        for frame in 0..6 {
+            denoising.render(&camera).unwrap();
+            if frame < 3 {
+                continue;
+            }
+            let got = denoising.read_hdr().unwrap();
+            let difference = max_relative_difference(&got, &reference);
+            assert!(difference <= 1e-3, "{} frame {frame}: denoised restir differs from the reference by {difference}", pipeline.name());
+        }
+    }
+    // Six lamps: each frame's samples are noisy; after a few still frames the denoised image is much
+    // nearer the reference than the samples are, and as bright.
+    let (six, camera) = lamps_and_blocker(&six_lamps(), false);
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Forward] {
+        let what = pipeline.name();
+        let reference = render_with(&six, &camera, config(pipeline, LightMethod::Bvh, lighting(DirectLighting::Reference))).1.pixels;
+        let (_, sampled) = restir_mean(&six, &camera, pipeline, restir(1, RestirReuse::Temporal), 8);
+        let (_, denoised) = restir_mean(&six, &camera, pipeline, denoised(), 8);
+        let (sampled_error, denoised_error) = (relative_l1(&sampled, &reference), relative_l1(&denoised, &reference));
+        assert!(denoised_error <= 0.6 * sampled_error, "{what}: denoised error {denoised_error} against the samples' {sampled_error}");
+        let bias = relative_bias(&denoised, &reference);
+        assert!(bias.abs() <= 0.02, "{what}: the denoised image's bias {bias}");
+    }
 }
 
 #[test]
@@ -216,11 +258,17 @@ fn debug_views_count_each_points_shadow_rays_and_show_restirs_weight_and_confide
             debug_view: DebugView::RestirConfidence,
             ..config(pipeline, LightMethod::Bvh, restir(1, RestirReuse::Temporal))
         };
-        let mut restir = renderer(&scene, config);
+        let mut reusing = renderer(&scene, config);
         for _ in 0..3 {
-            restir.render(&camera).unwrap();
+            reusing.render(&camera).unwrap();
         }
-        let confidence = restir.read_hdr().unwrap();
+        let confidence = reusing.read_hdr().unwrap();
         assert!(confidence.pixels.iter().all(|p| p[..3] == color(3, DebugView::RestirConfidence)), "{what}: restir's confidence");
+        // The denoiser adds no light to a debug view.
+        assert_eq!(
+            view(DebugView::RestirWeight, RaySettings { denoise: Denoise::Svgf, ..restir(1, RestirReuse::Off) }).pixels,
+            weighed.pixels,
+            "{what}: denoised weights"
+        );
     }
 }
