@@ -3,7 +3,7 @@
 // Pixels without a surface have no light to add.
 #include "passes/denoise/denoise_types.wgsl"
 
-@group(1) @binding(0) var<storage, read> denoised: array<DenoiseLight>;
+@group(1) @binding(0) var<storage, read> denoised: array<vec4<u32>>;
 @group(1) @binding(1) var shaded: texture_2d<f32>;
 @group(1) @binding(2) var hdr_output: texture_storage_2d<rgba32float, write>;
 
@@ -13,7 +13,7 @@ fn denoise_compose(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let index = denoise_index(id.xy);
-    let light = denoised[index];
+    let light = denoise_unpack_light(denoised[index]);
     let sample = denoise_samples[index];
     let added = light.diffuse.rgb * unpack4x8unorm(sample.albedo).rgb + light.specular.rgb * unpack4x8unorm(sample.specular_albedo).rgb;
     let shaded_radiance = textureLoad(shaded, id.xy, 0);

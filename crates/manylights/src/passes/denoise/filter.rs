@@ -13,26 +13,19 @@ pub struct Filter {
 }
 
 impl Filter {
-    /// Reads the frame's `depth`, `guides` and the variance estimate's `light[1]`; ping-pongs
+    /// Reads `guides` and the variance estimate's `light[1]`; ping-pongs
     /// between the two.
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        depth: &wgpu::TextureView,
-        light: &[wgpu::Buffer; 2],
-        guides: &wgpu::Buffer,
-    ) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, light: &[wgpu::Buffer; 2], guides: &wgpu::Buffer) -> Result<Self> {
         let device = &ctx.device;
         let compute = wgpu::ShaderStages::COMPUTE;
         let layout = bindings::layout(
             device,
             "denoise_filter",
             &[
-                bindings::texture(0, compute, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2), // depth
-                bindings::storage_read(1, compute),                                                            // light in
-                bindings::storage_read_write(2, compute),                                                      // light out
-                bindings::uniform(3, compute),                                                                 // the step
-                bindings::storage_read(4, compute),                                                            // the pixels' surfaces
+                bindings::storage_read(0, compute),       // light in
+                bindings::storage_read_write(1, compute), // light out
+                bindings::uniform(2, compute),            // the step
+                bindings::storage_read(3, compute),       // the pixels' surfaces
             ],
         );
         let shader = ShaderDesc::new("passes/denoise/filter.wgsl");
@@ -53,7 +46,6 @@ impl Filter {
                     "denoise_filter",
                     &layout,
                     vec![
-                        wgpu::BindingResource::TextureView(depth),
                         light[(k + 1) % 2].as_entire_binding(),
                         light[k % 2].as_entire_binding(),
                         steps[k].as_entire_binding(),

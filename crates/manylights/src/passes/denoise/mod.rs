@@ -11,7 +11,7 @@
 //!                                      variance (short histories: spatial moments) ─▶ light B
 //!                                                  │
 //!                                                  ▼
-//!            filter × FILTER_STEPS (à-trous, steps 1, 2, 4, …) ─▶ light A/B
+//!         filter × FILTER_STEPS (3×3 à-trous, steps 1, 2, 4, 8) ─▶ light A/B
 //!                                                  │
 //!                                                  ▼
 //!                 compose (light × albedos, added to a copy of hdr) ─▶ hdr
@@ -29,13 +29,12 @@ use crate::gpu::{scene::pixel_buffer, GpuContext, GpuScene, GpuTimer};
 use crate::passes::FrameInputs;
 use crate::Result;
 
-/// À-trous steps: taps 1 to 8 pixels apart, a 33-pixel-wide footprint (SVGF's fifth step, 16 apart,
-/// changed the error little: BENCHMARKS.md).
+/// À-trous steps of a 3×3 kernel: taps 1 to 8 pixels apart, a 31-pixel-wide footprint.
 pub const FILTER_STEPS: u32 = 4;
 /// A pixel's history (`DenoiseHistory` in `denoise_types.wgsl`) and its light between the filters
-/// (`DenoiseLight`).
+/// (`DenoiseLight`, eight halves).
 const HISTORY_BYTES: usize = 64;
-const LIGHT_BYTES: usize = 32;
+const LIGHT_BYTES: usize = 16;
 /// A pixel's surface as the spatial passes read it (`denoise_guide`).
 const GUIDE_BYTES: usize = 16;
 
@@ -62,8 +61,8 @@ impl Denoiser {
         let light = [buffer("the denoiser's light", LIGHT_BYTES)?, buffer("the denoiser's light", LIGHT_BYTES)?];
         let guides = buffer("the denoiser's guides", GUIDE_BYTES)?;
         let temporal = temporal::Temporal::new(ctx, scene, depth, &history, &light[0], &guides)?;
-        let variance = variance::Variance::new(ctx, scene, depth, &history, [&light[0], &light[1]], &guides)?;
-        let filter = filter::Filter::new(ctx, scene, depth, &light, &guides)?;
+        let variance = variance::Variance::new(ctx, scene, &history, [&light[0], &light[1]], &guides)?;
+        let filter = filter::Filter::new(ctx, scene, &light, &guides)?;
         let compose = compose::Compose::new(ctx, scene, filter.result(&light), hdr)?;
         Ok(Self { temporal, variance, filter, compose, history, hdr: hdr.clone(), size })
     }

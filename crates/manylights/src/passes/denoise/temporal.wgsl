@@ -12,7 +12,7 @@
 @group(1) @binding(0) var depth: texture_depth_2d;
 @group(1) @binding(1) var<storage, read> previous: array<DenoiseHistory>;
 @group(1) @binding(2) var<storage, read_write> history: array<DenoiseHistory>;
-@group(1) @binding(3) var<storage, read_write> integrated: array<DenoiseLight>;
+@group(1) @binding(3) var<storage, read_write> integrated: array<vec4<u32>>;
 @group(1) @binding(4) var<storage, read_write> guides: array<vec4<u32>>;
 
 // The most frames averaged: a still surface's light converges like 1/n up to this, then follows
@@ -47,11 +47,13 @@ fn denoise_neighbourhood(pixel: vec2<i32>, size: vec2<i32>) -> DenoiseNeighbourh
             if any(q < vec2<i32>(0)) || any(q >= size) || textureLoad(depth, q, 0) == 0.0 {
                 continue;
             }
-            let sample = denoise_samples[denoise_index(vec2<u32>(q))];
-            diffuse += sample.diffuse;
-            diffuse_square += sample.diffuse * sample.diffuse;
-            specular += sample.specular;
-            specular_square += sample.specular * sample.specular;
+            let other = denoise_index(vec2<u32>(q));
+            let sample_diffuse = denoise_samples[other].diffuse;
+            let sample_specular = denoise_samples[other].specular;
+            diffuse += sample_diffuse;
+            diffuse_square += sample_diffuse * sample_diffuse;
+            specular += sample_specular;
+            specular_square += sample_specular * sample_specular;
             count += 1.0;
         }
     }
@@ -80,12 +82,13 @@ fn denoise_temporal(@builtin(global_invocation_id) id: vec3<u32>) {
     let none = vec4<f32>(0.0);
     if textureLoad(depth, id.xy, 0) == 0.0 {
         history[index] = DenoiseHistory(none, vec3<f32>(0.0), 0u, none, none);
-        integrated[index] = DenoiseLight(none, none);
+        integrated[index] = vec4<u32>(0u);
+        guides[index] = vec4<u32>(0u);
         return;
     }
     let sample = denoise_samples[index];
-    guides[index] = denoise_guide(sample);
     let normal = denoise_normal(sample);
+    guides[index] = denoise_guide(sample.position, normal);
     let tolerance = max(DENOISE_MAX_PLANE_DISTANCE * length(sample.position - frame.world_from_view[3].xyz), denoise_footprint(sample.position));
 
     // Where the surface was a frame ago, in pixel coordinates of the pixels' centres.
@@ -141,5 +144,5 @@ fn denoise_temporal(@builtin(global_invocation_id) id: vec3<u32>) {
     // filters then stop at smaller differences as the history grows, so a still surface converges
     // to its own mean rather than its neighbourhood's.
     let variance = max(vec2<f32>(0.0), moments.yw - moments.xz * moments.xz) / f32(frames);
-    integrated[index] = DenoiseLight(vec4<f32>(diffuse, variance.x), vec4<f32>(specular, variance.y));
+    integrated[index] = denoise_pack_light(DenoiseLight(vec4<f32>(diffuse, variance.x), vec4<f32>(specular, variance.y)));
 }

@@ -11,11 +11,10 @@ pub struct Variance {
 }
 
 impl Variance {
-    /// Reads the frame's `depth`, its half of `history`, `light[0]` and `guides`; writes `light[1]`.
+    /// Reads its half of `history`, `light[0]` and `guides`; writes `light[1]`.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
-        depth: &wgpu::TextureView,
         history: &[wgpu::Buffer; 2],
         light: [&wgpu::Buffer; 2],
         guides: &wgpu::Buffer,
@@ -26,11 +25,10 @@ impl Variance {
             device,
             "denoise_variance",
             &[
-                bindings::texture(0, compute, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2), // depth
-                bindings::storage_read(1, compute),                                                            // this frame's history
-                bindings::storage_read(2, compute),       // integrated light and variance
-                bindings::storage_read_write(3, compute), // estimated light and variance
-                bindings::storage_read(4, compute),       // the pixels' surfaces
+                bindings::storage_read(0, compute),       // this frame's history
+                bindings::storage_read(1, compute),       // integrated light and variance
+                bindings::storage_read_write(2, compute), // estimated light and variance
+                bindings::storage_read(3, compute),       // the pixels' surfaces
             ],
         );
         let shader = ShaderDesc::new("passes/denoise/variance.wgsl");
@@ -41,7 +39,6 @@ impl Variance {
                 "denoise_variance",
                 &layout,
                 vec![
-                    wgpu::BindingResource::TextureView(depth),
                     history[parity].as_entire_binding(),
                     light[0].as_entire_binding(),
                     light[1].as_entire_binding(),

@@ -5,11 +5,10 @@
 // Pixels with enough history pass through.
 #include "passes/denoise/denoise_types.wgsl"
 
-@group(1) @binding(0) var depth: texture_depth_2d;
-@group(1) @binding(1) var<storage, read> history: array<DenoiseHistory>;
-@group(1) @binding(2) var<storage, read> integrated: array<DenoiseLight>;
-@group(1) @binding(3) var<storage, read_write> estimated: array<DenoiseLight>;
-@group(1) @binding(4) var<storage, read> guides: array<vec4<u32>>;
+@group(1) @binding(0) var<storage, read> history: array<DenoiseHistory>;
+@group(1) @binding(1) var<storage, read> integrated: array<vec4<u32>>;
+@group(1) @binding(2) var<storage, read_write> estimated: array<vec4<u32>>;
+@group(1) @binding(3) var<storage, read> guides: array<vec4<u32>>;
 
 const DENOISE_SHORT_HISTORY: u32 = 4u;
 const DENOISE_VARIANCE_RADIUS: i32 = 3;
@@ -22,13 +21,13 @@ fn denoise_variance(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let index = denoise_index(id.xy);
     let frames = history[index].normal_length >> 24u;
-    if frames >= DENOISE_SHORT_HISTORY || textureLoad(depth, id.xy, 0) == 0.0 {
+    let guide = guides[index];
+    if frames >= DENOISE_SHORT_HISTORY || !denoise_guide_has_surface(guide) {
         estimated[index] = integrated[index];
         return;
     }
-    let guide = guides[index];
     let position = bitcast<vec3<f32>>(guide.xyz);
-    let normal = octahedral_unpack(guide.w, 16u);
+    let normal = denoise_guide_normal(guide);
     let footprint = denoise_footprint(position);
     var moments = vec4<f32>(0.0);
     var diffuse = vec3<f32>(0.0);
@@ -37,19 +36,24 @@ fn denoise_variance(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var dy = -DENOISE_VARIANCE_RADIUS; dy <= DENOISE_VARIANCE_RADIUS; dy += 1) {
         for (var dx = -DENOISE_VARIANCE_RADIUS; dx <= DENOISE_VARIANCE_RADIUS; dx += 1) {
             let q = vec2<i32>(id.xy) + vec2<i32>(dx, dy);
-            if any(q < vec2<i32>(0)) || any(q >= vec2<i32>(size)) || textureLoad(depth, q, 0) == 0.0 {
+            if any(q < vec2<i32>(0)) || any(q >= vec2<i32>(size)) {
                 continue;
             }
             let other = denoise_index(vec2<u32>(q));
-            let w = denoise_surface_weight(normal, position, footprint, guides[other], length(vec2<f32>(f32(dx), f32(dy))));
+            let other_guide = guides[other];
+            if !denoise_guide_has_surface(other_guide) {
+                continue;
+            }
+            let light = denoise_unpack_light(integrated[other]);
+            let w = denoise_surface_weight(normal, position, footprint, other_guide, length(vec2<f32>(f32(dx), f32(dy))));
             moments += w * history[other].moments;
-            diffuse += w * integrated[other].diffuse.rgb;
-            specular += w * integrated[other].specular.rgb;
+            diffuse += w * light.diffuse.rgb;
+            specular += w * light.specular.rgb;
             weights += w;
         }
     }
     // The pixel itself weighs 1: `weights` is at least that.
     moments /= weights;
     let variance = max(vec2<f32>(0.0), moments.yw - moments.xz * moments.xz) * f32(DENOISE_SHORT_HISTORY) / f32(max(frames, 1u));
-    estimated[index] = DenoiseLight(vec4<f32>(diffuse / weights, variance.x), vec4<f32>(specular / weights, variance.y));
+    estimated[index] = denoise_pack_light(DenoiseLight(vec4<f32>(diffuse / weights, variance.x), vec4<f32>(specular / weights, variance.y)));
 }

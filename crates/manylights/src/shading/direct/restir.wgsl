@@ -21,7 +21,9 @@
 // ray of its own — one for each reused reservoir but the one y came from, none for the reprojected
 // surface under a still camera, where it is the pixel's own point. The estimate stays unbiased
 // while reuse steers samples towards lights the surface sees. Further samples (`frame.direct_lighting.y` above 1) are drawn from the
-// pixel's candidates alone, each with its ray, and averaged with the first.
+// pixel's candidates alone, each with its ray, and averaged with the first. Where the frame is
+// denoised, the samples' light at pixels' opaque surfaces goes to the denoiser instead of into the
+// radiance (`add_sampled_light`, `shading/shading_pixel.wgsl`; `passes/denoise/`).
 #include "shading/light_bindings.wgsl"
 #include "shading/direct/shadow_ray.wgsl"
 #include "shading/shading_pixel.wgsl"
