@@ -303,6 +303,11 @@ mod tests {
         if source.contains("@early_depth_test") {
             capabilities |= naga::valid::Capabilities::EARLY_DEPTH_TEST;
         }
+        // Halves packed in 32-bit words (the denoiser's light): wgpu grants them wherever the
+        // downlevel flag SHADER_F16_IN_F32 is set, every backend but old OpenGL ES.
+        if source.contains("2x16float(") {
+            capabilities |= naga::valid::Capabilities::SHADER_FLOAT16_IN_FLOAT32;
+        }
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
             .validate(&module)
             .unwrap_or_else(|e| panic!("{}:\n{}", desc.entry, e.emit_to_string(&source)));
