@@ -330,7 +330,7 @@ for set in "${@:-structures}"; do
     sweeps) bench sweeps --scenes none --dense none ;;
     dense) bench dense --scenes none --sweeps none ;;
     assets) assets ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform, soak or direct)" >&2; exit 2 ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform, soak, direct or direct_error)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .
