@@ -28,3 +28,9 @@ fn octahedral_unpack(packed: u32, bits: u32) -> vec3<f32> {
     let levels = f32(mask);
     return octahedral_decode(vec2<f32>(f32(packed & mask), f32((packed >> bits) & mask)) / levels * 2.0 - 1.0);
 }
+
+// A unit vector in 12 + 12 bits with a count of up to 255 in the top 8 (`packed >> 24u`): how
+// per-pixel records keep a surface's normal beside the frames or samples behind them.
+fn octahedral_pack_counted(n: vec3<f32>, count: u32) -> u32 {
+    return octahedral_pack(n, 12u) | (min(count, 255u) << 24u);
+}

@@ -49,13 +49,6 @@ fn denoise_normal(sample: DenoiseSample) -> vec3<f32> {
     return octahedral_unpack(sample.normal, 16u);
 }
 
-fn denoise_pack_normal_length(n: vec3<f32>, frames: u32) -> u32 {
-    return octahedral_pack(n, 12u) | (min(frames, 255u) << 24u);
-}
-
-fn denoise_unpack_normal(packed: u32) -> vec3<f32> {
-    return octahedral_unpack(packed, 12u);
-}
 
 // The world-space width of a pixel at `position`.
 fn denoise_footprint(position: vec3<f32>) -> f32 {

@@ -25,8 +25,8 @@ pub mod filter;
 pub mod temporal;
 pub mod variance;
 
-use crate::gpu::{scene::pixel_buffer, GpuContext, GpuScene, GpuTimer};
-use crate::passes::FrameInputs;
+use crate::gpu::{bindings, scene::pixel_buffer, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
+use crate::passes::{builder::ComputeStep, FrameInputs};
 use crate::Result;
 
 /// À-trous steps of a 3×3 kernel: taps 1 to 8 pixels apart, a 31-pixel-wide footprint.
@@ -39,8 +39,8 @@ const LIGHT_BYTES: usize = 16;
 const GUIDE_BYTES: usize = 16;
 
 pub struct Denoiser {
-    temporal: temporal::Temporal,
-    variance: variance::Variance,
+    temporal: ParityStep,
+    variance: ParityStep,
     filter: filter::Filter,
     compose: compose::Compose,
     /// Two halves, the frames alternating which they write and which they read.
@@ -60,8 +60,8 @@ impl Denoiser {
         let history = [buffer("the denoiser's history", HISTORY_BYTES)?, buffer("the denoiser's history", HISTORY_BYTES)?];
         let light = [buffer("the denoiser's light", LIGHT_BYTES)?, buffer("the denoiser's light", LIGHT_BYTES)?];
         let guides = buffer("the denoiser's guides", GUIDE_BYTES)?;
-        let temporal = temporal::Temporal::new(ctx, scene, depth, &history, &light[0], &guides)?;
-        let variance = variance::Variance::new(ctx, scene, &history, [&light[0], &light[1]], &guides)?;
+        let temporal = temporal::step(ctx, scene, depth, &history, &light[0], &guides)?;
+        let variance = variance::step(ctx, scene, &history, [&light[0], &light[1]], &guides)?;
         let filter = filter::Filter::new(ctx, scene, &light, &guides)?;
         let compose = compose::Compose::new(ctx, scene, filter.result(&light), hdr)?;
         Ok(Self { temporal, variance, filter, compose, history, hdr: hdr.clone(), size })
@@ -84,5 +84,40 @@ impl Denoiser {
             encoder.clear_buffer(half, 0, None);
         }
         ctx.queue.submit([encoder.finish()]);
+    }
+}
+
+/// A compute pass over every pixel whose group 1 depends on the frame's parity (which half of the
+/// history it reads or writes); group 0 is the scene.
+pub struct ParityStep {
+    step: ComputeStep,
+    bind_groups: [wgpu::BindGroup; 2],
+}
+
+impl ParityStep {
+    /// `entry` of `shader` over group 1 laid out as `entries`, bound to `resources(parity)`.
+    fn new<'a>(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        (shader, entry): (&'static str, &'static str),
+        entries: &[wgpu::BindGroupLayoutEntry],
+        resources: impl Fn(usize) -> Vec<wgpu::BindingResource<'a>>,
+    ) -> Result<Self> {
+        let device = &ctx.device;
+        let layout = bindings::layout(device, entry, entries);
+        let step = ComputeStep::new(device, &ShaderDesc::new(shader), entry, &[&scene.bind_group_layout, &layout], &[])?;
+        let bind_groups = [0, 1].map(|parity| bindings::bind_group(device, entry, &layout, resources(parity)));
+        Ok(Self { step, bind_groups })
+    }
+
+    fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&mut GpuTimer>,
+        scene: &wgpu::BindGroup,
+        parity: usize,
+        workgroups: (u32, u32),
+    ) {
+        self.step.record(encoder, timer, &[scene, &self.bind_groups[parity]], workgroups);
     }
 }

@@ -110,7 +110,7 @@ fn denoise_temporal(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         let kept = previous[denoise_index(vec2<u32>(p))];
         let frames = kept.normal_length >> 24u;
-        if frames == 0u || dot(denoise_unpack_normal(kept.normal_length), normal) < DENOISE_MIN_NORMAL_COSINE
+        if frames == 0u || dot(octahedral_unpack(kept.normal_length, 12u), normal) < DENOISE_MIN_NORMAL_COSINE
             || abs(dot(normal, kept.position - sample.position)) > tolerance {
             continue;
         }
@@ -139,7 +139,7 @@ fn denoise_temporal(@builtin(global_invocation_id) id: vec3<u32>) {
     );
     let diffuse = mix(kept_diffuse, sample.diffuse, alpha);
     let specular = mix(kept_specular, sample.specular, alpha);
-    history[index] = DenoiseHistory(moments, sample.position, denoise_pack_normal_length(normal, frames), vec4<f32>(diffuse, 0.0), vec4<f32>(specular, 0.0));
+    history[index] = DenoiseHistory(moments, sample.position, octahedral_pack_counted(normal, frames), vec4<f32>(diffuse, 0.0), vec4<f32>(specular, 0.0));
     // The variance of the mean of the frames accumulated, not of one frame's sample: the spatial
     // filters then stop at smaller differences as the history grows, so a still surface converges
     // to its own mean rather than its neighbourhood's.

@@ -112,15 +112,6 @@ fn restir_light_hash(index: u32) -> u32 {
     return restir_hash(sphere.x ^ restir_hash(sphere.y ^ restir_hash(sphere.z ^ restir_hash(sphere.w))));
 }
 
-// A unit vector in 12 + 12 bits (octahedral), with a confidence of up to 255 in the top 8.
-fn restir_pack_normal_count(n: vec3<f32>, count: u32) -> u32 {
-    return octahedral_pack(n, 12u) | (min(count, 255u) << 24u);
-}
-
-fn restir_unpack_normal(packed: u32) -> vec3<f32> {
-    return octahedral_unpack(packed, 12u);
-}
-
 // Whether light `index`, placed by `instance`, lights the surface at `position` facing `normal` (world
 // space) at all: the support of the target there, for the combination's Z.
 fn restir_light_reaches(index: u32, instance: VolumeInstance, position: vec3<f32>, normal: vec3<f32>) -> bool {
@@ -189,7 +180,7 @@ fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> RestirR
         }
         let kept = restir_reservoirs[restir_reservoir_index(1u - frame.direct_lighting.z, vec2<u32>(at))];
         let kept_count = min(kept.normal_count >> 24u, RESTIR_MAX_CONFIDENCE);
-        let kept_normal = restir_unpack_normal(kept.normal_count);
+        let kept_normal = octahedral_unpack(kept.normal_count, 12u);
         if kept_count == 0u || dot(kept_normal, s.normal) < RESTIR_MIN_NORMAL_COSINE
             || abs(dot(s.normal, kept.position - s.position)) > plane_tolerance {
             continue;
@@ -247,7 +238,7 @@ fn restir_keep(s: ShadingInput, choice: RestirChoice, weight: f32, count: u32) {
     if choice.light != RESTIR_NO_LIGHT {
         light_hash = restir_light_hash(choice.light);
     }
-    restir_reservoirs[restir_reservoir_index(frame.direct_lighting.z, shading_pixel)] = Reservoir(choice.light, choice.instance, light_hash, weight, s.position, restir_pack_normal_count(s.normal, count));
+    restir_reservoirs[restir_reservoir_index(frame.direct_lighting.z, shading_pixel)] = Reservoir(choice.light, choice.instance, light_hash, weight, s.position, octahedral_pack_counted(s.normal, count));
 }
 
 fn direct_lights_end(s: ShadingInput) -> vec3<f32> {
