@@ -420,6 +420,8 @@ pub struct SceneStatistics {
     /// (`accel::overlap::centre_overlap`), measured where [`Measurements::decal_centre_overlap`]
     /// asks: `None` where it was not.
     pub decal_centre_overlap: Option<f32>,
+    /// The scene's animation moves instances of its meshes.
+    pub animated_instances: bool,
 }
 
 /// Which statistics the plan reads for these settings, so that nothing else is measured.
@@ -491,6 +493,10 @@ pub struct FramePlan {
     /// rather than into the image: where its settings ask for it and where pixels' surfaces write their
     /// samples alone (as for [`FramePlan::keeps_reservoirs`]).
     pub denoises: bool,
+    /// Each frame records where animated instances' surfaces were a frame before
+    /// (`passes/surface_motion.rs`), so that what pixels keep (reservoirs, the denoiser's history)
+    /// follows them: where something is kept and instances move.
+    pub tracks_surface_motion: bool,
     /// The light and decal methods that run, and why.
     pub methods: MethodChoice,
     /// The shading core's variant, with the decals' cell lists as planned
@@ -578,6 +584,7 @@ impl FramePlan {
             traces_rays: config.rays.traces_rays(),
             keeps_reservoirs,
             denoises,
+            tracks_surface_motion: (keeps_reservoirs || denoises) && stats.animated_instances,
             methods,
             planned_methods: ShadingMethods { dense_decals, dense_lights, decal_cell_lists: decals.cell_lists, ..unlisted },
         })
@@ -785,6 +792,21 @@ mod tests {
         assert!(!denoised(PipelineKind::Forward, DirectLighting::Restir, Denoise::Svgf, late));
         assert!(!denoised(PipelineKind::Deferred, DirectLighting::Restir, Denoise::Off, SUBGROUPS));
         assert!(!denoised(PipelineKind::Visbuffer, DirectLighting::Reference, Denoise::Svgf, SUBGROUPS));
+    }
+
+    #[test]
+    fn surface_motion_is_tracked_where_pixels_keep_state_and_instances_move() {
+        let tracks = |reuse, denoise, animated_instances| {
+            let mut config = config(LightMethod::Bvh, DecalMethod::Off);
+            config.rays.direct_lighting = DirectLighting::Restir;
+            (config.rays.restir_reuse, config.rays.denoise) = (reuse, denoise);
+            let stats = SceneStatistics { animated_instances, ..Default::default() };
+            FramePlan::resolve(&config, SUBGROUPS, &stats).unwrap().tracks_surface_motion
+        };
+        assert!(tracks(RestirReuse::Temporal, Denoise::Off, true));
+        assert!(tracks(RestirReuse::Off, Denoise::Svgf, true));
+        assert!(!tracks(RestirReuse::Temporal, Denoise::Svgf, false));
+        assert!(!tracks(RestirReuse::Off, Denoise::Off, true));
     }
 
     fn scene(lights: usize, light_overlap: f32, decals: usize, decal_overlap: f32) -> SceneStatistics {

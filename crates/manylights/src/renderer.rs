@@ -53,6 +53,9 @@ pub struct Renderer {
     frame_index: u64,
     /// `restir` keeps each pixel's reservoir for the next frame (`FramePlan::keeps_reservoirs`).
     keeps_reservoirs: bool,
+    /// Animated instances' previous placement is written for the surface motions
+    /// (`FramePlan::tracks_surface_motion`), as for motion blur.
+    tracks_surface_motion: bool,
     /// The camera of the last frame rendered, for motion blur's velocities; `None` before the first.
     previous_camera: Option<Camera>,
     /// Test mode: after every frame, read the ray hierarchy back and check that the frame traced
@@ -132,6 +135,7 @@ impl Renderer {
                 PixelStateSize {
                     reservoirs: if plan.keeps_reservoirs { pixels } else { 0 },
                     denoise_samples: if plan.denoises { pixels } else { 0 },
+                    surface_motions: if plan.tracks_surface_motion { pixels } else { 0 },
                 }
             },
         )?;
@@ -173,6 +177,7 @@ impl Renderer {
             post: config.post,
             structures: Structures { lights: &lights, decals: &decals },
             size: (config.width, config.height),
+            surface_motion: plan.tracks_surface_motion,
         };
         let pipeline = FramePipeline::new(&ctx, &gpu_scene, config.pipeline, setup)?;
         let timer = GpuTimer::new(&ctx);
@@ -203,6 +208,7 @@ impl Renderer {
             deform,
             refit,
             keeps_reservoirs: plan.keeps_reservoirs,
+            tracks_surface_motion: plan.tracks_surface_motion,
             time: 0.0,
             frame_index: 0,
             previous_camera: None,
@@ -233,12 +239,15 @@ impl Renderer {
         let (moved, previous) = match &motion.animation {
             Some(animation) => {
                 let moved = animation.instance_transforms(time);
-                let previous = match self.pipeline.post().settings.motion_blur {
+                let read = self.pipeline.post().settings.motion_blur.is_some() || self.tracks_surface_motion;
+                let previous = if !read {
+                    Vec::new()
+                } else if animation.loops_between(time - FRAME_INTERVAL, time) {
                     // On the frame where a looping animation starts over, the pose a frame earlier is
                     // the clip's end: no motion is the honest velocity.
-                    Some(_) if animation.loops_between(time - FRAME_INTERVAL, time) => moved.clone(),
-                    Some(_) => animation.instance_transforms(time - FRAME_INTERVAL),
-                    None => Vec::new(),
+                    moved.clone()
+                } else {
+                    animation.instance_transforms(time - FRAME_INTERVAL)
                 };
                 (moved, previous)
             }

@@ -94,6 +94,14 @@ pub struct GpuDenoiseSample {
     pub specular_albedo: u32,
 }
 
+/// Keep in sync with `SurfaceMotion` in `shading/types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuSurfaceMotion {
+    pub moved: [f32; 3],
+    pub frame: u32,
+}
+
 impl From<&Light> for GpuLight {
     fn from(l: &Light) -> Self {
         let (kind, spot_scale, spot_offset) = match l.kind {
@@ -223,7 +231,8 @@ pub struct GpuScene {
     /// buffers.
     pub primitive_ranges: Vec<Vec<(u32, u32, u32)>>,
     /// Each draw's transform (world from local) a frame interval before the current one, for motion
-    /// blur's velocity (`post/velocity.rs`), and which draws belong to animated instances.
+    /// blur's velocity (`post/velocity.rs`) and the surface motions (`passes/surface_motion.rs`), and
+    /// which draws belong to animated instances.
     pub previous_transforms: wgpu::Buffer,
     moving_draws: Vec<bool>,
     /// `restir`'s reservoirs, two per pixel (`GpuReservoir`), or one placeholder.
@@ -311,6 +320,16 @@ impl GpuScene {
             limit,
             "--denoise off",
         )?;
+        // Where animated instances' surfaces were a frame before (`GpuSurfaceMotion`, written by
+        // `passes/surface_motion.rs`): bound only.
+        let surface_motions = pixel_buffer(
+            device,
+            "the surface motions",
+            pixel_state.surface_motions,
+            std::mem::size_of::<GpuSurfaceMotion>(),
+            limit,
+            "--restir-reuse off --denoise off",
+        )?;
         let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
             size: std::mem::size_of::<FrameUniforms>() as u64,
@@ -343,7 +362,7 @@ impl GpuScene {
             .chain([&textures.decal_color, &textures.decal_data].map(|t| wgpu::BindingResource::TextureView(&t.view)))
             .chain([&environment.background, &environment.specular, &environment.brdf_table].map(wgpu::BindingResource::TextureView))
             .chain([wgpu::BindingResource::Sampler(&environment.sampler)])
-            .chain([restir_reservoirs.as_entire_binding(), denoise_samples.as_entire_binding()])
+            .chain([&restir_reservoirs, &denoise_samples, &surface_motions].map(|b| b.as_entire_binding()))
             .collect(),
         );
         ctx.check_errors()?;
@@ -462,6 +481,7 @@ impl GpuScene {
                                                   // restir's reservoirs, written by shading, which no vertex stage does
         entries.push(bindings::storage_read_write(28, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE));
         entries.push(bindings::storage_read_write(29, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE)); // the denoiser's samples
+        entries.push(bindings::storage_read_write(30, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE)); // surface motions
         bindings::layout(device, "scene", &entries)
     }
 
@@ -692,11 +712,13 @@ fn storage_buffer<T: bytemuck::Pod>(
 }
 
 /// Per-pixel state the shading core writes: how many pixels keep a `restir` reservoir (two each:
-/// the frame's and the one before) and a denoiser's sample (0: none, one placeholder record).
+/// the frame's and the one before), a denoiser's sample and a surface motion (0: none, one
+/// placeholder record).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PixelStateSize {
     pub reservoirs: u64,
     pub denoise_samples: u64,
+    pub surface_motions: u64,
 }
 
 /// `records` zeroed records of `record_size` bytes for pixels (one placeholder for none); the error
@@ -852,6 +874,7 @@ mod tests {
         check!("Decal", GpuDecal, [decal_from_group, material, layer, weight]);
         check!("Reservoir", GpuReservoir, [light, instance, light_hash, weight, position, normal_count]);
         check!("DenoiseSample", GpuDenoiseSample, [diffuse, normal, specular, albedo, position, specular_albedo]);
+        check!("SurfaceMotion", GpuSurfaceMotion, [moved, frame]);
         check!("RayTriangle", crate::rays::RayTriangle, [v0, draw_offset, e1, triangle, e2]);
         check!("RayInstance", crate::rays::RayInstance, [local_from_world, blas_root, first_draw, scene_instance]);
         check!(

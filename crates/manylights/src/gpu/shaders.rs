@@ -70,6 +70,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("post/tonemap.wgsl", include_str!("../post/tonemap.wgsl")),
     ("passes/surface_raster.wgsl", include_str!("../passes/surface_raster.wgsl")),
     ("passes/depth_prepass.wgsl", include_str!("../passes/depth_prepass.wgsl")),
+    ("passes/surface_motion.wgsl", include_str!("../passes/surface_motion.wgsl")),
     ("passes/forward_shade.wgsl", include_str!("../passes/forward_shade.wgsl")),
     ("passes/gbuffer.wgsl", include_str!("../passes/gbuffer.wgsl")),
     ("passes/gbuffer_raster.wgsl", include_str!("../passes/gbuffer_raster.wgsl")),

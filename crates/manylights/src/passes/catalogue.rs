@@ -27,6 +27,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("accel/cluster_build.wgsl"),
         ShaderDesc::new("passes/deferred_decals.wgsl"),
         ShaderDesc::new("passes/depth_prepass.wgsl"),
+        ShaderDesc::new("passes/surface_motion.wgsl"),
         ShaderDesc::new("passes/gbuffer_raster.wgsl"),
         ShaderDesc::new("particles/motion.wgsl"),
         ShaderDesc::new("particles/splat.wgsl"),

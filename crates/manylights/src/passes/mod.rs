@@ -24,6 +24,7 @@ pub mod forward_shade;
 pub mod gbuffer_raster;
 pub mod ray_shadows;
 pub mod shadow_filter;
+pub mod surface_motion;
 pub mod transparent_shade;
 pub mod visbuffer_raster;
 pub mod visbuffer_shade;

@@ -8,6 +8,7 @@
 //! GpuScene ─▶ gbuffer_raster ─▶ albedo, normal, roughness-metallic, emission (not cleared)
 //!                               + depth (cleared to 0)
 //!                                   │
+//!                                   ├─▶ surface_motion, when kept state follows animated instances ─▶ surface motions
 //!                                   ├─▶ (deferred decals only) copy normals ─▶ deferred_decals:
 //!                                   │     decal boxes blended into albedo, normal, roughness-metallic
 //!                                   ▼
@@ -25,6 +26,7 @@
 
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::denoise::Denoiser;
+use crate::passes::surface_motion::SurfaceMotion;
 use crate::passes::{
     deferred_decals::DeferredDecals,
     deferred_shade::{DeferredShade, DeferredShadeImages},
@@ -51,6 +53,8 @@ pub struct DeferredPipeline {
     /// Present when the sun casts ray-traced shadows.
     shadows: Option<RayShadows>,
     shade: DeferredShade,
+    /// Present when animated instances' motion is tracked (`plan::FramePlan::tracks_surface_motion`).
+    surface_motion: Option<SurfaceMotion>,
     /// Present when `restir`'s lighting is denoised (`plan::FramePlan::denoises`).
     pub(super) denoiser: Option<Denoiser>,
     /// Present when the scene has transparent draws.
@@ -99,6 +103,7 @@ impl DeferredPipeline {
                 DeferredShadeImages { depth: &depth_view, gbuffer: &gbuffer, hdr: &hdr_view },
             )?,
             shadows,
+            surface_motion: setup.surface_motion.then(|| SurfaceMotion::new(ctx, scene, &depth_view)).transpose()?,
             denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, &targets.hdr, (width, height))).transpose()?,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
@@ -113,6 +118,9 @@ impl DeferredPipeline {
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         let (width, height) = (self.targets.width, self.targets.height);
         self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.gbuffer, &self.depth_view);
+        if let Some(motion) = &self.surface_motion {
+            motion.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.depth_view);
+        }
         if let Some((decals, normals, copy)) = &self.decals {
             encoder.copy_texture_to_texture(normals.as_image_copy(), copy.as_image_copy(), normals.size());
             decals.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.decals, &self.gbuffer, &self.depth_view);

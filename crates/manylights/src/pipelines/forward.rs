@@ -9,6 +9,9 @@
 //! GpuScene ─▶ depth_prepass ─▶ depth (cleared to 0)
 //!                                   │
 //!                                   ▼
+//!             surface_motion, when kept state follows animated instances ─▶ surface motions (group 0)
+//!                                   │
+//!                                   ▼
 //!             ray_shadows (+ shadow_filter), with sun shadows ─▶ sun visibility and blocker distance (Rg32Float)
 //!                                   │
 //!                                   ▼
@@ -26,6 +29,7 @@
 
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::denoise::Denoiser;
+use crate::passes::surface_motion::SurfaceMotion;
 use crate::passes::{
     depth_prepass::DepthPrepass, forward_shade::ForwardShade, ray_shadows::RayShadows, transparent_shade::TransparentShade,
 };
@@ -44,6 +48,8 @@ pub struct ForwardPipeline {
     /// Present when the sun casts ray-traced shadows.
     shadows: Option<RayShadows>,
     shade: ForwardShade,
+    /// Present when animated instances' motion is tracked (`plan::FramePlan::tracks_surface_motion`).
+    surface_motion: Option<SurfaceMotion>,
     /// Present when `restir`'s lighting is denoised (`plan::FramePlan::denoises`).
     pub(super) denoiser: Option<Denoiser>,
     /// Present when the scene has transparent draws.
@@ -63,6 +69,7 @@ impl ForwardPipeline {
             prepass: DepthPrepass::new(ctx, scene)?,
             shade: ForwardShade::new(ctx, scene, methods, structures, shadows.as_ref())?,
             shadows,
+            surface_motion: setup.surface_motion.then(|| SurfaceMotion::new(ctx, scene, &depth_view)).transpose()?,
             denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, &targets.hdr, (width, height))).transpose()?,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
@@ -75,6 +82,9 @@ impl ForwardPipeline {
     /// Records one frame. The frame uniforms must already be written.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         self.prepass.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.depth_view);
+        if let Some(motion) = &self.surface_motion {
+            motion.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.depth_view);
+        }
         if let Some(shadows) = &self.shadows {
             shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (self.targets.width, self.targets.height));
         }

@@ -78,7 +78,7 @@ impl FramePipeline {
 
 /// What every pipeline is built for: the shading core's methods, how the sun's shadows are traced
 /// (`passes::ray_shadows`; `Off`: not at all), the post effects (`post/`), the light and decal
-/// structures, the image size.
+/// structures, the image size, and whether surfaces' motion is tracked.
 #[derive(Clone, Copy)]
 pub struct FrameSetup<'a> {
     pub methods: ShadingMethods,
@@ -86,6 +86,8 @@ pub struct FrameSetup<'a> {
     pub post: PostSettings,
     pub structures: Structures<'a>,
     pub size: (u32, u32),
+    /// Animated instances' surface motion is recorded for reuse (`plan::FramePlan::tracks_surface_motion`).
+    pub surface_motion: bool,
 }
 
 impl FrameSetup<'_> {

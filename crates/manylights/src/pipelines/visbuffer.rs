@@ -7,6 +7,9 @@
 //! GpuScene ─▶ visbuffer_raster ─▶ visibility (R32Uint, not cleared) + depth (cleared to 0)
 //!                                   │
 //!                                   ▼
+//!             surface_motion, when kept state follows animated instances ─▶ surface motions (group 0)
+//!                                   │
+//!                                   ▼
 //!             ray_shadows (+ shadow_filter), with sun shadows ─▶ sun visibility and blocker distance (Rg32Float)
 //!                                   │
 //!                                   ▼
@@ -24,6 +27,7 @@
 
 use crate::gpu::{GpuContext, GpuScene, GpuTimer};
 use crate::passes::denoise::Denoiser;
+use crate::passes::surface_motion::SurfaceMotion;
 use crate::passes::{
     ray_shadows::RayShadows,
     transparent_shade::TransparentShade,
@@ -46,6 +50,8 @@ pub struct VisbufferPipeline {
     /// Present when the sun casts ray-traced shadows.
     shadows: Option<RayShadows>,
     shade: VisbufferShade,
+    /// Present when animated instances' motion is tracked (`plan::FramePlan::tracks_surface_motion`).
+    surface_motion: Option<SurfaceMotion>,
     /// Present when `restir`'s lighting is denoised (`plan::FramePlan::denoises`).
     pub(super) denoiser: Option<Denoiser>,
     /// Present when the scene has transparent draws.
@@ -74,6 +80,7 @@ impl VisbufferPipeline {
                 VisbufferShadeImages { visibility: &visibility_view, depth: &depth_view, hdr: &hdr_view },
             )?,
             shadows,
+            surface_motion: setup.surface_motion.then(|| SurfaceMotion::new(ctx, scene, &depth_view)).transpose()?,
             denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, &targets.hdr, (width, height))).transpose()?,
             transparent: TransparentShade::new(ctx, scene, methods, structures)?,
             post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
@@ -89,6 +96,9 @@ impl VisbufferPipeline {
         let (width, height) = (self.targets.width, self.targets.height);
         let images = VisbufferImages { visibility: &self.visibility_view, depth: &self.depth_view };
         self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, images);
+        if let Some(motion) = &self.surface_motion {
+            motion.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.depth_view);
+        }
         if let Some(shadows) = &self.shadows {
             shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (width, height));
         }

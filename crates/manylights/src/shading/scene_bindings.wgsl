@@ -50,3 +50,15 @@
 // The denoiser's samples (`shading/shading_pixel.wgsl`, `passes/denoise/`): one per pixel, written by
 // the shading of its opaque surface. One placeholder where nothing is denoised.
 @group(0) @binding(29) var<storage, read_write> denoise_samples: array<DenoiseSample>;
+// Where animated instances' surfaces were a frame before (`passes/surface_motion.wgsl`), for the
+// reuse of what pixels kept: one per pixel, or one placeholder where nothing is reused or nothing moves.
+@group(0) @binding(30) var<storage, read_write> surface_motions: array<SurfaceMotion>;
+
+// Where the surface at `position`, seen at `pixel`, was a frame before: moved with its instance where
+// an animated instance shows there this frame, else where it is (the camera's own motion is the
+// previous camera's, `frame.previous_clip_from_world`).
+fn previous_surface_position(pixel: vec2<u32>, position: vec3<f32>) -> vec3<f32> {
+    let index = min(pixel.y * u32(frame.viewport.x) + pixel.x, arrayLength(&surface_motions) - 1u);
+    let motion = surface_motions[index];
+    return select(position, position + motion.moved, motion.frame == frame.direct_lighting.x);
+}

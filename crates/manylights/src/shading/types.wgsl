@@ -159,6 +159,15 @@ struct Reservoir {
     normal_count: u32,
 }
 
+// How the surface an animated instance shows at a pixel moved since the previous frame
+// (`passes/surface_motion.wgsl`): its world-space displacement, then − now, and the frame's number
+// (`FrameUniforms::direct_lighting.x`) that wrote it. A record of an earlier frame is stale: the pixel
+// shows no moving instance now.
+struct SurfaceMotion {
+    moved: vec3<f32>,
+    frame: u32,
+}
+
 // One pixel's sampled lighting for the denoiser (`passes/denoise/`): its diffuse and specular parts,
 // each divided by its albedo (rgba8 unorm, the same quantised albedo multiplies them back), and the
 // surface that guides the filters: its octahedral normal (16 + 16 bits), world position and

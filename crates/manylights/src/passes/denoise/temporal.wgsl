@@ -1,6 +1,7 @@
 // The denoiser's temporal accumulation (SVGF, Schied et al. 2017): each pixel's sampled light, per
 // lobe, joins what its surface accumulated in earlier frames, found where the previous camera saw the
-// surface (`frame.previous_clip_from_world`) and bilinearly resampled from those of the four nearest
+// surface (`frame.previous_clip_from_world`; an animated instance's surface where it was then,
+// `previous_surface_position`) and bilinearly resampled from those of the four nearest
 // pixels that saw the same surface (normals within about 25°, positions on the pixel's plane within a
 // pixel's footprint or 1 % of the distance), clamped to the frame's samples around the pixel. An
 // exponential moving average with weight 1/n over the
@@ -18,6 +19,8 @@
 // The most frames averaged: a still surface's light converges like 1/n up to this, then follows
 // changes within about as many frames.
 const DENOISE_MAX_HISTORY: u32 = 32u;
+// The most frames averaged on an animated instance's surface, whose light changes as it moves.
+const DENOISE_MOVING_HISTORY: u32 = 4u;
 const DENOISE_MIN_NORMAL_COSINE: f32 = 0.9;
 const DENOISE_MAX_PLANE_DISTANCE: f32 = 0.01;
 // History is clamped, channel by channel, to this many standard deviations around the mean of the
@@ -25,6 +28,7 @@ const DENOISE_MAX_PLANE_DISTANCE: f32 = 0.01;
 // floor as the camera moves, a light switched off) leaves no trail, while noise of the samples
 // themselves, which the clamp's width follows, leaves the history alone.
 const DENOISE_CLAMP_DEVIATIONS: f32 = 3.0;
+const DENOISE_MOVING_CLAMP_DEVIATIONS: f32 = 1.0;
 
 // The mean and standard deviation of the frame's samples of each lobe, channel by channel, over the
 // 3×3 pixels around `pixel` that show a surface.
@@ -68,8 +72,8 @@ fn denoise_neighbourhood(pixel: vec2<i32>, size: vec2<i32>) -> DenoiseNeighbourh
     );
 }
 
-fn denoise_clamp(kept: vec3<f32>, mean: vec3<f32>, deviation: vec3<f32>) -> vec3<f32> {
-    return clamp(kept, mean - DENOISE_CLAMP_DEVIATIONS * deviation, mean + DENOISE_CLAMP_DEVIATIONS * deviation);
+fn denoise_clamp(kept: vec3<f32>, mean: vec3<f32>, reach: vec3<f32>) -> vec3<f32> {
+    return clamp(kept, mean - reach, mean + reach);
 }
 
 @compute @workgroup_size(8, 8)
@@ -91,8 +95,10 @@ fn denoise_temporal(@builtin(global_invocation_id) id: vec3<u32>) {
     guides[index] = denoise_guide(sample.position, normal);
     let tolerance = max(DENOISE_MAX_PLANE_DISTANCE * length(sample.position - frame.world_from_view[3].xyz), denoise_footprint(sample.position));
 
-    // Where the surface was a frame ago, in pixel coordinates of the pixels' centres.
-    let clip = frame.previous_clip_from_world * vec4<f32>(sample.position, 1.0);
+    // Where the surface was a frame ago (carried by its instance, if animated), in pixel coordinates
+    // of the pixels' centres.
+    let previous_position = previous_surface_position(id.xy, sample.position);
+    let clip = frame.previous_clip_from_world * vec4<f32>(previous_position, 1.0);
     let ndc = clip.xy / clip.w;
     let at = vec2<f32>((ndc.x * 0.5 + 0.5) * frame.viewport.x, (0.5 - ndc.y * 0.5) * frame.viewport.y) - 0.5;
     let corner = floor(at);
@@ -111,7 +117,7 @@ fn denoise_temporal(@builtin(global_invocation_id) id: vec3<u32>) {
         let kept = previous[denoise_index(vec2<u32>(p))];
         let frames = kept.normal_length >> 24u;
         if frames == 0u || dot(octahedral_unpack(kept.normal_length, 12u), normal) < DENOISE_MIN_NORMAL_COSINE
-            || abs(dot(normal, kept.position - sample.position)) > tolerance {
+            || abs(dot(normal, kept.position - previous_position)) > tolerance {
             continue;
         }
         let w = select(1.0 - f.x, f.x, offset.x == 1u) * select(1.0 - f.y, f.y, offset.y == 1u);
@@ -125,9 +131,11 @@ fn denoise_temporal(@builtin(global_invocation_id) id: vec3<u32>) {
     if weights > 1e-4 {
         let around = denoise_neighbourhood(vec2<i32>(id.xy), vec2<i32>(size));
         kept_moments /= weights;
-        kept_diffuse = denoise_clamp(kept_diffuse / weights, around.diffuse_mean, around.diffuse_deviation);
-        kept_specular = denoise_clamp(kept_specular / weights, around.specular_mean, around.specular_deviation);
-        frames = min(u32(round(kept_length / weights)) + 1u, DENOISE_MAX_HISTORY);
+        let moving = any(previous_position != sample.position);
+        let deviations = select(DENOISE_CLAMP_DEVIATIONS, DENOISE_MOVING_CLAMP_DEVIATIONS, moving);
+        kept_diffuse = denoise_clamp(kept_diffuse / weights, around.diffuse_mean, deviations * around.diffuse_deviation);
+        kept_specular = denoise_clamp(kept_specular / weights, around.specular_mean, deviations * around.specular_deviation);
+        frames = min(u32(round(kept_length / weights)) + 1u, select(DENOISE_MAX_HISTORY, DENOISE_MOVING_HISTORY, moving));
     }
     let alpha = 1.0 / f32(frames);
     let diffuse_luminance = dot(sample.diffuse, DENOISE_LUMINANCE);

@@ -163,11 +163,17 @@ fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> RestirR
     var positions: array<vec3<f32>, RESTIR_REUSED>;
     var normals: array<vec3<f32>, RESTIR_REUSED>;
     var counts: array<u32, RESTIR_REUSED>;
+    // The light (and its instance) each kept with no weight, its surface not seeing it when it was
+    // made (RESTIR_NO_LIGHT for the others): that light could not have been chosen there, whatever
+    // its surface sees now.
+    var hidden: array<vec2<u32>, RESTIR_REUSED>;
     var reused = 0u;
     // Which reused reservoir the choice came from (RESTIR_REUSED: the pixel's own).
     var source = RESTIR_REUSED;
     let plane_tolerance = RESTIR_MAX_PLANE_DISTANCE * length(s.position - frame.world_from_view[3].xyz);
-    let previous = restir_previous_pixel(s.position);
+    // The surface a frame before: where an animated instance carried it, seen by the camera then.
+    let previous_position = previous_surface_position(shading_pixel, s.position);
+    let previous = restir_previous_pixel(previous_position);
     let tries = select(1u, RESTIR_REUSED, frame.direct_lighting.w == RESTIR_REUSE_SPATIOTEMPORAL);
     for (var t = 0u; t < tries; t += 1u) {
         var at = previous;
@@ -182,7 +188,7 @@ fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> RestirR
         let kept_count = min(kept.normal_count >> 24u, RESTIR_MAX_CONFIDENCE);
         let kept_normal = octahedral_unpack(kept.normal_count, 12u);
         if kept_count == 0u || dot(kept_normal, s.normal) < RESTIR_MIN_NORMAL_COSINE
-            || abs(dot(s.normal, kept.position - s.position)) > plane_tolerance {
+            || abs(dot(s.normal, kept.position - previous_position)) > plane_tolerance {
             continue;
         }
         var weight = 0.0;
@@ -199,9 +205,11 @@ fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> RestirR
             candidate = RestirChoice(kept.light, kept.instance, radiance, target_value, instance_point_to_world(instance, sphere.xyz));
             weight = target_value * kept.weight * f32(kept_count);
         }
-        positions[reused] = kept.position;
+        // Its surface as it is now, for Z's tests in the frame's scene: carried as far as the pixel's.
+        positions[reused] = kept.position + (s.position - previous_position);
         normals[reused] = kept_normal;
         counts[reused] = kept_count;
+        hidden[reused] = select(vec2<u32>(RESTIR_NO_LIGHT), vec2<u32>(kept.light, kept.instance), kept.weight == 0.0);
         count += kept_count;
         weight_sum += weight;
         if weight > 0.0 && restir_random() * weight_sum < weight {
@@ -215,11 +223,13 @@ fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> RestirR
         // Z: the confidence of every reservoir that could have chosen y — the pixel's own, the one it
         // came from, and each other whose surface y lights and sees, since kept reservoirs hold only
         // lights their surface saw (their weight is zeroed otherwise). A ray asks whether it sees y,
-        // unless the surface is the pixel's own point, as it is under a still camera.
+        // unless the surface is the pixel's own point, as it is under a still camera. Where blockers
+        // move, a surface may see now what it did not then: one that kept y's light without weight
+        // did not see it.
         let instance = light_instances[(*choice).instance];
         var z = 1u;
         for (var r = 0u; r < reused; r += 1u) {
-            if r == source || (restir_light_reaches((*choice).light, instance, positions[r], normals[r])
+            if r == source || (any(hidden[r] != vec2<u32>((*choice).light, (*choice).instance)) && restir_light_reaches((*choice).light, instance, positions[r], normals[r])
                 && (all(positions[r] == s.position) || !light_occluded_from(positions[r], normals[r], (*choice).position))) {
                 z += counts[r];
             }
