@@ -21,6 +21,7 @@
 #   scripts/bench-device.sh soak         10,000 frames of everything rebuilt per frame, memory sampled (issue 31)
 #   scripts/bench-device.sh direct       shadowed local lights: exact, reference and restir on 4,096 and 28k lights (issue 34)
 #   scripts/bench-device.sh direct_error restir's error against the reference, sampled and denoised (light-error)
+#   scripts/bench-device.sh moving       restir and its surface motion on GasStation's animated instances (issue 34)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -291,6 +292,16 @@ direct() {
   run direct_visbuffer_small28k_reference 30 --scene .bench/small_28000.toml --direct-lighting reference
 }
 
+# Animated instances under restir: GasStation (.bench/assets/gas_station) with 4,096 scattered lights;
+# reuse records where its moving surfaces were (`surface_motion`), which reuse off does not need.
+moving() {
+  local scene=.bench/assets/gas_station/GasStation.gltf
+  run moving_gasstation_4096_exact 100 --scene $scene --lights 4096 --seed 1 --direct-lighting exact
+  run moving_gasstation_4096_restir1 100 --scene $scene --lights 4096 --seed 1 --direct-lighting restir
+  run moving_gasstation_4096_restir1_sampled 100 --scene $scene --lights 4096 --seed 1 --direct-lighting restir --denoise off
+  run moving_gasstation_4096_restir1_no_reuse 100 --scene $scene --lights 4096 --seed 1 --direct-lighting restir --denoise off --restir-reuse off
+}
+
 # restir's error against the reference (`light-error`), sampled and denoised: 4,096 lights at
 # 1920×1080, and 256 to 65,536 lights at 960×540.
 direct_error() {
@@ -330,7 +341,8 @@ for set in "${@:-structures}"; do
     sweeps) bench sweeps --scenes none --dense none ;;
     dense) bench dense --scenes none --sweeps none ;;
     assets) assets ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform, soak, direct or direct_error)" >&2; exit 2 ;;
+    moving) moving ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform, soak, direct, direct_error or moving)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .
