@@ -22,6 +22,7 @@
 #   scripts/bench-device.sh direct       shadowed local lights: exact, reference and restir on 4,096 and 28k lights (issue 34)
 #   scripts/bench-device.sh direct_error restir's error against the reference, sampled and denoised (light-error)
 #   scripts/bench-device.sh moving       restir and its surface motion on GasStation's animated instances (issue 34)
+#   scripts/bench-device.sh tree         restir's candidates through the light tree against the enumeration, 256 to 65,536 lights (issue 35)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -302,6 +303,27 @@ moving() {
   run moving_gasstation_4096_restir1_no_reuse 100 --scene $scene --lights 4096 --seed 1 --direct-lighting restir --denoise off --restir-reuse off
 }
 
+# restir's candidates drawn through the light tree against the enumeration, on the shadowed-lights
+# scene from 256 to 65,536 lights, and the error of each at 960×540 (`light-error`).
+tree() {
+  local n c scene=.bench/shadowed_4096.toml
+  sed 's#"../../shared/assets/sponza/Sponza.gltf"#"sponza_lite/Sponza.gltf"#' scenes/shadowed-lights.toml >$scene
+  for n in 256 1024 4096 16384 65536; do
+    sed "s/^count = 4096/count = $n/" $scene >.bench/shadowed_$n.toml
+    for c in enumeration tree; do
+      run "tree_visbuffer_${n}_${c}" 100 --scene .bench/shadowed_$n.toml --restir-candidates $c
+      run "tree_visbuffer_${n}_${c}_sampled" 100 --scene .bench/shadowed_$n.toml --restir-candidates $c --denoise off
+    done
+  done
+  for n in 4096 65536; do
+    for c in enumeration tree; do
+      echo "== light-error $n $c"
+      timeout 300 $bin light-error --scene .bench/shadowed_$n.toml --width 960 --height 540 --frames 16 \
+        --restir-candidates $c --json "$out/tree_light_error_${n}_${c}.json" | tail -4
+    done
+  done
+}
+
 # restir's error against the reference (`light-error`), sampled and denoised: 4,096 lights at
 # 1920×1080, and 256 to 65,536 lights at 960×540.
 direct_error() {
@@ -342,7 +364,8 @@ for set in "${@:-structures}"; do
     dense) bench dense --scenes none --sweeps none ;;
     assets) assets ;;
     moving) moving ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform, soak, direct, direct_error or moving)" >&2; exit 2 ;;
+    tree) tree ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform, soak, direct, direct_error, moving or tree)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

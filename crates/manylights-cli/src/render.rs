@@ -12,9 +12,9 @@ use manylights::{
     scene::{Camera, Scene},
     settings::{
         AutoExposure, Bloom, BvhBuild, DebugView, DecalMethod, Denoise, DepthOfField, DirectLighting, Exposure, LightMethod, MotionBlur,
-        ParticleFilter, ParticleMethod, ParticleOverlay, PipelineKind, PostSettings, RayOverlay, RaySettings, RenderConfig, RestirReuse,
-        SunShadows, Tonemapper, EV100_RANGE, MAX_ANISOTROPY, MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH, MAX_MOTION_BLUR_SAMPLES,
-        MAX_REFLECTION_BOUNCES, MAX_RESTIR_SHADOW_RAYS, MAX_SHADOW_RAYS,
+        ParticleFilter, ParticleMethod, ParticleOverlay, PipelineKind, PostSettings, RayOverlay, RaySettings, RenderConfig,
+        RestirCandidates, RestirReuse, SunShadows, Tonemapper, EV100_RANGE, MAX_ANISOTROPY, MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH,
+        MAX_MOTION_BLUR_SAMPLES, MAX_REFLECTION_BOUNCES, MAX_RESTIR_SHADOW_RAYS, MAX_SHADOW_RAYS,
     },
 };
 
@@ -219,6 +219,8 @@ pub(crate) struct RayArgs {
     restir_shadow_rays: Option<u32>,
     #[arg(long, value_enum, help = format!("What --direct-lighting restir reuses at each pixel's surface from the frame before: nothing, its own reservoir (found by reprojection), or that and its neighbours'. [default: the scene file's, or {}]", RaySettings::default().restir_reuse))]
     restir_reuse: Option<RestirReuse>,
+    #[arg(long, value_enum, help = format!("Where --direct-lighting restir finds its candidates at a point: every light the light method finds there (enumeration), a few drawn through the lights' BVH by their estimated light (tree: the same cost however many lights reach; bvh lights built on the CPU), or by the scene's light density (auto). [default: the scene file's, or {}]", RaySettings::default().restir_candidates))]
+    restir_candidates: Option<RestirCandidates>,
     #[arg(long, value_enum, help = format!("How --direct-lighting restir's lighting is denoised at the pixels' opaque surfaces: not at all, for error studies (off), or by temporal accumulation and a variance-guided spatial filter (svgf). [default: the scene file's, or {}]", RaySettings::default().denoise))]
     denoise: Option<Denoise>,
 }
@@ -243,6 +245,7 @@ impl RayArgs {
             direct_lighting: self.direct_lighting,
             restir_shadow_rays: self.restir_shadow_rays,
             restir_reuse: self.restir_reuse,
+            restir_candidates: self.restir_candidates,
             denoise: self.denoise,
         };
         Ok(command_line.over(*file).settings())
@@ -431,8 +434,13 @@ impl TimingReport {
                 match rays.direct_lighting {
                     DirectLighting::Exact => format!("exact ({} light shadow rays)", rays.light_shadow_rays),
                     DirectLighting::Reference => "reference (a shadow ray per light)".into(),
-                    DirectLighting::Restir =>
-                        format!("restir ({} shadow rays, {} reuse, denoise {})", rays.restir_shadow_rays, rays.restir_reuse, rays.denoise),
+                    DirectLighting::Restir => format!(
+                        "restir ({} shadow rays, {} reuse, candidates {}, denoise {})",
+                        rays.restir_shadow_rays,
+                        rays.restir_reuse,
+                        restir_candidates(renderer),
+                        rays.denoise
+                    ),
                 },
                 if rays.reflection_bounces > 0 {
                     format!("{} bounce(s) below roughness {}", rays.reflection_bounces, rays.reflection_roughness)
@@ -534,6 +542,15 @@ fn particles_json(renderer: &Renderer, scene: &Scene) -> serde_json::Value {
 }
 
 /// The ray-traced effects, their budgets, and the hierarchy built for them.
+/// Where `restir`'s candidates came from, `auto` resolved.
+fn restir_candidates(renderer: &Renderer) -> &'static str {
+    if renderer.shading_methods().light_tree {
+        RestirCandidates::Tree.name()
+    } else {
+        RestirCandidates::Enumeration.name()
+    }
+}
+
 fn rays_json(renderer: &Renderer) -> serde_json::Value {
     let rays = &renderer.config.rays;
     let mut json = serde_json::json!({
@@ -546,6 +563,7 @@ fn rays_json(renderer: &Renderer) -> serde_json::Value {
         "direct_lighting": rays.direct_lighting.name(),
         "restir_shadow_rays": rays.restir_shadow_rays,
         "restir_reuse": rays.restir_reuse.name(),
+        "restir_candidates": restir_candidates(renderer),
         "denoise": rays.denoise.name(),
     });
     if let Some(built) = renderer.ray_structure() {

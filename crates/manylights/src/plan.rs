@@ -7,6 +7,7 @@ use std::fmt;
 use crate::gpu::GpuContext;
 use crate::settings::{
     BvhBuild, DebugView, DecalMethod, DirectLighting, LightMethod, Named, ParticleMethod, PipelineKind, RaySettings, RenderConfig,
+    RestirCandidates,
 };
 use crate::{Error, Result};
 
@@ -236,6 +237,9 @@ pub struct ShadingMethods {
     /// The decals' structure is one crowded group placed once, with cell lists: `bvh` decals are read
     /// from the list of a point's cell instead of walked (`shading/enumerate/decals_bvh_cells.wgsl`).
     pub decal_cell_lists: bool,
+    /// `restir` draws its candidates through the light tree instead of enumerating the lights
+    /// reaching a point (`shading/enumerate/lights_tree.wgsl`, [`restir_light_tree`]).
+    pub light_tree: bool,
     /// A debug view is shown: the shading core counts its work (`DEBUG_VIEWS` in
     /// `shading/debug_view.wgsl`, a pipeline constant: [`ShadingMethods::debug_views_constant`]).
     pub debug_views: bool,
@@ -257,6 +261,7 @@ impl ShadingMethods {
         match self.lights {
             LightMethod::Off => "shading/enumerate/lights_off.wgsl",
             LightMethod::Brute => "shading/enumerate/lights_brute.wgsl",
+            LightMethod::Bvh if self.light_tree => "shading/enumerate/lights_tree.wgsl",
             // `auto` is resolved before a plan is made (`MethodChoice`).
             LightMethod::Bvh | LightMethod::Auto => "shading/enumerate/lights_bvh.wgsl",
             LightMethod::Clustered => "shading/enumerate/lights_clustered.wgsl",
@@ -464,6 +469,9 @@ pub struct StructurePlan {
     /// The one placed group gets cell lists where they fit its budget (`accel/cell_lists.rs`); shading
     /// then reads them instead of walking ([`FramePlan::shading_methods`]).
     pub cell_lists: bool,
+    /// The CPU-built light groups get their light tree (`accel/light_tree.rs`): `restir` draws its
+    /// candidates through it ([`ShadingMethods::light_tree`]).
+    pub light_tree: bool,
 }
 
 /// How particles light the scene.
@@ -518,6 +526,7 @@ impl FramePlan {
                 config.light_method.name()
             )));
         }
+        let light_tree = restir_light_tree(config, particle_lights, stats.light_overlap)?;
         let pixels_write_alone = config.pipeline != PipelineKind::Forward || caps.early_depth_test;
         let keeps_reservoirs = config.rays.keeps_reservoirs() && pixels_write_alone;
         let denoises = config.rays.denoises() && pixels_write_alone;
@@ -529,6 +538,7 @@ impl FramePlan {
             direct: DirectShading::of(&config.rays),
             keeps_pixel_state: keeps_reservoirs || denoises,
             denoised: denoises,
+            light_tree,
             subgroups: caps.subgroups,
             dense_decals: false,
             dense_lights: false,
@@ -555,6 +565,7 @@ impl FramePlan {
             rebuilt_leaves: rebuilt_leaves(dense_lights),
             rebuilt_grids: !walks.lights,
             cell_lists: false,
+            light_tree,
         };
         let decal_build = group_build(
             config.decal_method == DecalMethod::Bvh,
@@ -568,6 +579,7 @@ impl FramePlan {
             rebuilt_leaves: rebuilt_leaves(dense_decals),
             rebuilt_grids: !walks.decals,
             cell_lists: dense_decals && stats.placed_decal_groups == 1 && decal_build == GroupBuild::CpuOnce,
+            light_tree: false,
         };
         let particles = match (has_particles, config.particle_method) {
             (false, _) | (true, ParticleMethod::Off) => ParticlePlan::None,
@@ -594,6 +606,30 @@ impl FramePlan {
     /// they were planned and fitted their budget (`lists_built`); otherwise the wide leaves are walked.
     pub fn shading_methods(&self, lists_built: bool) -> ShadingMethods {
         ShadingMethods { decal_cell_lists: self.planned_methods.decal_cell_lists && lists_built, ..self.planned_methods }
+    }
+}
+
+/// The mean number of lights reaching a surface point from which `restir`'s `auto` candidates come
+/// through the light tree rather than the enumeration.
+pub const RESTIR_TREE_OVERLAP: f32 = 16.0;
+
+/// Whether `restir` draws its candidates through the light tree (`accel/light_tree.rs`): where
+/// `--restir-candidates tree` asks, or `auto` finds the lights crowding (a mean overlap of
+/// [`RESTIR_TREE_OVERLAP`] at surface points). The tree is built over `bvh` lights' CPU-built groups,
+/// so the particles' rebuilt group (`particle_lights`) and GPU rebuilds have none.
+pub fn restir_light_tree(config: &RenderConfig, particle_lights: bool, light_overlap: Option<f32>) -> Result<bool> {
+    if config.rays.direct_lighting != DirectLighting::Restir {
+        return Ok(false);
+    }
+    let has_tree = config.light_method == LightMethod::Bvh && config.light_bvh_build == BvhBuild::CpuOnce && !particle_lights;
+    match config.rays.restir_candidates {
+        RestirCandidates::Enumeration => Ok(false),
+        RestirCandidates::Tree if !has_tree => Err(Error::InvalidConfig(
+            "--restir-candidates tree draws lights through their BVH built on the CPU; use --light-method bvh and --light-bvh-build cpu-once, without --particle-method bvh (or --restir-candidates enumeration)"
+                .into(),
+        )),
+        RestirCandidates::Tree => Ok(true),
+        RestirCandidates::Auto => Ok(has_tree && light_overlap.is_some_and(|overlap| overlap >= RESTIR_TREE_OVERLAP)),
     }
 }
 

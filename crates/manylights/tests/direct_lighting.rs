@@ -16,7 +16,9 @@ use manylights::{
         animation::{Animation, Channel, Interpolation, Node, Property, Trs},
         Camera, Instance, Light, Scene,
     },
-    settings::{heat_map, DebugView, Denoise, DirectLighting, LightMethod, PipelineKind, RaySettings, RenderConfig, RestirReuse},
+    settings::{
+        heat_map, DebugView, Denoise, DirectLighting, LightMethod, PipelineKind, RaySettings, RenderConfig, RestirCandidates, RestirReuse,
+    },
 };
 
 const SIZE: (u32, u32) = (96, 54);
@@ -345,6 +347,39 @@ fn restir_converges_to_the_reference_without_bias() {
             assert!(bias.abs() <= tolerance, "{what}, {reuse} reuse: bias {bias} over {frames} frames");
         }
     }
+}
+
+#[test]
+fn restir_through_the_light_tree_is_the_reference_for_one_light_and_converges_to_it_for_many() {
+    let tree = |rays: RaySettings| RaySettings { restir_candidates: RestirCandidates::Tree, ..rays };
+    // One lamp: every draw finds it, with probability 1 times its share of its leaf.
+    let (one, camera) = lamps_and_blocker(&six_lamps()[..1], false);
+    for pipeline in PipelineKind::ALL {
+        let reference = render_with(&one, &camera, config(pipeline, LightMethod::Bvh, lighting(DirectLighting::Reference))).1;
+        let mut sampled = renderer(&one, config(pipeline, LightMethod::Bvh, tree(restir(1, RestirReuse::Temporal))));
+        for frame in 0..3 {
+            sampled.render(&camera).unwrap();
+            let difference = max_relative_difference(&sampled.read_hdr().unwrap(), &reference);
+            assert!(
+                difference <= 1e-4,
+                "{} frame {frame}: restir through the tree differs from the reference by {difference}",
+                pipeline.name()
+            );
+        }
+    }
+    // Six lamps and forty out of reach, which the tree never draws: the mean of independent frames
+    // converges to the reference without bias, as the enumeration's does.
+    let mut lamps = six_lamps();
+    lamps.extend((0..40).map(|i| (Vec3::new(15.0 + 0.5 * i as f32, (i % 7) as f32 - 3.0, 3.0), Vec3::ONE)));
+    let (six, camera) = lamps_and_blocker(&lamps, false);
+    let pipeline = PipelineKind::Visbuffer;
+    let reference = render_with(&six, &camera, config(pipeline, LightMethod::Bvh, lighting(DirectLighting::Reference))).1.pixels;
+    let (mean, one_frame) = restir_mean(&six, &camera, pipeline, tree(restir(1, RestirReuse::Off)), 64);
+    let (one_error, mean_error, bias) =
+        (relative_l1(&one_frame, &reference), relative_l1(&mean, &reference), relative_bias(&mean, &reference));
+    eprintln!("tree: one {one_error} mean {mean_error} bias {bias}");
+    assert!(mean_error <= 0.3 * one_error, "64 frames' error {mean_error} against one frame's {one_error}");
+    assert!(bias.abs() <= 0.005, "bias {bias}");
 }
 
 #[test]

@@ -14,6 +14,15 @@ struct BvhNode {
     skip: u32,
 }
 
+// A light-structure node's emitters (`accel/light_tree.rs`, `LightTreeNode`): the box around its
+// lights' positions and their total power.
+struct LightTreeNode {
+    min: vec3<f32>,
+    power: f32,
+    max: vec3<f32>,
+    _pad: u32,
+}
+
 const BVH_LEAF: u32 = 0x80000000u;
 const BVH_END: u32 = 0xffffffffu;
 const BVH_LEAF_COUNT_SHIFT: u32 = 24u;

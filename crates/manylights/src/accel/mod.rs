@@ -20,6 +20,7 @@ pub mod clusters;
 pub mod entry_grid;
 pub mod lbvh;
 pub mod leaf_order;
+pub mod light_tree;
 pub mod overlap;
 pub mod radix_sort;
 pub mod rebuilt_grid;

@@ -31,6 +31,7 @@ use super::{
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
     leaf_order::{LeafOrder, LeafOrderTarget},
     light_aabb,
+    light_tree::{light_tree_nodes, LightTreeNode},
     rebuilt_grid::{GridPlacement, RebuiltGrids, RebuiltGroup},
     Aabb, Bvh, BvhNode,
 };
@@ -280,6 +281,8 @@ pub struct Volumes<'a> {
     pub rebuilt_grids: bool,
     /// The one placed group gets cell lists where they fit (`plan::StructurePlan::cell_lists`).
     pub cell_lists: bool,
+    /// CPU-built light groups get their light tree (`light_tree.rs`, `plan::StructurePlan::light_tree`).
+    pub light_tree: bool,
     pub groups: &'a Groups,
     /// Volumes written on the GPU every frame, after the others: one more group, placed at identity
     /// and rebuilt on the GPU every frame (particle lights, `particles/`).
@@ -368,6 +371,7 @@ impl VolumeStructure {
             rebuilt_leaves: plan.rebuilt_leaves,
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: false,
+            light_tree: plan.light_tree,
             groups,
             dynamic: None,
         };
@@ -397,6 +401,7 @@ impl VolumeStructure {
             rebuilt_leaves: plan.rebuilt_leaves,
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: false,
+            light_tree: false,
             groups,
             dynamic: Some(dynamic),
         };
@@ -442,6 +447,7 @@ impl VolumeStructure {
             rebuilt_leaves: plan.rebuilt_leaves,
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: plan.cell_lists,
+            light_tree: false,
             groups,
             dynamic: None,
         };
@@ -834,6 +840,8 @@ struct Buffers {
     instances: wgpu::Buffer,
     /// A [`GpuFirstInstance`].
     first_instance: wgpu::Buffer,
+    /// Each node's [`LightTreeNode`] where light groups have their tree, else one placeholder.
+    light_tree: wgpu::Buffer,
 }
 
 impl Buffers {
@@ -857,7 +865,9 @@ impl Buffers {
         let instances = buffer("instances", instance_bytes, U::STORAGE | U::COPY_DST);
         let first_instance = buffer("first instance", std::mem::size_of::<GpuFirstInstance>() as u64, U::UNIFORM | U::COPY_DST);
         let items = buffer("items", item_bytes.max(64), U::STORAGE | U::COPY_DST);
-        Self { items, nodes, primitives, instances, first_instance }
+        let tree_bytes = if volumes.light_tree { node_bytes } else { 0 }.max(std::mem::size_of::<LightTreeNode>() as u64);
+        let light_tree = buffer("light tree", tree_bytes, U::STORAGE | U::COPY_DST);
+        Self { items, nodes, primitives, instances, first_instance, light_tree }
     }
 
     /// Writes the items in their stored order (`scene_indices`).
@@ -884,8 +894,8 @@ impl Buffers {
     }
 
     /// The buffers shading binds, in binding order.
-    fn bound(&self) -> [&wgpu::Buffer; 5] {
-        [&self.items, &self.nodes, &self.primitives, &self.instances, &self.first_instance]
+    fn bound(&self) -> [&wgpu::Buffer; 6] {
+        [&self.items, &self.nodes, &self.primitives, &self.instances, &self.first_instance, &self.light_tree]
     }
 }
 
@@ -913,6 +923,12 @@ fn place_groups(
             Some(CpuGroup { bvh, grid: group_grid }) => {
                 let nodes = relocate(&bvh, blas_root, items.start);
                 ctx.queue.write_buffer(&buffers.nodes, node_offset(blas_root), bytemuck::cast_slice(&nodes));
+                if volumes.light_tree {
+                    let bytes = volumes.kind.record_bytes();
+                    let lights: &[GpuLight] = bytemuck::cast_slice(&volumes.items[range.start * bytes..range.end * bytes]);
+                    let tree = light_tree_nodes(&bvh, lights);
+                    ctx.queue.write_buffer(&buffers.light_tree, node_offset(blas_root), bytemuck::cast_slice(&tree));
+                }
                 if let Some(group_grid) = group_grid {
                     let (cells, header) = group_grid.gpu_words(blas_root, items.start, next_cell);
                     ctx.queue.write_buffer(&buffers.primitives, u64::from(next_cell) * 4, bytemuck::cast_slice(&cells));
@@ -992,7 +1008,15 @@ fn shading_bind_group_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGr
     let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
     let mut entries = [0, 1, 2, 3, 4, 5].map(|binding| bindings::storage_read(binding, all)).to_vec();
     entries.push(bindings::uniform(6, all));
+    if layout_has_light_tree(label) {
+        entries.push(bindings::storage_read(7, all));
+    }
     bindings::layout(device, label, &entries)
+}
+
+/// Lights' groups bind their light tree (a placeholder where they have none); decals' have none.
+fn layout_has_light_tree(label: &str) -> bool {
+    label == VolumeKind::Lights.label()
 }
 
 /// The bind group shading reads (`shading/*_bindings.wgsl`): items, nodes, primitives, instances,
@@ -1001,7 +1025,7 @@ fn shading_bind_group(
     ctx: &GpuContext,
     label: &str,
     layout: &wgpu::BindGroupLayout,
-    [items, nodes, primitives, instances, first_instance]: [&wgpu::Buffer; 5],
+    [items, nodes, primitives, instances, first_instance, light_tree]: [&wgpu::Buffer; 6],
     clusters: Option<&ClusterLists>,
 ) -> wgpu::BindGroup {
     let placeholder;
@@ -1017,7 +1041,10 @@ fn shading_bind_group(
             (&placeholder, &placeholder)
         }
     };
-    let resources = [items, nodes, primitives, instances, ranges, entries, first_instance].map(|b| b.as_entire_binding()).to_vec();
+    let mut resources = [items, nodes, primitives, instances, ranges, entries, first_instance].map(|b| b.as_entire_binding()).to_vec();
+    if layout_has_light_tree(label) {
+        resources.push(light_tree.as_entire_binding());
+    }
     bindings::bind_group(&ctx.device, label, layout, resources)
 }
 

@@ -11,8 +11,8 @@ use crate::{Error, Result};
 
 /// Storage buffers the shading passes bind at once: the scene's ten (four for geometry and
 /// materials, three for the ray hierarchy, restir's reservoirs, the denoiser's samples, the surface
-/// motions), the lights' and the decals' six each (`shading/*_bindings.wgsl`).
-const REQUIRED_STORAGE_BUFFERS: u32 = 22;
+/// motions), the lights' seven (their light tree too) and the decals' six (`shading/*_bindings.wgsl`).
+const REQUIRED_STORAGE_BUFFERS: u32 = 23;
 /// Features the renderer uses when the adapter has them; none is required by every scene.
 /// `primitive_index` lets the visibility raster draw indexed; `float32_blendable` lets transparent
 /// surfaces blend into the f32 HDR image (scenes with them need it); `subgroups` let passes walk BVHs

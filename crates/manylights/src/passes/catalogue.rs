@@ -33,6 +33,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("particles/splat.wgsl"),
         ShaderDesc::new("particles/lights.wgsl"),
         ShaderDesc::new("rays/trace_probe.wgsl"),
+        ShaderDesc::new("shading/light_tree_probe.wgsl"),
         ShaderDesc::new("passes/ray_shadows.wgsl"),
         ShaderDesc::new("passes/shadow_filter.wgsl"),
         ShaderDesc::new("passes/denoise/temporal.wgsl"),
@@ -74,6 +75,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         // Dense lights walk as a subgroup, as subgroup-walked decals do.
                         dense_lights: subgroups && lights == LightMethod::Bvh,
                         decal_cell_lists,
+                        light_tree: false,
                         debug_views: false,
                     };
                     if decals.works_in(PipelineKind::Forward) {
@@ -86,6 +88,29 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                     shaders.push(super::deferred_shade::shader(methods));
                 }
             }
+        }
+    }
+    // `restir` drawing its candidates through the light tree, with every particle method whose
+    // lights have one, walked alone and as subgroups.
+    for particles in [ParticleMethod::Off, ParticleMethod::Grid] {
+        for subgroups in [false, true] {
+            let methods = ShadingMethods {
+                lights: LightMethod::Bvh,
+                decals: DecalMethod::Bvh,
+                particles,
+                direct: DirectShading::Restir,
+                keeps_pixel_state: true,
+                denoised: true,
+                light_tree: true,
+                subgroups,
+                ..Default::default()
+            };
+            shaders.extend([
+                super::forward_shade::shader(methods),
+                super::transparent_shade::shader(methods),
+                super::visbuffer_shade::shader(methods),
+                super::deferred_shade::shader(methods),
+            ]);
         }
     }
     shaders

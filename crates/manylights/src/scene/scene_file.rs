@@ -103,6 +103,7 @@
 //! direct_lighting = "restir"  # local lights: "exact" (default), "reference" (a shadow ray each) or "restir"
 //! restir_shadow_rays = 1  # samples, each with its shadow ray, per point with "restir", 1 to 4; default 1
 //! restir_reuse = "temporal"  # what "restir" reuses: "off", "temporal" (default) or "spatiotemporal"
+//! restir_candidates = "auto"  # where "restir" finds candidates: "auto" (default), "enumeration" or "tree"
 //! denoise = "svgf"        # how "restir"'s lighting is denoised: "svgf" (default) or "off"
 //!
 //! [[deform]]              # a travelling wave deforming every mesh of a name (scene::deform::Wave)
@@ -263,6 +264,7 @@ struct RaysSpec {
     direct_lighting: Option<String>,
     restir_shadow_rays: Option<u32>,
     restir_reuse: Option<String>,
+    restir_candidates: Option<String>,
     denoise: Option<String>,
 }
 
@@ -271,6 +273,8 @@ impl RaysSpec {
         let sun_shadows = self.shadows.as_deref().map(str::parse).transpose().map_err(|e| format!("shadows {e}"))?;
         let direct_lighting = self.direct_lighting.as_deref().map(str::parse).transpose().map_err(|e| format!("direct_lighting {e}"))?;
         let restir_reuse = self.restir_reuse.as_deref().map(str::parse).transpose().map_err(|e| format!("restir_reuse {e}"))?;
+        let restir_candidates =
+            self.restir_candidates.as_deref().map(str::parse).transpose().map_err(|e| format!("restir_candidates {e}"))?;
         let denoise = self.denoise.as_deref().map(str::parse).transpose().map_err(|e| format!("denoise {e}"))?;
         let overlay = RayOverlay {
             sun_shadows,
@@ -282,6 +286,7 @@ impl RaysSpec {
             direct_lighting,
             restir_shadow_rays: self.restir_shadow_rays,
             restir_reuse,
+            restir_candidates,
             denoise,
         };
         overlay.settings().validate(Spelling::Key).map_err(inner_message)?;

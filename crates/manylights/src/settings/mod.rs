@@ -22,8 +22,8 @@ pub use post::{
     MAX_MOTION_BLUR_SAMPLES, POST_TILE,
 };
 pub use rays::{
-    Denoise, DirectLighting, RayOverlay, RaySettings, RestirReuse, SunShadows, MAX_REFLECTION_BOUNCES, MAX_RESTIR_SHADOW_RAYS,
-    MAX_SHADOW_RAYS,
+    Denoise, DirectLighting, RayOverlay, RaySettings, RestirCandidates, RestirReuse, SunShadows, MAX_REFLECTION_BOUNCES,
+    MAX_RESTIR_SHADOW_RAYS, MAX_SHADOW_RAYS,
 };
 
 use crate::{Error, Result};

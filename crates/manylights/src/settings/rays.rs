@@ -55,6 +55,22 @@ named_enum! {
 }
 
 named_enum! {
+    /// Where `restir` finds its candidates at a point.
+    pub enum RestirCandidates {
+        /// By the light density the scene's statistics show: the enumeration where few lights reach
+        /// a point, the tree where many do (`plan::restir_light_tree`).
+        #[default]
+        Auto = "auto",
+        /// Every light the light method enumerates there: the cost grows with the lights reaching.
+        Enumeration = "enumeration",
+        /// A few lights drawn through the lights' BVH by their estimated contribution (a light tree,
+        /// `accel/light_tree.rs`): a cost that stays the same however many lights reach. Needs
+        /// `bvh` lights built on the CPU.
+        Tree = "tree",
+    }
+}
+
+named_enum! {
     /// Whether sampled direct lighting (`restir`) is denoised at the pixels' opaque surfaces
     /// (`passes/denoise/`).
     pub enum Denoise {
@@ -100,6 +116,8 @@ pub struct RaySettings {
     pub restir_shadow_rays: u32,
     /// What `restir` reuses at the pixels' surfaces from earlier frames.
     pub restir_reuse: RestirReuse,
+    /// Where `restir` finds its candidates.
+    pub restir_candidates: RestirCandidates,
     /// How `restir`'s lighting is denoised.
     pub denoise: Denoise,
 }
@@ -116,6 +134,7 @@ impl Default for RaySettings {
             direct_lighting: DirectLighting::Exact,
             restir_shadow_rays: 1,
             restir_reuse: RestirReuse::Temporal,
+            restir_candidates: RestirCandidates::Auto,
             denoise: Denoise::Svgf,
         }
     }
@@ -134,6 +153,7 @@ pub struct RayOverlay {
     pub direct_lighting: Option<DirectLighting>,
     pub restir_shadow_rays: Option<u32>,
     pub restir_reuse: Option<RestirReuse>,
+    pub restir_candidates: Option<RestirCandidates>,
     pub denoise: Option<Denoise>,
 }
 
@@ -150,6 +170,7 @@ impl RayOverlay {
             direct_lighting: self.direct_lighting.or(below.direct_lighting),
             restir_shadow_rays: self.restir_shadow_rays.or(below.restir_shadow_rays),
             restir_reuse: self.restir_reuse.or(below.restir_reuse),
+            restir_candidates: self.restir_candidates.or(below.restir_candidates),
             denoise: self.denoise.or(below.denoise),
         }
     }
@@ -167,6 +188,7 @@ impl RayOverlay {
             direct_lighting: self.direct_lighting.unwrap_or(defaults.direct_lighting),
             restir_shadow_rays: self.restir_shadow_rays.unwrap_or(defaults.restir_shadow_rays),
             restir_reuse: self.restir_reuse.unwrap_or(defaults.restir_reuse),
+            restir_candidates: self.restir_candidates.unwrap_or(defaults.restir_candidates),
             denoise: self.denoise.unwrap_or(defaults.denoise),
         }
     }

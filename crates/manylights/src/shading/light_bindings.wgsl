@@ -12,3 +12,6 @@
 @group(2) @binding(4) var<storage, read> light_cluster_ranges: array<vec2<u32>>;
 @group(2) @binding(5) var<storage, read> light_cluster_entries: array<vec2<u32>>;
 @group(2) @binding(6) var<uniform> light_first_instance: FirstInstance;
+// Each light-structure node's emitters (`accel/light_tree.rs`), where `restir` draws its candidates
+// through the light tree (`shading/light_tree.wgsl`); one placeholder otherwise.
+@group(2) @binding(7) var<storage, read> light_tree: array<LightTreeNode>;

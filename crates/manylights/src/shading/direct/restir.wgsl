@@ -5,7 +5,10 @@
 // Candidates. Each light that reaches the point is a candidate whose target p̂ is the luminance of its
 // unshadowed radiance f; a reservoir keeps one, y, with probability p̂(y) / Σ p̂, and weighs it by
 // W = Σ p̂ / p̂(y), so that f(y) V(y) W, with V the shadow ray's visibility, has the expectation Σ f V:
-// unbiased, the `reference` image on average, for one ray whatever the number of lights.
+// unbiased, the `reference` image on average, for one ray whatever the number of lights. Drawn through
+// the light tree instead (`shading/enumerate/lights_tree.wgsl`), M candidates of probability p each
+// weigh p̂ / (M p), whose sum estimates Σ p̂ without bias: the same estimator, at a cost that does not
+// grow with the lights reaching the point.
 //
 // Reuse (`frame.direct_lighting.w`, `settings::RestirReuse`), at pixels' opaque surfaces only: the
 // first sample's reservoir is kept per pixel — with visibility reuse: its weight zeroed where its
@@ -28,6 +31,7 @@
 #include "shading/direct/shadow_ray.wgsl"
 #include "shading/shading_pixel.wgsl"
 #include "shading/octahedral.wgsl"
+#include "shading/random.wgsl"
 
 // Keep in sync with `settings::MAX_RESTIR_SHADOW_RAYS`.
 const RESTIR_MAX_SAMPLES: u32 = 4u;
@@ -48,9 +52,9 @@ const RESTIR_MIN_NORMAL_COSINE: f32 = 0.9;
 const RESTIR_MAX_PLANE_DISTANCE: f32 = 0.05;
 const RESTIR_NO_LIGHT: u32 = 0xffffffffu;
 
-// The point's random sequence and Σ p̂ over its candidates so far; each sample's f / p̂ and where its
-// light is (world space); the first sample's light, its instance and p̂.
-var<private> restir_rng: u32;
+// The point's candidates' weights summed so far (Σ p̂ when enumerated);
+// each sample's f / p̂ and where its light is (world space); the first sample's light, its instance
+// and p̂.
 var<private> restir_weight_sum: f32;
 var<private> restir_radiance: array<vec3<f32>, RESTIR_MAX_SAMPLES>;
 var<private> restir_light: array<vec3<f32>, RESTIR_MAX_SAMPLES>;
@@ -58,50 +62,44 @@ var<private> restir_first_light: u32;
 var<private> restir_first_instance: u32;
 var<private> restir_first_target: f32;
 
-// Wellons's lowbias32 integer hash.
-fn restir_hash(x: u32) -> u32 {
-    var h = x ^ (x >> 16u);
-    h *= 0x7feb352du;
-    h ^= h >> 15u;
-    h *= 0x846ca68bu;
-    return h ^ (h >> 16u);
-}
-
-// The next number of the point's sequence, uniform in [0, 1): a PCG step (O'Neill 2014).
-fn restir_random() -> f32 {
-    restir_rng = restir_rng * 747796405u + 2891336453u;
-    let word = ((restir_rng >> ((restir_rng >> 28u) + 4u)) ^ restir_rng) * 277803737u;
-    return f32(((word >> 22u) ^ word) >> 8u) / 16777216.0;
-}
-
 // Seeds the sequence from the point's position and the frame (`frame.direct_lighting.x`), so every
 // pixel, ray hit and frame draws its own samples, and a frame rendered again draws the same.
 fn direct_lights_begin(s: ShadingInput) {
     let p = bitcast<vec3<u32>>(s.position);
-    restir_rng = restir_hash(p.x ^ restir_hash(p.y ^ restir_hash(p.z ^ restir_hash(frame.direct_lighting.x))));
+    random_state = random_hash(p.x ^ random_hash(p.y ^ random_hash(p.z ^ random_hash(frame.direct_lighting.x))));
     restir_weight_sum = 0.0;
     restir_first_light = RESTIR_NO_LIGHT;
 }
 
 fn direct_light(index: u32, instance_index: u32, sphere: vec4<f32>, instance: VolumeInstance, s: ShadingInput, radiance: vec3<f32>) -> vec3<f32> {
-    let weight = dot(radiance, RESTIR_LUMINANCE);
-    if !(weight > 0.0) {
-        return vec3<f32>(0.0);
+    restir_candidate(index, instance_index, sphere, instance, radiance, 1.0);
+    return vec3<f32>(0.0);
+}
+
+// Streams light `index` (of the group `instance` places, `sphere` its sphere there), whose
+// unshadowed radiance at the point is `radiance`, into the point's reservoirs as a candidate drawn
+// with probability 1 / `inverse_probability`: its weight is p̂ / p. Enumerated lights are each drawn
+// once (1); lights drawn through the light tree carry their draw's probability
+// (`shading/enumerate/lights_tree.wgsl`).
+fn restir_candidate(index: u32, instance_index: u32, sphere: vec4<f32>, instance: VolumeInstance, radiance: vec3<f32>, inverse_probability: f32) {
+    let target_value = dot(radiance, RESTIR_LUMINANCE);
+    if !(target_value > 0.0) {
+        return;
     }
+    let weight = target_value * inverse_probability;
     restir_weight_sum += weight;
     let keep = weight / restir_weight_sum;
     for (var k = 0u; k < frame.direct_lighting.y; k += 1u) {
-        if restir_random() < keep {
-            restir_radiance[k] = radiance / weight;
+        if random_next() < keep {
+            restir_radiance[k] = radiance / target_value;
             restir_light[k] = instance_point_to_world(instance, sphere.xyz);
             if k == 0u {
                 restir_first_light = index;
                 restir_first_instance = instance_index;
-                restir_first_target = weight;
+                restir_first_target = target_value;
             }
         }
     }
-    return vec3<f32>(0.0);
 }
 
 // What identifies a light record as the one a reservoir chose: its sphere in its group's space.
@@ -109,7 +107,7 @@ fn direct_light(index: u32, instance_index: u32, sphere: vec4<f32>, instance: Vo
 // (particles), no longer match, and their reservoirs are not reused.
 fn restir_light_hash(index: u32) -> u32 {
     let sphere = bitcast<vec4<u32>>(light_sphere(index));
-    return restir_hash(sphere.x ^ restir_hash(sphere.y ^ restir_hash(sphere.z ^ restir_hash(sphere.w))));
+    return random_hash(sphere.x ^ random_hash(sphere.y ^ random_hash(sphere.z ^ random_hash(sphere.w))));
 }
 
 // Whether light `index`, placed by `instance`, lights the surface at `position` facing `normal` (world
@@ -178,8 +176,8 @@ fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> RestirR
     for (var t = 0u; t < tries; t += 1u) {
         var at = previous;
         if t > 0u {
-            let angle = 6.2831853 * restir_random();
-            at += RESTIR_NEIGHBOUR_RADIUS * sqrt(restir_random()) * vec2<f32>(cos(angle), sin(angle));
+            let angle = 6.2831853 * random_next();
+            at += RESTIR_NEIGHBOUR_RADIUS * sqrt(random_next()) * vec2<f32>(cos(angle), sin(angle));
         }
         if any(at < vec2<f32>(0.0)) || any(at >= frame.viewport.xy) {
             continue;
@@ -212,7 +210,7 @@ fn restir_reuse(s: ShadingInput, choice: ptr<function, RestirChoice>) -> RestirR
         hidden[reused] = select(vec2<u32>(RESTIR_NO_LIGHT), vec2<u32>(kept.light, kept.instance), kept.weight == 0.0);
         count += kept_count;
         weight_sum += weight;
-        if weight > 0.0 && restir_random() * weight_sum < weight {
+        if weight > 0.0 && random_next() * weight_sum < weight {
             *choice = candidate;
             source = reused;
         }
