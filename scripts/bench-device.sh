@@ -306,9 +306,9 @@ moving() {
 # restir's candidates drawn through the light tree against the enumeration, on the shadowed-lights
 # scene from 256 to 65,536 lights, and the error of each at 960×540 (`light-error`).
 tree() {
-  local n c scene=.bench/shadowed_4096.toml
+  local n c scene=.bench/shadowed.toml
   sed 's#"../../shared/assets/sponza/Sponza.gltf"#"sponza_lite/Sponza.gltf"#' scenes/shadowed-lights.toml >$scene
-  for n in 256 1024 4096 16384 65536; do
+  for n in ${TREE_COUNTS:-256 1024 4096 16384 65536}; do
     sed "s/^count = 4096/count = $n/" $scene >.bench/shadowed_$n.toml
     for c in enumeration tree; do
       run "tree_visbuffer_${n}_${c}" 100 --scene .bench/shadowed_$n.toml --restir-candidates $c
