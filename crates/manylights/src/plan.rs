@@ -548,7 +548,9 @@ impl FramePlan {
         // Lights and decals crowded enough get wide leaves, walked a subgroup at a time, their leaves
         // shared out; decals, as one group placed once, cell lists too. Groups rebuilt every frame get
         // entry grids where the opaque surfaces' queries walk alone.
+        // The light tree draws a leaf's lights one by one: it keeps narrow leaves.
         let dense_lights = config.light_method == LightMethod::Bvh
+            && !light_tree
             && stats.light_overlap.is_some_and(|overlap| lights_shared_out(caps, config.pipeline, overlap));
         let dense_decals =
             Measurements::for_settings(config, caps).decal_centre_overlap && decals_shared_out(caps, stats.decal_centre_overlap);

@@ -1,7 +1,7 @@
 // `restir`'s candidates drawn through the light tree (`shading/light_tree.wgsl`) instead of
 // enumerated: LIGHT_TREE_CANDIDATES draws a point, each an instance chosen in proportion to its
 // group root's importance, a leaf by descent, and one of the leaf's lights in proportion to its
-// unshadowed luminance p̂. A draw's probability p is the product of the three choices, and it enters
+// power over its squared distance. A draw's probability p is the product of the three choices, and it enters
 // restir's reservoirs with weight p̂ / (M p) (`restir_candidate`): the point's cost is M descents,
 // whatever the number of lights reaching it. Composed only with `restir` (`plan::restir_light_tree`).
 #include "shading/enumerate/light_loop.wgsl"
@@ -16,6 +16,18 @@ fn light_tree_instance_importance(index: u32, s: ShadingInput) -> f32 {
     let instance = light_instances[index];
     let local = shading_input_in_group(s, instance);
     return light_tree_importance(instance.blas_root & ~ENTRY_GRID_FLAG, local.position, local.normal) * instance_light_falloff(instance);
+}
+
+// Light `index`'s importance at the surface `local` (group space), as the tree weighs its nodes: its
+// power over its squared distance, zero out of range or below the horizon. A cheap stand-in for p̂,
+// which only the light drawn pays for.
+fn light_tree_light_importance(index: u32, local: ShadingInput) -> f32 {
+    let sphere = light_sphere(index);
+    if !sphere_may_light(sphere, local) {
+        return 0.0;
+    }
+    let to_light = sphere.xyz - local.position;
+    return dot(lights[index].radiant, RESTIR_LUMINANCE) / max(dot(to_light, to_light), 1e-8);
 }
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
@@ -52,32 +64,23 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
         if !leaf.drawn {
             continue;
         }
-        // One of the leaf's lights in proportion to p̂, streamed: Σ p̂ over the leaf divides.
+        // One of the leaf's lights in proportion to its own importance, streamed.
         let range = bvh_leaf_range(leaf.entry);
         var leaf_sum = 0.0;
         var light = range.x;
-        var sphere = vec4<f32>(0.0);
-        var radiance = vec3<f32>(0.0);
-        var target_value = 0.0;
+        var light_importance = 0.0;
         for (var k = range.x; k < range.y; k += 1u) {
-            let candidate_sphere = light_sphere(k);
-            if !sphere_reaches(candidate_sphere, local.position) {
-                continue;
-            }
-            let candidate = light_contribution(k, candidate_sphere, local) * falloff;
-            let candidate_target = dot(candidate, RESTIR_LUMINANCE);
+            let weight = light_tree_light_importance(k, local);
             if DEBUG_VIEWS {
                 debug_light_work += 1u;
             }
-            if !(candidate_target > 0.0) {
+            if !(weight > 0.0) {
                 continue;
             }
-            leaf_sum += candidate_target;
-            if random_next() * leaf_sum < candidate_target {
+            leaf_sum += weight;
+            if random_next() * leaf_sum < weight {
                 light = k;
-                sphere = candidate_sphere;
-                radiance = candidate;
-                target_value = candidate_target;
+                light_importance = weight;
             }
         }
         if !(leaf_sum > 0.0) {
@@ -86,7 +89,9 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
         if DEBUG_VIEWS {
             debug_lights_reaching += 1u;
         }
-        let probability = importance / total * leaf.probability * target_value / leaf_sum;
+        let sphere = light_sphere(light);
+        let radiance = light_contribution(light, sphere, local) * falloff;
+        let probability = importance / total * leaf.probability * light_importance / leaf_sum;
         restir_candidate(light, chosen, sphere, instance, radiance, 1.0 / (f32(LIGHT_TREE_CANDIDATES) * probability));
     }
     return direct_lights_end(s);
