@@ -37,11 +37,17 @@ fn importance(node: &BvhNode, emitters: &LightTreeNode, p: Vec3, n: Vec3) -> f32
         return 0.0;
     }
     let (low, high) = (Vec3::from(emitters.min), Vec3::from(emitters.max));
+    let gap = (low - p).max(p - high).max(Vec3::ZERO);
+    let nearest_ratio_sq = gap.length_squared() / (emitters.range * emitters.range);
+    if !(nearest_ratio_sq < 1.0) {
+        return 0.0;
+    }
+    let window = 1.0 - nearest_ratio_sq * nearest_ratio_sq;
     let (centre, half_extent) = (0.5 * (low + high), 0.5 * (high - low));
     if n.dot(centre - p) + n.abs().dot(half_extent) <= 0.0 {
         return 0.0;
     }
-    emitters.power / (centre - p).length_squared().max(half_extent.length_squared().max(1e-8))
+    emitters.power * window * window / (centre - p).length_squared().max(half_extent.length_squared().max(1e-8))
 }
 
 /// Every leaf's probability (by its first item) and the probability that a draw finds no light.

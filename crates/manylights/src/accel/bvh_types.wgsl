@@ -15,12 +15,12 @@ struct BvhNode {
 }
 
 // A light-structure node's emitters (`accel/light_tree.rs`, `LightTreeNode`): the box around its
-// lights' positions and their total power.
+// lights' positions, their total power and their largest range.
 struct LightTreeNode {
     min: vec3<f32>,
     power: f32,
     max: vec3<f32>,
-    _pad: u32,
+    range: f32,
 }
 
 const BVH_LEAF: u32 = 0x80000000u;

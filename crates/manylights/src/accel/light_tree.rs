@@ -1,7 +1,7 @@
 //! The light tree: what `restir` needs to draw its candidates through a group's BVH instead of
 //! enumerating the lights that reach a point (Conty Estevez & Kulla 2018; `shading/light_tree.wgsl`).
 //! Every node of a CPU-built light group gets, beside its box (the union of its lights' volumes), the
-//! box around its lights' positions and their total power; a descent picks a child in proportion to
+//! box around its lights' positions, their total power and their largest range; a descent picks a child in proportion to
 //! an importance estimated from them, so each light's probability is the product of the choices on
 //! its path, exact and known.
 
@@ -20,7 +20,8 @@ pub struct LightTreeNode {
     /// Their total power: the luminance of each one's radiant intensity, summed.
     pub power: f32,
     pub max: [f32; 3],
-    pub _pad: u32,
+    /// The largest of their ranges.
+    pub range: f32,
 }
 
 /// A light's power as the tree weighs it: the luminance of its colour × intensity.
@@ -38,7 +39,7 @@ pub fn light_tree_nodes(bvh: &Bvh, lights: &[GpuLight]) -> Vec<LightTreeNode> {
         tree[index] = if node.is_leaf() {
             bvh.primitive_indices[node.leaf_range()].iter().map(|&i| &lights[i as usize]).fold(EMPTY, |t, light| {
                 let p = Vec3::from(light.position);
-                union(t, LightTreeNode { min: p.into(), power: light_power(light), max: p.into(), _pad: 0 })
+                union(t, LightTreeNode { min: p.into(), power: light_power(light), max: p.into(), range: light.range })
             })
         } else {
             let first = node.entry as usize;
@@ -50,14 +51,14 @@ pub fn light_tree_nodes(bvh: &Bvh, lights: &[GpuLight]) -> Vec<LightTreeNode> {
     tree
 }
 
-const EMPTY: LightTreeNode = LightTreeNode { min: [f32::INFINITY; 3], power: 0.0, max: [f32::NEG_INFINITY; 3], _pad: 0 };
+const EMPTY: LightTreeNode = LightTreeNode { min: [f32::INFINITY; 3], power: 0.0, max: [f32::NEG_INFINITY; 3], range: 0.0 };
 
 fn union(a: LightTreeNode, b: LightTreeNode) -> LightTreeNode {
     LightTreeNode {
         min: Vec3::from(a.min).min(Vec3::from(b.min)).into(),
         power: a.power + b.power,
         max: Vec3::from(a.max).max(Vec3::from(b.max)).into(),
-        _pad: 0,
+        range: a.range.max(b.range),
     }
 }
 
@@ -104,9 +105,9 @@ mod tests {
                 }
                 let bounds = lights_below.iter().fold(EMPTY, |t, &i| {
                     let p = Vec3::from(records[i].position);
-                    union(t, LightTreeNode { min: p.into(), power: 0.0, max: p.into(), _pad: 0 })
+                    union(t, LightTreeNode { min: p.into(), power: 0.0, max: p.into(), range: records[i].range })
                 });
-                assert_eq!((tree[index].min, tree[index].max), (bounds.min, bounds.max), "node {index} is tight");
+                assert_eq!((tree[index].min, tree[index].max, tree[index].range), (bounds.min, bounds.max, bounds.range), "node {index} is tight");
             }
         }
     }

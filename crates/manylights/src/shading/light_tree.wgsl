@@ -9,13 +9,21 @@
 
 // A node's importance at group-space point `p` facing `n`: its lights' power over the squared
 // distance to their positions' box, that distance taken as at least the box's half-diagonal (Conty
-// Estevez & Kulla's clamp, which keeps a box around the point from claiming every draw).
+// Estevez & Kulla's clamp, which keeps a box around the point from claiming every draw), through the
+// range window (`light_distance_attenuation`'s) of the nearest any of them can be with the largest
+// range: zero only where none reaches.
 fn light_tree_importance(node: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let bounds = light_nodes[node];
     if any(p < bounds.min) || any(p > bounds.max) {
         return 0.0;
     }
     let emitters = light_tree[node];
+    let gap = max(max(emitters.min - p, p - emitters.max), vec3<f32>(0.0));
+    let nearest_ratio_sq = dot(gap, gap) / (emitters.range * emitters.range);
+    if !(nearest_ratio_sq < 1.0) {
+        return 0.0;
+    }
+    let window = 1.0 - nearest_ratio_sq * nearest_ratio_sq;
     let centre = 0.5 * (emitters.min + emitters.max);
     let half_extent = 0.5 * (emitters.max - emitters.min);
     // The highest any of the box's corners lies above the surface's plane.
@@ -23,7 +31,7 @@ fn light_tree_importance(node: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
         return 0.0;
     }
     let to_centre = centre - p;
-    return emitters.power / max(dot(to_centre, to_centre), max(dot(half_extent, half_extent), 1e-8));
+    return emitters.power * window * window / max(dot(to_centre, to_centre), max(dot(half_extent, half_extent), 1e-8));
 }
 
 // Where a draw from the subtree under `root` ended and with what probability: at a leaf (`drawn`;

@@ -1,7 +1,7 @@
 // `restir`'s candidates drawn through the light tree (`shading/light_tree.wgsl`) instead of
 // enumerated: LIGHT_TREE_CANDIDATES draws a point, each an instance chosen in proportion to its
 // group root's importance, a leaf by descent, and one of the leaf's lights in proportion to its
-// power over its squared distance. A draw's probability p is the product of the three choices, and it enters
+// unshadowed diffuse light there. A draw's probability p is the product of the three choices, and it enters
 // restir's reservoirs with weight p̂ / (M p) (`restir_candidate`): the point's cost is M descents,
 // whatever the number of lights reaching it. Composed only with `restir` (`plan::restir_light_tree`).
 #include "shading/enumerate/light_loop.wgsl"
@@ -18,16 +18,18 @@ fn light_tree_instance_importance(index: u32, s: ShadingInput) -> f32 {
     return light_tree_importance(instance.blas_root & ~ENTRY_GRID_FLAG, local.position, local.normal) * instance_light_falloff(instance);
 }
 
-// Light `index`'s importance at the surface `local` (group space), as the tree weighs its nodes: its
-// power over its squared distance, zero out of range or below the horizon. A cheap stand-in for p̂,
-// which only the light drawn pays for.
+// Light `index`'s importance at the surface `local` (group space): its power through its distance
+// falloff and the cosine at the surface, zero out of range or below the horizon — p̂ without the
+// BRDF's lobes and the spot's cone, which only the light drawn pays for.
 fn light_tree_light_importance(index: u32, local: ShadingInput) -> f32 {
     let sphere = light_sphere(index);
     if !sphere_may_light(sphere, local) {
         return 0.0;
     }
     let to_light = sphere.xyz - local.position;
-    return dot(lights[index].radiant, RESTIR_LUMINANCE) / max(dot(to_light, to_light), 1e-8);
+    let distance_sq = dot(to_light, to_light);
+    let cosine = dot(local.normal, to_light) * inverseSqrt(max(distance_sq * dot(local.normal, local.normal), 1e-20));
+    return dot(lights[index].radiant, RESTIR_LUMINANCE) * light_distance_attenuation(distance_sq, sphere.w) * cosine;
 }
 
 fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
