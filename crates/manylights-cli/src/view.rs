@@ -24,7 +24,7 @@ use manylights::{
     scene::{Camera, Projection, Scene},
     settings::{
         Bloom, DebugView, DecalMethod, Denoise, DepthOfField, DirectLighting, Exposure, LightMethod, MotionBlur, Named, ParticleMethod,
-        ParticleOverlay, PipelineKind, RayOverlay, RenderConfig, SettingsOverlay, SunShadows,
+        ParticleOverlay, PipelineKind, RayOverlay, RenderConfig, RestirCandidates, SettingsOverlay, SunShadows,
     },
 };
 use winit::{
@@ -56,7 +56,7 @@ pub struct ViewArgs {
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
     /// A switch at a frame, as the panel would make it: FRAME:KEY=VALUE, KEY one of pipeline,
-    /// light-method, decal-method, particle-method, shadows, direct-lighting, denoise, reflections, bloom, depth-of-field,
+    /// light-method, decal-method, particle-method, shadows, direct-lighting, restir-candidates, denoise, reflections, bloom, depth-of-field,
     /// motion-blur, auto-exposure (on/off), vignette (0 to 1), debug-view (a --debug-view name), or
     /// the scattered lights, decals or particles (a count: the scene is generated again), or window
     /// (WIDTHxHEIGHT: the window is resized). Repeatable.
@@ -74,6 +74,7 @@ struct Switches {
     debug_view: DebugView,
     shadows: SunShadows,
     direct_lighting: DirectLighting,
+    restir_candidates: RestirCandidates,
     denoise: Denoise,
     reflections: bool,
     bloom: bool,
@@ -95,6 +96,7 @@ impl Default for Switches {
             debug_view: DebugView::Off,
             shadows: SunShadows::Off,
             direct_lighting: DirectLighting::Exact,
+            restir_candidates: RestirCandidates::Auto,
             denoise: Denoise::Svgf,
             reflections: false,
             bloom: false,
@@ -117,6 +119,7 @@ impl Switches {
             particle_method: overlay.particles.method.unwrap_or(defaults.particle_method),
             shadows: overlay.rays.sun_shadows.unwrap_or(defaults.shadows),
             direct_lighting: overlay.rays.direct_lighting.unwrap_or(defaults.direct_lighting),
+            restir_candidates: overlay.rays.restir_candidates.unwrap_or(defaults.restir_candidates),
             denoise: overlay.rays.denoise.unwrap_or(defaults.denoise),
             reflections: overlay.rays.reflection_bounces.is_some_and(|bounces| bounces > 0),
             auto_exposure: overlay.exposure.is_none(),
@@ -132,6 +135,7 @@ impl Switches {
         let rays = RayOverlay {
             sun_shadows: Some(self.shadows),
             direct_lighting: Some(self.direct_lighting),
+            restir_candidates: Some(self.restir_candidates),
             denoise: Some(self.denoise),
             reflection_bounces: Some(if self.reflections { bounces } else { 0 }),
             ..overlay.rays
@@ -171,6 +175,7 @@ impl Switches {
             "debug-view" => self.debug_view = choose(key, value)?,
             "shadows" => self.shadows = choose(key, value)?,
             "direct-lighting" => self.direct_lighting = choose(key, value)?,
+            "restir-candidates" => self.restir_candidates = choose(key, value)?,
             "denoise" => self.denoise = choose(key, value)?,
             "reflections" => self.reflections = on()?,
             "bloom" => self.bloom = on()?,
@@ -180,7 +185,8 @@ impl Switches {
             // Its range is checked with the rest of the settings when the renderer is built.
             "vignette" => self.vignette = value.parse().with_context(|| format!("vignette={value}: give a number"))?,
             _ => bail!(
-                "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, debug-view, shadows, direct-lighting, denoise, reflections, bloom, \
+                "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, debug-view, shadows, direct-lighting, restir-candidates, denoise, \
+                 reflections, bloom, \
                  depth-of-field, motion-blur, auto-exposure, vignette, lights, decals or particles"
             ),
         }
@@ -792,6 +798,7 @@ fn panel(ui: &mut egui::Ui, asks: &mut PanelAsks, edited: &mut Counts, shown: &P
     choice(ui, "debug view", &mut switches.debug_view);
     choice(ui, "sun shadows", &mut switches.shadows);
     choice(ui, "direct lighting", &mut switches.direct_lighting);
+    choice(ui, "restir candidates", &mut switches.restir_candidates);
     choice(ui, "denoise", &mut switches.denoise);
     ui.checkbox(&mut switches.reflections, "reflections");
     ui.separator();

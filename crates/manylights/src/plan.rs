@@ -612,8 +612,11 @@ impl FramePlan {
 }
 
 /// The mean number of lights reaching a surface point from which `restir`'s `auto` candidates come
-/// through the light tree rather than the enumeration.
-pub const RESTIR_TREE_OVERLAP: f32 = 16.0;
+/// through the light tree rather than the enumeration: on Sponza the enumeration's shading cost grows
+/// with the lights reaching (1.64 ms at 6, 3.21 at 24, 6.03 at 97), the tree's far more slowly (3.25,
+/// 4.02, 4.92), so the tree is faster from about 60 — at a higher error (BENCHMARKS.md, "Shadowed
+/// local lights").
+pub const RESTIR_TREE_OVERLAP: f32 = 64.0;
 
 /// Whether `restir` draws its candidates through the light tree (`accel/light_tree.rs`): where
 /// `--restir-candidates tree` asks, or `auto` finds the lights crowding (a mean overlap of
@@ -830,6 +833,38 @@ mod tests {
         assert!(!denoised(PipelineKind::Forward, DirectLighting::Restir, Denoise::Svgf, late));
         assert!(!denoised(PipelineKind::Deferred, DirectLighting::Restir, Denoise::Off, SUBGROUPS));
         assert!(!denoised(PipelineKind::Visbuffer, DirectLighting::Reference, Denoise::Svgf, SUBGROUPS));
+    }
+
+    #[test]
+    fn restir_draws_through_the_light_tree_where_asked_or_where_lights_crowd_and_the_tree_exists() {
+        let tree = |light_method, light_bvh_build, candidates, particle_lights, overlap| {
+            let mut config = RenderConfig { light_bvh_build, ..config(light_method, DecalMethod::Off) };
+            config.rays.direct_lighting = DirectLighting::Restir;
+            config.rays.restir_candidates = candidates;
+            restir_light_tree(&config, particle_lights, overlap)
+        };
+        let (bvh, cpu, gpu) = (LightMethod::Bvh, BvhBuild::CpuOnce, BvhBuild::GpuEveryFrame);
+        assert!(tree(bvh, cpu, RestirCandidates::Tree, false, None).unwrap());
+        assert!(!tree(bvh, cpu, RestirCandidates::Enumeration, false, Some(1000.0)).unwrap());
+        assert!(tree(bvh, cpu, RestirCandidates::Auto, false, Some(RESTIR_TREE_OVERLAP)).unwrap());
+        assert!(!tree(bvh, cpu, RestirCandidates::Auto, false, Some(RESTIR_TREE_OVERLAP - 1.0)).unwrap());
+        // Where no tree is built, auto enumerates and tree is refused with the flags that give one.
+        for (method, build, particles) in [(LightMethod::Clustered, cpu, false), (bvh, gpu, false), (bvh, cpu, true)] {
+            assert!(!tree(method, build, RestirCandidates::Auto, particles, Some(1000.0)).unwrap());
+            let message = tree(method, build, RestirCandidates::Tree, particles, None).unwrap_err().to_string();
+            assert!(message.contains("--light-bvh-build cpu-once"), "{message}");
+        }
+        // Other direct lighting never draws.
+        let mut exact = config(LightMethod::Bvh, DecalMethod::Off);
+        exact.rays.restir_candidates = RestirCandidates::Tree;
+        assert!(!restir_light_tree(&exact, false, None).unwrap());
+        // The plan keeps the tree's leaves narrow, and composes the tree's module.
+        let mut crowded = config(LightMethod::Bvh, DecalMethod::Off);
+        crowded.rays.direct_lighting = DirectLighting::Restir;
+        let stats = SceneStatistics { placed_lights: 65_536, light_overlap: Some(100.0), ..Default::default() };
+        let plan = FramePlan::resolve(&crowded, SUBGROUPS, &stats).unwrap();
+        assert!(plan.lights.light_tree && !plan.lights.wide_leaves);
+        assert_eq!(plan.shading_methods(true).light_enumeration_module(), "shading/enumerate/lights_tree.wgsl");
     }
 
     #[test]

@@ -107,7 +107,11 @@ mod tests {
                     let p = Vec3::from(records[i].position);
                     union(t, LightTreeNode { min: p.into(), power: 0.0, max: p.into(), range: records[i].range })
                 });
-                assert_eq!((tree[index].min, tree[index].max, tree[index].range), (bounds.min, bounds.max, bounds.range), "node {index} is tight");
+                assert_eq!(
+                    (tree[index].min, tree[index].max, tree[index].range),
+                    (bounds.min, bounds.max, bounds.range),
+                    "node {index} is tight"
+                );
             }
         }
     }
