@@ -56,6 +56,7 @@ fn gpu_query(
         rebuilt_leaves: rebuilt_leaves(subgroups),
         rebuilt_grids: true,
         cell_lists: false,
+        light_tree: false,
     };
     let mut structure = VolumeStructure::for_lights(ctx, lights, groups, &plan, None).unwrap();
     let gpu_points: Vec<[f32; 4]> = points.iter().map(|p| p.extend(1.0).to_array()).collect();

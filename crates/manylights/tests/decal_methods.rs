@@ -291,6 +291,7 @@ fn decals_keep_their_layers_in_leaf_order_and_gpu_rebuilds_refuse_cpu_ordered_us
             rebuilt_leaves: rebuilt_leaves(false),
             rebuilt_grids: true,
             cell_lists: false,
+            light_tree: false,
         };
         VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, &plan, clustered.then_some((grid, &frame_layout)), 0)
     };

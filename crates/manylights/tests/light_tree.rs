@@ -39,7 +39,8 @@ fn importance(node: &BvhNode, emitters: &LightTreeNode, p: Vec3, n: Vec3) -> f32
     let (low, high) = (Vec3::from(emitters.min), Vec3::from(emitters.max));
     let gap = (low - p).max(p - high).max(Vec3::ZERO);
     let nearest_ratio_sq = gap.length_squared() / (emitters.range * emitters.range);
-    if !(nearest_ratio_sq < 1.0) {
+    // Also zero where the ratio is not a number, as the shader's test has it.
+    if nearest_ratio_sq.is_nan() || nearest_ratio_sq >= 1.0 {
         return 0.0;
     }
     let window = 1.0 - nearest_ratio_sq * nearest_ratio_sq;
@@ -64,7 +65,7 @@ fn oracle(bvh: &Bvh, tree: &[LightTreeNode], p: Vec3, n: Vec3) -> (HashMap<u32, 
         let (first, second) = (node.entry as usize, bvh.nodes[node.entry as usize].skip as usize);
         let a = importance(&bvh.nodes[first], &tree[first], p, n);
         let b = importance(&bvh.nodes[second], &tree[second], p, n);
-        if !(a + b > 0.0) {
+        if a + b <= 0.0 || (a + b).is_nan() {
             failed += probability;
             continue;
         }
