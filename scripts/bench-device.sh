@@ -23,6 +23,8 @@
 #   scripts/bench-device.sh direct_error restir's error against the reference, sampled and denoised (light-error)
 #   scripts/bench-device.sh moving       restir and its surface motion on GasStation's animated instances (issue 34)
 #   scripts/bench-device.sh tree         restir's candidates through the light tree against the enumeration, 256 to 65,536 lights (issue 35)
+#   scripts/bench-device.sh particle_tree shadowed particle lights, 262,144 and 1,048,576: restir through the tree built in
+#                                        their GPU rebuild against the enumeration, and their error (particle-error) (issue 35)
 # Several sets run one after the other: scripts/bench-device.sh tests lights.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -324,6 +326,26 @@ tree() {
   done
 }
 
+# Shadowed particle lights (issue 35): exact (unshadowed), restir through the light tree and through
+# the enumeration (denoised and sampled), and the reference, then restir's error after 16 frames
+# against the reference (`particle-error --restir-frames`), at 1920×1080.
+particle_tree() {
+  local n c p="--light-method bvh --particle-method bvh --direct-lighting"
+  for n in ${PARTICLE_COUNTS:-262144 1048576}; do
+    run "ptree_${n}_exact" 100 --scene .bench/particles_$n.toml $p exact
+    for c in tree enumeration; do
+      run "ptree_${n}_${c}" 100 --scene .bench/particles_$n.toml $p restir --restir-candidates $c
+      run "ptree_${n}_${c}_sampled" 100 --scene .bench/particles_$n.toml $p restir --restir-candidates $c --denoise off
+    done
+    WARMUP=2 run "ptree_${n}_reference" 5 --scene .bench/particles_$n.toml $p reference
+    for c in tree enumeration; do
+      echo "== particle-error $n $c"
+      timeout 300 $bin particle-error --scene .bench/particles_$n.toml --width 1920 --height 1080 --voxel-sizes 0.25 \
+        --filters tricubic --samples 8 --restir-frames 16 --restir-candidates $c | tail -5
+    done
+  done
+}
+
 # restir's error against the reference (`light-error`), sampled and denoised: 4,096 lights at
 # 1920×1080, and 256 to 65,536 lights at 960×540.
 direct_error() {
@@ -365,7 +387,8 @@ for set in "${@:-structures}"; do
     assets) assets ;;
     moving) moving ;;
     tree) tree ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform, soak, direct, direct_error, moving or tree)" >&2; exit 2 ;;
+    particle_tree) particle_tree ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform, soak, direct, direct_error, moving, tree or particle_tree)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .

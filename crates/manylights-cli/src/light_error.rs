@@ -57,7 +57,7 @@ struct FrameError {
     relative_mse: f64,
     /// PSNR of the tonemapped images, in dB.
     psnr: f64,
-    /// Mean |frame − the frame before| of the tonemapped images' channels, 0 to 1 (still camera only).
+    /// Mean |frame − the frame before| of the tonemapped images' channels, 0 to 1 (still camera and scene only).
     flicker: Option<f64>,
 }
 
@@ -207,13 +207,15 @@ fn measure(
     camera_at: impl Fn(u32) -> Camera,
 ) -> anyhow::Result<PathError> {
     let mut restir = Renderer::new(ctx.clone(), scene, config)?;
-    let still = (1..=frames).all(|frame| camera_at(frame).world_from_view == camera_at(1).world_from_view);
+    // The reference renders each frame at restir's time where the camera or the scene moves.
+    let still = !scene.changes_over_time() && (1..=frames).all(|frame| camera_at(frame).world_from_view == camera_at(1).world_from_view);
     let mut expected: Option<Frame> = None;
     let mut previous: Option<Image<[u8; 4]>> = None;
     let mut errors = Vec::new();
     for frame in 1..=frames {
         let camera = camera_at(frame);
         if expected.is_none() || !still {
+            reference.time = restir.time;
             reference.render(&camera)?;
             expected = Some((reference.read_hdr()?, reference.read_ldr()?));
         }

@@ -219,7 +219,7 @@ pub(crate) struct RayArgs {
     restir_shadow_rays: Option<u32>,
     #[arg(long, value_enum, help = format!("What --direct-lighting restir reuses at each pixel's surface from the frame before: nothing, its own reservoir (found by reprojection), or that and its neighbours'. [default: the scene file's, or {}]", RaySettings::default().restir_reuse))]
     restir_reuse: Option<RestirReuse>,
-    #[arg(long, value_enum, help = format!("Where --direct-lighting restir finds its candidates at a point: every light the light method finds there (enumeration), a few drawn through the lights' BVH by their estimated light (tree: the same cost however many lights reach; bvh lights built on the CPU), or by the scene's light density (auto). [default: the scene file's, or {}]", RaySettings::default().restir_candidates))]
+    #[arg(long, value_enum, help = format!("Where --direct-lighting restir finds its candidates at a point: every light the light method finds there (enumeration), a few drawn through the lights' BVH by their estimated light (tree: the same cost however many lights reach; bvh lights, particle lights too), or by the scene's light density (auto). [default: the scene file's, or {}]", RaySettings::default().restir_candidates))]
     restir_candidates: Option<RestirCandidates>,
     #[arg(long, value_enum, help = format!("How --direct-lighting restir's lighting is denoised at the pixels' opaque surfaces: not at all, for error studies (off), or by temporal accumulation and a variance-guided spatial filter (svgf). [default: the scene file's, or {}]", RaySettings::default().denoise))]
     denoise: Option<Denoise>,

@@ -14,10 +14,11 @@ use manylights::{
     renderer::{Image, FRAME_INTERVAL},
     scene::{
         animation::{Animation, Channel, Interpolation, Node, Property, Trs},
-        Camera, Instance, Light, Scene,
+        Camera, Instance, Light, ParticleSettings, Scene,
     },
     settings::{
-        heat_map, DebugView, Denoise, DirectLighting, LightMethod, PipelineKind, RaySettings, RenderConfig, RestirCandidates, RestirReuse,
+        heat_map, BvhBuild, DebugView, Denoise, DirectLighting, LightMethod, ParticleMethod, PipelineKind, RaySettings, RenderConfig,
+        RestirCandidates, RestirReuse,
     },
 };
 
@@ -352,18 +353,23 @@ fn restir_converges_to_the_reference_without_bias() {
 #[test]
 fn restir_through_the_light_tree_is_the_reference_for_one_light_and_converges_to_it_for_many() {
     let tree = |rays: RaySettings| RaySettings { restir_candidates: RestirCandidates::Tree, ..rays };
-    // One lamp: every draw finds it, with probability 1 times its share of its leaf.
+    // One lamp: every draw finds it, with probability 1 times its share of its leaf; through the
+    // tree of the CPU's BVH in every pipeline, and through the tree a GPU rebuild builds alongside.
     let (one, camera) = lamps_and_blocker(&six_lamps()[..1], false);
-    for pipeline in PipelineKind::ALL {
+    let builds = PipelineKind::ALL.map(|p| (p, BvhBuild::CpuOnce)).into_iter().chain([(PipelineKind::Visbuffer, BvhBuild::GpuEveryFrame)]);
+    for (pipeline, light_bvh_build) in builds {
         let reference = render_with(&one, &camera, config(pipeline, LightMethod::Bvh, lighting(DirectLighting::Reference))).1;
-        let mut sampled = renderer(&one, config(pipeline, LightMethod::Bvh, tree(restir(1, RestirReuse::Temporal))));
+        let config = RenderConfig { light_bvh_build, ..config(pipeline, LightMethod::Bvh, tree(restir(1, RestirReuse::Temporal))) };
+        let mut sampled = renderer(&one, config);
+        assert!(sampled.shading_methods().light_tree);
         for frame in 0..3 {
             sampled.render(&camera).unwrap();
             let difference = max_relative_difference(&sampled.read_hdr().unwrap(), &reference);
             assert!(
                 difference <= 1e-4,
-                "{} frame {frame}: restir through the tree differs from the reference by {difference}",
-                pipeline.name()
+                "{} {} frame {frame}: restir through the tree differs from the reference by {difference}",
+                pipeline.name(),
+                light_bvh_build.name()
             );
         }
     }
@@ -380,6 +386,54 @@ fn restir_through_the_light_tree_is_the_reference_for_one_light_and_converges_to
     eprintln!("tree: one {one_error} mean {mean_error} bias {bias}");
     assert!(mean_error <= 0.3 * one_error, "64 frames' error {mean_error} against one frame's {one_error}");
     assert!(bias.abs() <= 0.005, "bias {bias}");
+}
+
+/// Three hundred particle lights, still, around the blocker: `restir` draws them through the light
+/// tree built alongside their group's GPU rebuild, and the mean of independent frames converges to
+/// the reference without bias.
+#[test]
+fn restir_through_the_particles_light_tree_converges_to_the_reference() {
+    let (mut scene, camera) = lamps_and_blocker(&[], false);
+    let count = 300;
+    scene.particles = Some(ParticleSettings {
+        count,
+        seed: 5,
+        // Still: launched at no speed, without gravity; frames are all rendered at time 0.
+        emitters: (0..count)
+            .map(|i| {
+                let t = i as f32;
+                (Vec3::new((t * 0.61).sin() * 4.0, (t * 0.37).cos() * 3.0, 1.0 + (i % 5) as f32 * 0.6), 0.0)
+            })
+            .collect(),
+        gravity: 0.0,
+        swirl: 0.0,
+        radius: (2.0, 4.0),
+        intensity: 0.3,
+        ..ParticleSettings::default()
+    });
+    let pipeline = PipelineKind::Visbuffer;
+    let with_particles = |rays| RenderConfig { particle_method: ParticleMethod::Bvh, ..config(pipeline, LightMethod::Bvh, rays) };
+    let reference = render_with(&scene, &camera, with_particles(lighting(DirectLighting::Reference))).1.pixels;
+    let rays = RaySettings { restir_candidates: RestirCandidates::Tree, ..restir(1, RestirReuse::Off) };
+    let mut restir = renderer(&scene, with_particles(rays));
+    assert!(restir.shading_methods().light_tree, "restir does not draw through the particles' tree");
+    let frames = 64;
+    let mut sum = vec![[0.0f32; 4]; reference.len()];
+    let mut one_frame = Vec::new();
+    for _ in 0..frames {
+        restir.time = 0.0;
+        restir.render(&camera).unwrap();
+        one_frame = restir.read_hdr().unwrap().pixels;
+        for (total, p) in sum.iter_mut().zip(&one_frame) {
+            (0..4).for_each(|c| total[c] += p[c]);
+        }
+    }
+    let mean: Vec<[f32; 4]> = sum.into_iter().map(|p| p.map(|v| v / frames as f32)).collect();
+    let (one_error, mean_error, bias) =
+        (relative_l1(&one_frame, &reference), relative_l1(&mean, &reference), relative_bias(&mean, &reference));
+    eprintln!("particles through the tree: one {one_error} mean {mean_error} bias {bias}");
+    assert!(mean_error <= 0.3 * one_error, "64 frames' error {mean_error} against one frame's {one_error}");
+    assert!(bias.abs() <= 0.01, "bias {bias}");
 }
 
 #[test]

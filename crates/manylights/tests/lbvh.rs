@@ -121,3 +121,79 @@ fn bad_volumes_and_overflow_are_errors() {
     let unit = Aabb::new(Vec3::ZERO, Vec3::ONE);
     assert!(lbvh.set_boxes(&ctx.queue, &[unit; 5]).is_err());
 }
+
+/// With a light tree, every node the walk reaches also gets the emitters below it: the box of its
+/// lights' positions and their largest range exactly, their summed power to rounding — across the
+/// bounds pass's blocks of 256 leaves and past 256 blocks, where the blocks' prefix sums take
+/// several per thread — and lights of no power weigh nothing.
+#[test]
+fn gpu_builds_give_every_node_the_emitters_below_it() {
+    use manylights::accel::light_tree::{union, LightTreeNode, EMPTY};
+    let ctx = GpuContext::new().expect("a GPU adapter");
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(33);
+    for size in [1, 8] {
+        let mut lbvh = GpuLbvh::with_light_tree(&ctx, 70_000).unwrap().with_max_leaf_size(size);
+        for count in [1, 2, 255, 257, 3000, 70_000] {
+            let boxes = random_boxes(count, &mut rng);
+            // Each light off its box's centre, with powers over four decades; every tenth dark.
+            let emitters: Vec<LightTreeNode> = boxes
+                .iter()
+                .enumerate()
+                .map(|(i, b)| {
+                    let p = b.min + (b.max - b.min) * rng.random::<f32>();
+                    let power = if i % 10 == 3 { 0.0 } else { 10f32.powf(rng.random_range(-2.0..2.0)) };
+                    LightTreeNode { min: p.into(), power, max: p.into(), range: rng.random_range(0.1..4.0) }
+                })
+                .collect();
+            lbvh.set_boxes(&ctx.queue, &boxes).unwrap();
+            lbvh.set_emitters(&ctx.queue, &emitters).unwrap();
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            lbvh.record(&mut encoder, None, manylights::accel::lbvh::TimerSpan::whole("lbvh_build")).unwrap();
+            ctx.queue.submit([encoder.finish()]);
+            let primitives = lbvh.read_back(&ctx).unwrap().primitive_indices;
+            let (nodes, tree) = lbvh.read_back_light_tree(&ctx).unwrap();
+            // The emitters below each reached node, gathered by walking down from the root, with
+            // the power summed in f64.
+            fn below(
+                n: u32,
+                nodes: &[manylights::accel::BvhNode],
+                leaf_emitters: &dyn Fn(usize) -> (LightTreeNode, f64),
+            ) -> (LightTreeNode, f64) {
+                let node = nodes[n as usize];
+                if node.is_leaf() {
+                    return node.leaf_range().map(leaf_emitters).fold((EMPTY, 0.0), |(t, p), (e, q)| (union(t, e), p + q));
+                }
+                let (a, pa) = below(node.entry, nodes, leaf_emitters);
+                let (b, pb) = below(nodes[node.entry as usize].skip, nodes, leaf_emitters);
+                (union(a, b), pa + pb)
+            }
+            let leaf_emitters = |slot: usize| {
+                let e = emitters[primitives[slot] as usize];
+                (e, f64::from(e.power))
+            };
+            let mut stack = vec![0u32];
+            let mut reached = 0;
+            while let Some(n) = stack.pop() {
+                let (expected, power) = below(n, &nodes, &leaf_emitters);
+                let got = tree[n as usize];
+                let what = format!("{count} lights, leaves of {size}, node {n}");
+                assert_eq!((got.min, got.max, got.range), (expected.min, expected.max, expected.range), "{what}");
+                assert!((f64::from(got.power) - power).abs() <= 1e-4 * power + 1e-30, "{what}: power {} against {power}", got.power);
+                let node = nodes[n as usize];
+                if !node.is_leaf() {
+                    stack.extend([node.entry, nodes[node.entry as usize].skip]);
+                }
+                reached += 1;
+            }
+            assert!(reached >= 1 && reached <= 2 * count - 1);
+        }
+    }
+    // Emitters are for a tree, one per box.
+    let mut plain = GpuLbvh::new(&ctx, 4).unwrap();
+    let unit = Aabb::new(Vec3::ZERO, Vec3::ONE);
+    plain.set_boxes(&ctx.queue, &[unit; 2]).unwrap();
+    assert!(plain.set_emitters(&ctx.queue, &[LightTreeNode::default(); 2]).is_err());
+    let mut lbvh = GpuLbvh::with_light_tree(&ctx, 4).unwrap();
+    lbvh.set_boxes(&ctx.queue, &[unit; 2]).unwrap();
+    assert!(lbvh.set_emitters(&ctx.queue, &[LightTreeNode::default(); 3]).is_err());
+}

@@ -4,7 +4,7 @@
 //! the top level, so their boxes change only when the group's contents change). The nodes land in a
 //! region of a node array that may hold other BVHs too ([`LbvhTarget`]).
 
-use super::{radix_sort::GpuRadixSort, Aabb, Bvh, BvhNode, MAX_LEAF_SIZE};
+use super::{light_tree::LightTreeNode, radix_sort::GpuRadixSort, Aabb, Bvh, BvhNode, MAX_LEAF_SIZE};
 use crate::gpu::{bindings, readback, shaders::ShaderDesc, GpuContext, GpuTimer};
 use crate::{Error, Result};
 use glam::Vec3;
@@ -36,7 +36,9 @@ struct LbvhParams {
 /// indices from `primitive_base` in `primitives`, each `item_base` + the box's index, in leaf order. A
 /// leaf over sorted positions [j, j + n) names the range from `leaf_base` + j: `primitive_base` where
 /// queries read the primitive indices (a top level's instance indices), or `item_base` where a pass
-/// after the build stores the items themselves in leaf order (a group's lights or decals).
+/// after the build stores the items themselves in leaf order (a group's lights or decals). With
+/// `light_tree`, an array parallel to `nodes`, each node also gets its [`LightTreeNode`] there, the
+/// union of the emitters given with the boxes ([`GpuLbvh::set_emitters`], [`GpuLbvh::emitters`]).
 #[derive(Clone, Debug)]
 pub struct LbvhTarget {
     pub nodes: wgpu::Buffer,
@@ -45,6 +47,7 @@ pub struct LbvhTarget {
     pub primitive_base: u32,
     pub item_base: u32,
     pub leaf_base: u32,
+    pub light_tree: Option<wgpu::Buffer>,
 }
 
 /// The timer scope a build is recorded in: `starts` opens it at the build's first pass, `ends` closes
@@ -63,18 +66,22 @@ impl TimerSpan {
     }
 }
 
-/// One entry point per pass, in dispatch order around the sort.
-const PASSES: [&str; 4] = ["lbvh_morton", "lbvh_hierarchy", "lbvh_bounds", "lbvh_write_nodes"];
+/// One entry point per pass, in dispatch order around the sort; the light tree's only with one.
+const PASSES: [&str; 6] = ["lbvh_morton", "lbvh_hierarchy", "lbvh_bounds", "lbvh_emitters", "lbvh_block_power", "lbvh_write_nodes"];
+const LIGHT_TREE_PASSES: [&str; 2] = ["lbvh_emitters", "lbvh_block_power"];
 const WORKGROUP: u32 = 256;
 /// Bits of the Morton codes: 8 per axis (`MORTON_CELLS` in `lbvh.wgsl`).
 const MORTON_BITS: u32 = 24;
 
 pub struct GpuLbvh {
-    pipelines: Vec<wgpu::ComputePipeline>,
+    /// Each pass that runs, by entry point.
+    pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
     bind_group: wgpu::BindGroup,
     sort: GpuRadixSort,
     params: wgpu::Buffer,
     boxes: wgpu::Buffer,
+    /// One [`LightTreeNode`] per box where the target has a light tree; a placeholder otherwise.
+    emitters: wgpu::Buffer,
     target: LbvhTarget,
     capacity: u32,
     count: u32,
@@ -99,6 +106,28 @@ impl GpuLbvh {
             primitive_base: 0,
             item_base: 0,
             leaf_base: 0,
+            light_tree: None,
+        };
+        Self::with_target(ctx, capacity, target)
+    }
+
+    /// As [`new`](Self::new), with every node's [`LightTreeNode`] built alongside, in a buffer of its own.
+    pub fn with_light_tree(ctx: &GpuContext, capacity: u32) -> Result<Self> {
+        let capacity = capacity.max(1);
+        let node_bytes = u64::from(2 * capacity - 1) * std::mem::size_of::<BvhNode>() as u64;
+        check_binding_size(ctx, capacity, node_bytes)?;
+        let buffer = |label, size: u64| {
+            let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+            ctx.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+        };
+        let target = LbvhTarget {
+            nodes: buffer("lbvh nodes", node_bytes),
+            primitives: buffer("lbvh primitives", u64::from(capacity) * 4),
+            node_base: 0,
+            primitive_base: 0,
+            item_base: 0,
+            leaf_base: 0,
+            light_tree: Some(buffer("lbvh light tree", node_bytes)),
         };
         Self::with_target(ctx, capacity, target)
     }
@@ -111,7 +140,8 @@ impl GpuLbvh {
         check_binding_size(ctx, capacity, node_capacity * std::mem::size_of::<BvhNode>() as u64)?;
         let node_end = (u64::from(target.node_base) + node_capacity) * std::mem::size_of::<BvhNode>() as u64;
         let primitive_end = (u64::from(target.primitive_base) + u64::from(capacity)) * 4;
-        if node_end > target.nodes.size() || primitive_end > target.primitives.size() {
+        let tree_short = target.light_tree.as_ref().is_some_and(|tree| node_end > tree.size());
+        if node_end > target.nodes.size() || primitive_end > target.primitives.size() || tree_short {
             return Err(Error::Gpu(format!("an LBVH over {capacity} boxes does not fit its target's regions")));
         }
         use wgpu::BufferUsages as U;
@@ -126,6 +156,14 @@ impl GpuLbvh {
         // Internal nodes only (there is one fewer than boxes): leaves write their boxes directly.
         let node_bounds = buffer("lbvh node bounds", u64::from(capacity) * 24, U::STORAGE);
         let ranges = buffer("lbvh node ranges", u64::from(capacity) * 8, U::STORAGE);
+        // The light tree's inputs and working arrays (`lbvh.wgsl`), one-element placeholders without it.
+        let tree = target.light_tree.is_some();
+        let tree_bytes = |bytes: u64| if tree { bytes } else { 32 };
+        let emitters = buffer("lbvh emitters", tree_bytes(u64::from(capacity) * 32), U::STORAGE | U::COPY_DST);
+        let tree_placeholder = buffer("lbvh light tree placeholder", 32, U::STORAGE);
+        let tree_bounds = buffer("lbvh light tree bounds", tree_bytes(u64::from(capacity) * 32), U::STORAGE);
+        let leaf_power = buffer("lbvh leaf power", tree_bytes(u64::from(capacity) * 8), U::STORAGE);
+        let block_power = buffer("lbvh block power", tree_bytes(u64::from(capacity.div_ceil(WORKGROUP)) * 4), U::STORAGE);
 
         let compute = wgpu::ShaderStages::COMPUTE;
         let read_write = |binding| bindings::storage_read_write(binding, compute);
@@ -143,25 +181,51 @@ impl GpuLbvh {
                 read_write(6),                      // parents
                 read_write(7),                      // node bounds
                 read_write(8),                      // node ranges
+                bindings::storage_read(9, compute), // emitters
+                read_write(10),                     // light tree
+                read_write(11),                     // light tree bounds
+                read_write(12),                     // leaf power
+                read_write(13),                     // block power
             ],
         );
         let bind_group = bindings::bind_group(
             device,
             "lbvh",
             &layout,
-            [&params, &boxes, &keys, &sorted_keys, &target.nodes, &target.primitives, &parents, &node_bounds, &ranges]
-                .iter()
-                .map(|b| b.as_entire_binding())
-                .collect(),
+            [
+                &params,
+                &boxes,
+                &keys,
+                &sorted_keys,
+                &target.nodes,
+                &target.primitives,
+                &parents,
+                &node_bounds,
+                &ranges,
+                &emitters,
+                target.light_tree.as_ref().unwrap_or(&tree_placeholder),
+                &tree_bounds,
+                &leaf_power,
+                &block_power,
+            ]
+            .iter()
+            .map(|b| b.as_entire_binding())
+            .collect(),
         );
         let shader = ShaderDesc::new("accel/lbvh.wgsl");
-        let pipelines = PASSES.iter().map(|entry| bindings::compute_pipeline(device, entry, &shader, &[&layout])).collect::<Result<_>>()?;
+        let constants = [("LIGHT_TREE", if tree { 1.0 } else { 0.0 })];
+        let pipelines = PASSES
+            .iter()
+            .filter(|entry| tree || !LIGHT_TREE_PASSES.contains(entry))
+            .map(|&entry| Ok((entry, bindings::compute_pipeline_with_constants(device, entry, &shader, &[&layout], &constants)?)))
+            .collect::<Result<_>>()?;
         Ok(Self {
             pipelines,
             bind_group,
             sort: GpuRadixSort::new(ctx, &keys, &sorted_keys, capacity)?,
             params,
             boxes,
+            emitters,
             target,
             capacity,
             count: 0,
@@ -245,6 +309,27 @@ impl GpuLbvh {
         &self.boxes
     }
 
+    /// Sets the emitters of the boxes [`set_boxes`](Self::set_boxes) set, one per box, for the light
+    /// tree (a light's: [`LightTreeNode::of_light`]). Errors without a light tree.
+    pub fn set_emitters(&mut self, queue: &wgpu::Queue, emitters: &[LightTreeNode]) -> Result<()> {
+        if self.target.light_tree.is_none() {
+            return Err(Error::InvalidConfig("emitters given to a BVH built without a light tree".into()));
+        }
+        if emitters.len() != self.count as usize {
+            return Err(Error::InvalidConfig(format!("{} emitters for {} boxes; give one per box", emitters.len(), self.count)));
+        }
+        if !emitters.is_empty() {
+            queue.write_buffer(&self.emitters, 0, bytemuck::cast_slice(emitters));
+        }
+        Ok(())
+    }
+
+    /// The emitters the next build reads where it builds a light tree, for a GPU pass to write, one
+    /// [`LightTreeNode`] per box of [`boxes`](Self::boxes).
+    pub fn emitters(&self) -> &wgpu::Buffer {
+        &self.emitters
+    }
+
     /// The first of the build's primitive indices in its target's `primitives`.
     pub fn primitive_base(&self) -> u32 {
         self.target.primitive_base
@@ -263,8 +348,8 @@ impl GpuLbvh {
         }
         let items = self.count.div_ceil(WORKGROUP);
         let nodes = (self.count - 1).div_ceil(WORKGROUP);
-        let last = PASSES.len() - 1;
-        for (index, (entry, pipeline)) in PASSES.iter().zip(&self.pipelines).enumerate() {
+        let last = self.pipelines.len() - 1;
+        for (index, (entry, pipeline)) in self.pipelines.iter().enumerate() {
             if *entry == "lbvh_hierarchy" {
                 self.sort.record(encoder);
             }
@@ -276,7 +361,12 @@ impl GpuLbvh {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(entry), timestamp_writes });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &self.bind_group, &[]);
-            pass.dispatch_workgroups(if *entry == "lbvh_write_nodes" { nodes } else { items }, 1, 1);
+            let groups = match *entry {
+                "lbvh_write_nodes" => nodes,
+                "lbvh_block_power" => 1,
+                _ => items,
+            };
+            pass.dispatch_workgroups(groups, 1, 1);
         }
         Ok(())
     }
@@ -285,22 +375,7 @@ impl GpuLbvh {
     /// `item_base` and `leaf_base` were 0) and only the nodes a walk reaches ([`Bvh::reachable`]): for tests and
     /// validation.
     pub fn read_back(&self, ctx: &GpuContext) -> Result<Bvh> {
-        let copy = |source: &wgpu::Buffer, offset: u64, size: u64| -> Result<Vec<u8>> {
-            let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("lbvh readback"),
-                size: size.max(4),
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            if size > 0 {
-                encoder.copy_buffer_to_buffer(source, offset, &staging, 0, size);
-            }
-            ctx.queue.submit([encoder.finish()]);
-            let mut bytes: Vec<u8> = readback::map_buffer(ctx, &staging, 0, size.max(4))?;
-            bytes.truncate(size as usize);
-            Ok(bytes)
-        };
+        let copy = |source: &wgpu::Buffer, offset: u64, size: u64| read_range(ctx, source, offset, size);
         let t = &self.target;
         let nodes = copy(&t.nodes, u64::from(t.node_base) * 32, u64::from(self.node_count()) * 32)?;
         let primitives = copy(&t.primitives, u64::from(t.primitive_base) * 4, u64::from(self.count) * 4)?;
@@ -314,6 +389,38 @@ impl GpuLbvh {
         }
         Ok(bvh.reachable())
     }
+
+    /// Reads the last build back with its light tree: every node as stored (unreachable ones too,
+    /// with indices local to the build, as [`read_back`](Self::read_back) makes them) and each one's
+    /// [`LightTreeNode`]; for tests. Errors without a light tree.
+    pub fn read_back_light_tree(&self, ctx: &GpuContext) -> Result<(Vec<BvhNode>, Vec<LightTreeNode>)> {
+        let t = &self.target;
+        let Some(tree) = &t.light_tree else { return Err(Error::InvalidConfig("this BVH is built without a light tree".into())) };
+        let (offset, size) = (u64::from(t.node_base) * 32, u64::from(self.node_count()) * 32);
+        let read = |source: &wgpu::Buffer| read_range(ctx, source, offset, size);
+        let nodes: Vec<BvhNode> = bytemuck::pod_collect_to_vec(&read(&t.nodes)?);
+        let tree: Vec<LightTreeNode> = bytemuck::pod_collect_to_vec(&read(tree)?);
+        ctx.check_errors()?;
+        Ok((nodes.into_iter().map(|n| n.offset(t.node_base.wrapping_neg(), t.leaf_base.wrapping_neg())).collect(), tree))
+    }
+}
+
+/// `size` bytes of a COPY_SRC buffer from `offset`.
+fn read_range(ctx: &GpuContext, source: &wgpu::Buffer, offset: u64, size: u64) -> Result<Vec<u8>> {
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("lbvh readback"),
+        size: size.max(4),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    if size > 0 {
+        encoder.copy_buffer_to_buffer(source, offset, &staging, 0, size);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    let mut bytes: Vec<u8> = readback::map_buffer(ctx, &staging, 0, size.max(4))?;
+    bytes.truncate(size as usize);
+    Ok(bytes)
 }
 
 fn check_binding_size(ctx: &GpuContext, capacity: u32, node_bytes: u64) -> Result<()> {

@@ -47,6 +47,27 @@ const NO_PARENT: u32 = 0xffffffffu;
 // Internal nodes' ranges of sorted leaves [x, y].
 @group(0) @binding(8) var<storage, read_write> ranges: array<vec2<u32>>;
 
+// With LIGHT_TREE, the build also gives every node its light-tree emitters (`accel/light_tree.rs`):
+// the union of `emitters`, one per box (a light's position as a point box, its power and range),
+// written to `tree` at the node's index. Bounds and ranges are unions as the boxes are (block-local
+// in workgroup memory, spanning nodes through `tree_bounds`); power is a sum, which atomic max cannot
+// carry, so a spanning node adds the sums of its first and last blocks' parts (`leaf_power`) to those
+// of the whole blocks between (`block_power`, prefix sums over blocks). Without it these are
+// one-element placeholders.
+override LIGHT_TREE: bool = false;
+@group(0) @binding(9) var<storage, read> emitters: array<LightTreeNode>;
+@group(0) @binding(10) var<storage, read_write> tree: array<LightTreeNode>;
+// Spanning nodes' emitters as order-preserving integers, TREE_SLOTS per node: positions' min xyz
+// complemented, max xyz, the largest range and the largest single power.
+@group(0) @binding(11) var<storage, read_write> tree_bounds: array<atomic<u32>>;
+// Per sorted leaf: the power summed from its block's first leaf to it (x) and from it to the
+// block's last (y).
+@group(0) @binding(12) var<storage, read_write> leaf_power: array<vec2<f32>>;
+// Per block: its total power, then (after `lbvh_block_power`) the total of the blocks before it.
+@group(0) @binding(13) var<storage, read_write> block_power: array<f32>;
+
+const TREE_SLOTS: u32 = 8u;
+
 // f32 → u32 keeping the order, so atomicMax works on floats; ~ordered(x) turns max into min.
 fn ordered(x: f32) -> u32 {
     let bits = bitcast<u32>(x);
@@ -201,6 +222,11 @@ fn lbvh_hierarchy(@builtin(global_invocation_id) id: vec3<u32>) {
         for (var slot = 0u; slot < 6u; slot += 1u) {
             atomicStore(&node_bounds[id.x * 6u + slot], 0u);
         }
+        if LIGHT_TREE {
+            for (var slot = 0u; slot < TREE_SLOTS; slot += 1u) {
+                atomicStore(&tree_bounds[id.x * TREE_SLOTS + slot], 0u);
+            }
+        }
     }
 }
 
@@ -225,12 +251,23 @@ fn block_local(node: u32) -> bool {
 // much: whoever put that value there carries it (or found it) above, so every ancestor still ends up
 // exact. Atomic max is order-independent: no thread waits for another and no memory ordering between
 // threads is assumed.
-fn carry_up_globally(start: u32, values: array<u32, 6>) {
-    var rising = 0x3fu;
+// `values` holds 6 slots for `node_bounds` (a box) or TREE_SLOTS for `tree_bounds` (`emitters`).
+fn carry_up_globally(start: u32, values: array<u32, TREE_SLOTS>, emitters: bool) {
+    let slots = select(6u, TREE_SLOTS, emitters);
+    var rising = (1u << slots) - 1u;
     var node = start;
     loop {
-        for (var slot = 0u; slot < 6u; slot += 1u) {
-            if (rising & (1u << slot)) != 0u && atomicMax(&node_bounds[node * 6u + slot], values[slot]) >= values[slot] {
+        for (var slot = 0u; slot < slots; slot += 1u) {
+            if (rising & (1u << slot)) == 0u {
+                continue;
+            }
+            var held: u32;
+            if emitters {
+                held = atomicMax(&tree_bounds[node * TREE_SLOTS + slot], values[slot]);
+            } else {
+                held = atomicMax(&node_bounds[node * 6u + slot], values[slot]);
+            }
+            if held >= values[slot] {
                 rising &= ~(1u << slot);
             }
         }
@@ -241,8 +278,8 @@ fn carry_up_globally(start: u32, values: array<u32, 6>) {
     }
 }
 
-fn ordered_box(min_corner: vec3<f32>, max_corner: vec3<f32>) -> array<u32, 6> {
-    var values: array<u32, 6>;
+fn ordered_box(min_corner: vec3<f32>, max_corner: vec3<f32>) -> array<u32, TREE_SLOTS> {
+    var values: array<u32, TREE_SLOTS>;
     for (var axis = 0u; axis < 3u; axis += 1u) {
         values[axis] = ~ordered(min_corner[axis]);
         values[axis + 3u] = ordered(max_corner[axis]);
@@ -266,7 +303,7 @@ fn lbvh_bounds(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocatio
     let block_start = group.x * BLOCK;
     let k = block_start + local;
     let leaf = n - 1u + k;
-    var leaf_values: array<u32, 6>;
+    var leaf_values: array<u32, TREE_SLOTS>;
     if k < n {
         let b = boxes[sorted_keys[k].y];
         let slot = params.node_base + node_slot(i32(k), true);
@@ -292,16 +329,118 @@ fn lbvh_bounds(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocatio
         nodes[node].max = high;
         let parent = parents[k];
         if parent != NO_PARENT && !in_block(parent, block_start) {
-            carry_up_globally(parent, ordered_box(low, high));
+            carry_up_globally(parent, ordered_box(low, high), false);
         }
     }
     // Leaf `k`, if its parent spans blocks (a lone leaf is the root: nothing above it).
     if k < n && n > 1u && !in_block(parents[leaf], block_start) {
-        carry_up_globally(parents[leaf], leaf_values);
+        carry_up_globally(parents[leaf], leaf_values, false);
     }
 }
 
-// Internal nodes spanning blocks only: `lbvh_bounds` wrote the others.
+// The block's emitters, by position in the block, and its leaves' power summed from the block's
+// first leaf (`power_up`) and to its last (`power_down`).
+var<workgroup> block_emitter_min: array<vec3<f32>, BLOCK>;
+var<workgroup> block_emitter_max: array<vec3<f32>, BLOCK>;
+var<workgroup> block_range: array<f32, BLOCK>;
+var<workgroup> block_leaf_power: array<f32, BLOCK>;
+var<workgroup> power_up: array<f32, BLOCK>;
+var<workgroup> power_down: array<f32, BLOCK>;
+
+fn emitters_values(e: LightTreeNode, largest_power: f32) -> array<u32, TREE_SLOTS> {
+    var values = ordered_box(e.min, e.max);
+    values[6] = ordered(e.range);
+    values[7] = ordered(largest_power);
+    return values;
+}
+
+// LIGHT_TREE only, after `lbvh_bounds`, over the same blocks: each leaf's emitter goes to its node,
+// the block's power is scanned both ways, each block-local internal node takes the union of its
+// range's emitters (its power summed leaf by leaf), and what spans blocks is carried on globally.
+@compute @workgroup_size(256)
+fn lbvh_emitters(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    let n = params.count;
+    let block_start = group.x * BLOCK;
+    let k = block_start + local;
+    var e = LightTreeNode(vec3<f32>(3.4e38), 0.0, vec3<f32>(-3.4e38), 0.0);
+    if k < n {
+        e = emitters[sorted_keys[k].y];
+        tree[params.node_base + node_slot(i32(k), true)] = e;
+    }
+    block_emitter_min[local] = e.min;
+    block_emitter_max[local] = e.max;
+    block_range[local] = e.range;
+    block_leaf_power[local] = e.power;
+    power_up[local] = e.power;
+    power_down[local] = e.power;
+    workgroupBarrier();
+    // Hillis–Steele, both ways at once.
+    for (var offset = 1u; offset < BLOCK; offset *= 2u) {
+        let below = select(0.0, power_up[local - offset], local >= offset);
+        let above = select(0.0, power_down[local + offset], local + offset < BLOCK);
+        workgroupBarrier();
+        power_up[local] += below;
+        power_down[local] += above;
+        workgroupBarrier();
+    }
+    if k < n {
+        leaf_power[k] = vec2<f32>(power_up[local], power_down[local]);
+    }
+    if local == 0u {
+        block_power[group.x] = power_down[0];
+    }
+
+    if k + 1u < n && in_block(k, block_start) {
+        let range = ranges[k] - vec2<u32>(block_start);
+        var merged = LightTreeNode(block_emitter_min[range.x], 0.0, block_emitter_max[range.x], 0.0);
+        var largest_power = 0.0;
+        for (var j = range.x; j <= range.y; j += 1u) {
+            merged.min = min(merged.min, block_emitter_min[j]);
+            merged.max = max(merged.max, block_emitter_max[j]);
+            merged.range = max(merged.range, block_range[j]);
+            merged.power += block_leaf_power[j];
+            largest_power = max(largest_power, block_leaf_power[j]);
+        }
+        tree[params.node_base + 2u * k] = merged;
+        let parent = parents[k];
+        if parent != NO_PARENT && !in_block(parent, block_start) {
+            carry_up_globally(parent, emitters_values(merged, largest_power), true);
+        }
+    }
+    let leaf = n - 1u + k;
+    if k < n && n > 1u && !in_block(parents[leaf], block_start) {
+        carry_up_globally(parents[leaf], emitters_values(e, e.power), true);
+    }
+}
+
+// LIGHT_TREE only, one workgroup: turns each block's power into the total of the blocks before it.
+@compute @workgroup_size(256)
+fn lbvh_block_power(@builtin(local_invocation_index) local: u32) {
+    let blocks = (params.count + BLOCK - 1u) / BLOCK;
+    let chunk = (blocks + BLOCK - 1u) / BLOCK;
+    let first = min(local * chunk, blocks);
+    let end = min(first + chunk, blocks);
+    var sum = 0.0;
+    for (var b = first; b < end; b += 1u) {
+        sum += block_power[b];
+    }
+    power_up[local] = sum;
+    workgroupBarrier();
+    for (var offset = 1u; offset < BLOCK; offset *= 2u) {
+        let below = select(0.0, power_up[local - offset], local >= offset);
+        workgroupBarrier();
+        power_up[local] += below;
+        workgroupBarrier();
+    }
+    var before = power_up[local] - sum;
+    for (var b = first; b < end; b += 1u) {
+        let own = block_power[b];
+        block_power[b] = before;
+        before += own;
+    }
+}
+
+// Internal nodes spanning blocks only: `lbvh_bounds` (and `lbvh_emitters`) wrote the others.
 @compute @workgroup_size(256)
 fn lbvh_write_nodes(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x + 1u >= params.count || block_local(id.x) {
@@ -311,4 +450,24 @@ fn lbvh_write_nodes(@builtin(global_invocation_id) id: vec3<u32>) {
     let node = params.node_base + 2u * id.x;
     nodes[node].min = vec3<f32>(unordered(~atomicLoad(&node_bounds[base])), unordered(~atomicLoad(&node_bounds[base + 1u])), unordered(~atomicLoad(&node_bounds[base + 2u])));
     nodes[node].max = vec3<f32>(unordered(atomicLoad(&node_bounds[base + 3u])), unordered(atomicLoad(&node_bounds[base + 4u])), unordered(atomicLoad(&node_bounds[base + 5u])));
+    if LIGHT_TREE {
+        let slots = id.x * TREE_SLOTS;
+        var e: LightTreeNode;
+        e.min = vec3<f32>(unordered(~atomicLoad(&tree_bounds[slots])), unordered(~atomicLoad(&tree_bounds[slots + 1u])), unordered(~atomicLoad(&tree_bounds[slots + 2u])));
+        e.max = vec3<f32>(unordered(atomicLoad(&tree_bounds[slots + 3u])), unordered(atomicLoad(&tree_bounds[slots + 4u])), unordered(atomicLoad(&tree_bounds[slots + 5u])));
+        e.range = unordered(atomicLoad(&tree_bounds[slots + 6u]));
+        // The range [x, y] spans blocks: the rest of x's block, the start of y's, the whole blocks
+        // between. Prefix sums over blocks can round a small middle away next to a large total; the
+        // largest single power keeps a node whose lights shine from weighing nothing.
+        let range = ranges[id.x];
+        let first_block = range.x / BLOCK;
+        let last_block = range.y / BLOCK;
+        var between = 0.0;
+        if last_block > first_block + 1u {
+            between = max(block_power[last_block] - block_power[first_block + 1u], 0.0);
+        }
+        let largest = unordered(atomicLoad(&tree_bounds[slots + 7u]));
+        e.power = max(leaf_power[range.x].y + leaf_power[range.y].x + between, largest);
+        tree[node] = e;
+    }
 }

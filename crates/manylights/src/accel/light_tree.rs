@@ -24,6 +24,14 @@ pub struct LightTreeNode {
     pub range: f32,
 }
 
+impl LightTreeNode {
+    /// One light's emitter: its position as a point box, its power and its range. A GPU build over
+    /// lights takes one per box (`GpuLbvh::set_emitters`; particles write theirs, `particles/lights.wgsl`).
+    pub fn of_light(light: &GpuLight) -> Self {
+        Self { min: light.position, power: light_power(light), max: light.position, range: light.range }
+    }
+}
+
 /// A light's power as the tree weighs it: the luminance of its colour × intensity.
 pub fn light_power(light: &GpuLight) -> f32 {
     Vec3::from(light.radiant).dot(Vec3::new(0.2126, 0.7152, 0.0722)).max(0.0)
@@ -37,10 +45,7 @@ pub fn light_tree_nodes(bvh: &Bvh, lights: &[GpuLight]) -> Vec<LightTreeNode> {
     for index in (0..bvh.nodes.len()).rev() {
         let node = bvh.nodes[index];
         tree[index] = if node.is_leaf() {
-            bvh.primitive_indices[node.leaf_range()].iter().map(|&i| &lights[i as usize]).fold(EMPTY, |t, light| {
-                let p = Vec3::from(light.position);
-                union(t, LightTreeNode { min: p.into(), power: light_power(light), max: p.into(), range: light.range })
-            })
+            bvh.primitive_indices[node.leaf_range()].iter().fold(EMPTY, |t, &i| union(t, LightTreeNode::of_light(&lights[i as usize])))
         } else {
             let first = node.entry as usize;
             let second = bvh.nodes[first].skip;
@@ -51,9 +56,11 @@ pub fn light_tree_nodes(bvh: &Bvh, lights: &[GpuLight]) -> Vec<LightTreeNode> {
     tree
 }
 
-const EMPTY: LightTreeNode = LightTreeNode { min: [f32::INFINITY; 3], power: 0.0, max: [f32::NEG_INFINITY; 3], range: 0.0 };
+/// No emitters: the identity of [`union`].
+pub const EMPTY: LightTreeNode = LightTreeNode { min: [f32::INFINITY; 3], power: 0.0, max: [f32::NEG_INFINITY; 3], range: 0.0 };
 
-fn union(a: LightTreeNode, b: LightTreeNode) -> LightTreeNode {
+/// The emitters of two nodes together.
+pub fn union(a: LightTreeNode, b: LightTreeNode) -> LightTreeNode {
     LightTreeNode {
         min: Vec3::from(a.min).min(Vec3::from(b.min)).into(),
         power: a.power + b.power,

@@ -281,7 +281,8 @@ pub struct Volumes<'a> {
     pub rebuilt_grids: bool,
     /// The one placed group gets cell lists where they fit (`plan::StructurePlan::cell_lists`).
     pub cell_lists: bool,
-    /// CPU-built light groups get their light tree (`light_tree.rs`, `plan::StructurePlan::light_tree`).
+    /// Light groups get their light tree (`light_tree.rs`, `plan::StructurePlan::light_tree`): built
+    /// with the CPU's BVHs, or alongside each GPU rebuild (the dynamic group's too).
     pub light_tree: bool,
     pub groups: &'a Groups,
     /// Volumes written on the GPU every frame, after the others: one more group, placed at identity
@@ -303,12 +304,16 @@ pub struct DynamicGroup {
 /// the structure's `record`, and after it the items from `first_item` of `items` in leaf order: the
 /// build leaves primitive `first_primitive` + k naming `first_item` + the index of the box it sorted to
 /// position k, and the leaves over position k name item `first_item` + k.
+/// Where the structure has a light tree, the pass also writes each box's emitter into `emitters`
+/// (`accel::light_tree::LightTreeNode`, by box).
 pub struct DynamicTargets<'a> {
     pub items: &'a wgpu::Buffer,
     pub first_item: u32,
     pub boxes: &'a wgpu::Buffer,
     pub primitives: &'a wgpu::Buffer,
     pub first_primitive: u32,
+    pub light_tree: bool,
+    pub emitters: &'a wgpu::Buffer,
 }
 
 pub struct VolumeStructure {
@@ -401,7 +406,7 @@ impl VolumeStructure {
             rebuilt_leaves: plan.rebuilt_leaves,
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: false,
-            light_tree: false,
+            light_tree: plan.light_tree,
             groups,
             dynamic: Some(dynamic),
         };
@@ -418,6 +423,8 @@ impl VolumeStructure {
             boxes: builder.boxes(),
             primitives: &self.buffers.primitives,
             first_primitive: builder.primitive_base(),
+            light_tree: self.buffers.builds_light_tree,
+            emitters: builder.emitters(),
         })
     }
 
@@ -548,7 +555,7 @@ impl VolumeStructure {
             groups.push(dynamic_group(ctx, &layout, &buffers, dynamic)?);
         }
         let top_level_builder = (layout.instances.len() > CPU_TOP_LEVEL_MAX_INSTANCES)
-            .then(|| GpuLbvh::with_target(ctx, layout.instance_slots, buffers.target(0, 0, 0)))
+            .then(|| GpuLbvh::with_target(ctx, layout.instance_slots, buffers.target(0, 0, 0, false)))
             .transpose()?;
         let Scopes { top_level: top_level_scope, groups: blas_scope, clusters: cluster_scope, .. } = volumes.kind.scopes();
         let clusters = match clustering {
@@ -842,6 +849,7 @@ struct Buffers {
     first_instance: wgpu::Buffer,
     /// Each node's [`LightTreeNode`] where light groups have their tree, else one placeholder.
     light_tree: wgpu::Buffer,
+    builds_light_tree: bool,
 }
 
 impl Buffers {
@@ -867,7 +875,7 @@ impl Buffers {
         let items = buffer("items", item_bytes.max(64), U::STORAGE | U::COPY_DST);
         let tree_bytes = if volumes.light_tree { node_bytes } else { 0 }.max(std::mem::size_of::<LightTreeNode>() as u64);
         let light_tree = buffer("light tree", tree_bytes, U::STORAGE | U::COPY_DST);
-        Self { items, nodes, primitives, instances, first_instance, light_tree }
+        Self { items, nodes, primitives, instances, first_instance, light_tree, builds_light_tree: volumes.light_tree }
     }
 
     /// Writes the items in their stored order (`scene_indices`).
@@ -881,8 +889,9 @@ impl Buffers {
     }
 
     /// Where a GPU build writes a BVH: nodes from `node_base`, primitives from `primitive_base`, its
-    /// leaves naming items from `item_base`.
-    fn target(&self, node_base: u32, primitive_base: u32, item_base: u32) -> LbvhTarget {
+    /// leaves naming items from `item_base`; with the light tree of its nodes where `group` is a
+    /// group's BVH (not the top level) and the structure has one.
+    fn target(&self, node_base: u32, primitive_base: u32, item_base: u32, group: bool) -> LbvhTarget {
         LbvhTarget {
             nodes: self.nodes.clone(),
             primitives: self.primitives.clone(),
@@ -890,6 +899,7 @@ impl Buffers {
             primitive_base,
             item_base,
             leaf_base: item_base,
+            light_tree: (group && self.builds_light_tree).then(|| self.light_tree.clone()),
         }
     }
 
@@ -924,8 +934,7 @@ fn place_groups(
                 let nodes = relocate(&bvh, blas_root, items.start);
                 ctx.queue.write_buffer(&buffers.nodes, node_offset(blas_root), bytemuck::cast_slice(&nodes));
                 if volumes.light_tree {
-                    let bytes = volumes.kind.record_bytes();
-                    let lights: &[GpuLight] = bytemuck::cast_slice(&volumes.items[range.start * bytes..range.end * bytes]);
+                    let lights: &[GpuLight] = bytemuck::cast_slice(&volumes.items[group_bytes(volumes, range)]);
                     let tree = light_tree_nodes(&bvh, lights);
                     ctx.queue.write_buffer(&buffers.light_tree, node_offset(blas_root), bytemuck::cast_slice(&tree));
                 }
@@ -940,10 +949,14 @@ fn place_groups(
             }
             None if boxes.is_empty() || build == GroupBuild::None => None,
             None => {
-                let target = buffers.target(blas_root, layout.instance_slots + items.start, items.start);
+                let target = buffers.target(blas_root, layout.instance_slots + items.start, items.start, true);
                 let leaves = max_leaf_size(volumes.rebuilt_leaves);
                 let mut builder = GpuLbvh::with_target(ctx, boxes.len() as u32, target)?.with_max_leaf_size(leaves);
                 builder.set_boxes(&ctx.queue, boxes)?;
+                if volumes.light_tree {
+                    let lights: &[GpuLight] = bytemuck::cast_slice(&volumes.items[group_bytes(volumes, range)]);
+                    builder.set_emitters(&ctx.queue, &lights.iter().map(LightTreeNode::of_light).collect::<Vec<_>>())?;
+                }
                 if let Some(placement) = placement {
                     let node = placement.header(next_cell);
                     ctx.queue.write_buffer(&buffers.nodes, node_offset(blas_root - 1), bytemuck::bytes_of(&node));
@@ -962,6 +975,12 @@ fn place_groups(
         groups.push(Group { items, blas_root, grid, dynamic: false, bounds, builder });
     }
     Ok((groups, rebuilt))
+}
+
+/// The bytes of `volumes.items` that hold the group over `range`.
+fn group_bytes(volumes: &Volumes, range: &Range<usize>) -> Range<usize> {
+    let bytes = volumes.kind.record_bytes();
+    range.start * bytes..range.end * bytes
 }
 
 /// Each group's entry grid where it is rebuilt on the GPU and `volumes.rebuilt_grids` asks for one.
@@ -989,7 +1008,7 @@ fn max_leaf_size(leaves: DynamicLeaves) -> u32 {
 fn dynamic_group(ctx: &GpuContext, layout: &Layout, buffers: &Buffers, dynamic: DynamicGroup) -> Result<Group> {
     let first = layout.count as u32;
     let leaf_size = max_leaf_size(dynamic.leaves);
-    let target = buffers.target(layout.dynamic_root, layout.instance_slots + first, first);
+    let target = buffers.target(layout.dynamic_root, layout.instance_slots + first, first, true);
     let mut builder = GpuLbvh::with_target(ctx, dynamic.count, target)?.with_max_leaf_size(leaf_size);
     builder.set_gpu_boxes(&ctx.queue, dynamic.count, &dynamic.bounds)?;
     Ok(Group {

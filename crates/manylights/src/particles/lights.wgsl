@@ -6,6 +6,7 @@
 // lights lie side by side in memory, and a query tests them one after the other.
 #include "particles/types.wgsl"
 #include "shading/types.wgsl"
+#include "accel/bvh_types.wgsl"
 
 @group(0) @binding(0) var<uniform> params: ParticleParams;
 @group(0) @binding(1) var<storage, read> particles: array<ParticleLight>;
@@ -22,6 +23,10 @@ struct LightBox {
 // x: the first light record the particles take (after the scene's lights); y: the group's first
 // primitive index.
 @group(0) @binding(5) var<uniform> group: vec4<u32>;
+// Where `restir` draws through the light tree, the build also takes each particle's emitter
+// (`accel/light_tree.rs`, `LightTreeNode::of_light`); a placeholder otherwise.
+override LIGHT_TREE: bool = false;
+@group(0) @binding(6) var<storage, read_write> emitters: array<LightTreeNode>;
 
 @compute @workgroup_size(256)
 fn particle_boxes(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -32,6 +37,11 @@ fn particle_boxes(@builtin(global_invocation_id) id: vec3<u32>) {
     let particle = particles[i];
     // The sphere's box, as `accel::light_aabb` bounds a point light.
     boxes[i] = LightBox(vec4<f32>(particle.position - particle.radius, 0.0), vec4<f32>(particle.position + particle.radius, 0.0));
+    if LIGHT_TREE {
+        // Power as `accel::light_tree::light_power` weighs it: the luminance of the radiant colour.
+        let power = max(dot(particle.color, vec3<f32>(0.2126, 0.7152, 0.0722)), 0.0);
+        emitters[i] = LightTreeNode(particle.position, power, particle.position, particle.radius);
+    }
 }
 
 // Position k of the built group's leaf order: the particle the build sorted there becomes light

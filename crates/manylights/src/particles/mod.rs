@@ -350,11 +350,13 @@ impl ParticleSystem {
                 bindings::storage_read_write(3, compute),
                 bindings::storage_read(4, compute),
                 bindings::uniform(5, compute),
+                bindings::storage_read_write(6, compute),
             ],
         );
         let shader = ShaderDesc::new("particles/lights.wgsl");
-        let boxes = bindings::compute_pipeline(device, "particle_boxes", &shader, &[&layout])?;
-        let lights = bindings::compute_pipeline(device, "particle_lights", &shader, &[&layout])?;
+        let constants = [("LIGHT_TREE", if targets.light_tree { 1.0 } else { 0.0 })];
+        let boxes = bindings::compute_pipeline_with_constants(device, "particle_boxes", &shader, &[&layout], &constants)?;
+        let lights = bindings::compute_pipeline_with_constants(device, "particle_lights", &shader, &[&layout], &constants)?;
         use wgpu::util::DeviceExt;
         let group = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("particle light group"),
@@ -372,6 +374,7 @@ impl ParticleSystem {
                 targets.boxes.as_entire_binding(),
                 targets.primitives.as_entire_binding(),
                 group.as_entire_binding(),
+                targets.emitters.as_entire_binding(),
             ],
         );
         ctx.check_errors()?;

@@ -428,6 +428,16 @@ impl Default for Scene {
 }
 
 impl Scene {
+    /// Whether anything in it changes over time: particles, animated instances, moving light or
+    /// decal groups, deformed meshes.
+    pub fn changes_over_time(&self) -> bool {
+        self.particles.as_ref().is_some_and(|p| p.count > 0)
+            || self.animation.as_ref().is_some_and(|a| !a.instances.is_empty())
+            || self.light_groups.is_animated()
+            || self.decal_groups.is_animated()
+            || !self.deformers.is_empty()
+    }
+
     /// Triangles as drawn: each mesh counted once per instance.
     pub fn drawn_triangle_count(&self) -> usize {
         self.instances.iter().map(|i| self.meshes[i.mesh].primitives.iter().map(Primitive::triangle_count).sum::<usize>()).sum()

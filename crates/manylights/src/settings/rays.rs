@@ -65,7 +65,7 @@ named_enum! {
         Enumeration = "enumeration",
         /// A few lights drawn through the lights' BVH by their estimated contribution (a light tree,
         /// `accel/light_tree.rs`): a cost that stays the same however many lights reach. Needs
-        /// `bvh` lights built on the CPU.
+        /// `bvh` lights (built on the CPU or rebuilt on the GPU; particle lights too).
         Tree = "tree",
     }
 }
