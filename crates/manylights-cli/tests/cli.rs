@@ -226,6 +226,24 @@ fn particle_error_compares_grid_settings_with_the_exact_method() {
     }
     let none = failure(&["particle-error", "--width", "16", "--height", "16"]);
     assert!(none.contains("no particles") && none.contains("--particles"), "{none}");
+    // Shadowed: restir through the particles' light tree, sampled and denoised, against the reference.
+    #[rustfmt::skip]
+    let out = manylights(&[
+        "particle-error", "--particles", "2000", "--width", "48", "--height", "27", "--voxel-sizes", "1", "--filters", "trilinear",
+        "--samples", "1", "--restir-frames", "3", "--restir-candidates", "tree",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // restir, candidates, error %, PSNR dB.
+    let rows: Vec<Vec<&str>> =
+        stdout.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.len() == 4 && f[1] == "tree").collect();
+    assert_eq!(rows.iter().map(|r| r[0]).collect::<Vec<_>>(), ["sampled", "denoised"], "{stdout}");
+    for row in rows {
+        let (error, psnr): (f64, f64) = (row[2].parse().unwrap(), row[3].parse().unwrap());
+        assert!(error.is_finite() && error > 0.0 && psnr.is_finite() && psnr > 0.0, "{row:?}");
+    }
+    let early = failure(&["particle-error", "--particles", "10", "--restir-frames", "120", "--width", "16", "--height", "16"]);
+    assert!(early.contains("--restir-frames 120") && early.contains("time 0"), "{early}");
 }
 
 #[test]

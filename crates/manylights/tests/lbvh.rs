@@ -185,7 +185,12 @@ fn gpu_builds_give_every_node_the_emitters_below_it() {
                 }
                 reached += 1;
             }
-            assert!(reached >= 1 && reached <= 2 * count - 1);
+            // Leaves of one box: the walk reaches every node.
+            if size == 1 {
+                assert_eq!(reached, 2 * count - 1);
+            } else {
+                assert!((1..2 * count).contains(&reached));
+            }
         }
     }
     // Emitters are for a tree, one per box.

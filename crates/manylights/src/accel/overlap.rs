@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use super::{decal_aabb, decal_contains, light_aabb, light_contains, Aabb, Bvh};
 use crate::plan::{Measurements, SceneStatistics};
-use crate::scene::{generators::surface_points, Groups, ParticleSettings, Scene};
+use crate::scene::{generators::surface_points, Groups, Scene};
 use crate::Result;
 
 /// Volumes reaching each of a set of points, after the exact test (sphere or cone, decal box).
@@ -103,22 +103,6 @@ pub fn sampled_overlap<T>(
     (hits as f64 * placed as f64 / sampled as f64 / points.len() as f64) as f32
 }
 
-/// The mean number of particle lights reaching a point of `points` at time 0, estimated from every
-/// k-th particle ([`ParticleSettings::particle_at`]) as [`sampled_overlap`] estimates volumes': at
-/// most [`SAMPLED_VOLUMES`] of them against the points. 0 for no points or particles.
-pub fn particle_overlap(particles: &ParticleSettings, points: &[Vec3]) -> f32 {
-    if points.is_empty() || particles.count == 0 {
-        return 0.0;
-    }
-    let step = (particles.count as usize).div_ceil(SAMPLED_VOLUMES).max(1);
-    let sampled: Vec<_> = (0..particles.count).step_by(step).map(|i| particles.particle_at(i, 0.0)).collect();
-    let hits: usize = sampled
-        .iter()
-        .map(|light| points.iter().filter(|&&p| p.distance_squared(light.position) < light.radius * light.radius).count())
-        .sum();
-    (hits as f64 * f64::from(particles.count) / sampled.len() as f64 / points.len() as f64) as f32
-}
-
 /// The statistics the frame plan reads (`plan::FramePlan::resolve`), measuring only what
 /// `measurements` asks.
 pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<SceneStatistics> {
@@ -133,12 +117,8 @@ pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<Sce
     };
     let placed_lights = scene.light_groups.placed_count(scene.lights.len());
     let placed_decals = scene.decal_groups.placed_count(scene.decals.len());
-    let particle_overlap_measured = measurements.particle_overlap && scene.particles.is_some();
-    let points = if measurements.light_overlap || measurements.decal_overlap || particle_overlap_measured {
-        surface_points(scene, SAMPLED_POINTS, 1)
-    } else {
-        Vec::new()
-    };
+    let points =
+        if measurements.light_overlap || measurements.decal_overlap { surface_points(scene, SAMPLED_POINTS, 1) } else { Vec::new() };
     let light_overlap =
         measurements.light_overlap.then(|| sampled_overlap(&scene.lights, &scene.light_groups, &points, light_aabb, light_contains));
     let decal_overlap =
@@ -149,7 +129,6 @@ pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<Sce
         placed_decals,
         light_overlap,
         decal_overlap,
-        particle_overlap: scene.particles.as_ref().filter(|_| particle_overlap_measured).map(|p| particle_overlap(p, &points)),
         placed_decal_groups: instances.iter().filter(|i| !ranges[i.group].is_empty()).count(),
         decal_centre_overlap,
         animated_instances: scene.animation.as_ref().is_some_and(|a| !a.instances.is_empty()),
