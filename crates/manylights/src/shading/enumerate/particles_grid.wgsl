@@ -4,7 +4,8 @@
 // room for the filter's footprint, and near that cascade's edge blends into the next one, so the
 // switch leaves no seam. Sampled — nearest, trilinear or tricubic, at one point or averaged over
 // jittered points around it (`frame.particle_filter`) — the grid lights the point as one point light
-// would, through the same BRDF.
+// would, through the same BRDF, as far as its light comes from one direction, and as light from all
+// around for the rest (`particle_light_at`).
 
 // Both grids at one point: colour in .color, direction (unnormalised) in .direction.
 struct ParticleSample {
@@ -123,9 +124,17 @@ fn particle_light_at(s: ShadingInput, p: vec3<f32>) -> vec3<f32> {
     if length_sq <= 0.0 {
         return vec3<f32>(0.0);
     }
-    // The textures hold the sums scaled to fit half floats (`SplatScales`).
+    // The textures hold the sums scaled to fit half floats (`SplatScales`). The direction sum's
+    // length over the colour sum's luminance (both weighted alike) is how concentrated the light's
+    // directions are: 1 where it comes from one direction, towards 0 where particles surround the
+    // point. That share comes through the BRDF from the mean direction; the rest as from every
+    // direction evenly, through the surface's albedo over the sphere (4π).
     let color = max(grid.color, vec3<f32>(0.0)) * frame.particle_texture_unscale.x;
-    return color * brdf_times_cosine(s, grid.direction * inverseSqrt(length_sq));
+    let luminance = dot(max(grid.color, vec3<f32>(0.0)), vec3<f32>(0.2126, 0.7152, 0.0722));
+    let concentration = saturate(sqrt(length_sq) / max(luminance, 1e-30));
+    let isotropic = (s.base_color * (1.0 - s.metallic) + environment_specular_albedo(s)) / (4.0 * PI);
+    let directional = brdf_times_cosine(s, grid.direction * inverseSqrt(length_sq));
+    return color * (concentration * directional + (1.0 - concentration) * isotropic);
 }
 
 // The grid's colour sum at world point `p` (the debug view's slices), without a surface: zero
