@@ -65,10 +65,13 @@ pub fn run(args: &ParticleErrorArgs) -> anyhow::Result<()> {
         bail!("--time {}: give a finite time ≥ 0 in seconds", args.time);
     }
     // restir's frames end at --time, one frame interval apart.
-    let restir_start = args.time - args.restir_frames.saturating_sub(1) as f32 * FRAME_INTERVAL;
-    if args.restir_frames > MAX_FRAMES || restir_start < 0.0 {
+    if args.restir_frames > MAX_FRAMES {
+        bail!("--restir-frames {}: give at most {MAX_FRAMES}", args.restir_frames);
+    }
+    let earliest = args.restir_frames.saturating_sub(1) as f32 * FRAME_INTERVAL;
+    if args.time < earliest {
         bail!(
-            "--restir-frames {} ending at --time {} s: give at most {MAX_FRAMES} frames, starting at time 0 or later (frames are {FRAME_INTERVAL} s apart)",
+            "--restir-frames {} ending at --time {} s would start before time 0 (frames are {FRAME_INTERVAL:.4} s apart): give --time {earliest:.3} or later, or fewer frames",
             args.restir_frames,
             args.time
         );

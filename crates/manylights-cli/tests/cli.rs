@@ -242,8 +242,11 @@ fn particle_error_compares_grid_settings_with_the_exact_method() {
         let (error, psnr): (f64, f64) = (row[2].parse().unwrap(), row[3].parse().unwrap());
         assert!(error.is_finite() && error > 0.0 && psnr.is_finite() && psnr > 0.0, "{row:?}");
     }
-    let early = failure(&["particle-error", "--particles", "10", "--restir-frames", "120", "--width", "16", "--height", "16"]);
-    assert!(early.contains("--restir-frames 120") && early.contains("time 0"), "{early}");
+    let early =
+        failure(&["particle-error", "--particles", "10", "--restir-frames", "64", "--time", "0.5", "--width", "16", "--height", "16"]);
+    assert!(early.contains("--restir-frames 64") && early.contains("before time 0"), "{early}");
+    let many = failure(&["particle-error", "--particles", "10", "--restir-frames", "200000", "--width", "16", "--height", "16"]);
+    assert!(many.contains("--restir-frames 200000") && many.contains("at most"), "{many}");
 }
 
 #[test]

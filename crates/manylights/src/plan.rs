@@ -469,8 +469,9 @@ pub struct StructurePlan {
     /// The one placed group gets cell lists where they fit its budget (`accel/cell_lists.rs`); shading
     /// then reads them instead of walking ([`FramePlan::shading_methods`]).
     pub cell_lists: bool,
-    /// The CPU-built light groups get their light tree (`accel/light_tree.rs`): `restir` draws its
-    /// candidates through it ([`ShadingMethods::light_tree`]).
+    /// The light groups get their light tree (`accel/light_tree.rs`), with their CPU builds or
+    /// alongside their GPU rebuilds: `restir` draws its candidates through it
+    /// ([`ShadingMethods::light_tree`]).
     pub light_tree: bool,
 }
 

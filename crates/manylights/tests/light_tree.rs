@@ -48,7 +48,18 @@ fn importance(node: &BvhNode, emitters: &LightTreeNode, p: Vec3, n: Vec3) -> f32
     if n.dot(centre - p) + n.abs().dot(half_extent) <= 0.0 {
         return 0.0;
     }
-    emitters.power * window * window / (centre - p).length_squared().max(half_extent.length_squared().max(1e-8))
+    let to_centre = centre - p;
+    let (distance_sq, radius_sq) = (to_centre.length_squared(), half_extent.length_squared());
+    let mut cosine = 1.0;
+    if distance_sq > radius_sq {
+        let cos_centre = n.dot(to_centre) / (distance_sq * n.length_squared()).max(1e-30).sqrt();
+        let cos_sphere = (1.0 - radius_sq / distance_sq).sqrt();
+        if cos_centre < cos_sphere {
+            let sin_centre = (1.0 - cos_centre * cos_centre).max(0.0).sqrt();
+            cosine = (cos_centre * cos_sphere + sin_centre * (radius_sq / distance_sq).sqrt()).max(1e-6);
+        }
+    }
+    emitters.power * cosine * window * window / distance_sq.max(radius_sq.max(1e-8))
 }
 
 /// Every leaf's probability (by its first item) and the probability that a draw finds no light.

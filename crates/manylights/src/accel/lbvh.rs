@@ -160,7 +160,7 @@ impl GpuLbvh {
         let tree = target.light_tree.is_some();
         let tree_bytes = |bytes: u64| if tree { bytes } else { 32 };
         let emitters = buffer("lbvh emitters", tree_bytes(u64::from(capacity) * 32), U::STORAGE | U::COPY_DST);
-        let tree_placeholder = buffer("lbvh light tree placeholder", 32, U::STORAGE);
+        let tree_placeholder = (!tree).then(|| buffer("lbvh light tree placeholder", 32, U::STORAGE));
         let tree_bounds = buffer("lbvh light tree bounds", tree_bytes(u64::from(capacity) * 32), U::STORAGE);
         let leaf_power = buffer("lbvh leaf power", tree_bytes(u64::from(capacity) * 8), U::STORAGE);
         let block_power = buffer("lbvh block power", tree_bytes(u64::from(capacity.div_ceil(WORKGROUP)) * 4), U::STORAGE);
@@ -203,7 +203,7 @@ impl GpuLbvh {
                 &node_bounds,
                 &ranges,
                 &emitters,
-                target.light_tree.as_ref().unwrap_or(&tree_placeholder),
+                target.light_tree.as_ref().or(tree_placeholder.as_ref()).expect("a tree or its placeholder"),
                 &tree_bounds,
                 &leaf_power,
                 &block_power,
@@ -313,7 +313,10 @@ impl GpuLbvh {
     /// tree (a light's: [`LightTreeNode::of_light`]). Errors without a light tree.
     pub fn set_emitters(&mut self, queue: &wgpu::Queue, emitters: &[LightTreeNode]) -> Result<()> {
         if self.target.light_tree.is_none() {
-            return Err(Error::InvalidConfig("emitters given to a BVH built without a light tree".into()));
+            return Err(Error::InvalidConfig(
+                "emitters given to a BVH built without a light tree; build it with GpuLbvh::with_light_tree or a target with a light tree"
+                    .into(),
+            ));
         }
         if emitters.len() != self.count as usize {
             return Err(Error::InvalidConfig(format!("{} emitters for {} boxes; give one per box", emitters.len(), self.count)));
@@ -395,7 +398,11 @@ impl GpuLbvh {
     /// [`LightTreeNode`]; for tests. Errors without a light tree.
     pub fn read_back_light_tree(&self, ctx: &GpuContext) -> Result<(Vec<BvhNode>, Vec<LightTreeNode>)> {
         let t = &self.target;
-        let Some(tree) = &t.light_tree else { return Err(Error::InvalidConfig("this BVH is built without a light tree".into())) };
+        let Some(tree) = &t.light_tree else {
+            return Err(Error::InvalidConfig(
+                "this BVH is built without a light tree to read back; build it with GpuLbvh::with_light_tree".into(),
+            ));
+        };
         let (offset, size) = (u64::from(t.node_base) * 32, u64::from(self.node_count()) * 32);
         let read = |source: &wgpu::Buffer| read_range(ctx, source, offset, size);
         let nodes: Vec<BvhNode> = bytemuck::pod_collect_to_vec(&read(&t.nodes)?);

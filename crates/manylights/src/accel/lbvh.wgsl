@@ -251,9 +251,9 @@ fn block_local(node: u32) -> bool {
 // much: whoever put that value there carries it (or found it) above, so every ancestor still ends up
 // exact. Atomic max is order-independent: no thread waits for another and no memory ordering between
 // threads is assumed.
-// `values` holds 6 slots for `node_bounds` (a box) or TREE_SLOTS for `tree_bounds` (`emitters`).
-fn carry_up_globally(start: u32, values: array<u32, TREE_SLOTS>, emitters: bool) {
-    let slots = select(6u, TREE_SLOTS, emitters);
+// `values` holds 6 slots for `node_bounds` (a box) or, `to_tree`, TREE_SLOTS for `tree_bounds`.
+fn carry_up_globally(start: u32, values: array<u32, TREE_SLOTS>, to_tree: bool) {
+    let slots = select(6u, TREE_SLOTS, to_tree);
     var rising = (1u << slots) - 1u;
     var node = start;
     loop {
@@ -262,7 +262,7 @@ fn carry_up_globally(start: u32, values: array<u32, TREE_SLOTS>, emitters: bool)
                 continue;
             }
             var held: u32;
-            if emitters {
+            if to_tree {
                 held = atomicMax(&tree_bounds[node * TREE_SLOTS + slot], values[slot]);
             } else {
                 held = atomicMax(&node_bounds[node * 6u + slot], values[slot]);
@@ -376,8 +376,14 @@ fn lbvh_emitters(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocat
     workgroupBarrier();
     // Hillis–Steele, both ways at once.
     for (var offset = 1u; offset < BLOCK; offset *= 2u) {
-        let below = select(0.0, power_up[local - offset], local >= offset);
-        let above = select(0.0, power_down[local + offset], local + offset < BLOCK);
+        var below = 0.0;
+        if local >= offset {
+            below = power_up[local - offset];
+        }
+        var above = 0.0;
+        if local + offset < BLOCK {
+            above = power_down[local + offset];
+        }
         workgroupBarrier();
         power_up[local] += below;
         power_down[local] += above;
@@ -427,12 +433,19 @@ fn lbvh_block_power(@builtin(local_invocation_index) local: u32) {
     power_up[local] = sum;
     workgroupBarrier();
     for (var offset = 1u; offset < BLOCK; offset *= 2u) {
-        let below = select(0.0, power_up[local - offset], local >= offset);
+        var below = 0.0;
+        if local >= offset {
+            below = power_up[local - offset];
+        }
         workgroupBarrier();
         power_up[local] += below;
         workgroupBarrier();
     }
-    var before = power_up[local] - sum;
+    // The chunks before this thread's, summed by the scan: exactly 0 after dark chunks.
+    var before = 0.0;
+    if local > 0u {
+        before = power_up[local - 1u];
+    }
     for (var b = first; b < end; b += 1u) {
         let own = block_power[b];
         block_power[b] = before;

@@ -1,9 +1,11 @@
 //! The light tree: what `restir` needs to draw its candidates through a group's BVH instead of
 //! enumerating the lights that reach a point (Conty Estevez & Kulla 2018; `shading/light_tree.wgsl`).
-//! Every node of a CPU-built light group gets, beside its box (the union of its lights' volumes), the
-//! box around its lights' positions, their total power and their largest range; a descent picks a child in proportion to
-//! an importance estimated from them, so each light's probability is the product of the choices on
-//! its path, exact and known.
+//! Every node of a light group gets, beside its box (the union of its lights' volumes), the box
+//! around its lights' positions, their total power and their largest range; a descent picks a child
+//! in proportion to an importance estimated from them, so each light's probability is the product of
+//! the choices on its path, exact and known. CPU-built groups get theirs here
+//! ([`light_tree_nodes`]); groups rebuilt on the GPU, the particles' too, from their LBVH build
+//! (`lbvh.wgsl`, `LIGHT_TREE`).
 
 use glam::Vec3;
 
@@ -11,7 +13,7 @@ use super::bvh::{Bvh, END};
 use crate::gpu::scene::GpuLight;
 
 /// A BVH node's emitters, at the node's index in the light structure. Keep in sync with
-/// `LightTreeNode` in `shading/light_tree.wgsl`.
+/// `LightTreeNode` in `accel/bvh_types.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct LightTreeNode {

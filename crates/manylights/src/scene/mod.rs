@@ -646,4 +646,16 @@ mod tests {
         let scene = load_path(&test_support::assets_dir().join("box/Box.glb")).unwrap();
         assert_eq!(scene.drawn_triangle_count(), 12);
     }
+
+    #[test]
+    fn particles_and_spinning_groups_change_a_scene_over_time() {
+        assert!(!Scene::default().changes_over_time());
+        let particles = |count| Scene { particles: Some(ParticleSettings { count, ..Default::default() }), ..Default::default() };
+        assert!(particles(10).changes_over_time());
+        assert!(!particles(0).changes_over_time());
+        let spin = Some(Spin { pivot: Vec3::ZERO, radians_per_second: 1.0 });
+        let groups = Groups { sizes: vec![1], instances: vec![GroupInstance { group: 0, world_from_group: Affine3A::IDENTITY, spin }] };
+        assert!(Scene { decal_groups: groups.clone(), ..Default::default() }.changes_over_time());
+        assert!(Scene { light_groups: groups, ..Default::default() }.changes_over_time());
+    }
 }

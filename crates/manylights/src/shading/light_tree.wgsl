@@ -9,7 +9,8 @@
 
 // A node's importance at group-space point `p` facing `n`: its lights' power over the squared
 // distance to their positions' box, that distance taken as at least the box's half-diagonal (Conty
-// Estevez & Kulla's clamp, which keeps a box around the point from claiming every draw), through the
+// Estevez & Kulla's clamp, which keeps a box around the point from claiming every draw), times the
+// largest cosine at the surface of a direction into the box (their orientation bound), through the
 // range window (`light_distance_attenuation`'s) of the nearest any of them can be with the largest
 // range: zero only where none reaches.
 fn light_tree_importance(node: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
@@ -31,7 +32,20 @@ fn light_tree_importance(node: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
         return 0.0;
     }
     let to_centre = centre - p;
-    return emitters.power * window * window / max(dot(to_centre, to_centre), max(dot(half_extent, half_extent), 1e-8));
+    let distance_sq = dot(to_centre, to_centre);
+    let radius_sq = dot(half_extent, half_extent);
+    // The largest cosine at the surface of a direction to the box: that of the angle to its centre
+    // less the angle its bounding sphere subtends (1 where the sphere holds the point).
+    var cosine = 1.0;
+    if distance_sq > radius_sq {
+        let cos_centre = dot(n, to_centre) * inverseSqrt(max(distance_sq * dot(n, n), 1e-30));
+        let cos_sphere = sqrt(1.0 - radius_sq / distance_sq);
+        if cos_centre < cos_sphere {
+            let sin_centre = sqrt(max(1.0 - cos_centre * cos_centre, 0.0));
+            cosine = max(cos_centre * cos_sphere + sin_centre * sqrt(radius_sq / distance_sq), 1e-6);
+        }
+    }
+    return emitters.power * cosine * window * window / max(distance_sq, max(radius_sq, 1e-8));
 }
 
 // Where a draw from the subtree under `root` ended and with what probability: at a leaf (`drawn`;

@@ -120,8 +120,8 @@ fn particle_light_at(s: ShadingInput, p: vec3<f32>) -> vec3<f32> {
         grid.color = mix(coarser.color, grid.color, t);
         grid.direction = mix(coarser.direction, grid.direction, t);
     }
-    let length_sq = dot(grid.direction, grid.direction);
-    if length_sq <= 0.0 {
+    let luminance = dot(max(grid.color, vec3<f32>(0.0)), vec3<f32>(0.2126, 0.7152, 0.0722));
+    if !(luminance > 0.0) {
         return vec3<f32>(0.0);
     }
     // The textures hold the sums scaled to fit half floats (`SplatScales`). The direction sum's
@@ -130,10 +130,13 @@ fn particle_light_at(s: ShadingInput, p: vec3<f32>) -> vec3<f32> {
     // point. That share comes through the BRDF from the mean direction; the rest as from every
     // direction evenly, through the surface's albedo over the sphere (4π).
     let color = max(grid.color, vec3<f32>(0.0)) * frame.particle_texture_unscale.x;
-    let luminance = dot(max(grid.color, vec3<f32>(0.0)), vec3<f32>(0.2126, 0.7152, 0.0722));
-    let concentration = saturate(sqrt(length_sq) / max(luminance, 1e-30));
+    let length_sq = dot(grid.direction, grid.direction);
+    let concentration = saturate(sqrt(length_sq) / luminance);
     let isotropic = (s.base_color * (1.0 - s.metallic) + environment_specular_albedo(s)) / (4.0 * PI);
-    let directional = brdf_times_cosine(s, grid.direction * inverseSqrt(length_sq));
+    var directional = vec3<f32>(0.0);
+    if length_sq > 0.0 {
+        directional = brdf_times_cosine(s, grid.direction * inverseSqrt(length_sq));
+    }
     return color * (concentration * directional + (1.0 - concentration) * isotropic);
 }
 
