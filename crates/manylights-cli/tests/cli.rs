@@ -206,6 +206,29 @@ fn scene_file_particle_settings_yield_to_flags() {
     assert_eq!((particles["cascades"].as_u64(), particles["cascade_resolution"].as_u64()), (Some(2), Some(24)), "{json}");
 }
 
+/// Extensions a glTF only uses are named in one warning each when the importer ignores them, and
+/// not at all when it honours them.
+#[test]
+fn ignored_gltf_extensions_are_named_once_each() {
+    let dir = temp_dir("gltf_extensions_used");
+    std::fs::copy(assets().join("box/Box0.bin"), dir.join("Box0.bin")).unwrap();
+    let json = std::fs::read_to_string(assets().join("box/Box.gltf")).unwrap().replacen(
+        '{',
+        r#"{"extensionsUsed": ["KHR_lights_punctual", "KHR_texture_transform", "KHR_materials_clearcoat"], "#,
+        1,
+    );
+    let scene = dir.join("Box.gltf");
+    std::fs::write(&scene, json).unwrap();
+    let out = render_to(&dir, &["--scene", scene.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    for ignored in ["KHR_texture_transform", "KHR_materials_clearcoat"] {
+        let lines = stderr.lines().filter(|l| l.contains(ignored) && l.contains("not supported")).count();
+        assert_eq!(lines, 1, "{ignored}: {stderr}");
+    }
+    assert!(!stderr.lines().any(|l| l.contains("KHR_lights_punctual is not supported")), "{stderr}");
+}
+
 #[test]
 fn particle_error_compares_grid_settings_with_the_exact_method() {
     #[rustfmt::skip]

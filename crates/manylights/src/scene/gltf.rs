@@ -68,7 +68,7 @@ fn import_bytes(path: &Path, bytes: Vec<u8>, budget: &LoadBudget) -> Result<Scen
     // a generic validation failure, and this check names it.
     let ::gltf::Gltf { document, blob } = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(parse_reason(e)))?;
     drop(bytes);
-    check_required_extensions(path, &document)?;
+    check_extensions(path, &document)?;
     let version = &document.as_json().asset.version;
     if version.split('.').next() != Some("2") {
         return Err(invalid(format!("asset.version is \"{version}\": only glTF 2.x files can be read")));
@@ -183,15 +183,24 @@ fn parse_reason(error: ::gltf::Error) -> String {
     }
 }
 
-fn check_required_extensions(path: &Path, document: &Document) -> Result<()> {
-    match document.extensions_required().find(|e| !SUPPORTED_EXTENSIONS.contains(e)) {
-        Some(extension) => Err(Error::UnsupportedGltfExtension {
+/// Refuses a file that requires an extension the importer does not honour, and names, once each in a
+/// warning, those it only uses: what they add to the file is ignored, never silently.
+fn check_extensions(path: &Path, document: &Document) -> Result<()> {
+    if let Some(extension) = document.extensions_required().find(|e| !SUPPORTED_EXTENSIONS.contains(e)) {
+        return Err(Error::UnsupportedGltfExtension {
             path: path.to_owned(),
             extension: extension.to_owned(),
             supported: SUPPORTED_EXTENSIONS.join(", "),
-        }),
-        None => Ok(()),
+        });
     }
+    for extension in document.extensions_used().filter(|e| !SUPPORTED_EXTENSIONS.contains(e)) {
+        log::warn!(
+            "{}: the glTF extension {extension} is not supported, so what it adds is ignored (supported: {})",
+            path.display(),
+            SUPPORTED_EXTENSIONS.join(", ")
+        );
+    }
+    Ok(())
 }
 
 /// Where a URI's bytes come from.
