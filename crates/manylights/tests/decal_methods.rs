@@ -127,7 +127,7 @@ fn dense_decals_under_opaque_layers_agree_with_brute_force() {
         height: 4,
         rgba8: [texel.x as u8, texel.y as u8, texel.z as u8, 255].repeat(16),
     });
-    let normal_map = TextureRef { texture: scene.textures.len() - 1, wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::ClampToEdge };
+    let normal_map = TextureRef::new(scene.textures.len() - 1, Wrap::ClampToEdge, Wrap::ClampToEdge);
     let opaque = |color: Vec3, normal_texture: Option<TextureRef>| Material {
         base_color_factor: color.extend(1.0),
         roughness_factor: 0.4,

@@ -194,7 +194,7 @@ fn tilted_normal_map(scene: &mut Scene) -> TextureRef {
     let texel = ((n * 0.5 + 0.5) * 255.0).round();
     let rgba = [texel.x as u8, texel.y as u8, texel.z as u8, 255];
     scene.textures.push(Texture { name: "tilted".into(), width: 4, height: 4, rgba8: rgba.repeat(16) });
-    TextureRef { texture: scene.textures.len() - 1, wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::ClampToEdge }
+    TextureRef::new(scene.textures.len() - 1, Wrap::ClampToEdge, Wrap::ClampToEdge)
 }
 
 #[test]
@@ -287,7 +287,7 @@ fn decal_textures_are_clamped_to_their_edges_whatever_their_wrap_modes() {
 /// An 8×8 image as the only decal over the wall's centre: its material's base colour, wrapped by `wrap`.
 fn image_decal(scene: &mut Scene, rgba8: Vec<u8>, wrap: Wrap) {
     scene.textures.push(Texture { name: "decal".into(), width: 8, height: 8, rgba8 });
-    let texture = TextureRef { texture: scene.textures.len() - 1, wrap_u: wrap, wrap_v: wrap };
+    let texture = TextureRef::new(scene.textures.len() - 1, wrap, wrap);
     scene.materials.push(Material {
         base_color_factor: Vec4::ONE,
         base_color_texture: Some(texture),
@@ -313,7 +313,7 @@ fn decals_look_the_same_whatever_the_size_of_the_surfaces_textures() {
     // The same wall with a 1024² white texture: its colour is unchanged, its arrays' layers are 1024².
     let mut large = scene.clone();
     large.textures.push(Texture { name: "white".into(), width: 1024, height: 1024, rgba8: vec![255; 1024 * 1024 * 4] });
-    large.materials[0].base_color_texture = Some(TextureRef { texture: 1, wrap_u: Wrap::Repeat, wrap_v: Wrap::Repeat });
+    large.materials[0].base_color_texture = Some(TextureRef::new(1, Wrap::Repeat, Wrap::Repeat));
     for method in BLENDING_METHODS {
         let config = RenderConfig { decal_method: method, max_texture_size: 1024, ..config(64, 36, LightMethod::Brute) };
         let (small_image, large_image) = (render_with(&scene, &camera, config.clone()).1, render_with(&large, &camera, config).1);

@@ -295,7 +295,7 @@ fn rays_pass_alpha_masked_holes_and_blended_surfaces_but_stop_at_opaque_ones() {
     // Three unit quads (x, y in [-1, 1]) facing +Z: alpha-masked with the checker at z = 0, blended
     // at z = -1, opaque at z = -2. Rays travel along -Z through the checker's texel centres.
     let masked = Material {
-        base_color_texture: Some(TextureRef { texture: 0, wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::ClampToEdge }),
+        base_color_texture: Some(TextureRef::new(0, Wrap::ClampToEdge, Wrap::ClampToEdge)),
         alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
         ..Default::default()
     };

@@ -188,7 +188,7 @@ fn wrap_probe(wrap: Wrap) -> (manylights::renderer::Image<[f32; 4]>, Camera) {
     scene.textures = vec![Texture { name: "ramp".into(), width: 8, height: 8, rgba8: ramp }];
     scene.materials[0].base_color_factor = glam::Vec4::new(0.0, 0.0, 0.0, 1.0);
     scene.materials[0].emissive_factor = Vec3::ONE;
-    scene.materials[0].emissive_texture = Some(TextureRef { texture: 0, wrap_u: wrap, wrap_v: Wrap::Repeat });
+    scene.materials[0].emissive_texture = Some(TextureRef::new(0, wrap, Wrap::Repeat));
     for v in &mut scene.meshes[0].primitives[0].vertices {
         v.u *= 2.0;
     }
@@ -277,4 +277,44 @@ fn sky_pixels_do_not_show_triangles_of_earlier_frames() {
     let (_, fresh) = render(&scene, &sky);
     // Shading by stale ids instead of depth fails here by 4.0 (checked when this test was written).
     assert_eq!(max_abs_difference(&after_ground, &fresh), 0.0);
+}
+
+/// `KHR_texture_transform` moves a texture as the extension says: a wall whose texture's coordinates
+/// go through an offset, a rotation and a scale shows what a wall whose vertices carry the transformed
+/// coordinates shows, in every pipeline, and not what the untransformed texture shows.
+#[test]
+fn texture_transforms_move_the_texture_as_transformed_coordinates_do() {
+    use glam::{Affine2, Mat2, Vec2};
+    use manylights::settings::{PipelineKind, RenderConfig};
+    let checker: Vec<u8> = (0..8 * 8u32)
+        .flat_map(|i| {
+            let (x, y) = (i % 8, i / 8);
+            [(x * 32 + 16) as u8, (y * 32 + 16) as u8, if (x + y) % 2 == 0 { 255 } else { 0 }, 255]
+        })
+        .collect();
+    let (sin, cos) = 0.5f32.sin_cos();
+    let linear = Mat2::from_cols(Vec2::new(cos, sin), Vec2::new(-sin, cos)) * Mat2::from_diagonal(Vec2::new(4.0, 2.5));
+    let transform = Affine2::from_mat2_translation(linear, Vec2::new(0.1, 0.3));
+    let wall = |uv_transform: Affine2, coordinates: Affine2| {
+        let (mut scene, camera) = wall_scene(vec![]);
+        scene.textures = vec![Texture { name: "checker".into(), width: 8, height: 8, rgba8: checker.clone() }];
+        scene.materials[0].base_color_factor = glam::Vec4::new(0.0, 0.0, 0.0, 1.0);
+        scene.materials[0].emissive_factor = Vec3::ONE;
+        scene.materials[0].emissive_texture = Some(TextureRef { uv_transform, ..TextureRef::new(0, Wrap::Repeat, Wrap::Repeat) });
+        for v in &mut scene.meshes[0].primitives[0].vertices {
+            let uv = coordinates.transform_point2(Vec2::new(v.u, v.v));
+            (v.u, v.v) = (uv.x, uv.y);
+        }
+        (scene, camera)
+    };
+    let (transformed, camera) = wall(transform, Affine2::IDENTITY);
+    let (twin, _) = wall(Affine2::IDENTITY, transform);
+    let (plain, _) = wall(Affine2::IDENTITY, Affine2::IDENTITY);
+    for pipeline in PipelineKind::ALL {
+        let frame = |scene| render_with(scene, &camera, RenderConfig { pipeline, ..config(WIDTH, HEIGHT, LightMethod::Off) }).1;
+        let (got, expected) = (frame(&transformed), frame(&twin));
+        let difference = max_abs_difference(&got, &expected);
+        assert!(difference < 2e-3, "{}: {difference} from the wall with transformed coordinates", pipeline.name());
+        assert!(max_abs_difference(&got, &frame(&plain)) > 0.5, "{}: the transform changed nothing", pipeline.name());
+    }
 }

@@ -45,6 +45,9 @@ pub struct GpuMaterial {
     pub emissive_layer: i32,
     pub metallic_roughness_layer: i32,
     pub normal_layer: i32,
+    /// Each texture slot's coordinates from the mesh's (`TextureRef::uv_transform`), in the slots'
+    /// order: two vec4s a slot, the 2×2 matrix's columns, then the translation.
+    pub uv_transforms: [[f32; 4]; 8],
 }
 
 const NO_TEXTURE: i32 = -1;
@@ -817,7 +820,20 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
             | wrap_bits(m.emissive_texture) << 8
             | wrap_bits(m.metallic_roughness_texture) << 16
             | wrap_bits(m.normal_texture) << 24,
+        uv_transforms: uv_transforms([m.base_color_texture, m.emissive_texture, m.metallic_roughness_texture, m.normal_texture]),
     }
+}
+
+/// The slots' coordinate transforms as `GpuMaterial::uv_transforms` lays them out (identity where a
+/// slot has no texture).
+fn uv_transforms(slots: [Option<TextureRef>; 4]) -> [[f32; 4]; 8] {
+    let mut packed = [[0.0; 4]; 8];
+    for (k, slot) in slots.iter().enumerate() {
+        let t = slot.map_or(glam::Affine2::IDENTITY, |t| t.uv_transform);
+        packed[2 * k] = [t.matrix2.x_axis.x, t.matrix2.x_axis.y, t.matrix2.y_axis.x, t.matrix2.y_axis.y];
+        packed[2 * k + 1] = [t.translation.x, t.translation.y, 0.0, 0.0];
+    }
+    packed
 }
 
 #[cfg(test)]
@@ -867,7 +883,8 @@ mod tests {
                 base_color_layer,
                 emissive_layer,
                 metallic_roughness_layer,
-                normal_layer
+                normal_layer,
+                uv_transforms
             ]
         );
         check!("Light", GpuLight, [position, range, radiant, kind, direction, spot_scale, spot_offset, flags]);

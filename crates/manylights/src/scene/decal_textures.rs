@@ -124,7 +124,7 @@ pub fn add_decal_materials(scene: &mut Scene) -> Range<usize> {
         let mut add = |kind: &str, texel: &dyn Fn(Vec2) -> [u8; 4]| {
             let name = format!("{} {kind}", material_name(stamp));
             scene.textures.push(texture(&name, DECAL_TEXTURE_SIZE, |x, y| texel(texture_point(x, y))));
-            Some(TextureRef { texture: scene.textures.len() - 1, wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::ClampToEdge })
+            Some(TextureRef::new(scene.textures.len() - 1, Wrap::ClampToEdge, Wrap::ClampToEdge))
         };
         let base_color_texture = add("albedo", &|p| (stamp.albedo)(p).to_array().map(unorm8));
         let normal_texture = stamp.height.and_then(|height| add("normal", &|p| normal_texel(height, p)));

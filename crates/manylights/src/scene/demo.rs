@@ -76,7 +76,7 @@ const METAL_STRIPES: usize = 2;
 const PERFORATED_PAINT: usize = 3;
 
 fn materials() -> Vec<Material> {
-    let repeat = |texture| Some(TextureRef { texture, wrap_u: Wrap::Repeat, wrap_v: Wrap::Repeat });
+    let repeat = |texture| Some(TextureRef::new(texture, Wrap::Repeat, Wrap::Repeat));
     let dielectric = |name: &str, rgb: [f32; 3], roughness_factor| Material {
         name: name.into(),
         base_color_factor: Vec3::from(rgb).extend(1.0),

@@ -16,7 +16,7 @@ use ::gltf::buffer;
 use ::gltf::khr_lights_punctual::Kind;
 use ::gltf::mesh::{Mode, Semantic};
 use ::gltf::{Document, Node};
-use glam::{Mat4, Quat, Vec3, Vec4};
+use glam::{Affine2, Mat2, Mat4, Quat, Vec2, Vec3, Vec4};
 
 use super::{
     animation, tangents, AlphaMode, Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Projection, Scene, Sun, Texture,
@@ -26,7 +26,7 @@ use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::{Error, Result};
 
 /// Extensions a file may require; every other optional extension is ignored.
-const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+const SUPPORTED_EXTENSIONS: [&str; 3] = ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_texture_transform"];
 
 /// Loads a glTF 2.0 file and everything it references (buffers and images next to it).
 pub fn import(path: &Path) -> Result<Scene> {
@@ -712,17 +712,39 @@ fn material(m: &::gltf::Material) -> Result<Material, String> {
         return Err(format!("{named}: KHR_materials_emissive_strength {strength} must be finite and ≥ 0; give a strength ≥ 0"));
     }
     let pbr = m.pbr_metallic_roughness();
-    let texture = |info: Option<::gltf::texture::Info>| info.map(|i| texture_ref(&i.texture(), i.tex_coord(), &name));
+    let texture = |info: Option<::gltf::texture::Info>| {
+        info.map(|i| {
+            let transform = i.texture_transform().map(|t| (t.offset(), t.rotation(), t.scale(), t.tex_coord()));
+            texture_ref(&i.texture(), i.tex_coord(), transform, &named)
+        })
+        .transpose()
+    };
+    // The gltf crate parses the extension on texture infos only; a normal texture's is read here.
+    let normal_texture = match m.normal_texture() {
+        Some(t) => {
+            let transform = match t.extension_value("KHR_texture_transform") {
+                Some(value) => {
+                    let parsed =
+                        ::gltf::json::deserialize::from_value::<::gltf::json::extensions::texture::TextureTransform>(value.clone())
+                            .map_err(|e| format!("{named}: normal texture's KHR_texture_transform: {e}"))?;
+                    Some((parsed.offset.0, parsed.rotation.0, parsed.scale.0, parsed.tex_coord))
+                }
+                None => None,
+            };
+            Some(texture_ref(&t.texture(), t.tex_coord(), transform, &named)?)
+        }
+        None => None,
+    };
     Ok(Material {
         base_color_factor: Vec4::from(pbr.base_color_factor()),
-        base_color_texture: texture(pbr.base_color_texture()),
+        base_color_texture: texture(pbr.base_color_texture())?,
         metallic_factor: pbr.metallic_factor(),
         roughness_factor: pbr.roughness_factor(),
-        metallic_roughness_texture: texture(pbr.metallic_roughness_texture()),
-        normal_texture: m.normal_texture().map(|t| texture_ref(&t.texture(), t.tex_coord(), &name)),
+        metallic_roughness_texture: texture(pbr.metallic_roughness_texture())?,
+        normal_texture,
         normal_scale: m.normal_texture().map_or(1.0, |t| t.scale()),
         emissive_factor: Vec3::from(emissive_factor) * strength,
-        emissive_texture: texture(m.emissive_texture()),
+        emissive_texture: texture(m.emissive_texture())?,
         alpha_mode: match m.alpha_mode() {
             ::gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
             ::gltf::material::AlphaMode::Mask => AlphaMode::Mask { cutoff: m.alpha_cutoff().unwrap_or(0.5) },
@@ -733,17 +755,36 @@ fn material(m: &::gltf::Material) -> Result<Material, String> {
     })
 }
 
-fn texture_ref(texture: &::gltf::Texture, tex_coord: u32, material: &str) -> TextureRef {
-    if tex_coord != 0 {
-        log::warn!("material {material}: texture uses TEXCOORD_{tex_coord}; only TEXCOORD_0 is supported, using it");
+/// `KHR_texture_transform`'s offset, rotation (radians) and scale, and the `texCoord` it overrides.
+type UvTransform = ([f32; 2], f32, [f32; 2], Option<u32>);
+
+/// A texture's use, its coordinates through `transform` where given: the extension's
+/// translation · rotation · scale, composed as its GLSL does.
+fn texture_ref(texture: &::gltf::Texture, tex_coord: u32, transform: Option<UvTransform>, material: &str) -> Result<TextureRef, String> {
+    let (offset, rotation, scale, tex_coord_override) = transform.unwrap_or(([0.0; 2], 0.0, [1.0; 2], None));
+    if !(offset.iter().chain(&scale).all(|v| v.is_finite()) && rotation.is_finite()) {
+        return Err(format!(
+            "{material}: KHR_texture_transform offset {offset:?}, rotation {rotation} and scale {scale:?} must be finite; give finite values"
+        ));
     }
+    let tex_coord = tex_coord_override.unwrap_or(tex_coord);
+    if tex_coord != 0 {
+        log::warn!("{material}: texture uses TEXCOORD_{tex_coord}; only TEXCOORD_0 is supported, using it");
+    }
+    let (sin, cos) = rotation.sin_cos();
+    let linear = Mat2::from_cols(Vec2::new(cos, sin), Vec2::new(-sin, cos)) * Mat2::from_diagonal(Vec2::from(scale));
     let wrap = |mode| match mode {
         ::gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
         ::gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
         ::gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
     };
     let sampler = texture.sampler();
-    TextureRef { texture: texture.source().index(), wrap_u: wrap(sampler.wrap_s()), wrap_v: wrap(sampler.wrap_t()) }
+    Ok(TextureRef {
+        texture: texture.source().index(),
+        wrap_u: wrap(sampler.wrap_s()),
+        wrap_v: wrap(sampler.wrap_t()),
+        uv_transform: Affine2::from_mat2_translation(linear, Vec2::from(offset)),
+    })
 }
 
 fn mesh(mesh: &::gltf::Mesh, buffers: &[buffer::Data], default_material: usize) -> Result<Mesh, String> {
@@ -1085,6 +1126,35 @@ mod tests {
         jpeg[sof + 5..sof + 9].copy_from_slice(&[0x75, 0x30, 0x75, 0x30]);
         let e = decode_limited(&jpeg, image::ImageFormat::Jpeg, &LoadBudget::new()).unwrap_err();
         assert!(e.contains("too large to decode"), "{e}");
+    }
+
+    /// `KHR_texture_transform` on a texture info and on a normal texture (which the gltf crate leaves
+    /// unparsed) becomes each texture's coordinate transform: translation · rotation · scale, the
+    /// rotation as the extension's GLSL writes it.
+    #[test]
+    fn texture_transforms_become_coordinate_transforms() {
+        let mut png = Vec::new();
+        image::RgbaImage::new(1, 1).write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).unwrap();
+        let dir = temp_dir("gltf_texture_transform");
+        let path = dir.join("transformed.gltf");
+        let transform = r#"{"KHR_texture_transform": {"offset": [0.5, 0], "rotation": 1.5707964, "scale": [2, 1]}}"#;
+        let json = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_texture_transform"],
+            "images": [{{"uri": "data:image/png;base64,{}"}}], "textures": [{{"source": 0}}],
+            "materials": [{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0, "extensions": {transform}}},
+                "metallicRoughnessTexture": {{"index": 0}}}},
+                "normalTexture": {{"index": 0, "extensions": {transform}}}}}]}}"#,
+            ::base64::encode(&png)
+        );
+        std::fs::write(&path, json).unwrap();
+        let scene = import(&path).unwrap();
+        let material = &scene.materials[0];
+        for texture in [material.base_color_texture, material.normal_texture] {
+            let t = texture.unwrap().uv_transform;
+            assert!(t.transform_point2(Vec2::X).abs_diff_eq(Vec2::new(0.5, 2.0), 1e-6), "{t:?}");
+            assert!(t.transform_point2(Vec2::Y).abs_diff_eq(Vec2::new(-0.5, 0.0), 1e-6), "{t:?}");
+        }
+        assert_eq!(material.metallic_roughness_texture.unwrap().uv_transform, Affine2::IDENTITY);
     }
 
     #[test]

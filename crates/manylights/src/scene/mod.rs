@@ -23,7 +23,7 @@ mod tangents;
 
 use std::path::Path;
 
-use glam::{Affine3A, Mat4, Vec3, Vec4};
+use glam::{Affine2, Affine3A, Mat4, Vec3, Vec4};
 
 use crate::settings::SettingsOverlay;
 
@@ -115,12 +115,21 @@ pub enum Wrap {
     ClampToEdge,
 }
 
-/// A material's use of a texture: which image and how its coordinates wrap.
+/// A material's use of a texture: which image, how its coordinates wrap, and how they come from the
+/// mesh's `TEXCOORD_0` (glTF's `KHR_texture_transform`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TextureRef {
     pub texture: usize,
     pub wrap_u: Wrap,
     pub wrap_v: Wrap,
+    pub uv_transform: Affine2,
+}
+
+impl TextureRef {
+    /// Image `texture` read at the mesh's coordinates as they are.
+    pub fn new(texture: usize, wrap_u: Wrap, wrap_v: Wrap) -> Self {
+        Self { texture, wrap_u, wrap_v, uv_transform: Affine2::IDENTITY }
+    }
 }
 
 /// glTF metallic-roughness material.

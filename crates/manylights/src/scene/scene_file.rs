@@ -720,7 +720,7 @@ impl<'a> DecalMaterials<'a> {
             spec.roughness_metallic.as_ref().map(|path| self.texture(scene, "roughness_metallic", path)).transpose()?;
         let factors = [color.x, color.y, color.z, color.w, roughness, metallic].map(f32::to_bits);
         let index = *self.materials.entry((albedo, normal, roughness_metallic, factors)).or_insert_with(|| {
-            let clamped = |texture| TextureRef { texture, wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::ClampToEdge };
+            let clamped = |texture| TextureRef::new(texture, Wrap::ClampToEdge, Wrap::ClampToEdge);
             scene.materials.push(Material {
                 name: format!("decal {}", spec.albedo.display()),
                 base_color_factor: color,

@@ -11,8 +11,12 @@ struct UvGradients {
     ddy: vec2<f32>,
 }
 
-// Samples a layer with the sampler of a slot's wrap modes (`Material.wrap_modes`).
-fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Material, slot: u32, g: UvGradients) -> vec4<f32> {
+// Samples a layer with the sampler of a slot's wrap modes (`Material.wrap_modes`), at the slot's
+// transform of the coordinates (`Material.uv_transforms`), their gradients through its linear part.
+fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Material, slot: u32, surface: UvGradients) -> vec4<f32> {
+    let columns = material.uv_transforms[2u * slot];
+    let linear = mat2x2<f32>(columns.xy, columns.zw);
+    let g = UvGradients(linear * surface.uv + material.uv_transforms[2u * slot + 1u].xy, linear * surface.ddx, linear * surface.ddy);
     switch (material.wrap_modes >> (slot * 8u)) & 0xFu {
         case 1u: { return textureSampleGrad(textures, wrap_u1_v0, g.uv, layer, g.ddx, g.ddy); }
         case 2u: { return textureSampleGrad(textures, wrap_u2_v0, g.uv, layer, g.ddx, g.ddy); }

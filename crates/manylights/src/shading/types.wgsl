@@ -49,6 +49,9 @@ struct Material {
     emissive_layer: i32,
     metallic_roughness_layer: i32,
     normal_layer: i32,
+    // Each slot's texture coordinates from the mesh's (glTF's KHR_texture_transform): two vec4s a
+    // slot, the 2×2 matrix's columns (xy, zw), then the translation (xy).
+    uv_transforms: array<vec4<f32>, 8>,
 }
 
 const LIGHT_POINT: u32 = 0u;
