@@ -92,27 +92,15 @@ impl GpuLbvh {
     /// Allocates for up to `capacity` boxes, writing into buffers of its own; errors if the buffers
     /// would exceed the device's limits.
     pub fn new(ctx: &GpuContext, capacity: u32) -> Result<Self> {
-        let capacity = capacity.max(1);
-        let node_bytes = u64::from(2 * capacity - 1) * std::mem::size_of::<BvhNode>() as u64;
-        check_binding_size(ctx, capacity, node_bytes)?;
-        let buffer = |label, size: u64| {
-            let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-            ctx.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
-        };
-        let target = LbvhTarget {
-            nodes: buffer("lbvh nodes", node_bytes),
-            primitives: buffer("lbvh primitives", u64::from(capacity) * 4),
-            node_base: 0,
-            primitive_base: 0,
-            item_base: 0,
-            leaf_base: 0,
-            light_tree: None,
-        };
-        Self::with_target(ctx, capacity, target)
+        Self::with_own_buffers(ctx, capacity, false)
     }
 
     /// As [`new`](Self::new), with every node's [`LightTreeNode`] built alongside, in a buffer of its own.
     pub fn with_light_tree(ctx: &GpuContext, capacity: u32) -> Result<Self> {
+        Self::with_own_buffers(ctx, capacity, true)
+    }
+
+    fn with_own_buffers(ctx: &GpuContext, capacity: u32, light_tree: bool) -> Result<Self> {
         let capacity = capacity.max(1);
         let node_bytes = u64::from(2 * capacity - 1) * std::mem::size_of::<BvhNode>() as u64;
         check_binding_size(ctx, capacity, node_bytes)?;
@@ -127,7 +115,7 @@ impl GpuLbvh {
             primitive_base: 0,
             item_base: 0,
             leaf_base: 0,
-            light_tree: Some(buffer("lbvh light tree", node_bytes)),
+            light_tree: light_tree.then(|| buffer("lbvh light tree", node_bytes)),
         };
         Self::with_target(ctx, capacity, target)
     }
