@@ -3,9 +3,9 @@
 use manylights::{
     accel::overlap::{decal_overlap, light_overlap, scene_statistics, Overlap},
     gpu::{context, GpuContext},
-    plan::{Capabilities, Measurements, MethodChoice},
+    plan::{Capabilities, Measurements, MethodChoice, RayTracer},
     scene::generators::surface_points,
-    settings::{PipelineKind, RenderConfig},
+    settings::{PipelineKind, RayBackend, RenderConfig},
 };
 
 use crate::progress;
@@ -18,8 +18,9 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     let adapters = context::list_adapters();
     println!("adapters ({}):", adapters.len());
     for a in &adapters {
+        let ray_queries = if a.ray_queries { "ray queries" } else { "no ray queries" };
         let status = match &a.usable {
-            Ok(()) => "usable".to_string(),
+            Ok(()) => format!("usable, {ray_queries}"),
             Err(why) => format!("unusable: {why}"),
         };
         println!("  - {} [{status}]", context::describe(&a.info));
@@ -32,6 +33,11 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
             "  (this driver ends a shader's loops after {limit} iterations in all: brute force and clustered shading over more \
              lights or decals are refused; Mesa 25's lavapipe has no such limit)"
         );
+    }
+    let caps = Capabilities::of(&ctx);
+    match RayTracer::resolve(RayBackend::Auto, caps)? {
+        RayTracer::Hardware => println!("ray backend: auto picks hardware (the adapter has ray queries)"),
+        RayTracer::Software => println!("ray backend: auto picks software (the adapter has no ray queries)"),
     }
     if !ctx.has_timestamps() {
         println!("  (no timestamp queries: --timings is unavailable on this adapter)");
@@ -71,7 +77,6 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         show("decals", decals);
     }
     // What `auto` picks with the default settings (and the scene file's), per pipeline.
-    let caps = Capabilities::of(&ctx);
     let defaults = RenderConfig::default().with_particles(overlay.particles);
     let stats = scene_statistics(&scene, Measurements::for_settings(&defaults, caps))?;
     for pipeline in PipelineKind::ALL {

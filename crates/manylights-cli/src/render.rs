@@ -12,7 +12,7 @@ use manylights::{
     scene::{Camera, Scene},
     settings::{
         AutoExposure, Bloom, BvhBuild, DebugView, DecalMethod, Denoise, DepthOfField, DirectLighting, Exposure, LightMethod, MotionBlur,
-        ParticleFilter, ParticleMethod, ParticleOverlay, PipelineKind, PostSettings, RayOverlay, RaySettings, RenderConfig,
+        ParticleFilter, ParticleMethod, ParticleOverlay, PipelineKind, PostSettings, RayBackend, RayOverlay, RaySettings, RenderConfig,
         RestirCandidates, RestirReuse, SunShadows, Tonemapper, EV100_RANGE, MAX_ANISOTROPY, MAX_COC_RADIUS, MAX_MOTION_BLUR_LENGTH,
         MAX_MOTION_BLUR_SAMPLES, MAX_REFLECTION_BOUNCES, MAX_RESTIR_SHADOW_RAYS, MAX_SHADOW_RAYS,
     },
@@ -223,6 +223,8 @@ pub(crate) struct RayArgs {
     restir_candidates: Option<RestirCandidates>,
     #[arg(long, value_enum, help = format!("How --direct-lighting restir's lighting is denoised at the pixels' opaque surfaces: not at all, for error studies (off), or by temporal accumulation and a variance-guided spatial filter (svgf). [default: the scene file's, or {}]", RaySettings::default().denoise))]
     denoise: Option<Denoise>,
+    #[arg(long, value_enum, help = format!("What traces the lights' and decals' point queries: the GPU's ray queries through acceleration structures wgpu builds (hardware: an error where the adapter has none), manylights' own BVHs in WGSL (software), or hardware where the adapter has ray queries (auto; `manylights info` says which). [default: the scene file's, or {}]", RaySettings::default().backend))]
+    ray_backend: Option<RayBackend>,
 }
 
 impl RayArgs {
@@ -247,6 +249,7 @@ impl RayArgs {
             restir_reuse: self.restir_reuse,
             restir_candidates: self.restir_candidates,
             denoise: self.denoise,
+            backend: self.ray_backend,
         };
         Ok(command_line.over(*file).settings())
     }
@@ -400,7 +403,13 @@ impl TimingReport {
             args.warmup
         );
         let chosen = renderer.methods_chosen();
-        println!("{} pipeline; lights: {}; decals: {}", renderer.config.pipeline.name(), chosen.lights, chosen.decals);
+        println!(
+            "{} pipeline; lights: {}; decals: {}; ray backend: {}",
+            renderer.config.pipeline.name(),
+            chosen.lights,
+            chosen.decals,
+            renderer.ray_tracer()
+        );
         if let Some(particles) = scene.particles.as_ref().filter(|p| p.count > 0) {
             let config = &renderer.config;
             let grid = match (config.particle_method, config.particle_cascades) {
@@ -565,6 +574,7 @@ fn rays_json(renderer: &Renderer) -> serde_json::Value {
         "restir_reuse": rays.restir_reuse.name(),
         "restir_candidates": restir_candidates(renderer),
         "denoise": rays.denoise.name(),
+        "backend": renderer.ray_tracer().name(),
     });
     if let Some(built) = renderer.ray_structure() {
         json["hierarchy"] = serde_json::json!({

@@ -24,7 +24,7 @@ use manylights::{
     scene::{Camera, Projection, Scene},
     settings::{
         Bloom, DebugView, DecalMethod, Denoise, DepthOfField, DirectLighting, Exposure, LightMethod, MotionBlur, Named, ParticleMethod,
-        ParticleOverlay, PipelineKind, RayOverlay, RenderConfig, RestirCandidates, SettingsOverlay, SunShadows,
+        ParticleOverlay, PipelineKind, RayBackend, RayOverlay, RenderConfig, RestirCandidates, SettingsOverlay, SunShadows,
     },
 };
 use winit::{
@@ -56,7 +56,7 @@ pub struct ViewArgs {
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
     /// A switch at a frame, as the panel would make it: FRAME:KEY=VALUE, KEY one of pipeline,
-    /// light-method, decal-method, particle-method, shadows, direct-lighting, restir-candidates, denoise, reflections, bloom, depth-of-field,
+    /// light-method, decal-method, particle-method, ray-backend, shadows, direct-lighting, restir-candidates, denoise, reflections, bloom, depth-of-field,
     /// motion-blur, auto-exposure (on/off), vignette (0 to 1), debug-view (a --debug-view name), or
     /// the scattered lights, decals or particles (a count: the scene is generated again), or window
     /// (WIDTHxHEIGHT: the window is resized). Repeatable.
@@ -76,6 +76,7 @@ struct Switches {
     direct_lighting: DirectLighting,
     restir_candidates: RestirCandidates,
     denoise: Denoise,
+    ray_backend: RayBackend,
     reflections: bool,
     bloom: bool,
     depth_of_field: bool,
@@ -98,6 +99,7 @@ impl Default for Switches {
             direct_lighting: DirectLighting::Exact,
             restir_candidates: RestirCandidates::Auto,
             denoise: Denoise::Svgf,
+            ray_backend: RayBackend::Auto,
             reflections: false,
             bloom: false,
             depth_of_field: false,
@@ -121,6 +123,7 @@ impl Switches {
             direct_lighting: overlay.rays.direct_lighting.unwrap_or(defaults.direct_lighting),
             restir_candidates: overlay.rays.restir_candidates.unwrap_or(defaults.restir_candidates),
             denoise: overlay.rays.denoise.unwrap_or(defaults.denoise),
+            ray_backend: overlay.rays.backend.unwrap_or(defaults.ray_backend),
             reflections: overlay.rays.reflection_bounces.is_some_and(|bounces| bounces > 0),
             auto_exposure: overlay.exposure.is_none(),
             fixed_exposure: overlay.exposure.unwrap_or(defaults.fixed_exposure),
@@ -137,6 +140,7 @@ impl Switches {
             direct_lighting: Some(self.direct_lighting),
             restir_candidates: Some(self.restir_candidates),
             denoise: Some(self.denoise),
+            backend: Some(self.ray_backend),
             reflection_bounces: Some(if self.reflections { bounces } else { 0 }),
             ..overlay.rays
         };
@@ -177,6 +181,7 @@ impl Switches {
             "direct-lighting" => self.direct_lighting = choose(key, value)?,
             "restir-candidates" => self.restir_candidates = choose(key, value)?,
             "denoise" => self.denoise = choose(key, value)?,
+            "ray-backend" => self.ray_backend = choose(key, value)?,
             "reflections" => self.reflections = on()?,
             "bloom" => self.bloom = on()?,
             "depth-of-field" => self.depth_of_field = on()?,
@@ -185,7 +190,7 @@ impl Switches {
             // Its range is checked with the rest of the settings when the renderer is built.
             "vignette" => self.vignette = value.parse().with_context(|| format!("vignette={value}: give a number"))?,
             _ => bail!(
-                "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, debug-view, shadows, direct-lighting, restir-candidates, denoise, \
+                "unknown switch {key}: give pipeline, light-method, decal-method, particle-method, debug-view, shadows, direct-lighting, restir-candidates, denoise, ray-backend, \
                  reflections, bloom, \
                  depth-of-field, motion-blur, auto-exposure, vignette, lights, decals or particles"
             ),
@@ -799,6 +804,7 @@ fn panel(ui: &mut egui::Ui, asks: &mut PanelAsks, edited: &mut Counts, shown: &P
     choice(ui, "sun shadows", &mut switches.shadows);
     choice(ui, "direct lighting", &mut switches.direct_lighting);
     choice(ui, "restir candidates", &mut switches.restir_candidates);
+    choice(ui, "ray backend", &mut switches.ray_backend);
     choice(ui, "denoise", &mut switches.denoise);
     ui.checkbox(&mut switches.reflections, "reflections");
     ui.separator();
@@ -971,6 +977,17 @@ mod tests {
         // The switch, with the scene file's budget under it.
         assert_eq!((rays.direct_lighting, rays.restir_shadow_rays), (DirectLighting::Restir, 3));
         assert!(switches.set("direct-lighting", "sampled").unwrap_err().to_string().contains("restir"));
+    }
+
+    #[test]
+    fn the_ray_backend_switch_starts_from_the_scene_file_and_reaches_the_settings() {
+        let mut overlay = SettingsOverlay::default();
+        overlay.rays.backend = Some(RayBackend::Software);
+        let mut switches = Switches::for_scene(&overlay);
+        assert_eq!(switches.config((64, 36), &overlay).rays.backend, RayBackend::Software);
+        switches.set("ray-backend", "hardware").unwrap();
+        assert_eq!(switches.config((64, 36), &overlay).rays.backend, RayBackend::Hardware);
+        assert!(switches.set("ray-backend", "rtx").unwrap_err().to_string().contains("software"));
     }
 
     #[test]

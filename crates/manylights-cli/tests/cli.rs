@@ -426,6 +426,9 @@ fn info_lists_the_chosen_adapter() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("chosen:") && stdout.contains("features used"), "{stdout}");
+    // Mesa 25's lavapipe has ray queries, so `auto` picks the hardware ray backend there.
+    let picks = if stdout.contains("[usable, ray queries]") { "hardware" } else { "software" };
+    assert!(stdout.contains(&format!("ray backend: auto picks {picks}")), "{stdout}");
 }
 
 #[test]
@@ -716,6 +719,11 @@ fn scene_file_ray_settings_yield_to_flags_and_bad_ones_name_their_key() {
     );
     let rays = render(&["--shadows", "hard", "--reflections", "--bounces", "1"]);
     assert_eq!((rays["shadows"].as_str(), rays["reflection_bounces"].as_u64()), (Some("hard"), Some(1)));
+    // The ray backend: the scene file's, unless the flag says otherwise; `auto` by default.
+    write("backend = 'software'\n");
+    assert_eq!(render(&["--light-method", "bvh"])["backend"].as_str(), Some("software"));
+    // Mesa 25's lavapipe, which the tests run on, has ray queries.
+    assert_eq!(render(&["--light-method", "bvh", "--ray-backend", "hardware"])["backend"].as_str(), Some("hardware"));
     for (bad, words) in [
         ("shadow_rays = 65\n", ["rays", "65 shadow rays", "shadow_rays"]),
         ("reflections = 10\n", ["rays", "10 reflection bounces", "reflections"]),
@@ -724,6 +732,7 @@ fn scene_file_ray_settings_yield_to_flags_and_bad_ones_name_their_key() {
         ("light_shadow_rays = 100\n", ["rays", "100 shadow rays per point", "light_shadow_rays"]),
         ("restir_shadow_rays = 0\n", ["rays", "0 restir shadow rays", "restir_shadow_rays"]),
         ("direct_lighting = 'sampled'\n", ["rays", "sampled", "\"restir\""]),
+        ("backend = 'rtx'\n", ["rays", "rtx", "\"hardware\""]),
     ] {
         write(bad);
         let err = failure(&["render", "--scene", scene.to_str().unwrap(), "--width", "16", "--height", "16"]);

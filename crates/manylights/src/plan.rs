@@ -6,8 +6,8 @@ use std::fmt;
 
 use crate::gpu::GpuContext;
 use crate::settings::{
-    BvhBuild, DebugView, DecalMethod, DirectLighting, LightMethod, Named, ParticleMethod, PipelineKind, RaySettings, RenderConfig,
-    RestirCandidates,
+    BvhBuild, DebugView, DecalMethod, DirectLighting, LightMethod, Named, ParticleMethod, PipelineKind, RayBackend, RaySettings,
+    RenderConfig, RestirCandidates,
 };
 use crate::{Error, Result};
 
@@ -146,6 +146,45 @@ impl MethodChoice {
     }
 }
 
+/// What traces a frame's point queries (and, in time, its rays): `settings::RayBackend` resolved for
+/// the device.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayTracer {
+    /// The GPU's ray queries through acceleration structures wgpu builds (`accel/hardware.rs`).
+    Hardware,
+    /// manylights' own BVHs walked in WGSL.
+    Software,
+}
+
+impl RayTracer {
+    /// The tracer `backend` asks for on a device with `caps`: `auto` takes ray queries where the
+    /// device has them; `hardware` without them is an error naming the fix.
+    pub fn resolve(backend: RayBackend, caps: Capabilities) -> Result<Self> {
+        match backend {
+            RayBackend::Auto | RayBackend::Hardware if caps.ray_queries => Ok(Self::Hardware),
+            RayBackend::Hardware => Err(Error::InvalidConfig(
+                "--ray-backend hardware needs ray queries (Vulkan's VK_KHR_ray_query and VK_KHR_acceleration_structure), which this \
+                 adapter lacks; use --ray-backend software or auto (`manylights info` says which adapters have them)"
+                    .into(),
+            )),
+            RayBackend::Auto | RayBackend::Software => Ok(Self::Software),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Hardware => "hardware",
+            Self::Software => "software",
+        }
+    }
+}
+
+impl fmt::Display for RayTracer {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Where and when a structure's groups get their BVHs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GroupBuild {
@@ -240,6 +279,13 @@ pub struct ShadingMethods {
     /// `restir` draws its candidates through the light tree instead of enumerating the lights
     /// reaching a point (`shading/enumerate/lights_tree.wgsl`, [`restir_light_tree`]).
     pub light_tree: bool,
+    /// `bvh` lights and decals are queried through the GPU's ray queries
+    /// (`shading/enumerate/*_ray_query.wgsl`, [`StructurePlan::hardware`]) rather than walked.
+    pub hardware_lights: bool,
+    pub hardware_decals: bool,
+    /// Rays are traced through the GPU's ray queries (`rays/trace_ray_query.wgsl`, `rays/hardware.rs`)
+    /// rather than the software hierarchy.
+    pub hardware_rays: bool,
     /// A debug view is shown: the shading core counts its work (`DEBUG_VIEWS` in
     /// `shading/debug_view.wgsl`, a pipeline constant: [`ShadingMethods::debug_views_constant`]).
     pub debug_views: bool,
@@ -262,6 +308,7 @@ impl ShadingMethods {
             LightMethod::Off => "shading/enumerate/lights_off.wgsl",
             LightMethod::Brute => "shading/enumerate/lights_brute.wgsl",
             LightMethod::Bvh if self.light_tree => "shading/enumerate/lights_tree.wgsl",
+            LightMethod::Bvh if self.hardware_lights => "shading/enumerate/lights_ray_query.wgsl",
             // `auto` is resolved before a plan is made (`MethodChoice`).
             LightMethod::Bvh | LightMethod::Auto => "shading/enumerate/lights_bvh.wgsl",
             LightMethod::Clustered => "shading/enumerate/lights_clustered.wgsl",
@@ -272,6 +319,7 @@ impl ShadingMethods {
     /// cell lists where subgroups share them out, the one that reads the lists.
     pub fn decal_enumeration_module(&self) -> &'static str {
         match self.decals {
+            DecalMethod::Bvh if self.hardware_decals => "shading/enumerate/decals_ray_query.wgsl",
             DecalMethod::Bvh if self.decal_cell_lists && self.subgroups => "shading/enumerate/decals_bvh_cells.wgsl",
             DecalMethod::Off => "shading/enumerate/decals_off.wgsl",
             DecalMethod::Brute => "shading/enumerate/decals_brute.wgsl",
@@ -279,6 +327,15 @@ impl ShadingMethods {
             DecalMethod::Clustered => "shading/enumerate/decals_clustered.wgsl",
             // Already blended into the G-buffer when shading runs.
             DecalMethod::DeferredDecals => "shading/enumerate/decals_off.wgsl",
+        }
+    }
+
+    /// The WGSL module that defines `trace_any_hit`, `trace_closest` and `ray_occluded`.
+    pub fn ray_trace_module(&self) -> &'static str {
+        if self.hardware_rays {
+            "rays/trace_ray_query.wgsl"
+        } else {
+            "rays/trace.wgsl"
         }
     }
 
@@ -395,6 +452,8 @@ pub struct Capabilities {
     pub subgroups: bool,
     /// Fragment shaders may test depth before they run (`wgpu::Features::SHADER_EARLY_DEPTH_TEST`).
     pub early_depth_test: bool,
+    /// Ray queries through acceleration structures wgpu builds (`wgpu::Features::EXPERIMENTAL_RAY_QUERY`).
+    pub ray_queries: bool,
 }
 
 impl Capabilities {
@@ -403,6 +462,7 @@ impl Capabilities {
         Self {
             subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
             early_depth_test: ctx.features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST),
+            ray_queries: ctx.has_ray_queries(),
         }
     }
 }
@@ -473,6 +533,10 @@ pub struct StructurePlan {
     /// alongside their GPU rebuilds: `restir` draws its candidates through it
     /// ([`ShadingMethods::light_tree`]).
     pub light_tree: bool,
+    /// The groups are bottom-level acceleration structures of boxes under a top level over their
+    /// instances, which wgpu builds and shading queries with ray queries (`accel/hardware.rs`): once,
+    /// or every frame as `build` says. The software BVHs are then not built at all.
+    pub hardware: bool,
 }
 
 /// How particles light the scene.
@@ -494,6 +558,11 @@ pub struct FramePlan {
     pub particles: ParticlePlan,
     /// The frame traces rays: the scene's triangles get a ray hierarchy.
     pub traces_rays: bool,
+    /// What traces the point queries: the GPU's ray queries, or the software BVHs.
+    pub ray_tracer: RayTracer,
+    /// The frame traces rays through the GPU's ray queries: the scene's triangles get acceleration
+    /// structures wgpu builds (`rays/hardware.rs`) beside the software hierarchy the hits read.
+    pub hardware_rays: bool,
     /// `restir` keeps each pixel's reservoir for the next frame to reuse: where its settings ask for
     /// reuse and, in the forward pipeline, where fragment shaders can test depth before they run
     /// (others would let hidden fragments overwrite the visible surface's reservoir).
@@ -528,6 +597,12 @@ impl FramePlan {
             )));
         }
         let light_tree = restir_light_tree(config, particle_lights, stats.light_overlap)?;
+        let ray_tracer = RayTracer::resolve(config.rays.backend, caps)?;
+        // Ray queries find the lights a `bvh` enumeration would walk to, and `bvh` decals. The light
+        // tree's draws descend the software BVH; particle lights are written into it every frame.
+        let hardware = ray_tracer == RayTracer::Hardware;
+        let hardware_lights = hardware && config.light_method == LightMethod::Bvh && !light_tree && !particle_lights;
+        let hardware_decals = hardware && config.decal_method == DecalMethod::Bvh;
         let pixels_write_alone = config.pipeline != PipelineKind::Forward || caps.early_depth_test;
         let keeps_reservoirs = config.rays.keeps_reservoirs() && pixels_write_alone;
         let denoises = config.rays.denoises() && pixels_write_alone;
@@ -540,6 +615,9 @@ impl FramePlan {
             keeps_pixel_state: keeps_reservoirs || denoises,
             denoised: denoises,
             light_tree,
+            hardware_lights,
+            hardware_decals,
+            hardware_rays: hardware && config.rays.traces_rays(),
             subgroups: caps.subgroups,
             dense_decals: false,
             dense_lights: false,
@@ -552,9 +630,11 @@ impl FramePlan {
         // The light tree draws a leaf's lights one by one: it keeps narrow leaves.
         let dense_lights = config.light_method == LightMethod::Bvh
             && !light_tree
+            && !hardware_lights
             && stats.light_overlap.is_some_and(|overlap| lights_shared_out(caps, config.pipeline, overlap));
-        let dense_decals =
-            Measurements::for_settings(config, caps).decal_centre_overlap && decals_shared_out(caps, stats.decal_centre_overlap);
+        let dense_decals = !hardware_decals
+            && Measurements::for_settings(config, caps).decal_centre_overlap
+            && decals_shared_out(caps, stats.decal_centre_overlap);
         let opaque_stage = if config.pipeline == PipelineKind::Forward { ShadingStage::Fragment } else { ShadingStage::Compute };
         let walks = query_walks(ShadingMethods { dense_lights, dense_decals, ..unlisted }, opaque_stage);
         let lights = StructurePlan {
@@ -566,9 +646,10 @@ impl FramePlan {
             clustered: config.light_method == LightMethod::Clustered,
             wide_leaves: dense_lights,
             rebuilt_leaves: rebuilt_leaves(dense_lights),
-            rebuilt_grids: !walks.lights,
+            rebuilt_grids: !walks.lights && !hardware_lights,
             cell_lists: false,
             light_tree,
+            hardware: hardware_lights,
         };
         let decal_build = group_build(
             config.decal_method == DecalMethod::Bvh,
@@ -580,9 +661,10 @@ impl FramePlan {
             clustered: config.decal_method == DecalMethod::Clustered,
             wide_leaves: dense_decals,
             rebuilt_leaves: rebuilt_leaves(dense_decals),
-            rebuilt_grids: !walks.decals,
+            rebuilt_grids: !walks.decals && !hardware_decals,
             cell_lists: dense_decals && stats.placed_decal_groups == 1 && decal_build == GroupBuild::CpuOnce,
             light_tree: false,
+            hardware: hardware_decals,
         };
         let particles = match (has_particles, config.particle_method) {
             (false, _) | (true, ParticleMethod::Off) => ParticlePlan::None,
@@ -597,6 +679,8 @@ impl FramePlan {
             decals,
             particles,
             traces_rays: config.rays.traces_rays(),
+            ray_tracer,
+            hardware_rays: unlisted.hardware_rays,
             keeps_reservoirs,
             denoises,
             tracks_surface_motion: (keeps_reservoirs || denoises) && stats.animated_instances,
@@ -662,10 +746,40 @@ mod tests {
     use super::*;
     use crate::settings::{Denoise, RestirReuse};
 
-    const SUBGROUPS: Capabilities = Capabilities { subgroups: true, early_depth_test: true };
+    const SUBGROUPS: Capabilities = Capabilities { subgroups: true, early_depth_test: true, ray_queries: false };
 
     fn config(lights: LightMethod, decals: DecalMethod) -> RenderConfig {
         RenderConfig { light_method: lights, decal_method: decals, ..Default::default() }
+    }
+
+    #[test]
+    fn the_ray_backend_takes_ray_queries_where_the_device_has_them() {
+        let with = Capabilities { ray_queries: true, ..SUBGROUPS };
+        assert_eq!(RayTracer::resolve(RayBackend::Auto, with).unwrap(), RayTracer::Hardware);
+        assert_eq!(RayTracer::resolve(RayBackend::Auto, SUBGROUPS).unwrap(), RayTracer::Software);
+        assert_eq!(RayTracer::resolve(RayBackend::Software, with).unwrap(), RayTracer::Software);
+        let refused = RayTracer::resolve(RayBackend::Hardware, SUBGROUPS).unwrap_err().to_string();
+        assert!(refused.contains("--ray-backend software"), "{refused}");
+        // Hardware `bvh` lights and decals build no software BVH and are queried by ray queries;
+        // the light tree's draws and particle lights keep the software BVH.
+        let bvh = config(LightMethod::Bvh, DecalMethod::Bvh);
+        let plan = FramePlan::resolve(&bvh, with, &SceneStatistics::default()).unwrap();
+        assert_eq!(plan.ray_tracer, RayTracer::Hardware);
+        assert!(plan.lights.hardware && plan.decals.hardware && !plan.lights.rebuilt_grids && !plan.decals.rebuilt_grids);
+        let methods = plan.shading_methods(false);
+        assert_eq!(methods.light_enumeration_module(), "shading/enumerate/lights_ray_query.wgsl");
+        assert_eq!(methods.decal_enumeration_module(), "shading/enumerate/decals_ray_query.wgsl");
+        let clustered = FramePlan::resolve(&config(LightMethod::Clustered, DecalMethod::Brute), with, &SceneStatistics::default()).unwrap();
+        assert!(!clustered.lights.hardware && !clustered.decals.hardware);
+        let particles = SceneStatistics { particles: 100, ..Default::default() };
+        let exact_particles = RenderConfig { particle_method: ParticleMethod::Bvh, ..bvh.clone() };
+        assert!(!FramePlan::resolve(&exact_particles, with, &particles).unwrap().lights.hardware);
+        let tree = RenderConfig {
+            rays: RaySettings { direct_lighting: DirectLighting::Restir, restir_candidates: RestirCandidates::Tree, ..Default::default() },
+            ..bvh.clone()
+        };
+        let plan = FramePlan::resolve(&tree, with, &SceneStatistics::default()).unwrap();
+        assert!(!plan.lights.hardware && plan.decals.hardware && plan.shading_methods(false).light_tree);
     }
 
     #[test]
@@ -686,7 +800,10 @@ mod tests {
     fn crowded_decals_get_wide_leaves_and_one_placed_group_cell_lists() {
         let bvh = config(LightMethod::Bvh, DecalMethod::Bvh);
         assert!(Measurements::for_settings(&bvh, SUBGROUPS).decal_centre_overlap);
-        assert!(!Measurements::for_settings(&bvh, Capabilities { subgroups: false, early_depth_test: true }).decal_centre_overlap);
+        assert!(
+            !Measurements::for_settings(&bvh, Capabilities { subgroups: false, early_depth_test: true, ray_queries: false })
+                .decal_centre_overlap
+        );
         let gpu_built = RenderConfig { decal_bvh_build: BvhBuild::GpuEveryFrame, ..bvh.clone() };
         assert!(Measurements::for_settings(&gpu_built, SUBGROUPS).decal_centre_overlap);
         let stats =
@@ -713,7 +830,9 @@ mod tests {
         let sparse_rebuilt = MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP - 1.0));
         assert_eq!(sparse_rebuilt.decals.method, DecalMethod::Clustered);
         // An overlap measured for other settings decides nothing.
-        let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true }, &stats(40.0, 1)).unwrap();
+        let alone =
+            FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true, ray_queries: false }, &stats(40.0, 1))
+                .unwrap();
         assert!(!alone.decals.wide_leaves && !alone.shading_methods(true).dense_decals);
     }
 
@@ -723,7 +842,9 @@ mod tests {
         let exact = RenderConfig { particle_method: ParticleMethod::Bvh, ..config(LightMethod::Bvh, DecalMethod::Off) };
         let plan = FramePlan::resolve(&exact, SUBGROUPS, &with_particles).unwrap();
         assert_eq!(plan.particles, ParticlePlan::Lights(DynamicLeaves::Widest));
-        let alone = FramePlan::resolve(&exact, Capabilities { subgroups: false, early_depth_test: true }, &with_particles).unwrap();
+        let alone =
+            FramePlan::resolve(&exact, Capabilities { subgroups: false, early_depth_test: true, ray_queries: false }, &with_particles)
+                .unwrap();
         assert_eq!(alone.particles, ParticlePlan::Lights(DynamicLeaves::AtMost(16)));
         let brute = RenderConfig { light_method: LightMethod::Brute, ..exact.clone() };
         let err = FramePlan::resolve(&brute, SUBGROUPS, &with_particles).unwrap_err().to_string();
@@ -749,7 +870,8 @@ mod tests {
             assert!(query_walks(dense.shading_methods(true), stage).lights);
         }
         // Without subgroups, nothing is shared out: narrow leaves, walked alone.
-        let alone = FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true }, &stats(100.0)).unwrap();
+        let alone =
+            FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true, ray_queries: false }, &stats(100.0)).unwrap();
         assert!(!alone.lights.wide_leaves && !alone.shading_methods(true).dense_lights);
         // Rebuilt groups get entry grids exactly where their queries walk alone.
         assert!(sparse.lights.rebuilt_grids && alone.lights.rebuilt_grids && !dense.lights.rebuilt_grids);
@@ -770,7 +892,7 @@ mod tests {
         assert!(plan(PipelineKind::Visbuffer, SUBGROUPS) && plan(PipelineKind::Deferred, SUBGROUPS));
         assert!(
             !plan(PipelineKind::Forward, SUBGROUPS)
-                && plan(PipelineKind::Forward, Capabilities { subgroups: false, early_depth_test: true })
+                && plan(PipelineKind::Forward, Capabilities { subgroups: false, early_depth_test: true, ray_queries: false })
         );
     }
 
@@ -813,7 +935,7 @@ mod tests {
             assert_eq!(plan.keeps_reservoirs, plan.shading_methods(true).keeps_pixel_state);
             plan.keeps_reservoirs
         };
-        let late = Capabilities { subgroups: true, early_depth_test: false };
+        let late = Capabilities { subgroups: true, early_depth_test: false, ray_queries: false };
         assert!(keeps(PipelineKind::Visbuffer, RestirReuse::Spatiotemporal, late));
         assert!(keeps(PipelineKind::Forward, RestirReuse::Temporal, SUBGROUPS));
         assert!(!keeps(PipelineKind::Forward, RestirReuse::Spatiotemporal, late));
@@ -833,7 +955,7 @@ mod tests {
             assert_eq!(methods.denoised_constant(), ("DENOISED_LIGHTING", f64::from(u8::from(plan.denoises))));
             plan.denoises
         };
-        let late = Capabilities { subgroups: true, early_depth_test: false };
+        let late = Capabilities { subgroups: true, early_depth_test: false, ray_queries: false };
         assert!(denoised(PipelineKind::Visbuffer, DirectLighting::Restir, Denoise::Svgf, late));
         assert!(denoised(PipelineKind::Forward, DirectLighting::Restir, Denoise::Svgf, SUBGROUPS));
         assert!(!denoised(PipelineKind::Forward, DirectLighting::Restir, Denoise::Svgf, late));
@@ -933,7 +1055,11 @@ mod tests {
         assert_eq!(chosen(&forward, scene(28_000, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
         assert_eq!(chosen(&forward, scene(28_000, DENSE_FRAGMENT_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
         assert_eq!(chosen(&forward, scene(28_000, DENSE_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
-        let alone = MethodChoice::resolve(&forward, Capabilities { subgroups: false, early_depth_test: true }, &scene(1000, 50.0, 0, 0.0));
+        let alone = MethodChoice::resolve(
+            &forward,
+            Capabilities { subgroups: false, early_depth_test: true, ray_queries: false },
+            &scene(1000, 50.0, 0, 0.0),
+        );
         assert_eq!(alone.lights.method, LightMethod::Clustered);
         let mut reflecting = rebuilt.clone();
         reflecting.rays.reflection_bounces = 1;

@@ -5,13 +5,18 @@ use glam::Vec3;
 
 use crate::{
     accel::VolumeStructure,
-    gpu::{cluster_grid::ClusterGrid, readback, scene::PixelStateSize, FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings},
+    gpu::{
+        cluster_grid::ClusterGrid,
+        readback,
+        scene::{PixelStateSize, RayBuffers},
+        FrameUniforms, GpuContext, GpuScene, GpuTimer, PassTimings,
+    },
     particles::{ParticleGrid, ParticleSystem, ParticleVolume},
     passes::{deform::Deform, FrameInputs, Structures},
     pipelines::{FramePipeline, FrameSetup},
-    plan::{Capabilities, FramePlan, Measurements, MethodChoice, ParticlePlan, ShadingMethods, StructurePlan},
+    plan::{Capabilities, FramePlan, Measurements, MethodChoice, ParticlePlan, RayTracer, ShadingMethods, StructurePlan},
     post::PostFrame,
-    rays::{refit::BlasRefit, RayStructure, RayStructureStats},
+    rays::{hardware::HardwareRays, refit::BlasRefit, RayStructure, RayStructureStats},
     scene::ParticleSettings,
     scene::{Aabb, Camera, Scene},
     settings::{DecalMethod, LightMethod, RenderConfig},
@@ -30,6 +35,7 @@ pub struct Renderer {
     pub config: RenderConfig,
     /// The light and decal methods that run, and why.
     methods_chosen: MethodChoice,
+    ray_tracer: RayTracer,
     pipeline: FramePipeline,
     /// What the shading passes were composed with, decided by the configuration, the device and the
     /// structures built for the scene.
@@ -47,6 +53,8 @@ pub struct Renderer {
     /// Deformed meshes' vertices, and their BLASes' refit when the frame traces rays.
     deform: Option<Deform>,
     refit: Option<BlasRefit>,
+    /// The rays' acceleration structures with the hardware back end (`rays/hardware.rs`).
+    hardware_rays: Option<HardwareRays>,
     /// Scene time of the next frame, in seconds: where animated groups are.
     pub time: f32,
     /// Frames rendered so far: a deformed mesh's BLAS copy is the frame's parity.
@@ -123,13 +131,20 @@ impl Renderer {
         let rays = plan.traces_rays.then(|| RayStructure::build(scene)).transpose()?;
         // Without one, the scene binds a hierarchy no ray meets.
         let no_rays = RayStructure::unused();
+        let hardware_rays = match &rays {
+            Some(rays) if plan.hardware_rays => Some(HardwareRays::new(&ctx, rays)?),
+            _ => None,
+        };
         let gpu_scene = GpuScene::upload(
             &ctx,
             scene,
             config.max_texture_size,
             effective_anisotropy(&ctx, &config),
             grid_particles.as_ref().and_then(ParticleSystem::grid_textures),
-            rays.as_ref().filter(|r| !r.nodes.is_empty()).unwrap_or(&no_rays).buffers(),
+            RayBuffers {
+                tlas: hardware_rays.as_ref().map(HardwareRays::tlas),
+                ..rays.as_ref().filter(|r| !r.nodes.is_empty()).unwrap_or(&no_rays).buffers()
+            },
             {
                 let pixels = u64::from(config.width) * u64::from(config.height);
                 PixelStateSize {
@@ -139,6 +154,10 @@ impl Renderer {
                 }
             },
         )?;
+        let hardware_rays = match (hardware_rays, &rays) {
+            (Some(hardware), Some(rays)) => Some(hardware.with_deformed_corners(&ctx, rays, &gpu_scene.ray_triangle_buffer)?),
+            _ => None,
+        };
         // Clustered lists are built every frame only where the method reads them.
         let grid = ClusterGrid::for_resolution(config.width, config.height);
         let clusters = |structure: &StructurePlan| structure.clustered.then_some((grid, &gpu_scene.bind_group_layout));
@@ -197,6 +216,7 @@ impl Renderer {
             scene: gpu_scene,
             config,
             methods_chosen: plan.methods,
+            ray_tracer: plan.ray_tracer,
             pipeline,
             methods,
             lights,
@@ -207,6 +227,7 @@ impl Renderer {
             motion,
             deform,
             refit,
+            hardware_rays,
             keeps_reservoirs: plan.keeps_reservoirs,
             tracks_surface_motion: plan.tracks_surface_motion,
             time: 0.0,
@@ -219,6 +240,11 @@ impl Renderer {
     /// The methods the shading passes were composed with.
     pub fn shading_methods(&self) -> ShadingMethods {
         self.methods
+    }
+
+    /// What traces the point queries: the GPU's ray queries or the software BVHs.
+    pub fn ray_tracer(&self) -> RayTracer {
+        self.ray_tracer
     }
 
     /// The light and decal methods that run, and why (`auto`'s choice, or asked for).
@@ -366,6 +392,9 @@ impl Renderer {
             }
             if let Some(refit) = &self.refit {
                 refit.record(&mut encoder, self.timer.as_mut(), parity);
+            }
+            if let (Some(hardware), Some(rays)) = (&mut self.hardware_rays, &self.rays) {
+                hardware.record(&mut encoder, self.timer.as_mut(), rays, parity, self.motion.is_some());
             }
             let post = PostFrame {
                 camera,

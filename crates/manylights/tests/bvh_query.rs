@@ -57,6 +57,7 @@ fn gpu_query(
         rebuilt_grids: true,
         cell_lists: false,
         light_tree: false,
+        hardware: false,
     };
     let mut structure = VolumeStructure::for_lights(ctx, lights, groups, &plan, None).unwrap();
     let gpu_points: Vec<[f32; 4]> = points.iter().map(|p| p.extend(1.0).to_array()).collect();

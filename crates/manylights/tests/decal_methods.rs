@@ -80,7 +80,7 @@ fn assert_dense_decals_agree(scene: &Scene, cell_lists: bool, time: f32) {
     let ctx = GpuContext::new().expect("a GPU adapter");
     assert!(ctx.features.contains(wgpu::Features::SUBGROUP), "the test needs an adapter with subgroup operations");
     let config = decal_config(128, 72, DecalMethod::Bvh, BvhBuild::CpuOnce);
-    let caps = Capabilities { subgroups: true, early_depth_test: true };
+    let caps = Capabilities { subgroups: true, early_depth_test: true, ray_queries: false };
     let stats = overlap::scene_statistics(scene, Measurements::for_settings(&config, caps)).unwrap();
     let plan = FramePlan::resolve(&config, caps, &stats).unwrap();
     let structure = VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, &plan.decals, None, 0).unwrap();
@@ -292,6 +292,7 @@ fn decals_keep_their_layers_in_leaf_order_and_gpu_rebuilds_refuse_cpu_ordered_us
             rebuilt_grids: true,
             cell_lists: false,
             light_tree: false,
+            hardware: false,
         };
         VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, &plan, clustered.then_some((grid, &frame_layout)), 0)
     };

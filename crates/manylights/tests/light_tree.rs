@@ -171,6 +171,7 @@ fn the_trees_draws_have_the_probabilities_they_report_and_these_sum_to_one() {
         rebuilt_grids: false,
         cell_lists: false,
         light_tree: true,
+        hardware: false,
     };
     let mut structure = VolumeStructure::for_lights(&ctx, &lights, &groups, &plan, None).unwrap();
     // The oracle's tree: the structure builds the same BVH over the same boxes.

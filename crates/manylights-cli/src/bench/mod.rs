@@ -18,13 +18,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 use manylights::{
     files::OutputPlan,
     gpu::GpuContext,
+    plan::{Capabilities, RayTracer},
     scene::{
         self,
         generators::{self, ScatterDecals, ScatterLights},
         paper_scenes::{PaperScene, PAPER_DECAL_SIZE, SMALL_LIGHT_RANGE},
         Camera, Scene,
     },
-    settings::{BvhBuild, DecalMethod, Exposure, LightMethod, Named, PipelineKind, PostSettings, RenderConfig},
+    settings::{BvhBuild, DecalMethod, Exposure, LightMethod, Named, PipelineKind, PostSettings, RayBackend, RaySettings, RenderConfig},
 };
 
 use crate::render::choose_camera;
@@ -98,6 +99,10 @@ pub struct BenchArgs {
     /// Maximum anisotropy of texture filtering (1 = trilinear).
     #[arg(long, default_value_t = 8)]
     anisotropy: u16,
+    /// What traces the bvh methods' point queries: the GPU's ray queries (hardware), our own BVHs
+    /// (software), or hardware where the adapter has ray queries (auto).
+    #[arg(long, value_enum, default_value_t = RayBackend::Auto)]
+    ray_backend: RayBackend,
     /// Folder for bench.md, bench.json, bench.csv and the sweep plots (created if missing).
     #[arg(short, long, default_value = "bench-results")]
     out: PathBuf,
@@ -247,6 +252,8 @@ pub(crate) struct RunInfo {
     pub device: String,
     pub driver: String,
     pub backend: String,
+    /// The ray back end every configuration ran (`plan::RayTracer`).
+    pub ray_tracer: &'static str,
     pub commit: &'static str,
     pub scene: String,
     pub camera: String,
@@ -311,6 +318,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         device: ctx.info.name.clone(),
         driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info).trim().to_owned(),
         backend: format!("{:?}", ctx.info.backend),
+        ray_tracer: RayTracer::resolve(args.ray_backend, Capabilities::of(&ctx))?.name(),
         commit: env!("MANYLIGHTS_COMMIT"),
         scene: args.scene.clone(),
         camera: camera.name.clone(),
@@ -374,6 +382,7 @@ fn plan_jobs(args: &BenchArgs, sweep_max: u32) -> Vec<Job> {
         anisotropy: args.anisotropy,
         // Timings compare methods: a fixed exposure keeps the meter's passes out of them.
         post: PostSettings { exposure: Exposure::Fixed(1.0), ..PostSettings::default() },
+        rays: RaySettings { backend: args.ray_backend, ..RaySettings::default() },
         ..RenderConfig::default()
     };
 

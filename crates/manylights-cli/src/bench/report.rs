@@ -103,6 +103,7 @@ fn json(info: &RunInfo, results: &[Measurement]) -> serde_json::Value {
         "device": info.device,
         "driver": info.driver,
         "backend": info.backend,
+        "ray_backend": info.ray_tracer,
         "commit": info.commit,
         "scene": info.scene,
         "camera": info.camera,
@@ -199,12 +200,13 @@ fn markdown(info: &RunInfo, results: &[Measurement], plots: &[String]) -> String
     let _ = writeln!(md, "# manylights bench{}\n", if info.quick { " (quick)" } else { "" });
     let _ = writeln!(
         md,
-        "- Device: **{}** ({}), driver {}; commit `{}`\n- Scene: `{}` ({} triangles), camera \"{}\", {}×{}; seed {}\n\
+        "- Device: **{}** ({}), driver {}, {} ray backend; commit `{}`\n- Scene: `{}` ({} triangles), camera \"{}\", {}×{}; seed {}\n\
          - Per configuration: {} warm-up frames, then the median (and p95) of {} frames' GPU timestamps, in ms; \
          configurations whose first two frames each took over {} ms are reported as over the cap with the second one's time\n",
         info.device,
         info.backend,
         info.driver,
+        info.ray_tracer,
         info.commit,
         info.scene,
         info.triangles,

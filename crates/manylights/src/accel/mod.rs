@@ -13,11 +13,14 @@
 //! `structure.rs` is the two-level structure the shaders query (`accel/volume_query.wgsl`): a BVH
 //! per group of volumes and a top level over the groups' instances. `clusters.rs` builds the
 //! clustered method's per-froxel lists, the baseline the structures are compared against.
+//! `hardware.rs` is the same two levels built by wgpu as acceleration structures of boxes, for
+//! adapters with ray queries (`settings::RayBackend`).
 
 pub mod bvh;
 pub mod cell_lists;
 pub mod clusters;
 pub mod entry_grid;
+pub mod hardware;
 pub mod lbvh;
 pub mod leaf_order;
 pub mod light_tree;

@@ -28,6 +28,7 @@ use super::{
     clusters::{ClusterBounds, ClusterLists, ClusterNames, Clustering},
     decal_aabb,
     entry_grid::{self, EntryGrid},
+    hardware::HardwareVolumes,
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
     leaf_order::{LeafOrder, LeafOrderTarget},
     light_aabb,
@@ -284,6 +285,9 @@ pub struct Volumes<'a> {
     /// Light groups get their light tree (`light_tree.rs`, `plan::StructurePlan::light_tree`): built
     /// with the CPU's BVHs, or alongside each GPU rebuild (the dynamic group's too).
     pub light_tree: bool,
+    /// The groups are queried through the GPU's ray queries (`hardware.rs`,
+    /// `plan::StructurePlan::hardware`) instead of walked: no software BVH is built.
+    pub hardware: bool,
     pub groups: &'a Groups,
     /// Volumes written on the GPU every frame, after the others: one more group, placed at identity
     /// and rebuilt on the GPU every frame (particle lights, `particles/`).
@@ -337,6 +341,9 @@ pub struct VolumeStructure {
     rebuilt_grids: Option<RebuiltGrids>,
     /// Present for the clustered method; its buffers are bindings 4 and 5, placeholders otherwise.
     clusters: Option<ClusterLists>,
+    /// The acceleration structures ray queries read, with the hardware back end: bound after the
+    /// other bindings ([`hardware_binding`]).
+    hardware: Option<HardwareVolumes>,
     groups: Vec<Group>,
     /// Instances of non-empty groups: instances of empty groups can contain nothing.
     instances: Vec<GroupInstance>,
@@ -377,6 +384,7 @@ impl VolumeStructure {
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: false,
             light_tree: plan.light_tree,
+            hardware: plan.hardware,
             groups,
             dynamic: None,
         };
@@ -407,6 +415,7 @@ impl VolumeStructure {
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: false,
             light_tree: plan.light_tree,
+            hardware: plan.hardware,
             groups,
             dynamic: Some(dynamic),
         };
@@ -455,6 +464,7 @@ impl VolumeStructure {
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: plan.cell_lists,
             light_tree: false,
+            hardware: plan.hardware,
             groups,
             dynamic: None,
         };
@@ -498,6 +508,10 @@ impl VolumeStructure {
         volumes.check()?;
         let label = volumes.kind.label();
         let layout = Layout::new(volumes);
+        // With the hardware back end, `build` says when wgpu builds the groups' structures; the
+        // items are stored in scene order, group after group, as its bottom levels' boxes are.
+        let hardware_rebuilds = build == GroupBuild::GpuEveryFrame;
+        let build = if volumes.hardware { GroupBuild::None } else { build };
         volumes.kind.check_capacity(ctx, layout.count, layout.dynamic_count(), layout.instance_slots)?;
         let fits = |what: &str, bytes: u64| {
             ctx.check_storage_binding(&format!("{label} {what}"), bytes)
@@ -565,8 +579,27 @@ impl VolumeStructure {
             }
             None => None,
         };
-        let bind_group_layout = shading_bind_group_layout(&ctx.device, label);
-        let bind_group = shading_bind_group(ctx, label, &bind_group_layout, buffers.bound(), clusters.as_ref());
+        let hardware = if volumes.hardware {
+            if layout.dynamic.is_some() {
+                return Err(Error::InvalidConfig(format!(
+                    "particle {label}s are written into the software BVH every frame; use --ray-backend software with --particle-method bvh"
+                )));
+            }
+            let group_boxes: Vec<Vec<Aabb>> = layout.ranges.iter().map(|r| volumes.boxes[r.clone()].to_vec()).collect();
+            let scopes = volumes.kind.scopes();
+            Some(HardwareVolumes::new(
+                ctx,
+                label,
+                &group_boxes,
+                layout.instance_slots,
+                hardware_rebuilds,
+                (scopes.groups, scopes.top_level),
+            )?)
+        } else {
+            None
+        };
+        let bind_group_layout = shading_bind_group_layout(&ctx.device, label, hardware.is_some());
+        let bind_group = shading_bind_group(ctx, label, &bind_group_layout, buffers.bound(), clusters.as_ref(), hardware.as_ref());
         Ok(Self {
             bind_group_layout,
             bind_group,
@@ -579,6 +612,7 @@ impl VolumeStructure {
             leaf_order,
             rebuilt_grids,
             clusters,
+            hardware,
             groups,
             instances: layout.instances,
             top_level_builder,
@@ -635,7 +669,14 @@ impl VolumeStructure {
         if clusters.fitted(ctx)? {
             return Ok(true);
         }
-        self.bind_group = shading_bind_group(ctx, self.label, &self.bind_group_layout, self.buffers.bound(), self.clusters.as_ref());
+        self.bind_group = shading_bind_group(
+            ctx,
+            self.label,
+            &self.bind_group_layout,
+            self.buffers.bound(),
+            self.clusters.as_ref(),
+            self.hardware.as_ref(),
+        );
         Ok(false)
     }
 
@@ -663,7 +704,12 @@ impl VolumeStructure {
             None => true,
             Some(t) => t != time && self.instances.iter().any(|i| i.spin.is_some()),
         };
+        if let Some(hardware) = &mut self.hardware {
+            let placed: Vec<(usize, Affine3A)> = self.instances.iter().map(|i| (i.group, i.world_from_group_at(time))).collect();
+            hardware.record(encoder, timer.as_deref_mut(), &placed, moved);
+        }
         if self.instances.is_empty() || !moved {
+            self.built_for = Some(time);
             return Ok(());
         }
         let placed: Vec<(Affine3A, &Group)> = self.instances.iter().map(|i| (i.world_from_group_at(time), &self.groups[i.group])).collect();
@@ -1021,16 +1067,28 @@ fn dynamic_group(ctx: &GpuContext, layout: &Layout, buffers: &Buffers, dynamic: 
     })
 }
 
-/// The layout of the bind group shading reads. Keep in sync with `shading/light_bindings.wgsl` and
-/// `shading/decal_bindings.wgsl`.
-fn shading_bind_group_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
+/// The layout of the bind group shading reads. Keep in sync with `shading/light_bindings.wgsl`,
+/// `shading/decal_bindings.wgsl` and, with the hardware back end, the `*_ray_query.wgsl` enumerations.
+fn shading_bind_group_layout(device: &wgpu::Device, label: &str, hardware: bool) -> wgpu::BindGroupLayout {
     let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
     let mut entries = [0, 1, 2, 3, 4, 5].map(|binding| bindings::storage_read(binding, all)).to_vec();
     entries.push(bindings::uniform(6, all));
     if layout_has_light_tree(label) {
         entries.push(bindings::storage_read(7, all));
     }
+    if hardware {
+        entries.push(bindings::acceleration_structure(hardware_binding(label), all));
+    }
     bindings::layout(device, label, &entries)
+}
+
+/// The binding of the top-level acceleration structure, after the others: 8 for lights, 7 for decals.
+fn hardware_binding(label: &str) -> u32 {
+    if layout_has_light_tree(label) {
+        8
+    } else {
+        7
+    }
 }
 
 /// Lights' groups bind their light tree (a placeholder where they have none); decals' have none.
@@ -1046,6 +1104,7 @@ fn shading_bind_group(
     layout: &wgpu::BindGroupLayout,
     [items, nodes, primitives, instances, first_instance, light_tree]: [&wgpu::Buffer; 6],
     clusters: Option<&ClusterLists>,
+    hardware: Option<&HardwareVolumes>,
 ) -> wgpu::BindGroup {
     let placeholder;
     let (ranges, entries) = match clusters {
@@ -1063,6 +1122,9 @@ fn shading_bind_group(
     let mut resources = [items, nodes, primitives, instances, ranges, entries, first_instance].map(|b| b.as_entire_binding()).to_vec();
     if layout_has_light_tree(label) {
         resources.push(light_tree.as_entire_binding());
+    }
+    if let Some(hardware) = hardware {
+        resources.push(hardware.binding());
     }
     bindings::bind_group(&ctx.device, label, layout, resources)
 }

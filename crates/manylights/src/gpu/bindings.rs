@@ -76,6 +76,11 @@ fn storage_texture_write_dimension(
     }
 }
 
+/// A top-level acceleration structure that ray queries read.
+pub fn acceleration_structure(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry { binding, visibility, ty: wgpu::BindingType::AccelerationStructure { vertex_return: false }, count: None }
+}
+
 pub fn sampler(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry { binding, visibility, ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering), count: None }
 }

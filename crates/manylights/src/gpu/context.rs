@@ -24,7 +24,9 @@ const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     // Our SPIR-V for shaders whose variables need no zeroing (`gpu/spirv.rs`).
     .union(wgpu::Features::PASSTHROUGH_SHADERS)
     // Forward fragments keeping `restir`'s reservoirs test depth first (`plan::FramePlan::keeps_reservoirs`).
-    .union(wgpu::Features::SHADER_EARLY_DEPTH_TEST);
+    .union(wgpu::Features::SHADER_EARLY_DEPTH_TEST)
+    // The hardware ray backend (`settings::RayBackend`, `accel/hardware.rs`).
+    .union(wgpu::Features::EXPERIMENTAL_RAY_QUERY);
 
 /// Clones share the device: several renderers (a benchmark's configurations) can use one.
 #[derive(Clone)]
@@ -47,6 +49,8 @@ pub struct GpuContext {
 pub struct AdapterSummary {
     pub info: wgpu::AdapterInfo,
     pub usable: Result<(), String>,
+    /// The adapter has ray queries (`settings::RayBackend::Hardware`).
+    pub ray_queries: bool,
 }
 
 /// Vulkan, Metal and DX12 unless WGPU_BACKEND says otherwise: the GL backend lacks what the renderer
@@ -90,7 +94,14 @@ fn name_filter() -> Option<String> {
 /// Every adapter wgpu can see, with whether the renderer can use it.
 pub fn list_adapters() -> Vec<AdapterSummary> {
     let adapters = pollster::block_on(instance().enumerate_adapters(wgpu::Backends::all()));
-    adapters.iter().map(|a| AdapterSummary { info: a.get_info(), usable: unusable_reason(a) }).collect()
+    adapters
+        .iter()
+        .map(|a| AdapterSummary {
+            info: a.get_info(),
+            usable: unusable_reason(a),
+            ray_queries: a.features().contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY),
+        })
+        .collect()
 }
 
 impl GpuContext {
@@ -171,12 +182,26 @@ impl GpuContext {
             max_texture_array_layers: available.max_texture_array_layers,
             // Shading binds the scene's, the lights' and the decals' buffers at once.
             max_storage_buffers_per_shader_stage: available.max_storage_buffers_per_shader_stage,
+            max_buffers_and_acceleration_structures_per_shader_stage: available.max_buffers_and_acceleration_structures_per_shader_stage,
             ..wgpu::Limits::default().using_resolution(available.clone())
+        };
+        let limits = if features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY) {
+            limits.using_acceleration_structure_values(available.clone())
+        } else {
+            limits
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("manylights"),
             required_features: features,
             required_limits: limits.clone(),
+            // wgpu calls its ray queries experimental: their API may change, and they are requested
+            // only where the adapter reports every Vulkan extension they need (wgpu-hal's adapter).
+            // SAFETY: the renderer uses them only through wgpu's validated API.
+            experimental_features: if features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY) {
+                unsafe { wgpu::ExperimentalFeatures::enabled() }
+            } else {
+                wgpu::ExperimentalFeatures::disabled()
+            },
             ..Default::default()
         }))
         .map_err(|e| Error::Gpu(format!("cannot open a device on {}: {e}", describe(&info))))?;
@@ -193,6 +218,11 @@ impl GpuContext {
             ctx.loop_limit = super::loop_limit::probe(&ctx)?;
         }
         Ok(ctx)
+    }
+
+    /// Whether the device traces ray queries in hardware (`settings::RayBackend::Hardware`).
+    pub fn has_ray_queries(&self) -> bool {
+        self.features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
     }
 
     pub fn has_timestamps(&self) -> bool {

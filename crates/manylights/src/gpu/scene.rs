@@ -343,7 +343,7 @@ impl GpuScene {
         let (particle_views, particle_sampler) = particle_grid_bindings(device, particle_grids);
         let environment = GpuEnvironment::upload(device, &ctx.queue, scene, ctx.limits.max_texture_dimension_2d);
 
-        let bind_group_layout = Self::create_bind_group_layout(device);
+        let bind_group_layout = Self::create_bind_group_layout(device, rays.tlas.is_some());
         let bind_group = bindings::bind_group(
             device,
             "scene",
@@ -366,6 +366,7 @@ impl GpuScene {
             .chain([&environment.background, &environment.specular, &environment.brdf_table].map(wgpu::BindingResource::TextureView))
             .chain([wgpu::BindingResource::Sampler(&environment.sampler)])
             .chain([&restir_reservoirs, &denoise_samples, &surface_motions].map(|b| b.as_entire_binding()))
+            .chain(rays.tlas.map(wgpu::Tlas::as_binding))
             .collect(),
         );
         ctx.check_errors()?;
@@ -452,8 +453,9 @@ impl GpuScene {
         }
     }
 
-    /// Keep in sync with `shading/scene_bindings.wgsl`.
-    fn create_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    /// Keep in sync with `shading/scene_bindings.wgsl` (and, with the hardware ray back end,
+    /// `rays/trace_ray_query.wgsl`).
+    fn create_bind_group_layout(device: &wgpu::Device, hardware_rays: bool) -> wgpu::BindGroupLayout {
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let float_array = wgpu::TextureSampleType::Float { filterable: true };
         let mut entries = vec![
@@ -485,6 +487,9 @@ impl GpuScene {
         entries.push(bindings::storage_read_write(28, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE));
         entries.push(bindings::storage_read_write(29, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE)); // the denoiser's samples
         entries.push(bindings::storage_read_write(30, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE)); // surface motions
+        if hardware_rays {
+            entries.push(bindings::acceleration_structure(31, all)); // the rays' top-level acceleration structure
+        }
         bindings::layout(device, "scene", &entries)
     }
 
@@ -700,6 +705,9 @@ pub struct RayBuffers<'a> {
     pub top_level_nodes: usize,
     pub triangles: Records<'a>,
     pub instances: Records<'a>,
+    /// The top-level acceleration structure of the hardware back end (`rays/hardware.rs`), bound
+    /// as binding 31 where present.
+    pub tlas: Option<&'a wgpu::Tlas>,
 }
 
 /// A read-only storage buffer, also usable as `usage`; empty arrays get one zeroed element because

@@ -30,6 +30,9 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/enumerate/lights_brute.wgsl", include_str!("../shading/enumerate/lights_brute.wgsl")),
     ("shading/enumerate/lights_bvh.wgsl", include_str!("../shading/enumerate/lights_bvh.wgsl")),
     ("shading/enumerate/lights_tree.wgsl", include_str!("../shading/enumerate/lights_tree.wgsl")),
+    ("shading/enumerate/lights_ray_query.wgsl", include_str!("../shading/enumerate/lights_ray_query.wgsl")),
+    ("shading/enumerate/decals_ray_query.wgsl", include_str!("../shading/enumerate/decals_ray_query.wgsl")),
+    ("shading/volume_ray_query.wgsl", include_str!("../shading/volume_ray_query.wgsl")),
     ("shading/light_tree.wgsl", include_str!("../shading/light_tree.wgsl")),
     ("shading/light_tree_probe.wgsl", include_str!("../shading/light_tree_probe.wgsl")),
     ("shading/random.wgsl", include_str!("../shading/random.wgsl")),
@@ -108,6 +111,9 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/shading_pixel.wgsl", include_str!("../shading/shading_pixel.wgsl")),
     ("rays/ray_types.wgsl", include_str!("../rays/ray_types.wgsl")),
     ("rays/trace.wgsl", include_str!("../rays/trace.wgsl")),
+    ("rays/ray_hit.wgsl", include_str!("../rays/ray_hit.wgsl")),
+    ("rays/trace_ray_query.wgsl", include_str!("../rays/trace_ray_query.wgsl")),
+    ("rays/hardware_corners.wgsl", include_str!("../rays/hardware_corners.wgsl")),
     ("rays/trace_probe.wgsl", include_str!("../rays/trace_probe.wgsl")),
     ("passes/ray_shadows.wgsl", include_str!("../passes/ray_shadows.wgsl")),
     ("passes/shadow_filter.wgsl", include_str!("../passes/shadow_filter.wgsl")),
@@ -145,6 +151,7 @@ impl ShaderDesc {
         let mut out = String::new();
         let mut seen = HashSet::new();
         self.append(self.entry, None, &mut out, &mut seen, &mut Vec::new())?;
+        out = hoist_enables(&out);
         if self.early_depth_test {
             out = out.replace("@fragment\n", "@fragment\n@early_depth_test(force)\n");
         }
@@ -219,6 +226,24 @@ impl ShaderDesc {
         stack.pop();
         Ok(())
     }
+}
+
+/// `source` with its `enable` directives first, each once: WGSL wants them before any declaration,
+/// and an included module may need one (`enable wgpu_ray_query;` in the ray-query enumerations).
+fn hoist_enables(source: &str) -> String {
+    let mut enables: Vec<&str> = Vec::new();
+    let mut body = String::with_capacity(source.len());
+    for line in source.lines() {
+        if line.starts_with("enable ") {
+            if !enables.contains(&line) {
+                enables.push(line);
+            }
+        } else {
+            body.push_str(line);
+            body.push('\n');
+        }
+    }
+    enables.iter().map(|e| format!("{e}\n")).collect::<String>() + &body
 }
 
 /// The embedded file at `path`: its path with the `'static` lifetime the composer keeps, and its text.
@@ -304,6 +329,9 @@ mod tests {
         // Subgroup built-ins need no `enable` in wgpu's WGSL (naga rejects the standard's).
         if ["subgroupAny(", "subgroupBallot("].iter().any(|op| source.contains(op)) {
             capabilities |= naga::valid::Capabilities::SUBGROUP;
+        }
+        if source.contains("enable wgpu_ray_query;") {
+            capabilities |= naga::valid::Capabilities::RAY_QUERY;
         }
         if source.contains("@early_depth_test") {
             capabilities |= naga::valid::Capabilities::EARLY_DEPTH_TEST;

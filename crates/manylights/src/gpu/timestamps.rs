@@ -144,3 +144,20 @@ impl GpuTimer {
         Ok(timings)
     }
 }
+
+/// Records `build` between two timestamps of the scope `name`: acceleration-structure builds are
+/// not passes, so empty compute passes carry the timestamps.
+pub fn timed(
+    encoder: &mut wgpu::CommandEncoder,
+    timer: Option<&mut GpuTimer>,
+    name: &'static str,
+    build: impl FnOnce(&mut wgpu::CommandEncoder),
+) {
+    let Some(timer) = timer else {
+        build(encoder);
+        return;
+    };
+    encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(name), timestamp_writes: Some(timer.span_start(name)) });
+    build(encoder);
+    encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(name), timestamp_writes: Some(timer.span_end(name)) });
+}

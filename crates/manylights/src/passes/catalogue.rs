@@ -34,7 +34,9 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("particles/lights.wgsl"),
         ShaderDesc::new("rays/trace_probe.wgsl"),
         ShaderDesc::new("shading/light_tree_probe.wgsl"),
-        ShaderDesc::new("passes/ray_shadows.wgsl"),
+        ShaderDesc::new("passes/ray_shadows.wgsl").with("RAY_TRACE", "rays/trace.wgsl"),
+        ShaderDesc::new("passes/ray_shadows.wgsl").with("RAY_TRACE", "rays/trace_ray_query.wgsl"),
+        ShaderDesc::new("rays/hardware_corners.wgsl"),
         ShaderDesc::new("passes/shadow_filter.wgsl"),
         ShaderDesc::new("passes/denoise/temporal.wgsl"),
         ShaderDesc::new("passes/denoise/variance.wgsl"),
@@ -76,6 +78,9 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         dense_lights: subgroups && lights == LightMethod::Bvh,
                         decal_cell_lists,
                         light_tree: false,
+                        hardware_lights: false,
+                        hardware_decals: false,
+                        hardware_rays: false,
                         debug_views: false,
                     };
                     if decals.works_in(PipelineKind::Forward) {
@@ -103,6 +108,37 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                 denoised: true,
                 light_tree: true,
                 subgroups,
+                ..Default::default()
+            };
+            shaders.extend([
+                super::forward_shade::shader(methods),
+                super::transparent_shade::shader(methods),
+                super::visbuffer_shade::shader(methods),
+                super::deferred_shade::shader(methods),
+            ]);
+        }
+    }
+    // The hardware back end's ray queries for `bvh` lights and decals, with every direct-lighting
+    // module, with and without reflections and particle grids, and with restir's light tree for the
+    // lights (its draws walk the software tree) while decals are queried.
+    for direct in [DirectShading::Unshadowed, DirectShading::Budget, DirectShading::Reference, DirectShading::Restir] {
+        for (reflections, particles, light_tree) in
+            [(false, ParticleMethod::Off, false), (true, ParticleMethod::Grid, false), (true, ParticleMethod::Off, true)]
+        {
+            let restir = direct == DirectShading::Restir;
+            let methods = ShadingMethods {
+                lights: LightMethod::Bvh,
+                decals: DecalMethod::Bvh,
+                particles,
+                reflections,
+                direct,
+                keeps_pixel_state: restir,
+                denoised: restir,
+                light_tree: light_tree && restir,
+                hardware_lights: !(light_tree && restir),
+                hardware_decals: true,
+                hardware_rays: true,
+                subgroups: true,
                 ..Default::default()
             };
             shaders.extend([

@@ -31,7 +31,7 @@ pub mod visbuffer_shade;
 
 /// A pass's shader that calls the shading core, composed with the WGSL modules of its methods
 /// (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION`, `$DECAL_ENUMERATION` and `$PARTICLE_LIGHTING`,
-/// the light modules `$DIRECT_LIGHTING`; the opaque surfaces' shading passes include `$REFLECTIONS`)
+/// the light modules `$DIRECT_LIGHTING`, rays `$RAY_TRACE`; the opaque surfaces' shading passes include `$REFLECTIONS`)
 /// and of its point queries' walks ([`query_walks`]: `$LIGHT_QUERY`, `$DECAL_QUERY`, `$DECAL_LEAVES`).
 pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: ShadingStage) -> ShaderDesc {
     let walks = query_walks(methods, stage);
@@ -41,6 +41,7 @@ pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: 
         .with("PARTICLE_LIGHTING", methods.particle_lighting_module())
         .with("REFLECTIONS", if methods.reflections { "shading/reflections.wgsl" } else { "shading/reflections_off.wgsl" })
         .with("DIRECT_LIGHTING", methods.direct.module())
+        .with("RAY_TRACE", methods.ray_trace_module())
         .with("LIGHT_QUERY", volume_query_module(walks.lights))
         .with("DECAL_QUERY", volume_query_module(walks.decals))
         .with(

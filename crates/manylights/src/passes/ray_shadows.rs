@@ -21,11 +21,13 @@ pub struct RayShadows {
 }
 
 impl RayShadows {
-    /// The passes for `mode` (not `Off`) over `depth`, with their masks.
+    /// The passes for `mode` (not `Off`) over `depth`, with their masks, tracing through `trace`
+    /// (`ShadingMethods::ray_trace_module`).
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         mode: SunShadows,
+        trace: &'static str,
         depth: &wgpu::TextureView,
         (width, height): (u32, u32),
     ) -> Result<Self> {
@@ -39,7 +41,7 @@ impl RayShadows {
                 bindings::storage_texture_write(1, compute, MASK_FORMAT),                                      // sun visibility
             ],
         );
-        let shader = ShaderDesc::new("passes/ray_shadows.wgsl");
+        let shader = ShaderDesc::new("passes/ray_shadows.wgsl").with("RAY_TRACE", trace);
         let step = ComputeStep::new(device, &shader, "ray_shadows", &[&scene.bind_group_layout, &layout], &[])?;
         let traced = mask(device, "sun visibility (traced)", width, height);
         let traced_view = traced.create_view(&Default::default());

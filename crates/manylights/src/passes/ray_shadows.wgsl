@@ -7,7 +7,7 @@
 // penumbra. Sky pixels see the whole sun, blocked at no distance.
 #include "shading/scene_bindings.wgsl"
 #include "shading/depth_normal.wgsl"
-#include "rays/trace.wgsl"
+#include "$RAY_TRACE"
 #include "shading/pixel_hash.wgsl"
 
 @group(1) @binding(0) var depth: texture_depth_2d;

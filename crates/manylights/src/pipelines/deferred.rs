@@ -90,7 +90,10 @@ impl DeferredPipeline {
             }
             _ => None,
         };
-        let shadows = setup.traced_shadows().map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
+        let shadows = setup
+            .traced_shadows()
+            .map(|mode| RayShadows::new(ctx, scene, mode, setup.methods.ray_trace_module(), &depth_view, (width, height)))
+            .transpose()?;
         Ok(Self {
             raster: GBufferRaster::new(ctx, scene)?,
             decals,

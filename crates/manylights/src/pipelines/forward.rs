@@ -64,7 +64,10 @@ impl ForwardPipeline {
         let targets = FrameTargets::new(&ctx.device, width, height);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let (depth_view, hdr_view) = (view(&targets.depth), view(&targets.hdr));
-        let shadows = setup.traced_shadows().map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
+        let shadows = setup
+            .traced_shadows()
+            .map(|mode| RayShadows::new(ctx, scene, mode, setup.methods.ray_trace_module(), &depth_view, (width, height)))
+            .transpose()?;
         Ok(Self {
             prepass: DepthPrepass::new(ctx, scene)?,
             shade: ForwardShade::new(ctx, scene, methods, structures, shadows.as_ref())?,

@@ -68,7 +68,10 @@ impl VisbufferPipeline {
         let visibility = super::target(&ctx.device, "visibility", width, height, VISIBILITY_FORMAT, usage);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let (visibility_view, depth_view, hdr_view) = (view(&visibility), view(&targets.depth), view(&targets.hdr));
-        let shadows = setup.traced_shadows().map(|mode| RayShadows::new(ctx, scene, mode, &depth_view, (width, height))).transpose()?;
+        let shadows = setup
+            .traced_shadows()
+            .map(|mode| RayShadows::new(ctx, scene, mode, setup.methods.ray_trace_module(), &depth_view, (width, height)))
+            .transpose()?;
         Ok(Self {
             raster: VisbufferRaster::new(ctx, scene)?,
             shade: VisbufferShade::new(

@@ -15,6 +15,7 @@
 //! triangles and instances directly, without an index array. Alpha-blended (glTF `BLEND`)
 //! primitives are left out: rays see opaque and alpha-masked surfaces.
 
+pub mod hardware;
 pub mod refit;
 
 use glam::{Affine3A, Vec3};
@@ -66,7 +67,9 @@ pub struct RayInstance {
     pub first_draw: u32,
     /// The scene instance it places (`Scene::instances`).
     pub scene_instance: u32,
-    pub _pad: u32,
+    /// The first triangle of its BLAS in `RayStructure::triangles`: the hardware back end's BLAS holds
+    /// the same triangles in the same order (`rays/hardware.rs`).
+    pub first_triangle: u32,
 }
 
 /// The scene's ray-tracing hierarchy as uploaded: the TLAS's nodes first (root at 0), then every
@@ -85,6 +88,17 @@ pub struct RayStructure {
     placements: Vec<Placement>,
     /// The BLASes of deformed meshes (`scene::deform`), each stored twice and refitted on the GPU.
     pub deformed: Vec<DeformedBlas>,
+    /// Every stored BLAS, in the order of `nodes` (and so of their roots).
+    pub blases: Vec<BlasSpan>,
+}
+
+/// Where a stored BLAS lies: its root node and its triangles, in leaf order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlasSpan {
+    pub root: u32,
+    pub triangles: std::ops::Range<u32>,
+    /// It holds alpha-masked triangles: a ray must test their material's alpha.
+    pub alpha_masked: bool,
 }
 
 /// A deformed mesh's BLAS, stored twice: a frame refits one copy on the GPU (`rays/refit.rs`) before
@@ -309,8 +323,26 @@ impl RayStructure {
             }
             first_draw += scene.meshes[instance.mesh].primitives.len() as u32;
         }
-        let mut structure =
-            Self { nodes, triangles, instances: Vec::new(), tlas_node_count, blas_build_ms, tlas_build_ms: 0.0, placements, deformed };
+        let blases = blas_roots
+            .iter()
+            .zip(&blas_triangles)
+            .map(|(&root, range)| BlasSpan {
+                root,
+                triangles: range.clone(),
+                alpha_masked: triangles[range.start as usize..range.end as usize].iter().any(|t| t.draw_offset & ALPHA_MASKED != 0),
+            })
+            .collect();
+        let mut structure = Self {
+            nodes,
+            triangles,
+            instances: Vec::new(),
+            tlas_node_count,
+            blas_build_ms,
+            tlas_build_ms: 0.0,
+            placements,
+            deformed,
+            blases,
+        };
         structure.place(&scene.instances.iter().map(|i| i.world_from_local).collect::<Vec<_>>(), 0)?;
         Ok(structure)
     }
@@ -322,6 +354,7 @@ impl RayStructure {
     /// The hierarchy as the scene's bindings hold it (`GpuScene::upload`).
     pub fn buffers(&self) -> RayBuffers<'_> {
         RayBuffers {
+            tlas: None,
             nodes: Records::of(&self.nodes),
             top_level_nodes: self.tlas_node_count,
             triangles: Records::of(&self.triangles),
@@ -363,16 +396,22 @@ impl RayStructure {
             let p = tlas.primitive_indices[node.leaf_first() as usize] as usize;
             let placement = &self.placements[p];
             *node = BvhNode { entry: BvhNode::leaf_entry(self.instances.len() as u32, 1), ..*node };
+            let blas_root = placement.deformed.map_or(placement.blas_root, |d| self.deformed[d].roots[parity]);
             self.instances.push(RayInstance {
                 local_from_world: crate::gpu::scene::affine_rows(&maps[p]),
-                blas_root: placement.deformed.map_or(placement.blas_root, |d| self.deformed[d].roots[parity]),
+                blas_root,
                 first_draw: placement.first_draw,
                 scene_instance: placement.scene_instance as u32,
-                _pad: 0,
+                first_triangle: first_triangle(&self.blases, blas_root),
             });
         }
         self.tlas_build_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(())
+    }
+
+    /// The place in `blases` of the stored BLAS whose root is node `root`.
+    pub fn blas_index(&self, root: u32) -> Option<usize> {
+        self.blases.binary_search_by_key(&root, |b| b.root).ok()
     }
 
     /// The BLAS of mesh instance `instance` (in `instances`) as a standalone BVH with its triangles'
@@ -406,6 +445,11 @@ impl RayStructure {
         let boxes = triangles.iter().map(RayTriangle::bounds).collect();
         (Bvh { nodes, primitive_indices: (0..triangles.len() as u32).collect() }, boxes)
     }
+}
+
+/// The first triangle of the stored BLAS whose root is node `root` (0 for none).
+fn first_triangle(blases: &[BlasSpan], root: u32) -> u32 {
+    blases.binary_search_by_key(&root, |b| b.root).map_or(0, |i| blases[i].triangles.start)
 }
 
 /// The nodes of the tree at `root` (in `nodes`, links absolute), deepest first: children always come

@@ -26,5 +26,6 @@ struct RayInstance {
     blas_root: u32,
     first_draw: u32,
     scene_instance: u32,
-    _pad0: u32,
+    // The first triangle of its BLAS in `ray_triangles` (the hardware back end's primitive 0).
+    first_triangle: u32,
 }

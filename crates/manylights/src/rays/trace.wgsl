@@ -1,24 +1,12 @@
-// Ray traversal of the scene's two-level hierarchy (`rays/mod.rs`), in any stage: closest hit for
-// reflections, any hit for shadows. Like the point query (`accel/volume_query.wgsl`) it needs no
-// stack for any hit: every node says where to go if the ray meets its box (`entry`) and if not (`skip`), and a
-// top-level leaf moves the ray into its instance's mesh space until that BLAS ends (its last `skip`
-// is BVH_END), then resumes the top level. The ray's direction is mapped into mesh space without
-// normalising, so a hit's distance means the same in every instance and prunes them all.
-#include "shading/material.wgsl"
-
-const RAY_NO_HIT: u32 = 0xffffffffu;
-
-struct RayHit {
-    // Distance along the world ray's direction (in units of its length); t_max when nothing was hit.
-    t: f32,
-    // Index into `ray_triangles`; RAY_NO_HIT when nothing was hit.
-    triangle: u32,
-    // Index into `ray_instances`.
-    instance: u32,
-    // Barycentrics of v1 and v2.
-    b1: f32,
-    b2: f32,
-}
+// Ray traversal of the scene's two-level hierarchy (`rays/mod.rs`) by the software back end, in any
+// stage: closest hit for reflections, any hit for shadows (the hardware back end's twin:
+// `rays/trace_ray_query.wgsl`; the plan picks one as `$RAY_TRACE`). Like the point query
+// (`accel/volume_query.wgsl`) it needs no stack for any hit: every node says where to go if the ray
+// meets its box (`entry`) and if not (`skip`), and a top-level leaf moves the ray into its instance's
+// mesh space until that BLAS ends (its last `skip` is BVH_END), then resumes the top level. The ray's
+// direction is mapped into mesh space without normalising, so a hit's distance means the same in
+// every instance and prunes them all.
+#include "rays/ray_hit.wgsl"
 
 // 1 / d with zero components turned into huge finite values of the right sign: slab tests then stay
 // free of 0 · ∞ = NaN for rays starting on a slab's plane.
@@ -74,24 +62,6 @@ fn ray_triangle(origin: vec3<f32>, dir: vec3<f32>, tri: RayTriangle) -> vec3<f32
         return vec3<f32>(-1.0, 0.0, 0.0);
     }
     return vec3<f32>(dot(tri.e2, q) * inverse_det, b1, b2);
-}
-
-// The draw a triangle of an instance belongs to.
-fn ray_triangle_draw(instance: RayInstance, tri: RayTriangle) -> u32 {
-    return instance.first_draw + (tri.draw_offset & ~RAY_ALPHA_MASKED);
-}
-
-// Whether an alpha-masked triangle is solid at barycentrics (b1, b2): its material's alpha at the
-// finest mip, as the raster's alpha test sees it up close.
-fn ray_alpha_covers(instance: RayInstance, tri: RayTriangle, b1: f32, b2: f32) -> bool {
-    let draw = draws[ray_triangle_draw(instance, tri)];
-    let first = draw.first_index + tri.triangle * 3u;
-    let v0 = vertices[draw.base_vertex + indices[first]];
-    let v1 = vertices[draw.base_vertex + indices[first + 1u]];
-    let v2 = vertices[draw.base_vertex + indices[first + 2u]];
-    let uv = vec2<f32>(v0.u, v0.v) * (1.0 - b1 - b2) + vec2<f32>(v1.u, v1.v) * b1 + vec2<f32>(v2.u, v2.v) * b2;
-    let material = materials[draw.material];
-    return material_base_color(material, UvGradients(uv, vec2<f32>(0.0), vec2<f32>(0.0))).a >= material.alpha_cutoff;
 }
 
 // `hit` updated with the triangles of a BLAS leaf (the range [x, y) of `ray_triangles`) that the ray
@@ -267,14 +237,3 @@ fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> RayHit {
     return hit;
 }
 
-// A ray origin off the surface at `p` with geometric normal `n` (facing the side the ray leaves
-// from), far enough that the ray cannot hit the surface it starts on through rounding, yet close
-// enough to keep contact shadows: Wächter and Binder's integer-ulp offset ("A Fast and Robust Method
-// for Avoiding Self-Intersection", Ray Tracing Gems, 2019), plus `extra` metres along n for origins
-// known only to `extra`'s precision (a position rebuilt from depth).
-fn ray_offset_origin(p: vec3<f32>, n: vec3<f32>, extra: f32) -> vec3<f32> {
-    let offset_int = vec3<i32>(n * 256.0);
-    let p_int = bitcast<vec3<f32>>(bitcast<vec3<i32>>(p) + select(offset_int, -offset_int, p < vec3<f32>(0.0)));
-    let near_origin = abs(p) < vec3<f32>(1.0 / 32.0);
-    return select(p_int, p + n * (1.0 / 65536.0), near_origin) + n * extra;
-}

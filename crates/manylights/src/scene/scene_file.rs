@@ -105,6 +105,7 @@
 //! restir_reuse = "temporal"  # what "restir" reuses: "off", "temporal" (default) or "spatiotemporal"
 //! restir_candidates = "auto"  # where "restir" finds candidates: "auto" (default), "enumeration" or "tree"
 //! denoise = "svgf"        # how "restir"'s lighting is denoised: "svgf" (default) or "off"
+//! backend = "auto"        # what traces: "auto" (default: ray queries where the GPU has them), "hardware" or "software"
 //!
 //! [[deform]]              # a travelling wave deforming every mesh of a name (scene::deform::Wave)
 //! mesh = "Curtain"        # required: the glTF mesh name
@@ -266,6 +267,7 @@ struct RaysSpec {
     restir_reuse: Option<String>,
     restir_candidates: Option<String>,
     denoise: Option<String>,
+    backend: Option<String>,
 }
 
 impl RaysSpec {
@@ -276,6 +278,7 @@ impl RaysSpec {
         let restir_candidates =
             self.restir_candidates.as_deref().map(str::parse).transpose().map_err(|e| format!("restir_candidates {e}"))?;
         let denoise = self.denoise.as_deref().map(str::parse).transpose().map_err(|e| format!("denoise {e}"))?;
+        let backend = self.backend.as_deref().map(str::parse).transpose().map_err(|e| format!("backend {e}"))?;
         let overlay = RayOverlay {
             sun_shadows,
             sun_angle_degrees: self.sun_angle,
@@ -288,6 +291,7 @@ impl RaysSpec {
             restir_reuse,
             restir_candidates,
             denoise,
+            backend,
         };
         overlay.settings().validate(Spelling::Key).map_err(inner_message)?;
         Ok(overlay)

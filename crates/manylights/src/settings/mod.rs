@@ -22,7 +22,7 @@ pub use post::{
     MAX_MOTION_BLUR_SAMPLES, POST_TILE,
 };
 pub use rays::{
-    Denoise, DirectLighting, RayOverlay, RaySettings, RestirCandidates, RestirReuse, SunShadows, MAX_REFLECTION_BOUNCES,
+    Denoise, DirectLighting, RayBackend, RayOverlay, RaySettings, RestirCandidates, RestirReuse, SunShadows, MAX_REFLECTION_BOUNCES,
     MAX_RESTIR_SHADOW_RAYS, MAX_SHADOW_RAYS,
 };
 

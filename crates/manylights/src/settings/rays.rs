@@ -83,6 +83,22 @@ named_enum! {
     }
 }
 
+named_enum! {
+    /// What traces the renderer's rays and point queries: the lights' and decals' queries (a zero-length
+    /// ray query whose box candidates get the exact test) and, later, the triangles' rays.
+    pub enum RayBackend {
+        /// The GPU's ray queries where the adapter has them (`wgpu::Features::EXPERIMENTAL_RAY_QUERY`),
+        /// the software BVHs elsewhere (`plan::RayTracer::resolve`).
+        #[default]
+        Auto = "auto",
+        /// The GPU's ray queries through acceleration structures wgpu builds (`accel/hardware.rs`): an
+        /// error on adapters without them.
+        Hardware = "hardware",
+        /// manylights' own BVHs, walked in WGSL (`accel/`, `rays/`): every adapter.
+        Software = "software",
+    }
+}
+
 /// Most rays per pixel towards the sun's disc, and most reflection bounces.
 pub const MAX_SHADOW_RAYS: u32 = 64;
 pub const MAX_REFLECTION_BOUNCES: u32 = 8;
@@ -120,6 +136,8 @@ pub struct RaySettings {
     pub restir_candidates: RestirCandidates,
     /// How `restir`'s lighting is denoised.
     pub denoise: Denoise,
+    /// What traces rays and point queries.
+    pub backend: RayBackend,
 }
 
 impl Default for RaySettings {
@@ -136,6 +154,7 @@ impl Default for RaySettings {
             restir_reuse: RestirReuse::Temporal,
             restir_candidates: RestirCandidates::Auto,
             denoise: Denoise::Svgf,
+            backend: RayBackend::Auto,
         }
     }
 }
@@ -155,6 +174,7 @@ pub struct RayOverlay {
     pub restir_reuse: Option<RestirReuse>,
     pub restir_candidates: Option<RestirCandidates>,
     pub denoise: Option<Denoise>,
+    pub backend: Option<RayBackend>,
 }
 
 impl RayOverlay {
@@ -172,6 +192,7 @@ impl RayOverlay {
             restir_reuse: self.restir_reuse.or(below.restir_reuse),
             restir_candidates: self.restir_candidates.or(below.restir_candidates),
             denoise: self.denoise.or(below.denoise),
+            backend: self.backend.or(below.backend),
         }
     }
 
@@ -190,6 +211,7 @@ impl RayOverlay {
             restir_reuse: self.restir_reuse.unwrap_or(defaults.restir_reuse),
             restir_candidates: self.restir_candidates.unwrap_or(defaults.restir_candidates),
             denoise: self.denoise.unwrap_or(defaults.denoise),
+            backend: self.backend.unwrap_or(defaults.backend),
         }
     }
 }

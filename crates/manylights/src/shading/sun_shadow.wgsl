@@ -1,7 +1,7 @@
 // The sun's visibility at a shading point where no mask was traced for it (transparent surfaces,
 // reflections' hits): a ray of its own. 1 when the sun casts no shadows. Pixels of the opaque
 // surfaces read the ray-traced mask instead (`shading/sun_shadow_mask.wgsl`).
-#include "rays/trace.wgsl"
+#include "$RAY_TRACE"
 
 // One ray towards the sun's centre from `position`, off the surface along its geometric normal `n`
 // (on the side being lit) by `clearance` metres beyond rounding's reach (for positions known only

@@ -10,9 +10,9 @@ use manylights::{
     scene::{Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Vertex},
     settings::BvhBuild,
     settings::ParticleFilter,
-    settings::RaySettings,
     settings::{DecalMethod, LightMethod, ParticleMethod, PipelineKind},
     settings::{Exposure, PostSettings},
+    settings::{RayBackend, RaySettings},
     settings::{RenderConfig, Tonemapper},
 };
 
@@ -38,7 +38,9 @@ pub fn config(width: u32, height: u32, light_method: LightMethod) -> RenderConfi
         tonemapper: Tonemapper::Aces,
         max_texture_size: 256,
         anisotropy: 1,
-        rays: RaySettings::default(),
+        // The software BVHs, which most tests exercise; `ray_backend.rs` compares the hardware
+        // back end with them.
+        rays: RaySettings { backend: RayBackend::Software, ..RaySettings::default() },
         post: still_post(),
         debug_view: Default::default(),
         debug_slice_height: None,

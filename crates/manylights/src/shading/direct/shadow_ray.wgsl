@@ -1,7 +1,7 @@
 // A shadow ray towards a local light, shared by the direct-lighting modules that trace them.
 #include "shading/shading_input.wgsl"
 #include "shading/camera.wgsl"
-#include "rays/trace.wgsl"
+#include "$RAY_TRACE"
 #include "shading/debug_view.wgsl"
 
 // Whether something lies between the surface `s` and the light at `light` (world space).
