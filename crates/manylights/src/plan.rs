@@ -598,10 +598,10 @@ impl FramePlan {
         }
         let light_tree = restir_light_tree(config, particle_lights, stats.light_overlap)?;
         let ray_tracer = RayTracer::resolve(config.rays.backend, caps)?;
-        // Ray queries find the lights a `bvh` enumeration would walk to, and `bvh` decals. The light
-        // tree's draws descend the software BVH; particle lights are written into it every frame.
+        // Ray queries find the lights a `bvh` enumeration would walk to (particle lights too), and
+        // `bvh` decals. The light tree's draws descend the software BVH.
         let hardware = ray_tracer == RayTracer::Hardware;
-        let hardware_lights = hardware && config.light_method == LightMethod::Bvh && !light_tree && !particle_lights;
+        let hardware_lights = hardware && config.light_method == LightMethod::Bvh && !light_tree;
         let hardware_decals = hardware && config.decal_method == DecalMethod::Bvh;
         let pixels_write_alone = config.pipeline != PipelineKind::Forward || caps.early_depth_test;
         let keeps_reservoirs = config.rays.keeps_reservoirs() && pixels_write_alone;
@@ -760,8 +760,8 @@ mod tests {
         assert_eq!(RayTracer::resolve(RayBackend::Software, with).unwrap(), RayTracer::Software);
         let refused = RayTracer::resolve(RayBackend::Hardware, SUBGROUPS).unwrap_err().to_string();
         assert!(refused.contains("--ray-backend software"), "{refused}");
-        // Hardware `bvh` lights and decals build no software BVH and are queried by ray queries;
-        // the light tree's draws and particle lights keep the software BVH.
+        // Hardware `bvh` lights (particle lights too) and decals build no software BVH and are
+        // queried by ray queries; the light tree's draws keep the software BVH.
         let bvh = config(LightMethod::Bvh, DecalMethod::Bvh);
         let plan = FramePlan::resolve(&bvh, with, &SceneStatistics::default()).unwrap();
         assert_eq!(plan.ray_tracer, RayTracer::Hardware);
@@ -773,7 +773,7 @@ mod tests {
         assert!(!clustered.lights.hardware && !clustered.decals.hardware);
         let particles = SceneStatistics { particles: 100, ..Default::default() };
         let exact_particles = RenderConfig { particle_method: ParticleMethod::Bvh, ..bvh.clone() };
-        assert!(!FramePlan::resolve(&exact_particles, with, &particles).unwrap().lights.hardware);
+        assert!(FramePlan::resolve(&exact_particles, with, &particles).unwrap().lights.hardware);
         let tree = RenderConfig {
             rays: RaySettings { direct_lighting: DirectLighting::Restir, restir_candidates: RestirCandidates::Tree, ..Default::default() },
             ..bvh.clone()

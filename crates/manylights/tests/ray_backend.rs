@@ -22,9 +22,11 @@ use manylights::{
         deform::{Deformer, Wave},
         demo::demo_scene,
         generators::{self, ScatterDecals, ScatterLights},
-        Scene,
+        ParticleSettings, Scene,
     },
-    settings::{BvhBuild, DecalMethod, DirectLighting, LightMethod, PipelineKind, RayBackend, RaySettings, RenderConfig, SunShadows},
+    settings::{
+        BvhBuild, DecalMethod, DirectLighting, LightMethod, ParticleMethod, PipelineKind, RayBackend, RaySettings, RenderConfig, SunShadows,
+    },
     Error,
 };
 
@@ -112,6 +114,29 @@ fn hardware_queries_follow_spinning_groups() {
         render_at(&ctx, &scene, backend_config(PipelineKind::Visbuffer, false, BvhBuild::CpuOnce, RayBackend::Software), time);
     let difference = max_abs_difference(&expected, &r.read_hdr().unwrap());
     assert!(difference <= TOLERANCE, "frame 12 differs by {difference} from brute force at its time");
+}
+
+/// Particles as exact lights: their boxes, written every frame, are packed and their bottom level
+/// rebuilt; frames rendered back to back, the particles moving, give the software BVH's image.
+#[test]
+fn hardware_queries_find_moving_particle_lights() {
+    let mut scene = demo_scene();
+    scene.particles = Some(ParticleSettings {
+        count: 3000,
+        seed: 3,
+        emitters: vec![(glam::Vec3::new(0.0, 0.1, 0.0), 3.0), (glam::Vec3::new(2.0, 0.1, -2.0), 2.0)],
+        ..ParticleSettings::default()
+    });
+    let ctx = ray_queries();
+    let [software, hardware] = [RayBackend::Software, RayBackend::Hardware].map(|backend| {
+        let config = backend_config(PipelineKind::Visbuffer, true, BvhBuild::CpuOnce, backend);
+        let mut r = Renderer::new(ctx.clone(), &scene, RenderConfig { particle_method: ParticleMethod::Bvh, ..config }).unwrap();
+        assert_eq!(r.shading_methods().hardware_lights, backend == RayBackend::Hardware);
+        r.render_frames(&scene.cameras[0], 3).unwrap();
+        r.read_hdr().unwrap()
+    });
+    let difference = max_abs_difference(&software, &hardware);
+    assert!(difference <= TOLERANCE, "particle lights: hardware differs from software by {difference}");
 }
 
 /// Reflection hits are shaded by the same core, which queries lights and decals through the

@@ -28,7 +28,7 @@ use super::{
     clusters::{ClusterBounds, ClusterLists, ClusterNames, Clustering},
     decal_aabb,
     entry_grid::{self, EntryGrid},
-    hardware::HardwareVolumes,
+    hardware::{DynamicBoxes, HardwareScopes, HardwareVolumes},
     lbvh::{GpuLbvh, LbvhTarget, TimerSpan},
     leaf_order::{LeafOrder, LeafOrderTarget},
     light_aabb,
@@ -178,6 +178,9 @@ struct Group {
     bounds: Aabb,
     /// Present when the group is rebuilt on the GPU.
     builder: Option<GpuLbvh>,
+    /// The dynamic group's boxes where no LBVH is built over them (the hardware back end builds its
+    /// bottom level from them); with a builder, they are its boxes.
+    boxes: Option<wgpu::Buffer>,
 }
 
 /// Checks that the scene's lights and decals, in their groups' instances, fit their structures on this
@@ -216,6 +219,7 @@ impl VolumeKind {
                 leaf_order: "light_leaf_order",
                 rebuilt_grids: "light_entry_grid_build",
                 clusters: "light_cluster_build",
+                hardware_pack: "light_hardware_boxes",
             },
             VolumeKind::Decals => Scopes {
                 top_level: "decal_tlas_build",
@@ -223,6 +227,7 @@ impl VolumeKind {
                 leaf_order: "decal_leaf_order",
                 rebuilt_grids: "decal_entry_grid_build",
                 clusters: "decal_cluster_build",
+                hardware_pack: "decal_hardware_boxes",
             },
         }
     }
@@ -265,6 +270,8 @@ struct Scopes {
     leaf_order: &'static str,
     rebuilt_grids: &'static str,
     clusters: &'static str,
+    /// Packing the dynamic group's boxes for the hardware back end's bottom level.
+    hardware_pack: &'static str,
 }
 
 /// The volumes a structure is built over: the GPU items (one record per volume) and their boxes, in
@@ -425,16 +432,26 @@ impl VolumeStructure {
     /// Where the GPU writes the dynamic group's volumes, if the structure has one.
     pub fn dynamic_group(&self) -> Option<DynamicTargets<'_>> {
         let group = self.groups.iter().find(|g| g.dynamic)?;
-        let builder = group.builder.as_ref()?;
+        let (boxes, first_primitive, emitters) = match (&group.builder, &group.boxes) {
+            (Some(builder), _) => (builder.boxes(), builder.primitive_base(), builder.emitters()),
+            // The hardware back end: the primitives name the items in box order, and no tree is built.
+            (None, Some(boxes)) => (boxes, self.instance_slots() + group.items.start, &self.buffers.light_tree),
+            (None, None) => return None,
+        };
         Some(DynamicTargets {
             items: &self.buffers.items,
             first_item: group.items.start,
-            boxes: builder.boxes(),
+            boxes,
             primitives: &self.buffers.primitives,
-            first_primitive: builder.primitive_base(),
+            first_primitive,
             light_tree: self.buffers.builds_light_tree,
-            emitters: builder.emitters(),
+            emitters,
         })
+    }
+
+    /// The top level's primitive slots, before the items' scene indices in the primitive array.
+    fn instance_slots(&self) -> u32 {
+        self.instances.len().max(1) as u32
     }
 
     /// The structure over a scene's decals, built as `plan` says; with clustered lists on `clusters`'
@@ -566,7 +583,7 @@ impl VolumeStructure {
             .then(|| RebuiltGrids::new(ctx, volumes.kind.scopes().rebuilt_grids, &buffers.nodes, &buffers.primitives, &rebuilt))
             .transpose()?;
         if let Some(dynamic) = layout.dynamic {
-            groups.push(dynamic_group(ctx, &layout, &buffers, dynamic)?);
+            groups.push(dynamic_group(ctx, &layout, &buffers, dynamic, volumes.hardware)?);
         }
         let top_level_builder = (layout.instances.len() > CPU_TOP_LEVEL_MAX_INSTANCES)
             .then(|| GpuLbvh::with_target(ctx, layout.instance_slots, buffers.target(0, 0, 0, false)))
@@ -580,20 +597,18 @@ impl VolumeStructure {
             None => None,
         };
         let hardware = if volumes.hardware {
-            if layout.dynamic.is_some() {
-                return Err(Error::InvalidConfig(format!(
-                    "particle {label}s are written into the software BVH every frame; use --ray-backend software with --particle-method bvh"
-                )));
-            }
             let group_boxes: Vec<Vec<Aabb>> = layout.ranges.iter().map(|r| volumes.boxes[r.clone()].to_vec()).collect();
+            let dynamic = groups.iter().find(|g| g.dynamic).and_then(|g| g.boxes.as_ref().map(|boxes| (boxes, g.items.len() as u32)));
             let scopes = volumes.kind.scopes();
+            let scopes = HardwareScopes { groups: scopes.groups, top_level: scopes.top_level, pack: scopes.hardware_pack };
             Some(HardwareVolumes::new(
                 ctx,
                 label,
                 &group_boxes,
+                dynamic.map(|(boxes, count)| DynamicBoxes { boxes, count }),
                 layout.instance_slots,
                 hardware_rebuilds,
-                (scopes.groups, scopes.top_level),
+                scopes,
             )?)
         } else {
             None
@@ -1018,7 +1033,7 @@ fn place_groups(
                 Some(builder)
             }
         };
-        groups.push(Group { items, blas_root, grid, dynamic: false, bounds, builder });
+        groups.push(Group { items, blas_root, grid, dynamic: false, bounds, builder, boxes: None });
     }
     Ok((groups, rebuilt))
 }
@@ -1051,20 +1066,34 @@ fn max_leaf_size(leaves: DynamicLeaves) -> u32 {
 }
 
 /// The dynamic group, after the others: a GPU build over boxes a pass writes every frame.
-fn dynamic_group(ctx: &GpuContext, layout: &Layout, buffers: &Buffers, dynamic: DynamicGroup) -> Result<Group> {
+fn dynamic_group(ctx: &GpuContext, layout: &Layout, buffers: &Buffers, dynamic: DynamicGroup, hardware: bool) -> Result<Group> {
     let first = layout.count as u32;
-    let leaf_size = max_leaf_size(dynamic.leaves);
-    let target = buffers.target(layout.dynamic_root, layout.instance_slots + first, first, true);
-    let mut builder = GpuLbvh::with_target(ctx, dynamic.count, target)?.with_max_leaf_size(leaf_size);
-    builder.set_gpu_boxes(&ctx.queue, dynamic.count, &dynamic.bounds)?;
-    Ok(Group {
+    let group = Group {
         items: first..first + dynamic.count,
         blas_root: layout.dynamic_root,
         grid: None,
         dynamic: true,
         bounds: dynamic.bounds,
-        builder: Some(builder),
-    })
+        builder: None,
+        boxes: None,
+    };
+    if hardware {
+        // The items in box order: primitive k names item `first + k` (`DynamicTargets`).
+        let in_order: Vec<u32> = group.items.clone().collect();
+        ctx.queue.write_buffer(&buffers.primitives, u64::from(layout.instance_slots + first) * 4, bytemuck::cast_slice(&in_order));
+        let boxes = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("dynamic group boxes"),
+            size: u64::from(dynamic.count) * std::mem::size_of::<[[f32; 4]; 2]>() as u64,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        return Ok(Group { boxes: Some(boxes), ..group });
+    }
+    let leaf_size = max_leaf_size(dynamic.leaves);
+    let target = buffers.target(layout.dynamic_root, layout.instance_slots + first, first, true);
+    let mut builder = GpuLbvh::with_target(ctx, dynamic.count, target)?.with_max_leaf_size(leaf_size);
+    builder.set_gpu_boxes(&ctx.queue, dynamic.count, &dynamic.bounds)?;
+    Ok(Group { builder: Some(builder), ..group })
 }
 
 /// The layout of the bind group shading reads. Keep in sync with `shading/light_bindings.wgsl`,
@@ -1173,7 +1202,7 @@ mod tests {
             glam::Quat::from_rotation_y(0.5),
             glam::Vec3::new(1.0, 2.0, 3.0),
         );
-        let mut group = Group { items: 4..9, blas_root: 17, grid: None, dynamic: false, bounds: Aabb::EMPTY, builder: None };
+        let mut group = Group { items: 4..9, blas_root: 17, grid: None, dynamic: false, bounds: Aabb::EMPTY, builder: None, boxes: None };
         let gpu = GpuVolumeInstance::new(t, &group);
         let apply =
             |rows: &[[f32; 4]; 3], p: glam::Vec3| glam::Vec3::from_array(rows.map(|r| glam::Vec4::from_array(r).dot(p.extend(1.0))));

@@ -901,7 +901,7 @@ mod tests {
         check!("DenoiseSample", GpuDenoiseSample, [diffuse, normal, specular, albedo, position, specular_albedo]);
         check!("SurfaceMotion", GpuSurfaceMotion, [moved, frame]);
         check!("RayTriangle", crate::rays::RayTriangle, [v0, draw_offset, e1, triangle, e2]);
-        check!("RayInstance", crate::rays::RayInstance, [local_from_world, blas_root, first_draw, scene_instance]);
+        check!("RayInstance", crate::rays::RayInstance, [local_from_world, blas_root, first_draw, scene_instance, first_triangle]);
         check!(
             "FrameUniforms",
             FrameUniforms,

@@ -55,6 +55,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("accel/bvh_types.wgsl", include_str!("../accel/bvh_types.wgsl")),
     ("shading/camera.wgsl", include_str!("../shading/camera.wgsl")),
     ("accel/lbvh.wgsl", include_str!("../accel/lbvh.wgsl")),
+    ("accel/hardware_boxes.wgsl", include_str!("../accel/hardware_boxes.wgsl")),
     ("accel/rebuilt_grid.wgsl", include_str!("../accel/rebuilt_grid.wgsl")),
     ("accel/leaf_order.wgsl", include_str!("../accel/leaf_order.wgsl")),
     ("accel/radix_sort.wgsl", include_str!("../accel/radix_sort.wgsl")),

@@ -37,6 +37,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("passes/ray_shadows.wgsl").with("RAY_TRACE", "rays/trace.wgsl"),
         ShaderDesc::new("passes/ray_shadows.wgsl").with("RAY_TRACE", "rays/trace_ray_query.wgsl"),
         ShaderDesc::new("rays/hardware_corners.wgsl"),
+        ShaderDesc::new("accel/hardware_boxes.wgsl"),
         ShaderDesc::new("passes/shadow_filter.wgsl"),
         ShaderDesc::new("passes/denoise/temporal.wgsl"),
         ShaderDesc::new("passes/denoise/variance.wgsl"),
