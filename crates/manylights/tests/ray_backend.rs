@@ -158,7 +158,8 @@ fn reflection_hits_query_through_the_hardware_backend() {
     assert!(difference <= TOLERANCE, "with reflections: max abs difference {difference} from brute force");
 }
 
-/// A scene with no lights and no decals: the top levels are built over no instance.
+/// A scene with no lights and no decals, then with no triangles either: the top levels are built over
+/// no instance.
 #[test]
 fn hardware_queries_over_no_volumes() {
     let scene = demo_scene();
@@ -170,6 +171,13 @@ fn hardware_queries_over_no_volumes() {
     let (hardware, _) =
         render_at(&ctx, &empty, backend_config(PipelineKind::Visbuffer, true, BvhBuild::CpuOnce, RayBackend::Hardware), 0.0);
     assert!(max_abs_difference(&brute, &hardware) <= TOLERANCE);
+    // And rays traced over no triangles: the rays' top level is built over no instance.
+    let mut bare = empty;
+    bare.meshes.clear();
+    bare.instances.clear();
+    let shadows = backend_config(PipelineKind::Visbuffer, true, BvhBuild::CpuOnce, RayBackend::Hardware);
+    let shadows = RenderConfig { rays: RaySettings { sun_shadows: SunShadows::Hard, ..shadows.rays }, ..shadows };
+    render_at(&ctx, &bare, shadows, 0.0);
 }
 
 /// `auto` takes ray queries where the device has them and the software BVHs where it does not;

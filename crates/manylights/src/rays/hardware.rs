@@ -209,7 +209,8 @@ impl HardwareRays {
                 encoder.build_acceleration_structures(&entries, std::iter::empty());
             });
         }
-        if !moved && rebuilt.is_empty() {
+        // The first frame builds the top level even over no instance: shading binds it.
+        if self.built && !moved && rebuilt.is_empty() {
             return;
         }
         for (slot, instance) in rays.instances.iter().enumerate() {
