@@ -3,7 +3,7 @@
 use manylights::{
     accel::overlap::{decal_overlap, light_overlap, scene_statistics, Overlap},
     gpu::{context, GpuContext},
-    plan::{Capabilities, Measurements, MethodChoice, RayTracer},
+    plan::{Capabilities, Measurements, MethodChoice, RayQueries, RayTracer},
     scene::generators::surface_points,
     settings::{PipelineKind, RayBackend, RenderConfig},
 };
@@ -35,10 +35,12 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         );
     }
     let caps = Capabilities::of(&ctx);
-    match RayTracer::resolve(RayBackend::Auto, caps)? {
-        RayTracer::Hardware => println!("ray backend: auto picks hardware (the adapter has ray queries)"),
-        RayTracer::Software => println!("ray backend: auto picks software (the adapter has no ray queries)"),
-    }
+    let why = match caps.ray_queries {
+        RayQueries::Native => "the adapter runs ray queries",
+        RayQueries::Emulated => "this CPU adapter emulates ray queries, slower than the software BVHs; --ray-backend hardware uses them",
+        RayQueries::None => "the adapter has no ray queries",
+    };
+    println!("ray backend: auto picks {} ({why})", RayTracer::resolve(RayBackend::Auto, caps)?);
     if !ctx.has_timestamps() {
         println!("  (no timestamp queries: --timings is unavailable on this adapter)");
     }

@@ -426,9 +426,10 @@ fn info_lists_the_chosen_adapter() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("chosen:") && stdout.contains("features used"), "{stdout}");
-    // Mesa 25's lavapipe has ray queries, so `auto` picks the hardware ray backend there.
-    let picks = if stdout.contains("[usable, ray queries]") { "hardware" } else { "software" };
-    assert!(stdout.contains(&format!("ray backend: auto picks {picks}")), "{stdout}");
+    // Mesa 25's lavapipe emulates ray queries on the CPU, slower than the software BVHs: `auto`
+    // leaves them to those who ask.
+    assert!(stdout.contains("[usable, ray queries]"), "lavapipe 25 has ray queries: {stdout}");
+    assert!(stdout.contains("ray backend: auto picks software (this CPU adapter emulates ray queries"), "{stdout}");
 }
 
 #[test]

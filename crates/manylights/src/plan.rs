@@ -158,16 +158,18 @@ pub enum RayTracer {
 
 impl RayTracer {
     /// The tracer `backend` asks for on a device with `caps`: `auto` takes ray queries where the
-    /// device has them; `hardware` without them is an error naming the fix.
+    /// GPU runs them, not where a CPU emulates them (lavapipe: 1.3× to 230× slower than the software
+    /// BVHs, BENCHMARKS.md, "Ray back ends"); `hardware` without them is an error naming the fix.
     pub fn resolve(backend: RayBackend, caps: Capabilities) -> Result<Self> {
-        match backend {
-            RayBackend::Auto | RayBackend::Hardware if caps.ray_queries => Ok(Self::Hardware),
-            RayBackend::Hardware => Err(Error::InvalidConfig(
+        match (backend, caps.ray_queries) {
+            (RayBackend::Auto, RayQueries::Native) => Ok(Self::Hardware),
+            (RayBackend::Hardware, RayQueries::Native | RayQueries::Emulated) => Ok(Self::Hardware),
+            (RayBackend::Hardware, RayQueries::None) => Err(Error::InvalidConfig(
                 "--ray-backend hardware needs ray queries (Vulkan's VK_KHR_ray_query and VK_KHR_acceleration_structure), which this \
                  adapter lacks; use --ray-backend software or auto (`manylights info` says which adapters have them)"
                     .into(),
             )),
-            RayBackend::Auto | RayBackend::Software => Ok(Self::Software),
+            (RayBackend::Auto | RayBackend::Software, _) => Ok(Self::Software),
         }
     }
 
@@ -453,7 +455,18 @@ pub struct Capabilities {
     /// Fragment shaders may test depth before they run (`wgpu::Features::SHADER_EARLY_DEPTH_TEST`).
     pub early_depth_test: bool,
     /// Ray queries through acceleration structures wgpu builds (`wgpu::Features::EXPERIMENTAL_RAY_QUERY`).
-    pub ray_queries: bool,
+    pub ray_queries: RayQueries,
+}
+
+/// Whether a device traces ray queries, and where.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum RayQueries {
+    #[default]
+    None,
+    /// A CPU adapter (Mesa's lavapipe) emulates them: right, but slower than the software BVHs.
+    Emulated,
+    /// The GPU runs them.
+    Native,
 }
 
 impl Capabilities {
@@ -462,7 +475,11 @@ impl Capabilities {
         Self {
             subgroups: ctx.features.contains(wgpu::Features::SUBGROUP),
             early_depth_test: ctx.features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST),
-            ray_queries: ctx.has_ray_queries(),
+            ray_queries: match (ctx.has_ray_queries(), ctx.info.device_type) {
+                (false, _) => RayQueries::None,
+                (true, wgpu::DeviceType::Cpu) => RayQueries::Emulated,
+                (true, _) => RayQueries::Native,
+            },
         }
     }
 }
@@ -746,7 +763,7 @@ mod tests {
     use super::*;
     use crate::settings::{Denoise, RestirReuse};
 
-    const SUBGROUPS: Capabilities = Capabilities { subgroups: true, early_depth_test: true, ray_queries: false };
+    const SUBGROUPS: Capabilities = Capabilities { subgroups: true, early_depth_test: true, ray_queries: RayQueries::None };
 
     fn config(lights: LightMethod, decals: DecalMethod) -> RenderConfig {
         RenderConfig { light_method: lights, decal_method: decals, ..Default::default() }
@@ -754,9 +771,13 @@ mod tests {
 
     #[test]
     fn the_ray_backend_takes_ray_queries_where_the_device_has_them() {
-        let with = Capabilities { ray_queries: true, ..SUBGROUPS };
+        let with = Capabilities { ray_queries: RayQueries::Native, ..SUBGROUPS };
         assert_eq!(RayTracer::resolve(RayBackend::Auto, with).unwrap(), RayTracer::Hardware);
         assert_eq!(RayTracer::resolve(RayBackend::Auto, SUBGROUPS).unwrap(), RayTracer::Software);
+        // Emulated on the CPU: asked for only.
+        let emulated = Capabilities { ray_queries: RayQueries::Emulated, ..SUBGROUPS };
+        assert_eq!(RayTracer::resolve(RayBackend::Auto, emulated).unwrap(), RayTracer::Software);
+        assert_eq!(RayTracer::resolve(RayBackend::Hardware, emulated).unwrap(), RayTracer::Hardware);
         assert_eq!(RayTracer::resolve(RayBackend::Software, with).unwrap(), RayTracer::Software);
         let refused = RayTracer::resolve(RayBackend::Hardware, SUBGROUPS).unwrap_err().to_string();
         assert!(refused.contains("--ray-backend software"), "{refused}");
@@ -801,7 +822,7 @@ mod tests {
         let bvh = config(LightMethod::Bvh, DecalMethod::Bvh);
         assert!(Measurements::for_settings(&bvh, SUBGROUPS).decal_centre_overlap);
         assert!(
-            !Measurements::for_settings(&bvh, Capabilities { subgroups: false, early_depth_test: true, ray_queries: false })
+            !Measurements::for_settings(&bvh, Capabilities { subgroups: false, early_depth_test: true, ray_queries: RayQueries::None })
                 .decal_centre_overlap
         );
         let gpu_built = RenderConfig { decal_bvh_build: BvhBuild::GpuEveryFrame, ..bvh.clone() };
@@ -830,9 +851,12 @@ mod tests {
         let sparse_rebuilt = MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP - 1.0));
         assert_eq!(sparse_rebuilt.decals.method, DecalMethod::Clustered);
         // An overlap measured for other settings decides nothing.
-        let alone =
-            FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true, ray_queries: false }, &stats(40.0, 1))
-                .unwrap();
+        let alone = FramePlan::resolve(
+            &bvh,
+            Capabilities { subgroups: false, early_depth_test: true, ray_queries: RayQueries::None },
+            &stats(40.0, 1),
+        )
+        .unwrap();
         assert!(!alone.decals.wide_leaves && !alone.shading_methods(true).dense_decals);
     }
 
@@ -842,9 +866,12 @@ mod tests {
         let exact = RenderConfig { particle_method: ParticleMethod::Bvh, ..config(LightMethod::Bvh, DecalMethod::Off) };
         let plan = FramePlan::resolve(&exact, SUBGROUPS, &with_particles).unwrap();
         assert_eq!(plan.particles, ParticlePlan::Lights(DynamicLeaves::Widest));
-        let alone =
-            FramePlan::resolve(&exact, Capabilities { subgroups: false, early_depth_test: true, ray_queries: false }, &with_particles)
-                .unwrap();
+        let alone = FramePlan::resolve(
+            &exact,
+            Capabilities { subgroups: false, early_depth_test: true, ray_queries: RayQueries::None },
+            &with_particles,
+        )
+        .unwrap();
         assert_eq!(alone.particles, ParticlePlan::Lights(DynamicLeaves::AtMost(16)));
         let brute = RenderConfig { light_method: LightMethod::Brute, ..exact.clone() };
         let err = FramePlan::resolve(&brute, SUBGROUPS, &with_particles).unwrap_err().to_string();
@@ -870,8 +897,12 @@ mod tests {
             assert!(query_walks(dense.shading_methods(true), stage).lights);
         }
         // Without subgroups, nothing is shared out: narrow leaves, walked alone.
-        let alone =
-            FramePlan::resolve(&bvh, Capabilities { subgroups: false, early_depth_test: true, ray_queries: false }, &stats(100.0)).unwrap();
+        let alone = FramePlan::resolve(
+            &bvh,
+            Capabilities { subgroups: false, early_depth_test: true, ray_queries: RayQueries::None },
+            &stats(100.0),
+        )
+        .unwrap();
         assert!(!alone.lights.wide_leaves && !alone.shading_methods(true).dense_lights);
         // Rebuilt groups get entry grids exactly where their queries walk alone.
         assert!(sparse.lights.rebuilt_grids && alone.lights.rebuilt_grids && !dense.lights.rebuilt_grids);
@@ -892,7 +923,7 @@ mod tests {
         assert!(plan(PipelineKind::Visbuffer, SUBGROUPS) && plan(PipelineKind::Deferred, SUBGROUPS));
         assert!(
             !plan(PipelineKind::Forward, SUBGROUPS)
-                && plan(PipelineKind::Forward, Capabilities { subgroups: false, early_depth_test: true, ray_queries: false })
+                && plan(PipelineKind::Forward, Capabilities { subgroups: false, early_depth_test: true, ray_queries: RayQueries::None })
         );
     }
 
@@ -935,7 +966,7 @@ mod tests {
             assert_eq!(plan.keeps_reservoirs, plan.shading_methods(true).keeps_pixel_state);
             plan.keeps_reservoirs
         };
-        let late = Capabilities { subgroups: true, early_depth_test: false, ray_queries: false };
+        let late = Capabilities { subgroups: true, early_depth_test: false, ray_queries: RayQueries::None };
         assert!(keeps(PipelineKind::Visbuffer, RestirReuse::Spatiotemporal, late));
         assert!(keeps(PipelineKind::Forward, RestirReuse::Temporal, SUBGROUPS));
         assert!(!keeps(PipelineKind::Forward, RestirReuse::Spatiotemporal, late));
@@ -955,7 +986,7 @@ mod tests {
             assert_eq!(methods.denoised_constant(), ("DENOISED_LIGHTING", f64::from(u8::from(plan.denoises))));
             plan.denoises
         };
-        let late = Capabilities { subgroups: true, early_depth_test: false, ray_queries: false };
+        let late = Capabilities { subgroups: true, early_depth_test: false, ray_queries: RayQueries::None };
         assert!(denoised(PipelineKind::Visbuffer, DirectLighting::Restir, Denoise::Svgf, late));
         assert!(denoised(PipelineKind::Forward, DirectLighting::Restir, Denoise::Svgf, SUBGROUPS));
         assert!(!denoised(PipelineKind::Forward, DirectLighting::Restir, Denoise::Svgf, late));
@@ -1057,7 +1088,7 @@ mod tests {
         assert_eq!(chosen(&forward, scene(28_000, DENSE_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
         let alone = MethodChoice::resolve(
             &forward,
-            Capabilities { subgroups: false, early_depth_test: true, ray_queries: false },
+            Capabilities { subgroups: false, early_depth_test: true, ray_queries: RayQueries::None },
             &scene(1000, 50.0, 0, 0.0),
         );
         assert_eq!(alone.lights.method, LightMethod::Clustered);

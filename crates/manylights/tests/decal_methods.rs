@@ -13,7 +13,7 @@ use manylights::{
     accel::VolumeStructure,
     gpu::cluster_grid::ClusterGrid,
     gpu::GpuContext,
-    plan::{rebuilt_leaves, Capabilities, FramePlan, GroupBuild, Measurements, StructurePlan},
+    plan::{rebuilt_leaves, Capabilities, FramePlan, GroupBuild, Measurements, RayQueries, StructurePlan},
     renderer::{Image, Renderer},
     scene::{
         self,
@@ -80,7 +80,7 @@ fn assert_dense_decals_agree(scene: &Scene, cell_lists: bool, time: f32) {
     let ctx = GpuContext::new().expect("a GPU adapter");
     assert!(ctx.features.contains(wgpu::Features::SUBGROUP), "the test needs an adapter with subgroup operations");
     let config = decal_config(128, 72, DecalMethod::Bvh, BvhBuild::CpuOnce);
-    let caps = Capabilities { subgroups: true, early_depth_test: true, ray_queries: false };
+    let caps = Capabilities { subgroups: true, early_depth_test: true, ray_queries: RayQueries::None };
     let stats = overlap::scene_statistics(scene, Measurements::for_settings(&config, caps)).unwrap();
     let plan = FramePlan::resolve(&config, caps, &stats).unwrap();
     let structure = VolumeStructure::for_decals(&ctx, &scene.decals, &scene.decal_groups, &plan.decals, None, 0).unwrap();

@@ -4,8 +4,8 @@
 //! frame, grouped and spinning, at reflection hits and with no volumes at all; and the software
 //! hierarchy's image for rays against the scene's triangles (`rays/hardware.rs`): sun shadows hard and
 //! soft, shadowed lamps, reflections and restir's rays, through alpha-masked holes, past moving
-//! instances and deforming meshes. `auto` takes ray queries where the adapter has them and the
-//! software BVHs where it does not.
+//! instances and deforming meshes. `auto` takes ray queries where the GPU runs them and the software
+//! BVHs where a CPU emulates them (lavapipe) or none exist.
 //!
 //! Mesa 25's lavapipe has ray queries (`scripts/ensure-vulkan.sh` installs it); on an adapter without
 //! them the tests that need them fail with that said, rather than pass without testing anything.
@@ -15,7 +15,7 @@ mod common;
 use common::*;
 use manylights::{
     gpu::GpuContext,
-    plan::RayTracer,
+    plan::{Capabilities, RayQueries, RayTracer},
     renderer::{Image, Renderer},
     scene::{
         animation::{Animation, Channel, Interpolation, Node, Property, Trs},
@@ -180,20 +180,27 @@ fn hardware_queries_over_no_volumes() {
     render_at(&ctx, &bare, shadows, 0.0);
 }
 
-/// `auto` takes ray queries where the device has them and the software BVHs where it does not;
-/// `hardware` on a device without them is refused, naming the fix.
+/// `auto` takes ray queries where the GPU runs them (`plan`'s unit tests), not where a CPU adapter
+/// emulates them, as lavapipe does, nor where the device has none; `hardware` takes emulated ones, and
+/// on a device without any is refused, naming the fix.
 #[test]
-fn auto_takes_ray_queries_where_they_exist_and_software_elsewhere() {
+fn auto_takes_ray_queries_only_where_the_gpu_runs_them() {
     let scene = with_decals_and_lights(demo_scene(), 50, 50, 2);
     let auto = backend_config(PipelineKind::Visbuffer, true, BvhBuild::CpuOnce, RayBackend::Auto);
-    let (with, tracer) = render_at(&ray_queries(), &scene, auto.clone(), 0.0);
-    assert_eq!(tracer, RayTracer::Hardware);
+    let ctx = ray_queries();
+    let expected = match Capabilities::of(&ctx).ray_queries {
+        RayQueries::Native => RayTracer::Hardware,
+        RayQueries::Emulated | RayQueries::None => RayTracer::Software,
+    };
+    let (with, tracer) = render_at(&ctx, &scene, auto.clone(), 0.0);
+    assert_eq!(tracer, expected, "{}", ctx.describe());
     let without = GpuContext::without(wgpu::Features::EXPERIMENTAL_RAY_QUERY).unwrap();
     assert!(!without.has_ray_queries());
     let (fallback, tracer) = render_at(&without, &scene, auto, 0.0);
     assert_eq!(tracer, RayTracer::Software);
     assert!(max_abs_difference(&with, &fallback) <= TOLERANCE);
     let hardware = backend_config(PipelineKind::Visbuffer, true, BvhBuild::CpuOnce, RayBackend::Hardware);
+    assert_eq!(render_at(&ctx, &scene, hardware.clone(), 0.0).1, RayTracer::Hardware);
     match Renderer::new(without, &scene, hardware) {
         Err(Error::InvalidConfig(message)) => assert!(message.contains("--ray-backend software"), "{message}"),
         Err(e) => panic!("unexpected error: {e}"),

@@ -100,7 +100,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 8)]
     anisotropy: u16,
     /// What traces the bvh methods' point queries: the GPU's ray queries (hardware), our own BVHs
-    /// (software), or hardware where the adapter has ray queries (auto).
+    /// (software), or hardware where the GPU runs ray queries (auto: not where a CPU emulates them).
     #[arg(long, value_enum, default_value_t = RayBackend::Auto)]
     ray_backend: RayBackend,
     /// Folder for bench.md, bench.json, bench.csv and the sweep plots (created if missing).

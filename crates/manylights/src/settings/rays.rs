@@ -87,12 +87,12 @@ named_enum! {
     /// What traces the renderer's rays and point queries: the lights' and decals' queries (a zero-length
     /// ray query whose box candidates get the exact test) and, later, the triangles' rays.
     pub enum RayBackend {
-        /// The GPU's ray queries where the adapter has them (`wgpu::Features::EXPERIMENTAL_RAY_QUERY`),
-        /// the software BVHs elsewhere (`plan::RayTracer::resolve`).
+        /// The GPU's ray queries where the GPU runs them (`wgpu::Features::EXPERIMENTAL_RAY_QUERY`),
+        /// the software BVHs elsewhere, also where a CPU adapter emulates them (`plan::RayTracer::resolve`).
         #[default]
         Auto = "auto",
-        /// The GPU's ray queries through acceleration structures wgpu builds (`accel/hardware.rs`): an
-        /// error on adapters without them.
+        /// The GPU's ray queries through acceleration structures wgpu builds (`accel/hardware.rs`,
+        /// `rays/hardware.rs`), emulated ones too: an error on adapters without them.
         Hardware = "hardware",
         /// manylights' own BVHs, walked in WGSL (`accel/`, `rays/`): every adapter.
         Software = "software",
