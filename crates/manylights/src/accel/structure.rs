@@ -534,8 +534,10 @@ impl VolumeStructure {
             ctx.check_storage_binding(&format!("{label} {what}"), bytes)
                 .map_err(|m| Error::InvalidScene(format!("{m}; use fewer {label}s")))
         };
-        // Without group BVHs only the top level's nodes are written.
-        let stored_nodes = if build == GroupBuild::None && layout.dynamic.is_none() { layout.top_level_nodes() } else { layout.node_count };
+        // Without group BVHs only the top level's nodes are written (the hardware back end builds none
+        // over the dynamic group either).
+        let no_group_bvh = build == GroupBuild::None && (layout.dynamic.is_none() || volumes.hardware);
+        let stored_nodes = if no_group_bvh { layout.top_level_nodes() } else { layout.node_count };
         let node_bytes = u64::from(stored_nodes) * std::mem::size_of::<BvhNode>() as u64;
         fits("BVH nodes", node_bytes)?;
         // CPU builds first: their entry grids' cells and covers, or cell lists, follow the primitive
