@@ -223,7 +223,7 @@ pub(crate) struct RayArgs {
     restir_candidates: Option<RestirCandidates>,
     #[arg(long, value_enum, help = format!("How --direct-lighting restir's lighting is denoised at the pixels' opaque surfaces: not at all, for error studies (off), or by temporal accumulation and a variance-guided spatial filter (svgf). [default: the scene file's, or {}]", RaySettings::default().denoise))]
     denoise: Option<Denoise>,
-    #[arg(long, value_enum, help = format!("What traces the lights' and decals' point queries: the GPU's ray queries through acceleration structures wgpu builds (hardware: an error where the adapter has none), manylights' own BVHs in WGSL (software), or hardware where the GPU runs ray queries and software where it has none or a CPU adapter such as lavapipe emulates them (auto; `manylights info` says which). [default: the scene file's, or {}]", RaySettings::default().backend))]
+    #[arg(long, value_enum, help = format!("What traces the bvh lights' and decals' point queries and every ray (shadows, reflections, restir's): the GPU's ray queries through acceleration structures wgpu builds (hardware: an error where the adapter has none), manylights' own BVHs in WGSL (software), or hardware where the GPU runs ray queries and software where it has none or a CPU adapter such as lavapipe emulates them (auto; `manylights info` says which). [default: the scene file's, or {}]", RaySettings::default().backend))]
     ray_backend: Option<RayBackend>,
 }
 

@@ -146,8 +146,7 @@ impl MethodChoice {
     }
 }
 
-/// What traces a frame's point queries (and, in time, its rays): `settings::RayBackend` resolved for
-/// the device.
+/// What traces a frame's point queries and rays: `settings::RayBackend` resolved for the device.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RayTracer {
     /// The GPU's ray queries through acceleration structures wgpu builds (`accel/hardware.rs`).

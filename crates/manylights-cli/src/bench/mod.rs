@@ -252,7 +252,7 @@ pub(crate) struct RunInfo {
     pub device: String,
     pub driver: String,
     pub backend: String,
-    /// The ray back end every configuration ran (`plan::RayTracer`).
+    /// The ray back end of the configurations' `bvh` queries (`plan::RayTracer`).
     pub ray_tracer: &'static str,
     pub commit: &'static str,
     pub scene: String,

@@ -6,9 +6,10 @@
 //! minimal length from the shading point (`shading/enumerate/*_ray_query.wgsl`), whose box candidates
 //! get the exact test and are accumulated without committing.
 //!
-//! wgpu has no refit, so groups whose volumes change are rebuilt every frame (`rebuild_every_frame`),
-//! as is the dynamic group (particle lights), from the boxes its pass writes, packed by
-//! `hardware_boxes.wgsl`; the top level is rebuilt whenever an instance moves or a group is rebuilt.
+//! wgpu has no refit: groups asked to be rebuilt every frame (`gpu-every-frame`, as volumes that
+//! change need) are built again from their boxes each frame, and the dynamic group (particle lights)
+//! from the boxes its pass writes, packed by `hardware_boxes.wgsl`; the top level is rebuilt whenever
+//! an instance moves or a group is rebuilt.
 
 use glam::Affine3A;
 use wgpu::util::DeviceExt;

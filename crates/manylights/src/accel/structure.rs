@@ -219,7 +219,7 @@ impl VolumeKind {
                 leaf_order: "light_leaf_order",
                 rebuilt_grids: "light_entry_grid_build",
                 clusters: "light_cluster_build",
-                hardware_pack: "light_hardware_boxes",
+                hardware_pack: "light_hardware_boxes_build",
             },
             VolumeKind::Decals => Scopes {
                 top_level: "decal_tlas_build",
@@ -227,7 +227,7 @@ impl VolumeKind {
                 leaf_order: "decal_leaf_order",
                 rebuilt_grids: "decal_entry_grid_build",
                 clusters: "decal_cluster_build",
-                hardware_pack: "decal_hardware_boxes",
+                hardware_pack: "decal_hardware_boxes_build",
             },
         }
     }
@@ -587,7 +587,7 @@ impl VolumeStructure {
         if let Some(dynamic) = layout.dynamic {
             groups.push(dynamic_group(ctx, &layout, &buffers, dynamic, volumes.hardware)?);
         }
-        let top_level_builder = (layout.instances.len() > CPU_TOP_LEVEL_MAX_INSTANCES)
+        let top_level_builder = (!volumes.hardware && layout.instances.len() > CPU_TOP_LEVEL_MAX_INSTANCES)
             .then(|| GpuLbvh::with_target(ctx, layout.instance_slots, buffers.target(0, 0, 0, false)))
             .transpose()?;
         let Scopes { top_level: top_level_scope, groups: blas_scope, clusters: cluster_scope, .. } = volumes.kind.scopes();
@@ -721,14 +721,28 @@ impl VolumeStructure {
             None => true,
             Some(t) => t != time && self.instances.iter().any(|i| i.spin.is_some()),
         };
+        if !self.instances.is_empty() && moved {
+            self.place_instances(ctx, encoder, timer.as_deref_mut(), time)?;
+        }
         if let Some(hardware) = &mut self.hardware {
             let placed: Vec<(usize, Affine3A)> = self.instances.iter().map(|i| (i.group, i.world_from_group_at(time))).collect();
-            hardware.record(encoder, timer.as_deref_mut(), &placed, moved);
+            hardware.record(encoder, timer, &placed, moved);
         }
-        if self.instances.is_empty() || !moved {
-            self.built_for = Some(time);
-            return Ok(());
-        }
+        self.built_for = Some(time);
+        Ok(())
+    }
+}
+
+impl VolumeStructure {
+    /// Writes the instances as placed at `time`, and the software top level over them where shading
+    /// walks it (the hardware back end builds its own, `HardwareVolumes::record`).
+    fn place_instances(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&mut GpuTimer>,
+        time: f32,
+    ) -> Result<()> {
         let placed: Vec<(Affine3A, &Group)> = self.instances.iter().map(|i| (i.world_from_group_at(time), &self.groups[i.group])).collect();
         let gpu: Vec<GpuVolumeInstance> = placed.iter().map(|(t, g)| GpuVolumeInstance::new(*t, g)).collect();
         let boxes: Vec<Aabb> = placed.iter().map(|(t, g)| g.bounds.transformed(t)).collect();
@@ -738,6 +752,9 @@ impl VolumeStructure {
         ctx.queue.write_buffer(&self.buffers.instances, 0, bytemuck::cast_slice(&gpu));
         let first = GpuFirstInstance { instance: gpu[0], entry_grid_header: placed[0].1.grid.map_or_else(BvhNode::zeroed, |g| g.node) };
         ctx.queue.write_buffer(&self.buffers.first_instance, 0, bytemuck::bytes_of(&first));
+        if self.hardware.is_some() {
+            return Ok(());
+        }
         match &mut self.top_level_builder {
             Some(builder) => {
                 builder.set_boxes(&ctx.queue, &boxes)?;
@@ -750,7 +767,6 @@ impl VolumeStructure {
                 ctx.queue.write_buffer(&self.buffers.primitives, 0, bytemuck::cast_slice(&top_level.primitive_indices));
             }
         }
-        self.built_for = Some(time);
         Ok(())
     }
 }

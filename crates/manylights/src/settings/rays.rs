@@ -84,8 +84,9 @@ named_enum! {
 }
 
 named_enum! {
-    /// What traces the renderer's rays and point queries: the lights' and decals' queries (a zero-length
-    /// ray query whose box candidates get the exact test) and, later, the triangles' rays.
+    /// What traces the renderer's point queries and rays: the `bvh` lights' and decals' queries (a ray
+    /// query of minimal length whose box candidates get the exact test) and every ray against the
+    /// triangles (shadows, reflections, restir's).
     pub enum RayBackend {
         /// The GPU's ray queries where the GPU runs them (`wgpu::Features::EXPERIMENTAL_RAY_QUERY`),
         /// the software BVHs elsewhere, also where a CPU adapter emulates them (`plan::RayTracer::resolve`).
