@@ -18,7 +18,6 @@ use manylights::{
     plan::{Capabilities, RayQueries, RayTracer},
     renderer::{Image, Renderer},
     scene::{
-        animation::{Animation, Channel, Interpolation, Node, Property, Trs},
         deform::{Deformer, Wave},
         demo::demo_scene,
         generators::{self, ScatterDecals, ScatterLights},
@@ -269,20 +268,8 @@ fn hardware_rays_follow_deforming_meshes_and_moving_instances() {
     let floor = scene.meshes.iter().position(|m| m.name == "floor").expect("the demo's floor");
     scene.deformers = vec![Deformer { mesh: floor, wave: Wave { amplitude: 0.2, wavelength: 2.0, speed: 1.0, direction: glam::Vec3::X } }];
     let flying = scene.instances.iter().position(|i| i.mesh != floor).expect("an instance besides the floor");
-    let (scale, rotation, translation) = scene.instances[flying].world_from_local.to_scale_rotation_translation();
-    scene.animation = Some(Animation {
-        name: "fly".into(),
-        nodes: vec![Node::from_trs(None, Trs { translation, rotation, scale })],
-        channels: vec![Channel {
-            node: 0,
-            property: Property::Translation,
-            interpolation: Interpolation::Linear,
-            times: vec![0.0, 0.1],
-            values: vec![translation.extend(0.0), (translation + glam::Vec3::new(0.5, 0.3, 0.0)).extend(0.0)],
-        }],
-        instances: vec![(flying, 0)],
-        duration: 0.1,
-    });
+    let start = scene.instances[flying].world_from_local.w_axis.truncate();
+    fly(&mut scene, flying, start, start + glam::Vec3::new(0.5, 0.3, 0.0));
     let rays = RaySettings { sun_shadows: SunShadows::Hard, reflection_bounces: 1, ..RaySettings::default() };
     assert_rays_agree(&scene, PipelineKind::Visbuffer, rays, 3, "deforming floor");
 }

@@ -9,10 +9,7 @@ use common::*;
 use glam::{Mat4, Quat, Vec3, Vec4};
 use manylights::{
     renderer::Image,
-    scene::{
-        animation::{Animation, Channel, Interpolation, Node, Property, Trs},
-        AlphaMode, Camera, Instance, Material, Mesh, Primitive, Projection, Scene, Sun, Vertex,
-    },
+    scene::{AlphaMode, Camera, Instance, Material, Mesh, Primitive, Projection, Scene, Sun, Vertex},
     settings::RenderConfig,
     settings::{LightMethod, PipelineKind},
     settings::{RaySettings, SunShadows},
@@ -290,21 +287,8 @@ fn soft_shadows_follow_the_fraction_of_the_sun_each_point_sees() {
 /// The box of [`shadow_scene`] flying along x at 60 m/s (one metre, six pixels, a frame), by a glTF
 /// style node animation.
 fn moving_box(scene: &mut Scene) {
-    let (scale, rotation, translation) = scene.instances[1].world_from_local.to_scale_rotation_translation();
     let centre = (BOX_MIN + BOX_MAX) * 0.5;
-    scene.animation = Some(Animation {
-        name: "fly".into(),
-        nodes: vec![Node::from_trs(None, Trs { translation, rotation, scale })],
-        channels: vec![Channel {
-            node: 0,
-            property: Property::Translation,
-            interpolation: Interpolation::Linear,
-            times: vec![0.0, 0.1],
-            values: vec![(centre - Vec3::X * 3.0).extend(0.0), (centre + Vec3::X * 3.0).extend(0.0)],
-        }],
-        instances: vec![(1, 0)],
-        duration: 0.1,
-    });
+    fly(scene, 1, centre - Vec3::X * 3.0, centre + Vec3::X * 3.0);
 }
 
 /// Where the flying box is at `time`, as an offset from its rest place.

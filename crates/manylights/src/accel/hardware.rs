@@ -143,15 +143,15 @@ impl HardwareVolumes {
     }
 
     /// Records this frame's builds, after the dynamic group's boxes are written: the bottom levels
-    /// the first time, those rebuilt every frame each time; the top level over `placed` (each
+    /// the first time, those rebuilt every frame each time; the top level over `placed()` (each
     /// instance's group and its place in the world, in instance-buffer order) when `moved` or a
     /// bottom level was built.
     pub fn record(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         mut timer: Option<&mut GpuTimer>,
-        placed: &[(usize, Affine3A)],
         moved: bool,
+        placed: impl FnOnce() -> Vec<(usize, Affine3A)>,
     ) {
         if let Some(pack) = &self.pack {
             pack.record(encoder, timer.as_deref_mut());
@@ -181,7 +181,7 @@ impl HardwareVolumes {
         if !(first || moved || built_groups) {
             return;
         }
-        for (slot, (group, world_from_group)) in placed.iter().enumerate() {
+        for (slot, (group, world_from_group)) in placed().iter().enumerate() {
             let blas = &self.groups[*group].as_ref().expect("instances place non-empty groups").blas;
             let transform: [f32; 12] = bytemuck::cast(affine_rows(world_from_group));
             self.tlas[slot] = Some(wgpu::TlasInstance::new(blas, transform, slot as u32, 0xff));
@@ -202,19 +202,23 @@ impl HardwareGroup {
             flags: wgpu::AccelerationStructureGeometryFlags::OPAQUE,
         };
         let blas = ctx.device.create_blas(
-            &wgpu::CreateBlasDescriptor {
-                label: Some(&format!("{label} blas")),
-                // Rebuilt every frame: build speed first; built once: trace speed.
-                flags: if rebuilt {
-                    wgpu::AccelerationStructureFlags::PREFER_FAST_BUILD
-                } else {
-                    wgpu::AccelerationStructureFlags::PREFER_FAST_TRACE
-                },
-                update_mode: wgpu::AccelerationStructureUpdateMode::Build,
-            },
+            &blas_descriptor(&format!("{label} blas"), rebuilt),
             wgpu::BlasGeometrySizeDescriptors::AABBs { descriptors: vec![size.clone()] },
         );
         Self { boxes, size, blas, rebuilt }
+    }
+}
+
+/// A bottom level's descriptor: rebuilt every frame, build speed first; built once, trace speed.
+pub(crate) fn blas_descriptor(label: &str, rebuilt_every_frame: bool) -> wgpu::CreateBlasDescriptor<'_> {
+    wgpu::CreateBlasDescriptor {
+        label: Some(label),
+        flags: if rebuilt_every_frame {
+            wgpu::AccelerationStructureFlags::PREFER_FAST_BUILD
+        } else {
+            wgpu::AccelerationStructureFlags::PREFER_FAST_TRACE
+        },
+        update_mode: wgpu::AccelerationStructureUpdateMode::Build,
     }
 }
 

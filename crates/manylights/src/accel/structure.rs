@@ -725,15 +725,13 @@ impl VolumeStructure {
             self.place_instances(ctx, encoder, timer.as_deref_mut(), time)?;
         }
         if let Some(hardware) = &mut self.hardware {
-            let placed: Vec<(usize, Affine3A)> = self.instances.iter().map(|i| (i.group, i.world_from_group_at(time))).collect();
-            hardware.record(encoder, timer, &placed, moved);
+            let instances = &self.instances;
+            hardware.record(encoder, timer, moved, || instances.iter().map(|i| (i.group, i.world_from_group_at(time))).collect());
         }
         self.built_for = Some(time);
         Ok(())
     }
-}
 
-impl VolumeStructure {
     /// Writes the instances as placed at `time`, and the software top level over them where shading
     /// walks it (the hardware back end builds its own, `HardwareVolumes::record`).
     fn place_instances(

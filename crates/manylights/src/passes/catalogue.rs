@@ -111,12 +111,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                 subgroups,
                 ..Default::default()
             };
-            shaders.extend([
-                super::forward_shade::shader(methods),
-                super::transparent_shade::shader(methods),
-                super::visbuffer_shade::shader(methods),
-                super::deferred_shade::shader(methods),
-            ]);
+            shaders.extend(every_shading_pass(methods));
         }
     }
     // The hardware back end's ray queries for `bvh` lights and decals, with every direct-lighting
@@ -142,13 +137,18 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                 subgroups: true,
                 ..Default::default()
             };
-            shaders.extend([
-                super::forward_shade::shader(methods),
-                super::transparent_shade::shader(methods),
-                super::visbuffer_shade::shader(methods),
-                super::deferred_shade::shader(methods),
-            ]);
+            shaders.extend(every_shading_pass(methods));
         }
     }
     shaders
+}
+
+/// The shaders of every pass that calls the shading core, composed with `methods`.
+fn every_shading_pass(methods: ShadingMethods) -> [ShaderDesc; 4] {
+    [
+        super::forward_shade::shader(methods),
+        super::transparent_shade::shader(methods),
+        super::visbuffer_shade::shader(methods),
+        super::deferred_shade::shader(methods),
+    ]
 }

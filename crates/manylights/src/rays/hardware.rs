@@ -15,6 +15,7 @@ use wgpu::util::DeviceExt;
 
 use super::RayStructure;
 use crate::{
+    accel::hardware::blas_descriptor,
     gpu::{bindings, shaders::ShaderDesc, timestamps::timed, GpuContext, GpuTimer},
     Error, Result,
 };
@@ -97,15 +98,7 @@ impl HardwareRays {
             };
             let rebuilt = deformed_roots.contains(&span.root);
             let blas = ctx.device.create_blas(
-                &wgpu::CreateBlasDescriptor {
-                    label: Some("ray blas"),
-                    flags: if rebuilt {
-                        wgpu::AccelerationStructureFlags::PREFER_FAST_BUILD
-                    } else {
-                        wgpu::AccelerationStructureFlags::PREFER_FAST_TRACE
-                    },
-                    update_mode: wgpu::AccelerationStructureUpdateMode::Build,
-                },
+                &blas_descriptor("ray blas", rebuilt),
                 wgpu::BlasGeometrySizeDescriptors::Triangles { descriptors: vec![size.clone()] },
             );
             blases.push(HardwareBlas { size, first_corner: 3 * span.triangles.start, blas });

@@ -7,6 +7,7 @@ use glam::{Mat4, Vec3, Vec4};
 use manylights::{
     gpu::GpuContext,
     renderer::{Image, Renderer},
+    scene::animation::{Animation, Channel, Interpolation, Node, Property, Trs},
     scene::{Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Scene, Vertex},
     settings::BvhBuild,
     settings::ParticleFilter,
@@ -146,4 +147,23 @@ pub fn ambient_wall() -> (Scene, Camera) {
         ..Default::default()
     };
     (scene, Camera::look_at("front", Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 60f32.to_radians(), 0.1))
+}
+
+/// Flies scene instance `instance` (one node, its rest transform kept but for its translation) from
+/// `from` to `to` over 0.1 s by a glTF-style linear translation channel.
+pub fn fly(scene: &mut Scene, instance: usize, from: Vec3, to: Vec3) {
+    let (scale, rotation, translation) = scene.instances[instance].world_from_local.to_scale_rotation_translation();
+    scene.animation = Some(Animation {
+        name: "fly".into(),
+        nodes: vec![Node::from_trs(None, Trs { translation, rotation, scale })],
+        channels: vec![Channel {
+            node: 0,
+            property: Property::Translation,
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 0.1],
+            values: vec![from.extend(0.0), to.extend(0.0)],
+        }],
+        instances: vec![(instance, 0)],
+        duration: 0.1,
+    });
 }
