@@ -283,6 +283,9 @@ impl Renderer {
             for &(instance, transform) in &moved {
                 motion.transforms[instance] = transform;
             }
+            for deformed in &mut rays.deformed {
+                deformed.set_time(time, motion.animation.as_ref());
+            }
             rays.place(&motion.transforms, parity)?;
         }
         self.scene.move_instances(
@@ -387,7 +390,11 @@ impl Renderer {
             self.move_instances(self.time, parity)?;
             // Deformed meshes first: every pass after draws or traces them.
             if let Some(deform) = &mut self.deform {
-                deform.write_time(&self.ctx.queue, self.time);
+                let animation = self.motion.as_ref().and_then(|m| m.animation.as_ref());
+                // As for moving instances: across the loop's restart, no motion.
+                let before = self.time - FRAME_INTERVAL;
+                let before = if animation.is_some_and(|a| a.loops_between(before, self.time)) { self.time } else { before };
+                deform.write_time(&self.ctx.queue, self.time, before, animation);
                 deform.record(&mut encoder, self.timer.as_mut());
             }
             if let Some(refit) = &self.refit {
@@ -458,7 +465,7 @@ impl Renderer {
             if instances.iter().any(|i| i.blas_root == other) || !instances.iter().any(|i| i.blas_root == root) {
                 return fail(format!("mesh {}'s instances are not on copy {parity}", deformed.mesh));
             }
-            let expected = deformed.deformed_triangles(time);
+            let expected = deformed.deformed_triangles(time, self.motion.as_ref().and_then(|m| m.animation.as_ref()));
             let got = &triangles[deformed.triangles[parity].start as usize..deformed.triangles[parity].end as usize];
             if got.len() != expected.len() {
                 return fail(format!("mesh {} has {} triangles stored, {} expected", deformed.mesh, got.len(), expected.len()));

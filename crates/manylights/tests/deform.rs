@@ -62,7 +62,7 @@ fn waving_sheet() -> (Scene, Camera) {
         ],
         sun: Some(Sun { direction: Vec3::new(0.2, -0.8, -1.0), color: Vec3::ONE, illuminance: 3.0 }),
         ambient: Vec3::splat(0.05),
-        deformers: vec![Deformer { mesh: 0, wave: WAVE }],
+        deformers: vec![Deformer::wave(0, WAVE)],
         ..Default::default()
     };
     let camera = Camera::look_at("above", Vec3::new(1.5, 4.0, 5.0), Vec3::new(0.0, 0.5, -1.0), 60f32.to_radians(), 0.1);
@@ -95,7 +95,7 @@ fn every_frame_traces_a_complete_refit_of_its_own_time_from_the_copy_of_its_pari
     scene.meshes.push(grid_mesh(48));
     scene.instances.push(Instance { mesh: 2, world_from_local: Mat4::from_translation(Vec3::new(-2.5, 1.0, -0.5)) });
     let slow = Wave { amplitude: 0.1, wavelength: 0.7, speed: -0.4, direction: Vec3::new(0.6, 0.8, 0.0) };
-    scene.deformers.push(Deformer { mesh: 2, wave: slow });
+    scene.deformers.push(Deformer::wave(2, slow));
     let mut renderer = renderer(&scene, config(PipelineKind::Visbuffer));
     renderer.validate_ray_hierarchy = true;
     // Frames submitted back to back, then one by one: each checked right after it.

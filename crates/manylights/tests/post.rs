@@ -3,8 +3,8 @@
 //! is the post-processed radiance, sRGB-encoded: vignetting follows the cos⁴ law; auto exposure maps
 //! the measured luminance to middle grey, ignores the scene's scale and adapts at its rate; bloom
 //! spreads a bright spot's light around it; depth of field blurs what is out of focus by its circle of
-//! confusion and leaves what is in focus exact; motion blur smears along the camera's and animated
-//! instances' motion and leaves still pixels exact.
+//! confusion and leaves what is in focus exact; motion blur smears along the camera's, animated
+//! instances' and posed (morphed, skinned) meshes' motion and leaves still pixels exact.
 
 mod common;
 
@@ -14,6 +14,8 @@ use manylights::{
     renderer::{Image, FRAME_INTERVAL},
     scene::{
         animation::{Animation, Channel, Interpolation, Node, Property, Trs},
+        deform::{Deformation, Deformer},
+        pose::{MorphOffset, Pose, Skin, WeightKeys},
         Camera, Instance, Material, Scene,
     },
     settings::{AutoExposure, Bloom, DepthOfField, Exposure, MotionBlur, PostSettings},
@@ -341,6 +343,77 @@ fn motion_blur_smears_animated_instances_by_their_own_motion_and_not_still_ones_
     }
     for y in [65, 79] {
         assert!(lit_columns(&blurred, y).is_empty(), "row {y} is lit: the motion is horizontal");
+    }
+}
+
+#[test]
+fn motion_blur_smears_morphed_and_skinned_meshes_by_their_previous_pose() {
+    // Two 12×12-pixel squares 40 px apart, each flying along +x at 10 px a frame: the left one by a
+    // morph target moving every vertex, the right one by the joint it is skinned to. At 0.5 s both
+    // are at their rest place.
+    let half = 6.0 * METRES_PER_PIXEL;
+    let left = Vec3::new(-20.0 * METRES_PER_PIXEL, 0.0, 0.0);
+    let right = Vec3::new(20.0 * METRES_PER_PIXEL, 0.0, 0.0);
+    let (mut scene, camera) = quads(&[(left, (half, half), 1.0), (right, (half, half), 1.0)]);
+    let speed = 10.0 * METRES_PER_PIXEL / FRAME_INTERVAL;
+    // The morph target moves a vertex by `speed` metres at weight 1, in the quad's space (scaled by
+    // `half`); the weight runs from −0.5 to 0.5 over a second.
+    let slide = MorphOffset { position: Vec3::X * speed / half, ..Default::default() };
+    let morphed = Pose {
+        targets: vec![vec![slide; 4]],
+        rest_weights: vec![0.0],
+        weight_keys: Some(WeightKeys { interpolation: Interpolation::Linear, times: vec![0.0, 1.0], values: vec![-0.5, 0.5] }),
+        skin: None,
+    };
+    // The right square is placed by its joint (a skinned mesh's node transform is not used).
+    scene.instances[1].world_from_local = Mat4::IDENTITY;
+    let skinned = Pose {
+        targets: Vec::new(),
+        rest_weights: Vec::new(),
+        weight_keys: None,
+        skin: Some(Skin {
+            joints: vec![0],
+            inverse_bind: vec![Mat4::IDENTITY],
+            sets: 1,
+            joint_indices: vec![[0; 4]; 4],
+            weights: vec![[1.0, 0.0, 0.0, 0.0]; 4],
+        }),
+    };
+    scene.deformers = vec![
+        Deformer { mesh: 0, deformation: Deformation::Pose(Box::new(morphed)) },
+        Deformer { mesh: 1, deformation: Deformation::Pose(Box::new(skinned)) },
+    ];
+    scene.animation = Some(Animation {
+        name: "joint".into(),
+        nodes: vec![Node::from_trs(None, Trs { translation: right, rotation: Quat::IDENTITY, scale: Vec3::new(half, half, 1.0) })],
+        channels: vec![Channel {
+            node: 0,
+            property: Property::Translation,
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 1.0],
+            values: vec![(right - Vec3::X * speed * 0.5).extend(0.0), (right + Vec3::X * speed * 0.5).extend(0.0)],
+        }],
+        instances: Vec::new(),
+        duration: 1.0,
+    });
+    let at = |post| {
+        let mut r = renderer(&scene, post_config(post));
+        r.time = 0.5;
+        r.render(&camera).unwrap();
+        r.read_ldr().unwrap()
+    };
+    let sharp = at(still_post());
+    let blurred = at(PostSettings { motion_blur: Some(MotionBlur { shutter: 1.0, samples: 32, max_length: 32.0 }), ..still_post() });
+    let y = 72;
+    for (name, side) in [("morphed", 0..128), ("skinned", 128..WIDTH)] {
+        let square: Vec<u32> = lit_columns(&sharp, y).into_iter().filter(|x| side.contains(x)).collect();
+        let (first, last) = (square[0], *square.last().unwrap());
+        assert_eq!(last - first + 1, 12, "{name}: {square:?}");
+        let smeared: Vec<u32> = lit_columns(&blurred, y).into_iter().filter(|x| side.contains(x)).collect();
+        assert!(
+            smeared[0] + 4 <= first && smeared[0] + 6 >= first && *smeared.last().unwrap() >= last + 4,
+            "the {name} square must smear about 5 px each way: {smeared:?} vs {first}..={last}"
+        );
     }
 }
 

@@ -266,7 +266,7 @@ fn hardware_rays_give_the_software_image_in_every_pipeline() {
 fn hardware_rays_follow_deforming_meshes_and_moving_instances() {
     let mut scene = traced_scene();
     let floor = scene.meshes.iter().position(|m| m.name == "floor").expect("the demo's floor");
-    scene.deformers = vec![Deformer { mesh: floor, wave: Wave { amplitude: 0.2, wavelength: 2.0, speed: 1.0, direction: glam::Vec3::X } }];
+    scene.deformers = vec![Deformer::wave(floor, Wave { amplitude: 0.2, wavelength: 2.0, speed: 1.0, direction: glam::Vec3::X })];
     let flying = scene.instances.iter().position(|i| i.mesh != floor).expect("an instance besides the floor");
     let start = scene.instances[flying].world_from_local.w_axis.truncate();
     fly(&mut scene, flying, start, start + glam::Vec3::new(0.5, 0.3, 0.0));

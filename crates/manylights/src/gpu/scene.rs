@@ -237,6 +237,9 @@ pub struct GpuScene {
     /// blur's velocity (`post/velocity.rs`) and the surface motions (`passes/surface_motion.rs`), and
     /// which draws belong to animated instances.
     pub previous_transforms: wgpu::Buffer,
+    /// Where each deformed mesh's vertices were a frame before (xyz; w 1 for a deformed vertex),
+    /// written by `passes/deform.rs` for the velocities; one zero record when nothing deforms.
+    pub previous_positions: wgpu::Buffer,
     moving_draws: Vec<bool>,
     /// `restir`'s reservoirs, two per pixel (`GpuReservoir`), or one placeholder.
     restir_reservoirs: wgpu::Buffer,
@@ -300,6 +303,9 @@ impl GpuScene {
         let transforms: Vec<[[f32; 4]; 4]> = draws.iter().map(|d| d.world_from_local).collect();
         let previous_transforms = storage_buffer(device, "previous draw transforms", &transforms, limit, wgpu::BufferUsages::COPY_DST)?;
         let moving_draws = moving_draws(scene, &instance_first_draw, draws.len());
+        let deformed_vertices = if scene.deformers.is_empty() { 0 } else { vertices.len() };
+        let previous_positions =
+            storage_buffer(device, "previous positions", &vec![[0f32; 4]; deformed_vertices], limit, wgpu::BufferUsages::empty())?;
         let material_buffer = storage_buffer(device, "materials", &materials, limit, wgpu::BufferUsages::empty())?;
         // The top level and the instances are rewritten when instances move (`move_instances`).
         // Deformed meshes' BLASes are refitted on the GPU (`rays/refit.rs`); tests read them back.
@@ -385,6 +391,7 @@ impl GpuScene {
             instance_first_draw,
             draw_buffer,
             previous_transforms,
+            previous_positions,
             moving_draws,
             vertex_buffer,
             ray_node_buffer,
@@ -630,7 +637,13 @@ impl DrawList {
 /// Which draws the node animation moves.
 fn moving_draws(scene: &Scene, instance_first_draw: &[usize], draw_count: usize) -> Vec<bool> {
     let mut moving = vec![false; draw_count];
-    for &(instance, _) in scene.animation.iter().flat_map(|a| &a.instances) {
+    let mut deformed = vec![false; scene.meshes.len()];
+    for deformer in &scene.deformers {
+        deformed[deformer.mesh] = true;
+    }
+    let animated = scene.animation.iter().flat_map(|a| &a.instances).map(|&(instance, _)| instance);
+    let deforming = scene.instances.iter().enumerate().filter(|(_, i)| deformed[i.mesh]).map(|(instance, _)| instance);
+    for instance in animated.chain(deforming) {
         let first = instance_first_draw[instance];
         moving[first..first + scene.meshes[scene.instances[instance].mesh].primitives.len()].fill(true);
     }

@@ -67,6 +67,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("passes/deform.wgsl", include_str!("../passes/deform.wgsl")),
     ("shading/debug_view.wgsl", include_str!("../shading/debug_view.wgsl")),
     ("shading/pixel_hash.wgsl", include_str!("../shading/pixel_hash.wgsl")),
+    ("shading/previous_vertex.wgsl", include_str!("../shading/previous_vertex.wgsl")),
     ("rays/refit.wgsl", include_str!("../rays/refit.wgsl")),
     ("post/post_types.wgsl", include_str!("../post/post_types.wgsl")),
     ("post/velocity.wgsl", include_str!("../post/velocity.wgsl")),

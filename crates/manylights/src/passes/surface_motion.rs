@@ -28,13 +28,18 @@ impl SurfaceMotion {
             &[
                 bindings::storage_read(0, wgpu::ShaderStages::VERTEX),
                 bindings::texture(1, wgpu::ShaderStages::FRAGMENT, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2),
+                bindings::storage_read(2, wgpu::ShaderStages::VERTEX),
             ],
         );
         let bind_group = bindings::bind_group(
             device,
             "surface_motion",
             &layout,
-            vec![scene.previous_transforms.as_entire_binding(), wgpu::BindingResource::TextureView(depth)],
+            vec![
+                scene.previous_transforms.as_entire_binding(),
+                wgpu::BindingResource::TextureView(depth),
+                scene.previous_positions.as_entire_binding(),
+            ],
         );
         let module = shaders::create_module(device, &ShaderDesc::new("passes/surface_motion.wgsl"))?;
         let pipeline_layout = bindings::pipeline_layout(device, "surface_motion", &[&scene.bind_group_layout, &layout]);

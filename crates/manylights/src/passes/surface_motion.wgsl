@@ -1,11 +1,12 @@
 // Where animated instances' surfaces were a frame before (`SurfaceMotion`), for the passes that reuse
 // what pixels kept (`restir`'s reservoirs, the denoiser's history): each moving draw again, each vertex
-// through its draw's current and previous transform (`GpuScene::previous_transforms`), the
-// displacement interpolated across the triangle — exact, as both ends are affine in the triangle's
+// through its draw's current and previous transform (`GpuScene::previous_transforms`), a deformed one
+// from its previous pose, the displacement interpolated across the triangle — exact, as both ends are affine in the triangle's
 // points. The fragment whose surface the frame's depth holds writes it at its pixel, stamped with the
 // frame's number; alpha-masked materials' holes are discarded as the raster did.
 #include "shading/scene_bindings.wgsl"
 #include "shading/material.wgsl"
+#include "shading/previous_vertex.wgsl"
 
 @group(1) @binding(0) var<storage, read> previous_world_from_local: array<mat4x4<f32>>;
 @group(1) @binding(1) var depth: texture_depth_2d;
@@ -26,7 +27,7 @@ fn surface_motion_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(inst
     let world = draws[draw_index].world_from_local * position;
     var out: MotionVertex;
     out.clip_position = frame.clip_from_world * world;
-    out.moved = (previous_world_from_local[draw_index] * position).xyz - world.xyz;
+    out.moved = (previous_world_from_local[draw_index] * previous_vertex_position(vertex_index, vertex.position)).xyz - world.xyz;
     out.draw_index = draw_index;
     out.uv = vec2<f32>(vertex.u, vertex.v);
     return out;

@@ -53,12 +53,16 @@ impl Velocity {
         );
 
         let vertex = wgpu::ShaderStages::VERTEX;
-        let raster_layout = bindings::layout(device, "velocity_raster", &[bindings::uniform(0, vertex), bindings::storage_read(1, vertex)]);
+        let raster_layout = bindings::layout(
+            device,
+            "velocity_raster",
+            &[bindings::uniform(0, vertex), bindings::storage_read(1, vertex), bindings::storage_read(2, vertex)],
+        );
         let raster_bind_group = bindings::bind_group(
             device,
             "velocity_raster",
             &raster_layout,
-            vec![uniforms.as_entire_binding(), scene.previous_transforms.as_entire_binding()],
+            vec![uniforms.as_entire_binding(), scene.previous_transforms.as_entire_binding(), scene.previous_positions.as_entire_binding()],
         );
         let module = shaders::create_module(device, &ShaderDesc::new("post/velocity_raster.wgsl"))?;
         let pipeline_layout = bindings::pipeline_layout(device, "velocity_raster", &[&scene.bind_group_layout, &raster_layout]);

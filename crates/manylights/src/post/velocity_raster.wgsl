@@ -1,10 +1,12 @@
 // The moving instances' velocity (see `velocity.wgsl`): each vertex through its draw's current and
-// previous transform (`GpuScene::previous_transforms`) and the previous camera; depth-tested against
+// previous transform (`GpuScene::previous_transforms`), a deformed one from its previous pose, and
+// the previous camera; depth-tested against
 // the frame's depth so only the surfaces it holds are written, alpha-masked materials' holes
 // discarded as the raster did.
 #include "shading/scene_bindings.wgsl"
 #include "shading/material.wgsl"
 #include "post/post_types.wgsl"
+#include "shading/previous_vertex.wgsl"
 
 @group(1) @binding(0) var<uniform> post: PostUniforms;
 @group(1) @binding(1) var<storage, read> previous_world_from_local: array<mat4x4<f32>>;
@@ -25,7 +27,7 @@ fn velocity_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(instance_i
     out.draw_index = draw_index;
     out.uv = vec2<f32>(vertex.u, vertex.v);
     out.clip_position = frame.clip_from_world * (draws[draw_index].world_from_local * position);
-    let previous_world = previous_world_from_local[draw_index] * position;
+    let previous_world = previous_world_from_local[draw_index] * previous_vertex_position(vertex_index, vertex.position);
     out.previous_clip = post.previous_clip_from_relative * vec4<f32>(previous_world.xyz - frame.world_from_view[3].xyz, 1.0);
     return out;
 }

@@ -110,34 +110,48 @@ pub struct BlasSpan {
 #[derive(Clone, Debug)]
 pub struct DeformedBlas {
     pub mesh: usize,
-    pub wave: crate::scene::deform::Wave,
+    pub deformer: crate::scene::deform::Deformer,
     /// Each copy's root node and range of triangles.
     pub roots: [u32; 2],
     pub triangles: [std::ops::Range<u32>; 2],
     /// Each copy's nodes, children before parents (deepest first).
     pub refit_order: [Vec<u32>; 2],
-    /// The mesh's box at rest grown by the wave's amplitude: it holds every deformation, so the top
-    /// level can be built on the CPU before the GPU refits.
+    /// A box, in the space the mesh is deformed in, holding it as the frame deforms it, so the top
+    /// level can be built on the CPU before the GPU refits: a wave's rest box grown by its amplitude,
+    /// a pose's box at the frame's time (`set_time`).
     pub bounds: Aabb,
-    /// Each stored triangle's corners at rest, position and normal, in the copies' order: the CPU
-    /// reference the refit is checked against (`deformed_triangles`).
-    pub rest_corners: Vec<[(Vec3, Vec3); 3]>,
+    /// A pose's measures for its boxes.
+    pose_bounds: Option<crate::scene::pose::PoseBounds>,
+    /// The mesh's vertices at rest, primitive after primitive, and each stored triangle's corners
+    /// among them, in the copies' order: the CPU reference the refit is checked against
+    /// (`deformed_triangles`).
+    pub rest: Vec<crate::scene::Vertex>,
+    pub corners: Vec<[u32; 3]>,
 }
 
 impl DeformedBlas {
     /// The mesh's triangles deformed to `time` on the CPU, as the refit must have stored them.
-    pub fn deformed_triangles(&self, time: f32) -> Vec<RayTriangle> {
-        self.rest_corners
+    pub fn deformed_triangles(&self, time: f32, animation: Option<&crate::scene::animation::Animation>) -> Vec<RayTriangle> {
+        let deformed = self.deformer.deformed(&self.rest, time, animation);
+        self.corners
             .iter()
             .map(|corners| {
-                let [v0, v1, v2] = corners.map(|(p, n)| self.wave.displace(p, n, time).0);
+                let [v0, v1, v2] = corners.map(|c| Vec3::from(deformed[c as usize].position));
                 RayTriangle { v0: v0.to_array(), draw_offset: 0, e1: (v1 - v0).to_array(), triangle: 0, e2: (v2 - v0).to_array(), _pad: 0 }
             })
             .collect()
     }
+
+    /// Moves a pose's box to scene `time`; a wave's holds every time.
+    pub fn set_time(&mut self, time: f32, animation: Option<&crate::scene::animation::Animation>) {
+        if let (crate::scene::deform::Deformation::Pose(pose), Some(measures)) = (&self.deformer.deformation, &self.pose_bounds) {
+            self.bounds = pose.bounds(measures, &crate::scene::deform::pose_state(pose, time, animation));
+        }
+    }
 }
 
-/// A mesh instance as the top level places it: its BLAS and that BLAS's box in its own space.
+/// A mesh instance as the top level places it: its BLAS and that BLAS's box in its own space (a
+/// deformed mesh's is its `DeformedBlas::bounds`).
 #[derive(Clone, Copy, Debug)]
 struct Placement {
     scene_instance: usize,
@@ -196,7 +210,7 @@ impl RayStructure {
         // Deformed meshes are refitted in their own space, and their instances placed on them.
         let mut deformer_of = vec![None; scene.meshes.len()];
         for deformer in &scene.deformers {
-            deformer_of[deformer.mesh] = Some(deformer.wave);
+            deformer_of[deformer.mesh] = Some(deformer);
         }
         for (instance, mesh) in scene.instances.iter().map(|i| i.mesh).enumerate() {
             animated[instance] |= deformer_of[mesh].is_some();
@@ -216,7 +230,7 @@ impl RayStructure {
         for (m, _) in shared.iter().enumerate().filter(|(_, &shared)| shared) {
             if let Some(blas) = build_blas(scene, m, &Affine3A::IDENTITY)? {
                 match deformer_of[m] {
-                    Some(wave) => deformed_blas.push((m, wave, blas)),
+                    Some(deformer) => deformed_blas.push((deformer, blas)),
                     None => {
                         mesh_blas[m] = Some(blases.len());
                         blases.push(blas);
@@ -225,16 +239,16 @@ impl RayStructure {
             }
         }
         let first_copies = blases.len();
-        for (m, _, blas) in &deformed_blas {
-            mesh_blas[*m] = Some(blases.len());
+        for (deformer, blas) in &deformed_blas {
+            mesh_blas[deformer.mesh] = Some(blases.len());
             blases.push(Blas { bvh: blas.bvh.clone(), triangles: blas.triangles.clone() });
         }
         let deformed_blas: Vec<_> = deformed_blas
             .into_iter()
             .enumerate()
-            .map(|(i, (m, wave, blas))| {
+            .map(|(i, (deformer, blas))| {
                 blases.push(blas);
-                (m, wave, first_copies + i, blases.len() - 1)
+                (deformer, first_copies + i, blases.len() - 1)
             })
             .collect();
         let mut instance_blas = Vec::with_capacity(scene.instances.len());
@@ -268,33 +282,52 @@ impl RayStructure {
         }
         let deformed: Vec<DeformedBlas> = deformed_blas
             .iter()
-            .map(|&(mesh, wave, b, second)| {
+            .map(|&(deformer, b, second)| {
+                let mesh = &scene.meshes[deformer.mesh];
                 let roots = [blas_roots[b], blas_roots[second]];
                 let order = refit_order(&nodes, roots[0]);
                 let shift = roots[1] - roots[0];
-                let bounds = blases[b].bvh.nodes[0].bounds();
-                let grow = Vec3::splat(wave.amplitude);
-                let rest_corners = blases[b]
+                // Each primitive's first vertex among the mesh's.
+                let first_vertex: Vec<u32> = mesh
+                    .primitives
+                    .iter()
+                    .scan(0u32, |first, p| {
+                        let this = *first;
+                        *first += p.vertices.len() as u32;
+                        Some(this)
+                    })
+                    .collect();
+                let corners = blases[b]
                     .triangles
                     .iter()
                     .map(|t| {
-                        let primitive = &scene.meshes[mesh].primitives[(t.draw_offset & !ALPHA_MASKED) as usize];
+                        let p = (t.draw_offset & !ALPHA_MASKED) as usize;
                         let first = 3 * t.triangle as usize;
-                        [0, 1, 2].map(|k| {
-                            let v = &primitive.vertices[primitive.indices[first + k] as usize];
-                            (Vec3::from(v.position), Vec3::from(v.normal))
-                        })
+                        [0, 1, 2].map(|k| first_vertex[p] + mesh.primitives[p].indices[first + k])
                     })
                     .collect();
-                DeformedBlas {
-                    rest_corners,
-                    mesh,
-                    wave,
+                let rest: Vec<crate::scene::Vertex> = mesh.primitives.iter().flat_map(|p| p.vertices.iter().copied()).collect();
+                let rest_box = blases[b].bvh.nodes[0].bounds();
+                let (bounds, pose_bounds) = match &deformer.deformation {
+                    crate::scene::deform::Deformation::Wave(wave) => {
+                        let grow = Vec3::splat(wave.amplitude);
+                        (Aabb::new(rest_box.min - grow, rest_box.max + grow), None)
+                    }
+                    crate::scene::deform::Deformation::Pose(pose) => (rest_box, Some(crate::scene::pose::PoseBounds::of(pose, &rest))),
+                };
+                let mut deformed = DeformedBlas {
+                    mesh: deformer.mesh,
+                    deformer: deformer.clone(),
                     roots,
                     triangles: [blas_triangles[b].clone(), blas_triangles[second].clone()],
                     refit_order: [order.clone(), order.iter().map(|n| n + shift).collect()],
-                    bounds: Aabb::new(bounds.min - grow, bounds.max + grow),
-                }
+                    bounds,
+                    pose_bounds,
+                    rest,
+                    corners,
+                };
+                deformed.set_time(0.0, scene.animation.as_ref());
+                deformed
             })
             .collect();
         if triangles.len() > crate::accel::bvh::MAX_PRIMITIVES {
@@ -311,7 +344,7 @@ impl RayStructure {
         for (i, (instance, blas)) in scene.instances.iter().zip(&instance_blas).enumerate() {
             if let Some((b, baked)) = *blas {
                 let deformed_index = deformed.iter().position(|d| d.mesh == instance.mesh && !baked);
-                let bounds = deformed_index.map_or_else(|| blases[b].bvh.nodes[0].bounds(), |d| deformed[d].bounds);
+                let bounds = blases[b].bvh.nodes[0].bounds();
                 placements.push(Placement {
                     scene_instance: i,
                     blas_root: blas_roots[b],
@@ -380,7 +413,8 @@ impl RayStructure {
             let world_from_local =
                 if placement.baked { Affine3A::IDENTITY } else { Affine3A::from_mat4(transforms[placement.scene_instance]) };
             if invertible(&world_from_local) {
-                boxes.push(placement.bounds.transformed(&world_from_local));
+                let bounds = placement.deformed.map_or(placement.bounds, |d| self.deformed[d].bounds);
+                boxes.push(bounds.transformed(&world_from_local));
                 maps.push(world_from_local.inverse());
             } else {
                 boxes.push(Aabb::new(world_from_local.translation.into(), world_from_local.translation.into()));
@@ -563,7 +597,7 @@ mod tests {
     fn a_deformed_mesh_has_two_identical_copies_refitted_children_before_parents() {
         let mut scene = crate::scene::load_path(&assets_dir().join("duck/Duck.glb")).unwrap();
         let wave = crate::scene::deform::Wave { amplitude: 3.0, wavelength: 50.0, speed: 1.0, direction: Vec3::X };
-        scene.deformers.push(crate::scene::deform::Deformer { mesh: 0, wave });
+        scene.deformers.push(crate::scene::deform::Deformer::wave(0, wave));
         let structure = RayStructure::build(&scene).unwrap();
         let [deformed] = &structure.deformed[..] else { panic!() };
         let [a, b] = deformed.roots.map(|r| r as usize);
@@ -590,7 +624,7 @@ mod tests {
         // The top level's box for it holds the mesh however the wave moves it.
         let rest = structure.blas_of(0).0.nodes[0].bounds();
         assert_eq!(deformed.bounds.min, rest.min - Vec3::splat(3.0));
-        assert_eq!(deformed.deformed_triangles(0.7).len(), (t0.end - t0.start) as usize);
+        assert_eq!(deformed.deformed_triangles(0.7, None).len(), (t0.end - t0.start) as usize);
     }
 
     #[test]

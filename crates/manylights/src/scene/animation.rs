@@ -1,6 +1,7 @@
-//! Rigid node animation (glTF animations of node translation, rotation and scale): the node
-//! hierarchy above the scene's mesh instances and keyframed channels, evaluated at a time into each
-//! moving instance's transform. The renderer moves draws and the rays' top level with it every frame.
+//! Node animation (glTF animations of node translation, rotation and scale): the node hierarchy
+//! above the scene's mesh instances and keyframed channels, evaluated at a time into each moving
+//! instance's transform and each skin joint's (`scene::pose`). The renderer moves draws and the rays'
+//! top level with it every frame.
 //!
 //! Samplers interpolate as glTF defines: STEP, LINEAR (rotations by spherical linear interpolation)
 //! and CUBICSPLINE (Hermite, with in- and out-tangents scaled by the keyframe interval); the animation
@@ -126,11 +127,25 @@ impl Animation {
     /// The transform of every moving instance at `time` seconds (looping; a time that is not finite
     /// is the start), as (instance, world from local).
     pub fn instance_transforms(&self, time: f32) -> Vec<(usize, Mat4)> {
-        let t = if self.duration > 0.0 && time.is_finite() { time.rem_euclid(self.duration) } else { 0.0 };
+        let world = self.node_worlds(self.looped(time));
+        self.instances.iter().map(|&(instance, node)| (instance, world[node])).collect()
+    }
+
+    /// `time` within the loop: seconds from its start (0 for a time that is not finite).
+    pub fn looped(&self, time: f32) -> f32 {
+        if self.duration > 0.0 && time.is_finite() {
+            time.rem_euclid(self.duration)
+        } else {
+            0.0
+        }
+    }
+
+    /// Every node's world matrix at `time` seconds into the loop.
+    pub fn node_worlds(&self, time: f32) -> Vec<Mat4> {
         let mut locals: Vec<Mat4> = self.nodes.iter().map(|n| n.rest).collect();
         let mut animated: Vec<Option<Trs>> = vec![None; self.nodes.len()];
         for channel in &self.channels {
-            let v = channel.sample(t);
+            let v = channel.sample(time);
             let trs = animated[channel.node].get_or_insert(self.nodes[channel.node].rest_trs);
             match channel.property {
                 Property::Translation => trs.translation = v.truncate(),
@@ -147,7 +162,7 @@ impl Animation {
         for (node, local) in self.nodes.iter().zip(&locals) {
             world.push(node.parent.map_or(*local, |p| world[p] * *local));
         }
-        self.instances.iter().map(|&(instance, node)| (instance, world[node])).collect()
+        world
     }
 
     /// Whether the loop starts over after `earlier` and by `later` (seconds): poses across it are not a

@@ -1,8 +1,10 @@
 //! Deforming meshes: a procedural travelling wave that moves a mesh's vertices along their normals
-//! every frame (curtains, flags, water), evaluated on the GPU (`passes/deform.wgsl`) for the raster and
-//! the rays alike; the rays' hierarchy of a deformed mesh is refitted on the GPU every frame
-//! (`rays/refit.rs`). This CPU twin is the tests' reference.
+//! (curtains, flags, water), or a glTF skin and morph targets (`scene::pose`), evaluated every frame
+//! on the GPU (`passes/deform.wgsl`) for the raster and the rays alike; the rays' hierarchy of a
+//! deformed mesh is refitted on the GPU every frame (`rays/refit.rs`). This CPU twin is the tests'
+//! reference.
 
+use super::{animation::Animation, pose::Pose, Vertex};
 use glam::Vec3;
 
 /// A sine wave travelling along `direction` (mesh space): each vertex moves along its normal by
@@ -18,11 +20,55 @@ pub struct Wave {
     pub direction: Vec3,
 }
 
-/// A mesh (index into `Scene::meshes`) deformed by a wave: every instance of it deforms alike.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// What moves a deformed mesh's vertices.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Deformation {
+    Wave(Wave),
+    /// Skin and morph targets, posed by the scene's animation.
+    Pose(Box<Pose>),
+}
+
+/// A mesh (index into `Scene::meshes`) and what deforms it: every instance of it deforms alike.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Deformer {
     pub mesh: usize,
-    pub wave: Wave,
+    pub deformation: Deformation,
+}
+
+impl Deformer {
+    pub fn wave(mesh: usize, wave: Wave) -> Self {
+        Self { mesh, deformation: Deformation::Wave(wave) }
+    }
+
+    /// The mesh's vertices (`rest`, primitive after primitive) deformed to `time` (seconds of scene
+    /// time; a pose loops over `animation`'s duration).
+    pub fn deformed(&self, rest: &[Vertex], time: f32, animation: Option<&Animation>) -> Vec<Vertex> {
+        match &self.deformation {
+            Deformation::Wave(wave) => rest
+                .iter()
+                .map(|v| {
+                    let (position, normal) = wave.displace(Vec3::from(v.position), Vec3::from(v.normal), time);
+                    Vertex { position: position.into(), normal: normal.into(), ..*v }
+                })
+                .collect(),
+            Deformation::Pose(pose) => {
+                let state = pose_state(pose, time, animation);
+                rest.iter().enumerate().map(|(i, v)| pose.pose_vertex(i, v, &state)).collect()
+            }
+        }
+    }
+}
+
+/// A pose's state at scene `time`: the animation's nodes and weights there (looped over its
+/// duration); without an animation (and so without a skin), its weights at `time`.
+pub fn pose_state(pose: &Pose, time: f32, animation: Option<&Animation>) -> super::pose::PoseState {
+    match animation {
+        Some(animation) => {
+            let t = animation.looped(time);
+            pose.state(t, &animation.node_worlds(t))
+        }
+        None => pose.state(time, &[]),
+    }
 }
 
 impl Wave {

@@ -5,11 +5,14 @@
 //! tangents come from MikkTSpace, and every image is decoded to RGBA8 (in parallel: decoding dominates
 //! load time). Cameras and `KHR_lights_punctual` lights on nodes are placed with their node's world
 //! transform. The first animation's node channels (translation, rotation, scale) become the scene's
-//! [`animation::Animation`] of the instances they move.
+//! [`animation::Animation`] of the instances and skin joints they move; skins and morph targets, with
+//! the animation's morph weights, become deformers posing their mesh (`scene::pose`). Vertex
+//! attributes may be quantized (`KHR_mesh_quantization`).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use ::gltf::accessor::util::{Item, Iter as AccessorIter};
 use ::gltf::accessor::{Accessor, DataType, Dimensions};
 use ::gltf::animation::util::ReadOutputs;
 use ::gltf::buffer;
@@ -18,15 +21,17 @@ use ::gltf::mesh::{Mode, Semantic};
 use ::gltf::{Document, Node};
 use glam::{Affine2, Mat2, Mat4, Quat, Vec2, Vec3, Vec4};
 
+use super::deform::{Deformation, Deformer};
 use super::{
-    animation, tangents, AlphaMode, Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Projection, Scene, Sun, Texture,
+    animation, pose, tangents, AlphaMode, Camera, Instance, Light, LightKind, Material, Mesh, Primitive, Projection, Scene, Sun, Texture,
     TextureRef, Vertex, Wrap, DEFAULT_LIGHT_CUTOFF,
 };
 use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::{Error, Result};
 
 /// Extensions a file may require; every other optional extension is ignored.
-const SUPPORTED_EXTENSIONS: [&str; 3] = ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_texture_transform"];
+const SUPPORTED_EXTENSIONS: [&str; 4] =
+    ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_mesh_quantization", "KHR_texture_transform"];
 
 /// Loads a glTF 2.0 file and everything it references (buffers and images next to it).
 pub fn import(path: &Path) -> Result<Scene> {
@@ -512,23 +517,18 @@ fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Text
     let mut materials: Vec<Material> = document.materials().map(|m| material(&m)).collect::<Result<_, _>>()?;
     // Primitives without a material use the glTF default material, appended only when needed.
     let default_material = materials.len();
-    let meshes = document.meshes().map(|m| mesh(&m, buffers, default_material)).collect::<Result<Vec<_>, _>>()?;
+    let (meshes, sources): (Vec<Mesh>, Vec<_>) =
+        document.meshes().map(|m| mesh(&m, buffers, default_material)).collect::<Result<Vec<_>, _>>()?.into_iter().unzip();
     if meshes.iter().flat_map(|m| &m.primitives).any(|p| p.material == default_material) {
         materials.push(Material::default());
     }
     let mut scene = Scene { meshes, materials, textures, ..Scene::default() };
-    // Skinned meshes draw in their bind pose: no joint transforms are applied (deforming meshes are
-    // procedural waves, `scene::deform`).
-    if document.skins().len() > 0 {
-        log::warn!(
-            "the glTF file has {} skin(s): skinning is not supported, skinned meshes are drawn in their bind pose",
-            document.skins().len()
-        );
-    }
     match document.default_scene().or_else(|| document.scenes().next()) {
         Some(root) => {
             let hierarchy = place_nodes(&mut scene, &root, document.nodes().len())?;
-            scene.animation = node_animation(document, buffers, &hierarchy)?;
+            let (animation, weight_keys) = node_animation(document, buffers, &hierarchy)?;
+            scene.animation = animation;
+            scene.deformers = poses(document, buffers, &mut scene, &hierarchy, &sources, weight_keys)?;
         }
         None => log::warn!("the glTF file has no scene: nothing is placed"),
     }
@@ -537,56 +537,70 @@ fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Text
 }
 
 /// The placed node hierarchy, for animation: nodes in the order visited (parents first), each
-/// glTF node's place in it, and the node each mesh instance was placed by.
+/// glTF node's place in it, and for each mesh instance the node it was placed by (its place, and
+/// the glTF node).
 struct Hierarchy {
     nodes: Vec<animation::Node>,
     index_of: Vec<Option<usize>>,
     instance_nodes: Vec<usize>,
+    instance_sources: Vec<usize>,
 }
 
-/// The file's first animation, as the moving instances' node animation; `None` without animations
-/// or when none moves an instance. Morph-target weights are not supported and are skipped.
-fn node_animation(document: &Document, buffers: &[buffer::Data], hierarchy: &Hierarchy) -> Result<Option<animation::Animation>, String> {
-    let Some(source) = document.animations().next() else { return Ok(None) };
-    if document.animations().len() > 1 {
-        log::warn!("the glTF file has {} animations: only the first plays", document.animations().len());
-    }
-    let name = source.name().map_or_else(|| format!("animation {}", source.index()), str::to_owned);
+/// Morph weights keyframed by the animation, by glTF node.
+type WeightKeysByNode = Vec<Option<pose::WeightKeys>>;
+
+/// The file's first animation, as the node animation of the moving instances and the skins' joints,
+/// and the morph weights it keys; no animation where none moves an instance and no mesh is skinned.
+fn node_animation(
+    document: &Document,
+    buffers: &[buffer::Data],
+    hierarchy: &Hierarchy,
+) -> Result<(Option<animation::Animation>, WeightKeysByNode), String> {
+    let mut weight_keys = vec![None; document.nodes().len()];
     let mut channels = Vec::new();
-    for channel in source.channels() {
-        // Channels of nodes outside the scene move nothing placed.
-        let Some(node) = hierarchy.index_of[channel.target().node().index()] else { continue };
-        let sampler = channel.sampler();
-        let at = |what: &str| format!("{name}: channel {} {what}", channel.index());
-        check_accessor(&sampler.input(), &at("keyframe times"), Dimensions::Scalar, FLOATS)?;
-        let (dimensions, types) = match channel.target().property() {
-            ::gltf::animation::Property::Translation | ::gltf::animation::Property::Scale => (Dimensions::Vec3, FLOATS),
-            ::gltf::animation::Property::Rotation => (Dimensions::Vec4, SIGNED_NORMALIZED),
-            ::gltf::animation::Property::MorphTargetWeights => (Dimensions::Scalar, SIGNED_NORMALIZED),
-        };
-        check_accessor(&sampler.output(), &at("keyframe values"), dimensions, types)?;
-        let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-        let times: Vec<f32> =
-            reader.read_inputs().ok_or_else(|| format!("{name}: channel {} has no keyframe times", channel.index()))?.collect();
-        let to_vec4 = |v: [f32; 3]| Vec3::from(v).extend(0.0);
-        let (property, values): (_, Vec<Vec4>) = match reader.read_outputs() {
-            Some(ReadOutputs::Translations(values)) => (animation::Property::Translation, values.map(to_vec4).collect()),
-            Some(ReadOutputs::Scales(values)) => (animation::Property::Scale, values.map(to_vec4).collect()),
-            Some(ReadOutputs::Rotations(values)) => (animation::Property::Rotation, values.into_f32().map(Vec4::from).collect()),
-            Some(ReadOutputs::MorphTargetWeights(_)) => {
-                log::warn!("{name}: morph target weights are not supported; channel {} skipped", channel.index());
-                continue;
-            }
-            None => return Err(format!("{name}: channel {} has no keyframe values", channel.index())),
-        };
-        let interpolation = match channel.sampler().interpolation() {
-            ::gltf::animation::Interpolation::Step => animation::Interpolation::Step,
-            ::gltf::animation::Interpolation::Linear => animation::Interpolation::Linear,
-            ::gltf::animation::Interpolation::CubicSpline => animation::Interpolation::CubicSpline,
-        };
-        channels.push(animation::Channel { node, property, interpolation, times, values });
+    let mut name = String::from("rest pose");
+    if let Some(source) = document.animations().next() {
+        if document.animations().len() > 1 {
+            log::warn!("the glTF file has {} animations: only the first plays", document.animations().len());
+        }
+        name = source.name().map_or_else(|| format!("animation {}", source.index()), str::to_owned);
+        for channel in source.channels() {
+            // Channels of nodes outside the scene move nothing placed.
+            let target = channel.target().node();
+            let Some(node) = hierarchy.index_of[target.index()] else { continue };
+            let sampler = channel.sampler();
+            let at = |what: &str| format!("{name}: channel {} {what}", channel.index());
+            check_accessor(&sampler.input(), &at("keyframe times"), Dimensions::Scalar, FLOATS)?;
+            let (dimensions, types) = match channel.target().property() {
+                ::gltf::animation::Property::Translation | ::gltf::animation::Property::Scale => (Dimensions::Vec3, FLOATS),
+                ::gltf::animation::Property::Rotation => (Dimensions::Vec4, SIGNED_NORMALIZED),
+                ::gltf::animation::Property::MorphTargetWeights => (Dimensions::Scalar, SIGNED_NORMALIZED),
+            };
+            check_accessor(&sampler.output(), &at("keyframe values"), dimensions, types)?;
+            let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let times: Vec<f32> =
+                reader.read_inputs().ok_or_else(|| format!("{name}: channel {} has no keyframe times", channel.index()))?.collect();
+            let interpolation = match channel.sampler().interpolation() {
+                ::gltf::animation::Interpolation::Step => animation::Interpolation::Step,
+                ::gltf::animation::Interpolation::Linear => animation::Interpolation::Linear,
+                ::gltf::animation::Interpolation::CubicSpline => animation::Interpolation::CubicSpline,
+            };
+            let to_vec4 = |v: [f32; 3]| Vec3::from(v).extend(0.0);
+            let (property, values): (_, Vec<Vec4>) = match reader.read_outputs() {
+                Some(ReadOutputs::Translations(values)) => (animation::Property::Translation, values.map(to_vec4).collect()),
+                Some(ReadOutputs::Scales(values)) => (animation::Property::Scale, values.map(to_vec4).collect()),
+                Some(ReadOutputs::Rotations(values)) => (animation::Property::Rotation, values.into_f32().map(Vec4::from).collect()),
+                Some(ReadOutputs::MorphTargetWeights(values)) => {
+                    weight_keys[target.index()] = Some(pose::WeightKeys { interpolation, times, values: values.into_f32().collect() });
+                    continue;
+                }
+                None => return Err(format!("{name}: channel {} has no keyframe values", channel.index())),
+            };
+            channels.push(animation::Channel { node, property, interpolation, times, values });
+        }
     }
-    // An instance moves when its node or an ancestor is animated.
+    // An instance moves when its node or an ancestor is animated; a skinned one is placed by its
+    // joints instead (glTF ignores its node's transform).
     let mut moving = vec![false; hierarchy.nodes.len()];
     for channel in &channels {
         moving[channel.node] = true;
@@ -594,21 +608,210 @@ fn node_animation(document: &Document, buffers: &[buffer::Data], hierarchy: &Hie
     for (i, node) in hierarchy.nodes.iter().enumerate() {
         moving[i] |= node.parent.is_some_and(|p| moving[p]);
     }
-    let instances: Vec<(usize, usize)> = hierarchy.instance_nodes.iter().copied().enumerate().filter(|&(_, node)| moving[node]).collect();
-    if instances.is_empty() {
-        return Ok(None);
+    let skinned = |instance: usize| document.nodes().nth(hierarchy.instance_sources[instance]).is_some_and(|n| n.skin().is_some());
+    let instances: Vec<(usize, usize)> =
+        hierarchy.instance_nodes.iter().copied().enumerate().filter(|&(i, node)| moving[node] && !skinned(i)).collect();
+    let any_skinned = (0..hierarchy.instance_nodes.len()).any(skinned);
+    if instances.is_empty() && !any_skinned && weight_keys.iter().all(Option::is_none) {
+        return Ok((None, weight_keys));
     }
-    let duration = channels.iter().filter_map(|c| c.times.last().copied()).fold(0.0, f32::max);
+    let weight_times = weight_keys.iter().flatten().filter_map(|k| k.times.last().copied());
+    let duration = channels.iter().filter_map(|c| c.times.last().copied()).chain(weight_times).fold(0.0, f32::max);
     let animation = animation::Animation { name, nodes: hierarchy.nodes.clone(), channels, instances, duration };
     animation.validate(hierarchy.instance_nodes.len())?;
-    Ok(Some(animation))
+    Ok((Some(animation), weight_keys))
+}
+
+/// The deformers of the placed instances whose node has a skin or whose mesh has morph targets. Each
+/// such instance gets a mesh of its own (a copy where other instances use the mesh too), since its
+/// pose is its node's.
+fn poses(
+    document: &Document,
+    buffers: &[buffer::Data],
+    scene: &mut Scene,
+    hierarchy: &Hierarchy,
+    sources: &[Vec<Vec<u32>>],
+    mut weight_keys: WeightKeysByNode,
+) -> Result<Vec<Deformer>, String> {
+    let mut deformers = Vec::new();
+    let mut users = vec![0usize; scene.meshes.len()];
+    for instance in &scene.instances {
+        users[instance.mesh] += 1;
+    }
+    for (instance, &source) in hierarchy.instance_sources.iter().enumerate() {
+        let node = document.nodes().nth(source).expect("placed nodes exist");
+        let gltf_mesh = node.mesh().expect("instances are placed by mesh nodes");
+        let targets = gltf_mesh.primitives().map(|p| p.morph_targets().len()).max().unwrap_or(0);
+        if node.skin().is_none() && targets == 0 {
+            continue;
+        }
+        let at = format!("node {} (mesh {})", node.index(), gltf_mesh.index());
+        let mut mesh = scene.instances[instance].mesh;
+        if users[mesh] > 1 {
+            users[mesh] -= 1;
+            scene.meshes.push(scene.meshes[mesh].clone());
+            mesh = scene.meshes.len() - 1;
+            scene.instances[instance].mesh = mesh;
+        }
+        let rest_weights = node.weights().or(gltf_mesh.weights()).map_or_else(|| vec![0.0; targets], <[f32]>::to_vec);
+        if rest_weights.len() != targets {
+            return Err(format!("{at}: {} morph weights for {targets} morph targets; give one weight per target", rest_weights.len()));
+        }
+        let keys = weight_keys[source].take();
+        if let Some(keys) = &keys {
+            let per_key = if keys.interpolation == animation::Interpolation::CubicSpline { 3 } else { 1 } * targets;
+            if keys.values.len() != per_key * keys.times.len() {
+                return Err(format!(
+                    "{at}: the animation keys {} morph weights for {} keyframes of {targets} targets; give {per_key} per keyframe",
+                    keys.values.len(),
+                    keys.times.len()
+                ));
+            }
+        }
+        let mut pose = pose::Pose { targets: vec![Vec::new(); targets], rest_weights, weight_keys: keys, skin: None };
+        let mut skin_data: Option<pose::Skin> = None;
+        if let Some(skin) = node.skin() {
+            let joints = skin
+                .joints()
+                .map(|j| {
+                    hierarchy.index_of[j.index()]
+                        .ok_or_else(|| format!("{at}: skin {} joint node {} is not in the scene", skin.index(), j.index()))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let inverse_bind = match skin.inverse_bind_matrices() {
+                Some(accessor) => {
+                    check_accessor(&accessor, "inverseBindMatrices", Dimensions::Mat4, FLOATS)?;
+                    let matrices: Vec<Mat4> = skin
+                        .reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()))
+                        .read_inverse_bind_matrices()
+                        .ok_or_else(|| format!("{at}: skin {}'s inverse bind matrices lie outside their buffer", skin.index()))?
+                        .map(|m| Mat4::from_cols_array_2d(&m))
+                        .collect();
+                    if matrices.len() != joints.len() {
+                        return Err(format!(
+                            "{at}: skin {} has {} inverse bind matrices for {} joints",
+                            skin.index(),
+                            matrices.len(),
+                            joints.len()
+                        ));
+                    }
+                    matrices
+                }
+                None => vec![Mat4::IDENTITY; joints.len()],
+            };
+            let sets =
+                gltf_mesh.primitives().map(|p| (0..).take_while(|&s| p.get(&Semantic::Joints(s)).is_some()).count()).max().unwrap_or(0);
+            if sets == 0 {
+                return Err(format!("{at}: the node has a skin but its mesh has no JOINTS_0 and WEIGHTS_0"));
+            }
+            skin_data = Some(pose::Skin { joints, inverse_bind, sets, joint_indices: Vec::new(), weights: Vec::new() });
+        }
+        let primitives = gltf_mesh.primitives().filter(|p| matches!(p.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan));
+        for (p, source) in primitives.zip(&sources[gltf_mesh.index()]) {
+            let at = format!("{at} primitive {}", p.index());
+            let count = p.get(&Semantic::Positions).map_or(0, |a| a.count());
+            for (t, target) in p.morph_targets().enumerate() {
+                let offsets = morph_offsets(&target, buffers, count).map_err(|e| format!("{at}: morph target {t}: {e}"))?;
+                pose.targets[t].extend(source.iter().map(|&v| offsets[v as usize]));
+            }
+            // Primitives with fewer targets than the mesh's are not moved by the others.
+            for target in pose.targets.iter_mut().skip(p.morph_targets().len()) {
+                target.extend(std::iter::repeat_n(pose::MorphOffset::default(), source.len()));
+            }
+            if let Some(skin) = &mut skin_data {
+                let influences = skin_influences(&p, buffers, count, skin.sets, skin.joints.len()).map_err(|e| format!("{at}: {e}"))?;
+                for &v in source {
+                    let range = v as usize * skin.sets..(v as usize + 1) * skin.sets;
+                    skin.joint_indices.extend(influences[range.clone()].iter().map(|(j, _)| *j));
+                    skin.weights.extend(influences[range].iter().map(|(_, w)| *w));
+                }
+            }
+        }
+        pose.skin = skin_data;
+        if pose.skin.is_some() {
+            // Skinned vertices are placed in world space by their joints.
+            scene.instances[instance].world_from_local = Mat4::IDENTITY;
+        }
+        deformers.push(Deformer { mesh, deformation: Deformation::Pose(Box::new(pose)) });
+    }
+    Ok(deformers)
+}
+
+/// A morph target's offsets of a primitive's `count` vertices (zero where it has no attribute).
+fn morph_offsets(target: &::gltf::mesh::MorphTarget, buffers: &[buffer::Data], count: usize) -> Result<Vec<pose::MorphOffset>, String> {
+    let read = |accessor: Option<Accessor>, name: &str, types| -> Result<Vec<Vec3>, String> {
+        let Some(accessor) = accessor else { return Ok(vec![Vec3::ZERO; count]) };
+        check_accessor(&accessor, name, Dimensions::Vec3, types)?;
+        let values: Vec<[f32; 3]> = read_floats(&accessor, buffers).ok_or_else(|| format!("{name} lies outside its buffer"))?;
+        if values.len() != count || values.iter().flatten().any(|c| !c.is_finite()) {
+            return Err(format!("{name} has {} offsets for {count} vertices, or one is not finite", values.len()));
+        }
+        Ok(values.into_iter().map(Vec3::from).collect())
+    };
+    let positions = read(target.positions(), "POSITION", MORPH_POSITIONS)?;
+    let normals = read(target.normals(), "NORMAL", DIRECTIONS)?;
+    let tangents = read(target.tangents(), "TANGENT", DIRECTIONS)?;
+    Ok((0..count).map(|i| pose::MorphOffset { position: positions[i], normal: normals[i], tangent: tangents[i] }).collect())
+}
+
+/// Four joints of a vertex and their weights.
+type Influences = ([u32; 4], [f32; 4]);
+
+/// A primitive's `sets` runs of four (joint, weight) per vertex for its `count` vertices, weights
+/// normalised to sum to 1 (all zero stays zero).
+fn skin_influences(
+    p: &::gltf::Primitive,
+    buffers: &[buffer::Data],
+    count: usize,
+    sets: usize,
+    joint_count: usize,
+) -> Result<Vec<Influences>, String> {
+    let mut influences = vec![([0u32; 4], [0f32; 4]); count * sets];
+    let reader = p.reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()));
+    for set in 0..sets {
+        let (Some(joints), Some(weights)) = (p.get(&Semantic::Joints(set as u32)), p.get(&Semantic::Weights(set as u32))) else {
+            continue;
+        };
+        check_accessor(&joints, &format!("JOINTS_{set}"), Dimensions::Vec4, JOINTS)?;
+        check_accessor(&weights, &format!("WEIGHTS_{set}"), Dimensions::Vec4, WEIGHTS)?;
+        let joints: Vec<[u16; 4]> =
+            reader.read_joints(set as u32).ok_or_else(|| format!("JOINTS_{set} lies outside its buffer"))?.into_u16().collect();
+        let weights: Vec<[f32; 4]> =
+            reader.read_weights(set as u32).ok_or_else(|| format!("WEIGHTS_{set} lies outside its buffer"))?.into_f32().collect();
+        if joints.len() != count || weights.len() != count {
+            return Err(format!(
+                "JOINTS_{set} and WEIGHTS_{set} have {} and {} elements for {count} vertices",
+                joints.len(),
+                weights.len()
+            ));
+        }
+        for (v, (j, w)) in joints.iter().zip(&weights).enumerate() {
+            if let Some(bad) = j.iter().zip(w).find(|(&j, &w)| w != 0.0 && j as usize >= joint_count) {
+                return Err(format!("vertex {v} names joint {} of a skin with {joint_count}", bad.0));
+            }
+            if !w.iter().all(|w| w.is_finite() && *w >= 0.0) {
+                return Err(format!("vertex {v}'s weights {w:?} must be finite and ≥ 0"));
+            }
+            influences[v * sets + set] = (j.map(|j| if (j as usize) < joint_count { u32::from(j) } else { 0 }), *w);
+        }
+    }
+    for vertex in influences.chunks_mut(sets) {
+        let total: f32 = vertex.iter().flat_map(|(_, w)| w).sum();
+        if total > 0.0 {
+            for (_, w) in vertex.iter_mut() {
+                *w = w.map(|w| w / total);
+            }
+        }
+    }
+    Ok(influences)
 }
 
 /// Walks the node hierarchy depth first, adding an instance, camera or light for each node that has
 /// one; returns the hierarchy as placed, for animation.
 fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Result<Hierarchy, String> {
     let mut cameras = Vec::new();
-    let mut hierarchy = Hierarchy { nodes: Vec::new(), index_of: vec![None; node_count], instance_nodes: Vec::new() };
+    let mut hierarchy =
+        Hierarchy { nodes: Vec::new(), index_of: vec![None; node_count], instance_nodes: Vec::new(), instance_sources: Vec::new() };
     let mut stack: Vec<(Node, Mat4, Option<usize>)> = root.nodes().map(|n| (n, Mat4::IDENTITY, None)).collect();
     stack.reverse();
     while let Some((node, parent, parent_index)) = stack.pop() {
@@ -631,6 +834,7 @@ fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Re
         if let Some(mesh) = node.mesh() {
             scene.instances.push(Instance { mesh: mesh.index(), world_from_local: world });
             hierarchy.instance_nodes.push(index);
+            hierarchy.instance_sources.push(node.index());
         }
         if let Some(camera) = node.camera() {
             cameras.push((camera.index(), place_camera(&camera, &node, world)));
@@ -787,25 +991,30 @@ fn texture_ref(texture: &::gltf::Texture, tex_coord: u32, transform: Option<UvTr
     })
 }
 
-fn mesh(mesh: &::gltf::Mesh, buffers: &[buffer::Data], default_material: usize) -> Result<Mesh, String> {
+/// A mesh, and for each of its primitives the glTF vertex each of its vertices was made from (flat
+/// normals and tangent seams copy vertices), for the attributes read later (skins, morph targets).
+fn mesh(mesh: &::gltf::Mesh, buffers: &[buffer::Data], default_material: usize) -> Result<(Mesh, Vec<Vec<u32>>), String> {
     let name = mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned);
     let mut primitives = Vec::new();
+    let mut sources = Vec::new();
     for p in mesh.primitives() {
         let at = || format!("mesh {} ({name}) primitive {}", mesh.index(), p.index());
         if !matches!(p.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
             log::warn!("{}: {:?} are not rendered, skipped", at(), p.mode());
             continue;
         }
-        primitives.push(primitive(&p, buffers, default_material).map_err(|e| format!("{}: {e}", at()))?);
+        let (primitive, source) = primitive(&p, buffers, default_material).map_err(|e| format!("{}: {e}", at()))?;
+        primitives.push(primitive);
+        sources.push(source);
     }
-    Ok(Mesh { name, primitives })
+    Ok((Mesh { name, primitives }, sources))
 }
 
-fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: usize) -> Result<Primitive, String> {
+fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: usize) -> Result<(Primitive, Vec<u32>), String> {
     for (semantic, name, dimensions, types) in [
-        (Semantic::Positions, "POSITION", Dimensions::Vec3, FLOATS),
-        (Semantic::Normals, "NORMAL", Dimensions::Vec3, FLOATS),
-        (Semantic::Tangents, "TANGENT", Dimensions::Vec4, FLOATS),
+        (Semantic::Positions, "POSITION", Dimensions::Vec3, POSITIONS),
+        (Semantic::Normals, "NORMAL", Dimensions::Vec3, DIRECTIONS),
+        (Semantic::Tangents, "TANGENT", Dimensions::Vec4, DIRECTIONS),
         (Semantic::TexCoords(0), "TEXCOORD_0", Dimensions::Vec2, TEX_COORDS),
     ] {
         if let Some(accessor) = p.get(&semantic) {
@@ -816,15 +1025,15 @@ fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: 
         check_accessor(&accessor, "the indices", Dimensions::Scalar, INDICES)?;
     }
     let reader = p.reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()));
-    let positions: Vec<[f32; 3]> = reader.read_positions().ok_or("POSITION is missing or lies outside its buffer")?.collect();
+    let positions: Vec<[f32; 3]> =
+        p.get(&Semantic::Positions).and_then(|a| read_floats(&a, buffers)).ok_or("POSITION is missing or lies outside its buffer")?;
     if positions.iter().flatten().any(|c| !c.is_finite()) {
         return Err("a vertex position is NaN or infinite".into());
     }
     let count = positions.len();
-    let has = |semantic| p.get(&semantic).is_some();
-    let normals = attribute("NORMAL", has(Semantic::Normals), reader.read_normals(), count)?;
-    let uvs = attribute("TEXCOORD_0", has(Semantic::TexCoords(0)), reader.read_tex_coords(0).map(|t| t.into_f32()), count)?;
-    let file_tangents = attribute("TANGENT", has(Semantic::Tangents), reader.read_tangents(), count)?;
+    let normals: Option<Vec<[f32; 3]>> = vertex_attribute(p.get(&Semantic::Normals), "NORMAL", buffers, count)?;
+    let uvs: Option<Vec<[f32; 2]>> = vertex_attribute(p.get(&Semantic::TexCoords(0)), "TEXCOORD_0", buffers, count)?;
+    let file_tangents: Option<Vec<[f32; 4]>> = vertex_attribute(p.get(&Semantic::Tangents), "TANGENT", buffers, count)?;
     let indices: Vec<u32> = match reader.read_indices() {
         Some(indices) => indices.into_u32().collect(),
         None if p.indices().is_some() => return Err("the indices lie outside their buffer".into()),
@@ -852,25 +1061,77 @@ fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: 
             }
         })
         .collect();
+    let mut sources: Vec<u32> = (0..count as u32).collect();
     if normals.is_none() {
+        sources = indices.clone();
         (vertices, indices) = flat_shaded(&vertices, &indices);
     }
     if file_tangents.is_none() && uvs.is_some() {
-        tangents::generate(&mut vertices, &mut indices);
+        let copied = tangents::generate(&mut vertices, &mut indices);
+        sources = copied.iter().map(|&v| sources[v as usize]).collect();
     } else {
         tangents::orthonormalize(&mut vertices);
     }
-    Ok(Primitive { vertices, indices, material: p.material().index().unwrap_or(default_material) })
+    Ok((Primitive { vertices, indices, material: p.material().index().unwrap_or(default_material) }, sources))
 }
 
 /// Component types (with `normalized`) the glTF specification allows for each use of an accessor we
-/// read; the gltf crate's readers assume them and panic on others, so they are checked first.
+/// read, with `KHR_mesh_quantization`'s for vertex attributes; the gltf crate's readers assume them
+/// and panic on others, so they are checked first.
 const FLOATS: &[(DataType, bool)] = &[(DataType::F32, false)];
-const TEX_COORDS: &[(DataType, bool)] = &[(DataType::F32, false), (DataType::U8, true), (DataType::U16, true)];
+const POSITIONS: &[(DataType, bool)] = &[
+    (DataType::F32, false),
+    (DataType::I8, false),
+    (DataType::I8, true),
+    (DataType::U8, false),
+    (DataType::U8, true),
+    (DataType::I16, false),
+    (DataType::I16, true),
+    (DataType::U16, false),
+    (DataType::U16, true),
+];
+/// Normals and tangents, and their morph offsets.
+const DIRECTIONS: &[(DataType, bool)] = &[(DataType::F32, false), (DataType::I8, true), (DataType::I16, true)];
+const MORPH_POSITIONS: &[(DataType, bool)] =
+    &[(DataType::F32, false), (DataType::I8, false), (DataType::I8, true), (DataType::I16, false), (DataType::I16, true)];
+const TEX_COORDS: &[(DataType, bool)] = POSITIONS;
 const INDICES: &[(DataType, bool)] = &[(DataType::U8, false), (DataType::U16, false), (DataType::U32, false)];
+const JOINTS: &[(DataType, bool)] = &[(DataType::U8, false), (DataType::U16, false)];
+const WEIGHTS: &[(DataType, bool)] = &[(DataType::F32, false), (DataType::U8, true), (DataType::U16, true)];
 /// Rotations and morph weights in animations.
 const SIGNED_NORMALIZED: &[(DataType, bool)] =
     &[(DataType::F32, false), (DataType::I8, true), (DataType::U8, true), (DataType::I16, true), (DataType::U16, true)];
+
+/// An accessor's elements as floats: normalized integers mapped to 0..1 or −1..1 as glTF defines,
+/// other integers taken as they are (`KHR_mesh_quantization`); `None` where it lies outside its
+/// buffer. Its component type must have been checked.
+fn read_floats<const N: usize>(accessor: &Accessor, buffers: &[buffer::Data]) -> Option<Vec<[f32; N]>>
+where
+    [f32; N]: Item,
+    [i8; N]: Item,
+    [u8; N]: Item,
+    [i16; N]: Item,
+    [u16; N]: Item,
+    [u32; N]: Item,
+{
+    fn read<T: Copy, const N: usize>(accessor: &Accessor, buffers: &[buffer::Data], to_float: impl Fn(T) -> f32) -> Option<Vec<[f32; N]>>
+    where
+        [T; N]: Item,
+    {
+        let items = AccessorIter::<[T; N]>::new(accessor.clone(), |b: ::gltf::Buffer| buffers.get(b.index()).map(|d| d.0.as_slice()))?;
+        Some(items.map(|item| item.map(&to_float)).collect())
+    }
+    let normalized = accessor.normalized();
+    let scale = |max: f32| if normalized { 1.0 / max } else { 1.0 };
+    match accessor.data_type() {
+        DataType::F32 => read::<f32, N>(accessor, buffers, |c| c),
+        DataType::I8 => read::<i8, N>(accessor, buffers, |c| (f32::from(c) * scale(127.0)).max(-1.0f32.max(f32::from(c)))),
+        DataType::U8 => read::<u8, N>(accessor, buffers, |c| f32::from(c) * scale(255.0)),
+        DataType::I16 => read::<i16, N>(accessor, buffers, |c| (f32::from(c) * scale(32767.0)).max(-1.0f32.max(f32::from(c)))),
+        DataType::U16 => read::<u16, N>(accessor, buffers, |c| f32::from(c) * scale(65535.0)),
+        DataType::U32 => read::<u32, N>(accessor, buffers, |c| c as f32),
+    }
+}
 
 fn check_accessor(accessor: &Accessor, name: &str, dimensions: Dimensions, types: &[(DataType, bool)]) -> Result<(), String> {
     let found = (accessor.data_type(), accessor.normalized());
@@ -885,6 +1146,24 @@ fn check_accessor(accessor: &Accessor, name: &str, dimensions: Dimensions, types
         describe(found),
         types.iter().map(|&t| describe(t)).collect::<Vec<_>>().join(", ")
     ))
+}
+
+/// An optional vertex attribute as floats (`read_floats`), `count` of them.
+fn vertex_attribute<const N: usize>(
+    accessor: Option<Accessor>,
+    name: &str,
+    buffers: &[buffer::Data],
+    count: usize,
+) -> Result<Option<Vec<[f32; N]>>, String>
+where
+    [f32; N]: Item,
+    [i8; N]: Item,
+    [u8; N]: Item,
+    [i16; N]: Item,
+    [u16; N]: Item,
+    [u32; N]: Item,
+{
+    attribute(name, accessor.is_some(), accessor.and_then(|a| read_floats(&a, buffers)).map(Vec::into_iter), count)
 }
 
 /// Reads an optional vertex attribute, telling an absent one (`None`) from one that cannot be read.
@@ -1321,12 +1600,13 @@ mod tests {
                 String::new(),
                 &["TEXCOORD_0 (accessor 1) is Vec2 of U32", "normalized U16"],
             ),
+            // KHR_mesh_quantization allows 8- and 16-bit positions, never 32-bit integers.
             (
-                "gltf_byte_positions",
-                r#"{"bufferView": 0, "componentType": 5121, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}"#.to_owned(),
+                "gltf_uint_positions",
+                r#"{"bufferView": 0, "componentType": 5125, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}"#.to_owned(),
                 strip,
                 String::new(),
-                &["POSITION (accessor 0) is Vec3 of U8"],
+                &["POSITION (accessor 0) is Vec3 of U32", "normalized U16"],
             ),
             // Keyframe times must be floats.
             (

@@ -17,6 +17,7 @@ pub mod gltf;
 pub mod ibl;
 pub mod paper_scenes;
 pub mod particles;
+pub mod pose;
 pub mod scene_file;
 pub mod sky;
 mod tangents;
@@ -404,7 +405,8 @@ pub struct Scene {
     pub environment: Option<Environment>,
     /// Moving particle lights (`particles/`), if any.
     pub particles: Option<ParticleSettings>,
-    /// Node animation moving mesh instances (glTF animations), if any.
+    /// Node animation moving mesh instances and skin joints (glTF animations), if any; a scene with
+    /// a skin has one, its channels perhaps empty.
     pub animation: Option<animation::Animation>,
     /// Meshes deformed every frame (`deform`), at most one deformer per mesh.
     pub deformers: Vec<deform::Deformer>,
@@ -510,7 +512,15 @@ impl Scene {
             if self.deformers[..i].iter().any(|other| other.mesh == d.mesh) {
                 return err(format!("deformer {i}: mesh {} ({}) has a deformer already", d.mesh, self.meshes[d.mesh].name));
             }
-            d.wave.validate().map_err(|m| crate::Error::InvalidScene(format!("deformer {i} ({}): {m}", self.meshes[d.mesh].name)))?;
+            let checked = match &d.deformation {
+                deform::Deformation::Wave(wave) => wave.validate(),
+                deform::Deformation::Pose(pose) => {
+                    let vertices = self.meshes[d.mesh].primitives.iter().map(|p| p.vertices.len()).sum();
+                    let nodes = self.animation.as_ref().map_or(0, |a| a.nodes.len());
+                    pose.validate(vertices, nodes)
+                }
+            };
+            checked.map_err(|m| crate::Error::InvalidScene(format!("deformer {i} ({}): {m}", self.meshes[d.mesh].name)))?;
         }
         for (mi, m) in self.materials.iter().enumerate() {
             let named = if m.name == format!("material {mi}") { m.name.clone() } else { format!("material {mi} ({})", m.name) };

@@ -235,7 +235,7 @@ impl DeformSpec {
         if meshes.is_empty() {
             return Err(format!("no mesh is named \"{}\"", self.mesh));
         }
-        scene.deformers.extend(meshes.into_iter().map(|mesh| super::deform::Deformer { mesh, wave }));
+        scene.deformers.extend(meshes.into_iter().map(|mesh| super::deform::Deformer::wave(mesh, wave)));
         Ok(())
     }
 }
@@ -826,10 +826,11 @@ mod tests {
             format!("gltf = {:?}\n[[deform]]\nmesh = \"Mesh\"\namplitude = 0.1\nwavelength = 2.0\n{extra}", gltf.to_str().unwrap())
         };
         let scene = load_text("deform", &file("speed = 0.5\ndirection = [0.0, 2.0, 0.0]\n")).unwrap();
-        let [deformer] = scene.deformers[..] else { panic!("{:?}", scene.deformers) };
+        let [deformer] = &scene.deformers[..] else { panic!("{:?}", scene.deformers) };
         assert_eq!(scene.meshes[deformer.mesh].name, "Mesh");
-        assert_eq!((deformer.wave.amplitude, deformer.wave.wavelength, deformer.wave.speed), (0.1, 2.0, 0.5));
-        assert_eq!(deformer.wave.direction, Vec3::Y, "directions are normalised");
+        let crate::scene::deform::Deformation::Wave(wave) = deformer.deformation else { panic!("{deformer:?}") };
+        assert_eq!((wave.amplitude, wave.wavelength, wave.speed), (0.1, 2.0, 0.5));
+        assert_eq!(wave.direction, Vec3::Y, "directions are normalised");
         let unknown = reason(load_text("deform_unknown", &file("").replace("\"Mesh\"", "\"Flag\"")));
         assert!(unknown.contains("deform 0") && unknown.contains("no mesh is named \"Flag\""), "{unknown}");
         let flat = reason(load_text("deform_wavelength", &file("").replace("wavelength = 2.0", "wavelength = 0.0")));

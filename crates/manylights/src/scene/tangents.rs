@@ -15,16 +15,19 @@ use super::Vertex;
 ///
 /// MikkTSpace works per triangle corner. Where corners sharing a vertex get different tangents (UV
 /// seams, mirrored UVs), the vertex is split so that each copy keeps its own; `indices` are updated.
-/// Normals must be unit length.
-pub(crate) fn generate(vertices: &mut Vec<Vertex>, indices: &mut [u32]) {
+/// Returns the vertex each vertex now is a copy of (itself for those that were there), for what
+/// else is stored per vertex (skin weights, morph targets). Normals must be unit length.
+pub(crate) fn generate(vertices: &mut Vec<Vertex>, indices: &mut [u32]) -> Vec<u32> {
+    let mut sources: Vec<u32> = (0..vertices.len() as u32).collect();
     let mut corners = Corners { vertices, indices, tangents: vec![[0.0; 4]; indices.len()] };
     // On failure (no usable triangles) the tangents stay zero and orthonormalize() substitutes
     // arbitrary ones, which is all a mesh without a usable UV layout can have.
     if mikktspace::generate_tangents(&mut corners) {
         let tangents = corners.tangents;
-        weld(vertices, indices, &tangents);
+        weld(vertices, indices, &tangents, &mut sources);
     }
     orthonormalize(vertices);
+    sources
 }
 
 /// Makes each tangent orthogonal to its normal and unit length, keeping the sign in w (±1). Where
@@ -47,7 +50,7 @@ pub(crate) fn orthonormalize(vertices: &mut [Vertex]) {
 }
 
 /// Writes per-corner tangents back to the shared vertices, splitting vertices whose corners disagree.
-fn weld(vertices: &mut Vec<Vertex>, indices: &mut [u32], tangents: &[[f32; 4]]) {
+fn weld(vertices: &mut Vec<Vertex>, indices: &mut [u32], tangents: &[[f32; 4]], sources: &mut Vec<u32>) {
     let mut assigned = vec![false; vertices.len()];
     let mut splits: HashMap<(u32, [u32; 4]), u32> = HashMap::new();
     for (index, &tangent) in indices.iter_mut().zip(tangents) {
@@ -59,6 +62,7 @@ fn weld(vertices: &mut Vec<Vertex>, indices: &mut [u32], tangents: &[[f32; 4]]) 
             *index = *splits.entry((*index, tangent.map(f32::to_bits))).or_insert_with(|| {
                 let copy = Vertex { tangent, ..vertices[v] };
                 vertices.push(copy);
+                sources.push(v as u32);
                 (vertices.len() - 1) as u32
             });
         }
