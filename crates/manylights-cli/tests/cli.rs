@@ -112,14 +112,14 @@ fn truncated_gltf() {
 #[test]
 fn required_unsupported_extension() {
     let dir = temp_dir("extension");
-    let path = dir.join("draco.gltf");
+    let path = dir.join("required.gltf");
     std::fs::write(
         &path,
-        r#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_draco_mesh_compression"],"extensionsRequired":["KHR_draco_mesh_compression"],"scenes":[{"nodes":[]}],"scene":0}"#,
+        r#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_materials_pbrSpecularGlossiness"],"extensionsRequired":["KHR_materials_pbrSpecularGlossiness"],"scenes":[{"nodes":[]}],"scene":0}"#,
     )
     .unwrap();
     let err = failure(&["render", "--scene", path.to_str().unwrap()]);
-    assert!(err.contains("KHR_draco_mesh_compression") && err.contains("does not support"), "{err}");
+    assert!(err.contains("KHR_materials_pbrSpecularGlossiness") && err.contains("does not support"), "{err}");
 }
 
 #[test]

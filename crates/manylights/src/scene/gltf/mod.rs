@@ -9,6 +9,8 @@
 //! the animation's morph weights, become deformers posing their mesh (`scene::pose`). Vertex
 //! attributes may be quantized (`KHR_mesh_quantization`).
 
+mod compression;
+
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -30,8 +32,18 @@ use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::{Error, Result};
 
 /// Extensions a file may require; every other optional extension is ignored.
-const SUPPORTED_EXTENSIONS: [&str; 4] =
-    ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_mesh_quantization", "KHR_texture_transform"];
+const SUPPORTED_EXTENSIONS: [&str; 8] = [
+    INSTANCING,
+    compression::MESHOPT,
+    "EXT_texture_webp",
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    compression::DRACO,
+    "KHR_mesh_quantization",
+    "KHR_texture_transform",
+];
+
+const INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
 /// Loads a glTF 2.0 file and everything it references (buffers and images next to it).
 pub fn import(path: &Path) -> Result<Scene> {
@@ -79,13 +91,18 @@ fn import_bytes(path: &Path, bytes: Vec<u8>, budget: &LoadBudget) -> Result<Scen
         return Err(invalid(format!("asset.version is \"{version}\": only glTF 2.x files can be read")));
     }
     check_before_validation(document.as_json()).map_err(&invalid)?;
-    let document = Document::from_json(document.into_json()).map_err(|e| invalid(validation_reason(e)))?;
+    // Buffers are read, and compressed geometry decoded into them, before validation: the gltf crate
+    // refuses a Draco primitive's accessors, which have no buffer view until it is decoded.
+    let base = path.parent().unwrap_or(Path::new("."));
+    let mut root = document.into_json();
+    let mut buffers = load_buffers(path, &root, base, blob, budget)?;
+    compression::decode(&mut root, &mut buffers, budget, path).map_err(&invalid)?;
+    // The gltf crate refuses required extensions it does not know; these were checked against ours.
+    root.extensions_required.clear();
+    let document = Document::from_json(root).map_err(|e| invalid(validation_reason(e)))?;
 
     check_sources(&document).map_err(&invalid)?;
     check_geometry_size(&document).map_err(&invalid)?;
-
-    let base = path.parent().unwrap_or(Path::new("."));
-    let buffers = load_buffers(path, &document, base, blob, budget)?;
     check_views(&document, &buffers).map_err(&invalid)?;
     let textures = decode_images(path, &document, base, &buffers, budget)?;
     let scene = build_scene(&document, &buffers, textures).map_err(&invalid)?;
@@ -245,24 +262,28 @@ fn decode_data_uri(base64: &str, gltf: &Path, budget: &LoadBudget) -> Result<Vec
 /// Reads every buffer: the GLB binary chunk, data URIs, or files up to their declared byte length.
 fn load_buffers(
     gltf: &Path,
-    document: &Document,
+    root: &::gltf::json::Root,
     base: &Path,
     mut blob: Option<Vec<u8>>,
     budget: &LoadBudget,
 ) -> Result<Vec<buffer::Data>> {
     let invalid = |reason: String| gltf_error(gltf, reason);
-    document
-        .buffers()
-        .map(|buffer| {
-            let length = buffer.length();
-            let (what, mut data) = match buffer.source() {
-                buffer::Source::Bin => {
+    root.buffers
+        .iter()
+        .enumerate()
+        .map(|(index, buffer)| {
+            let length = buffer.byte_length.0 as usize;
+            if let Some(length) = compression::fallback_length(buffer) {
+                budget.take_input(length as u64, gltf)?;
+                return Ok(buffer::Data(vec![0; length.next_multiple_of(4)]));
+            }
+            let (what, mut data) = match &buffer.uri {
+                None => {
                     let what = "the GLB binary chunk".to_owned();
-                    let data =
-                        blob.take().ok_or_else(|| invalid(format!("buffer {} ({what}): the file has no binary chunk", buffer.index())))?;
+                    let data = blob.take().ok_or_else(|| invalid(format!("buffer {index} ({what}): the file has no binary chunk")))?;
                     (what, data)
                 }
-                buffer::Source::Uri(uri) => match resolve_uri(uri, base).map_err(|e| invalid(format!("buffer {}: {e}", buffer.index())))? {
+                Some(uri) => match resolve_uri(uri, base).map_err(|e| invalid(format!("buffer {index}: {e}")))? {
                     UriSource::Data { base64, .. } => ("a data URI".to_owned(), decode_data_uri(base64, gltf, budget)?),
                     UriSource::File(file) => {
                         (format!("`{uri}`"), files::read_input(&file, InputKind::Buffer, Some(length as u64), budget)?)
@@ -271,8 +292,7 @@ fn load_buffers(
             };
             if data.len() < length {
                 return Err(invalid(format!(
-                    "buffer {} ({what}) has {} bytes, the file declares {length}; the file is truncated or its byteLength is wrong",
-                    buffer.index(),
+                    "buffer {index} ({what}) has {} bytes, the file declares {length}; the file is truncated or its byteLength is wrong",
                     data.len()
                 )));
             }
@@ -399,21 +419,26 @@ fn decode_images(gltf: &Path, document: &Document, base: &Path, buffers: &[buffe
     decoded.into_iter().map(|(_, texture)| texture).collect()
 }
 
-/// PNG or JPEG, as the gltf crate chooses: the media type, else the file's extension, else its first
-/// bytes.
+/// Extensions whose texture objects name an image of their own format (`source`).
+const TEXTURE_SOURCE_EXTENSIONS: [&str; 1] = ["EXT_texture_webp"];
+
+/// PNG, JPEG or WebP (`EXT_texture_webp`), as the gltf crate chooses: the media type, else the
+/// file's extension, else its first bytes.
 fn image_format(media_type: Option<&str>, uri: Option<&str>, bytes: &[u8]) -> Option<image::ImageFormat> {
-    use image::ImageFormat::{Jpeg, Png};
+    use image::ImageFormat::{Jpeg, Png, WebP};
     let by_media_type = match media_type {
         Some("image/png") => Some(Png),
         Some("image/jpeg") => Some(Jpeg),
+        Some("image/webp") => Some(WebP),
         _ => None,
     };
     let by_extension = || match uri?.rsplit('.').next()?.to_ascii_lowercase().as_str() {
         "png" => Some(Png),
         "jpg" | "jpeg" => Some(Jpeg),
+        "webp" => Some(WebP),
         _ => None,
     };
-    let by_content = || image::guess_format(bytes).ok().filter(|f| matches!(f, Png | Jpeg));
+    let by_content = || image::guess_format(bytes).ok().filter(|f| matches!(f, Png | Jpeg | WebP));
     by_media_type.or_else(|| media_type.is_none().then(by_extension).flatten()).or_else(by_content)
 }
 
@@ -438,8 +463,8 @@ fn decode_image(gltf: &Path, image: &::gltf::Image, base: &Path, buffers: &[buff
             UriSource::File(file) => (files::read_input(&file, InputKind::Image, None, budget)?.into(), mime_type, Some(uri)),
         },
     };
-    let format =
-        image_format(media_type, uri, &bytes).ok_or_else(|| invalid("not a PNG or JPEG image; convert it to PNG or JPEG".to_owned()))?;
+    let format = image_format(media_type, uri, &bytes)
+        .ok_or_else(|| invalid("not a PNG, JPEG or WebP image; convert it to PNG or JPEG".to_owned()))?;
     let decoded = decode_limited(&bytes, format, budget).map_err(invalid)?;
     Ok(Texture { name, width: decoded.width, height: decoded.height, rgba8: to_rgba8(decoded) })
 }
@@ -525,7 +550,7 @@ fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Text
     let mut scene = Scene { meshes, materials, textures, ..Scene::default() };
     match document.default_scene().or_else(|| document.scenes().next()) {
         Some(root) => {
-            let hierarchy = place_nodes(&mut scene, &root, document.nodes().len())?;
+            let hierarchy = place_nodes(&mut scene, &root, document, buffers)?;
             let (animation, weight_keys) = node_animation(document, buffers, &hierarchy)?;
             scene.animation = animation;
             scene.deformers = poses(document, buffers, &mut scene, &hierarchy, &sources, weight_keys)?;
@@ -808,7 +833,8 @@ fn skin_influences(
 
 /// Walks the node hierarchy depth first, adding an instance, camera or light for each node that has
 /// one; returns the hierarchy as placed, for animation.
-fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Result<Hierarchy, String> {
+fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, document: &Document, buffers: &[buffer::Data]) -> Result<Hierarchy, String> {
+    let node_count = document.nodes().len();
     let mut cameras = Vec::new();
     let mut hierarchy =
         Hierarchy { nodes: Vec::new(), index_of: vec![None; node_count], instance_nodes: Vec::new(), instance_sources: Vec::new() };
@@ -832,9 +858,21 @@ fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Re
         hierarchy.nodes.push(animation::Node { parent: parent_index, rest: local, rest_trs });
         hierarchy.index_of[node.index()] = Some(index);
         if let Some(mesh) = node.mesh() {
-            scene.instances.push(Instance { mesh: mesh.index(), world_from_local: world });
-            hierarchy.instance_nodes.push(index);
-            hierarchy.instance_sources.push(node.index());
+            match gpu_instances(&node, document, buffers)? {
+                None => {
+                    scene.instances.push(Instance { mesh: mesh.index(), world_from_local: world });
+                    hierarchy.instance_nodes.push(index);
+                }
+                // Each instance is a child of the node, so it moves with it.
+                Some(instances) => {
+                    for trs in instances {
+                        scene.instances.push(Instance { mesh: mesh.index(), world_from_local: world * trs.matrix() });
+                        hierarchy.instance_nodes.push(hierarchy.nodes.len());
+                        hierarchy.nodes.push(animation::Node::from_trs(Some(index), trs));
+                    }
+                }
+            }
+            hierarchy.instance_sources.resize(hierarchy.instance_nodes.len(), node.index());
         }
         if let Some(camera) = node.camera() {
             cameras.push((camera.index(), place_camera(&camera, &node, world)));
@@ -850,6 +888,50 @@ fn place_nodes(scene: &mut Scene, root: &::gltf::Scene, node_count: usize) -> Re
     cameras.sort_by_key(|(index, _)| *index);
     scene.cameras = cameras.into_iter().map(|(_, camera)| camera).collect();
     Ok(hierarchy)
+}
+
+/// `EXT_mesh_gpu_instancing`: the node's instances, each a transform under the node's (translation,
+/// rotation and scale, each defaulting to none); `None` for a node without the extension.
+fn gpu_instances(node: &Node, document: &Document, buffers: &[buffer::Data]) -> Result<Option<Vec<animation::Trs>>, String> {
+    let Some(ext) = node.extension_value(INSTANCING) else { return Ok(None) };
+    let at = format!("node {}'s {INSTANCING}", node.index());
+    let attributes = ext.get("attributes").and_then(|a| a.as_object()).ok_or_else(|| format!("{at} has no attributes"))?;
+    let accessor = |name: &str, dimensions, types| -> Result<Option<Accessor>, String> {
+        let Some(index) = attributes.get(name) else { return Ok(None) };
+        let accessor =
+            index.as_u64().and_then(|i| document.accessors().nth(i as usize)).ok_or_else(|| format!("{at}: {name} names no accessor"))?;
+        check_accessor(&accessor, &format!("{at} {name}"), dimensions, types)?;
+        Ok(Some(accessor))
+    };
+    let outside = |name: &str| format!("{at}: {name} lies outside its buffer");
+    let translations: Option<Vec<[f32; 3]>> = match accessor("TRANSLATION", Dimensions::Vec3, POSITIONS)? {
+        Some(a) => Some(read_floats(&a, buffers).ok_or_else(|| outside("TRANSLATION"))?),
+        None => None,
+    };
+    let rotations: Option<Vec<[f32; 4]>> = match accessor("ROTATION", Dimensions::Vec4, DIRECTIONS)? {
+        Some(a) => Some(read_floats(&a, buffers).ok_or_else(|| outside("ROTATION"))?),
+        None => None,
+    };
+    let scales: Option<Vec<[f32; 3]>> = match accessor("SCALE", Dimensions::Vec3, POSITIONS)? {
+        Some(a) => Some(read_floats(&a, buffers).ok_or_else(|| outside("SCALE"))?),
+        None => None,
+    };
+    let counts = [translations.as_ref().map(Vec::len), rotations.as_ref().map(Vec::len), scales.as_ref().map(Vec::len)];
+    let count = counts.iter().flatten().copied().max().ok_or_else(|| format!("{at} has no TRANSLATION, ROTATION or SCALE"))?;
+    if counts.iter().flatten().any(|&c| c != count) {
+        return Err(format!("{at}: its attributes have different counts {counts:?}; give each instance every attribute"));
+    }
+    let instances: Vec<animation::Trs> = (0..count)
+        .map(|i| animation::Trs {
+            translation: translations.as_ref().map_or(Vec3::ZERO, |t| Vec3::from(t[i])),
+            rotation: rotations.as_ref().map_or(Quat::IDENTITY, |r| Quat::from_array(r[i]).normalize()),
+            scale: scales.as_ref().map_or(Vec3::ONE, |s| Vec3::from(s[i])),
+        })
+        .collect();
+    if !instances.iter().all(|t| t.translation.is_finite() && t.rotation.is_finite() && t.scale.is_finite()) {
+        return Err(format!("{at}: an instance's transform is NaN, infinite or a zero rotation"));
+    }
+    Ok(Some(instances))
 }
 
 fn place_camera(camera: &::gltf::Camera, node: &Node, world: Mat4) -> Camera {
@@ -983,8 +1065,14 @@ fn texture_ref(texture: &::gltf::Texture, tex_coord: u32, transform: Option<UvTr
         ::gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
     };
     let sampler = texture.sampler();
+    // An image in a format an extension adds is preferred to the core PNG or JPEG fallback.
+    let extension_source =
+        TEXTURE_SOURCE_EXTENSIONS.iter().find_map(|e| texture.extension_value(e)?.get("source")?.as_u64()).map(|i| i as usize);
+    let source = extension_source.or(texture.source().map(|s| s.index())).ok_or_else(|| {
+        format!("{material}: texture {} has no image manylights reads (PNG, JPEG, WebP or KTX2); give it a source", texture.index())
+    })?;
     Ok(TextureRef {
-        texture: texture.source().index(),
+        texture: source,
         wrap_u: wrap(sampler.wrap_s()),
         wrap_v: wrap(sampler.wrap_t()),
         uv_transform: Affine2::from_mat2_translation(linear, Vec2::from(offset)),
@@ -1349,15 +1437,15 @@ mod tests {
 
     #[test]
     fn unsupported_required_extension_is_named() {
-        let dir = temp_dir("gltf_draco");
-        let path = dir.join("draco.gltf");
+        let dir = temp_dir("gltf_required");
+        let path = dir.join("required.gltf");
         let json = r#"{"asset": {"version": "2.0"},
-            "extensionsUsed": ["KHR_draco_mesh_compression"],
-            "extensionsRequired": ["KHR_draco_mesh_compression"]}"#;
+            "extensionsUsed": ["KHR_materials_pbrSpecularGlossiness"],
+            "extensionsRequired": ["KHR_materials_pbrSpecularGlossiness"]}"#;
         std::fs::write(&path, json).unwrap();
         match import(&path) {
             Err(Error::UnsupportedGltfExtension { extension, .. }) => {
-                assert_eq!(extension, "KHR_draco_mesh_compression")
+                assert_eq!(extension, "KHR_materials_pbrSpecularGlossiness")
             }
             other => panic!("{other:?}"),
         }
