@@ -32,7 +32,7 @@ use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::{Error, Result};
 
 /// Extensions a file may require; every other optional extension is ignored.
-const SUPPORTED_EXTENSIONS: [&str; 8] = [
+const SUPPORTED_EXTENSIONS: [&str; 9] = [
     INSTANCING,
     compression::MESHOPT,
     "EXT_texture_webp",
@@ -40,6 +40,7 @@ const SUPPORTED_EXTENSIONS: [&str; 8] = [
     "KHR_materials_emissive_strength",
     compression::DRACO,
     "KHR_mesh_quantization",
+    "KHR_texture_basisu",
     "KHR_texture_transform",
 ];
 
@@ -420,7 +421,10 @@ fn decode_images(gltf: &Path, document: &Document, base: &Path, buffers: &[buffe
 }
 
 /// Extensions whose texture objects name an image of their own format (`source`).
-const TEXTURE_SOURCE_EXTENSIONS: [&str; 1] = ["EXT_texture_webp"];
+const TEXTURE_SOURCE_EXTENSIONS: [&str; 2] = ["EXT_texture_webp", "KHR_texture_basisu"];
+
+/// A KTX2 file's first bytes.
+const KTX2_MAGIC: [u8; 12] = [0xAB, b'K', b'T', b'X', b' ', b'2', b'0', 0xBB, b'\r', b'\n', 0x1A, b'\n'];
 
 /// PNG, JPEG or WebP (`EXT_texture_webp`), as the gltf crate chooses: the media type, else the
 /// file's extension, else its first bytes.
@@ -463,10 +467,34 @@ fn decode_image(gltf: &Path, image: &::gltf::Image, base: &Path, buffers: &[buff
             UriSource::File(file) => (files::read_input(&file, InputKind::Image, None, budget)?.into(), mime_type, Some(uri)),
         },
     };
+    if media_type == Some("image/ktx2") || bytes.starts_with(&KTX2_MAGIC) {
+        let (width, height, rgba8) = decode_basis(&bytes, budget).map_err(invalid)?;
+        return Ok(Texture { name, width, height, rgba8 });
+    }
     let format = image_format(media_type, uri, &bytes)
-        .ok_or_else(|| invalid("not a PNG, JPEG or WebP image; convert it to PNG or JPEG".to_owned()))?;
+        .ok_or_else(|| invalid("not a PNG, JPEG, WebP or KTX2 image; convert it to PNG or JPEG".to_owned()))?;
     let decoded = decode_limited(&bytes, format, budget).map_err(invalid)?;
     Ok(Texture { name, width: decoded.width, height: decoded.height, rgba8: to_rgba8(decoded) })
+}
+
+/// A KTX2 texture in Basis Universal (`KHR_texture_basisu`): its base level transcoded to RGBA8 on
+/// the CPU, as stored (sRGB-encoded colour stays encoded, as PNG's does), within the load's budget.
+fn decode_basis(bytes: &[u8], budget: &LoadBudget) -> Result<(u32, u32, Vec<u8>), String> {
+    let not_basis = |e: basisu::Error| {
+        format!("the KTX2 image is not a Basis Universal texture manylights can transcode ({e:?}); encode it with ETC1S or UASTC, or give a PNG")
+    };
+    let transcoder = basisu::Transcoder::new(bytes).map_err(not_basis)?;
+    let (width, height) = transcoder.base_dimensions();
+    let size = u64::from(width) * u64::from(height) * 4;
+    if size > super::IMAGE_DECODE_LIMIT_MIB * 1024 * 1024 {
+        return Err(format!(
+            "the image is too large to decode ({width}×{height}; the decoder allows {} MiB); give a smaller one",
+            super::IMAGE_DECODE_LIMIT_MIB
+        ));
+    }
+    budget.take_decoded(size).map_err(|e| e.to_string())?;
+    let rgba8 = transcoder.transcode(0, basisu::TargetFormat::Rgba32, basisu::DecodeFlags::NONE).map_err(not_basis)?;
+    Ok((width, height, rgba8))
 }
 
 /// Decodes an image under the decoder's allocation limit and the load's budget for decoded images.
