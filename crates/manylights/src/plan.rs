@@ -290,9 +290,18 @@ pub struct ShadingMethods {
     /// A debug view is shown: the shading core counts its work (`DEBUG_VIEWS` in
     /// `shading/debug_view.wgsl`, a pipeline constant: [`ShadingMethods::debug_views_constant`]).
     pub debug_views: bool,
+    /// Some material needs the core's extended material path (`MATERIAL_EXTENSIONS` in
+    /// `shading/shading_input.wgsl`, a pipeline constant: [`ShadingMethods::material_constant`]);
+    /// without, the shading passes compile only glTF's core material.
+    pub material_extensions: bool,
 }
 
 impl ShadingMethods {
+    /// The shading core's pipeline constant for the material extensions' path.
+    pub fn material_constant(&self) -> (&'static str, f64) {
+        ("MATERIAL_EXTENSIONS", f64::from(u8::from(self.material_extensions)))
+    }
+
     /// The shading core's pipeline constant for its debug views' counters.
     pub fn debug_views_constant(&self) -> (&'static str, f64) {
         ("DEBUG_VIEWS", f64::from(u8::from(self.debug_views)))
@@ -503,6 +512,9 @@ pub struct SceneStatistics {
     pub decal_centre_overlap: Option<f32>,
     /// The scene's animation moves instances of its meshes.
     pub animated_instances: bool,
+    /// Some material uses an extension the shading core evaluates beyond glTF's core material
+    /// (its own index of refraction or specular, a clear coat, unlit).
+    pub material_extensions: bool,
 }
 
 /// Which statistics the plan reads for these settings, so that nothing else is measured.
@@ -639,6 +651,7 @@ impl FramePlan {
             dense_lights: false,
             decal_cell_lists: false,
             debug_views: config.debug_view != DebugView::Off,
+            material_extensions: stats.material_extensions,
         };
         // Lights and decals crowded enough get wide leaves, walked a subgroup at a time, their leaves
         // shared out; decals, as one group placed once, cell lists too. Groups rebuilt every frame get
@@ -936,6 +949,10 @@ mod tests {
         assert!(methods.reflections && methods.direct == DirectShading::Budget && methods.debug_views && methods.subgroups);
         assert_eq!(methods.light_enumeration_module(), "shading/enumerate/lights_bvh.wgsl");
         assert_eq!(methods.debug_views_constant(), ("DEBUG_VIEWS", 1.0));
+        assert_eq!(methods.material_constant(), ("MATERIAL_EXTENSIONS", 0.0));
+        let coated = SceneStatistics { material_extensions: true, ..Default::default() };
+        let methods = FramePlan::resolve(&bvh, SUBGROUPS, &coated).unwrap().shading_methods(true);
+        assert_eq!(methods.material_constant(), ("MATERIAL_EXTENSIONS", 1.0));
     }
 
     #[test]

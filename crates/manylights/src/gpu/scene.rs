@@ -40,15 +40,41 @@ pub struct GpuMaterial {
     pub metallic_factor: f32,
     pub roughness_factor: f32,
     pub normal_scale: f32,
-    pub wrap_modes: u32,
+    /// MATERIAL_UNLIT, MATERIAL_CLEARCOAT.
+    pub flags: u32,
     pub base_color_layer: i32,
     pub emissive_layer: i32,
     pub metallic_roughness_layer: i32,
     pub normal_layer: i32,
+    /// The dielectric's reflectance at normal incidence before the colour texture, the clamp to 1
+    /// and the specular factor: `((ior − 1) / (ior + 1))² × colour factor`; and the factor.
+    pub specular_color: [f32; 3],
+    pub specular_factor: f32,
+    pub clearcoat_factor: f32,
+    pub clearcoat_roughness_factor: f32,
+    pub clearcoat_normal_scale: f32,
+    pub _pad0: u32,
+    pub specular_layer: i32,
+    pub specular_color_layer: i32,
+    pub clearcoat_layer: i32,
+    pub clearcoat_roughness_layer: i32,
+    pub clearcoat_normal_layer: i32,
+    pub _pad1: u32,
+    /// Four bits a texture slot, `(wrap_v << 2) | wrap_u`, eight slots a word, in the slots' order.
+    pub wrap_modes: [u32; 2],
     /// Each texture slot's coordinates from the mesh's (`TextureRef::uv_transform`), in the slots'
     /// order: two vec4s a slot, the 2×2 matrix's columns, then the translation.
-    pub uv_transforms: [[f32; 4]; 8],
+    pub uv_transforms: [[f32; 4]; 2 * TEXTURE_SLOTS],
 }
+
+/// A material's texture slots, in the order of `shading/material.wgsl`: base colour, emissive,
+/// metallic-roughness, normal, specular, specular colour, clearcoat, clearcoat roughness,
+/// clearcoat normal.
+pub const TEXTURE_SLOTS: usize = 9;
+
+/// `GpuMaterial::flags` (`MATERIAL_*` in `shading/types.wgsl`).
+pub const MATERIAL_UNLIT: u32 = 1;
+pub const MATERIAL_CLEARCOAT: u32 = 2;
 
 const NO_TEXTURE: i32 = -1;
 
@@ -802,8 +828,13 @@ fn texture_usage(materials: &[&Material]) -> (Vec<usize>, Vec<usize>) {
     let mut srgb = BTreeSet::new();
     let mut linear = BTreeSet::new();
     for m in materials {
-        srgb.extend([m.base_color_texture, m.emissive_texture].into_iter().flatten().map(|t| t.texture));
-        linear.extend([m.metallic_roughness_texture, m.normal_texture].into_iter().flatten().map(|t| t.texture));
+        for (t, is_srgb) in m.textures() {
+            if is_srgb {
+                srgb.insert(t.texture)
+            } else {
+                linear.insert(t.texture)
+            };
+        }
     }
     (srgb.into_iter().collect(), linear.into_iter().collect())
 }
@@ -825,6 +856,33 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
         AlphaMode::Mask { cutoff } => cutoff,
         AlphaMode::Opaque | AlphaMode::Blend => 0.0,
     };
+    let specular = &m.specular;
+    let ior_reflectance = ((specular.ior - 1.0) / (specular.ior + 1.0)).powi(2);
+    let clearcoat = m.clearcoat.unwrap_or(crate::scene::Clearcoat {
+        factor: 0.0,
+        texture: None,
+        roughness_factor: 0.0,
+        roughness_texture: None,
+        normal_texture: None,
+        normal_scale: 1.0,
+    });
+    // Slot order matches the WGSL (`TEXTURE_SLOTS`).
+    let slots = [
+        m.base_color_texture,
+        m.emissive_texture,
+        m.metallic_roughness_texture,
+        m.normal_texture,
+        specular.texture,
+        specular.color_texture,
+        clearcoat.texture,
+        clearcoat.roughness_texture,
+        clearcoat.normal_texture,
+    ];
+    let mut wrap_modes = [0u32; 2];
+    for (k, slot) in slots.iter().enumerate() {
+        wrap_modes[k / 8] |= wrap_bits(*slot) << (4 * (k % 8));
+    }
+    let flags = if m.unlit { MATERIAL_UNLIT } else { 0 } | if m.clearcoat.is_some() { MATERIAL_CLEARCOAT } else { 0 };
     GpuMaterial {
         base_color_factor: m.base_color_factor.to_array(),
         emissive_factor: m.emissive_factor.to_array(),
@@ -832,23 +890,32 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
         metallic_factor: m.metallic_factor,
         roughness_factor: m.roughness_factor,
         normal_scale: m.normal_scale,
+        flags,
         base_color_layer: layer(m.base_color_texture, color),
         emissive_layer: layer(m.emissive_texture, color),
         metallic_roughness_layer: layer(m.metallic_roughness_texture, data),
         normal_layer: layer(m.normal_texture, data),
-        // Slot order matches the WGSL: base colour, emissive, metallic-roughness, normal.
-        wrap_modes: wrap_bits(m.base_color_texture)
-            | wrap_bits(m.emissive_texture) << 8
-            | wrap_bits(m.metallic_roughness_texture) << 16
-            | wrap_bits(m.normal_texture) << 24,
-        uv_transforms: uv_transforms([m.base_color_texture, m.emissive_texture, m.metallic_roughness_texture, m.normal_texture]),
+        specular_color: (specular.color_factor * ior_reflectance).to_array(),
+        specular_factor: specular.factor,
+        clearcoat_factor: clearcoat.factor,
+        clearcoat_roughness_factor: clearcoat.roughness_factor,
+        clearcoat_normal_scale: clearcoat.normal_scale,
+        _pad0: 0,
+        specular_layer: layer(specular.texture, data),
+        specular_color_layer: layer(specular.color_texture, color),
+        clearcoat_layer: layer(clearcoat.texture, data),
+        clearcoat_roughness_layer: layer(clearcoat.roughness_texture, data),
+        clearcoat_normal_layer: layer(clearcoat.normal_texture, data),
+        _pad1: 0,
+        wrap_modes,
+        uv_transforms: uv_transforms(slots),
     }
 }
 
 /// The slots' coordinate transforms as `GpuMaterial::uv_transforms` lays them out (identity where a
 /// slot has no texture).
-fn uv_transforms(slots: [Option<TextureRef>; 4]) -> [[f32; 4]; 8] {
-    let mut packed = [[0.0; 4]; 8];
+fn uv_transforms(slots: [Option<TextureRef>; TEXTURE_SLOTS]) -> [[f32; 4]; 2 * TEXTURE_SLOTS] {
+    let mut packed = [[0.0; 4]; 2 * TEXTURE_SLOTS];
     for (k, slot) in slots.iter().enumerate() {
         let t = slot.map_or(glam::Affine2::IDENTITY, |t| t.uv_transform);
         packed[2 * k] = [t.matrix2.x_axis.x, t.matrix2.x_axis.y, t.matrix2.y_axis.x, t.matrix2.y_axis.y];
@@ -900,11 +967,22 @@ mod tests {
                 metallic_factor,
                 roughness_factor,
                 normal_scale,
-                wrap_modes,
+                flags,
                 base_color_layer,
                 emissive_layer,
                 metallic_roughness_layer,
                 normal_layer,
+                specular_color,
+                specular_factor,
+                clearcoat_factor,
+                clearcoat_roughness_factor,
+                clearcoat_normal_scale,
+                specular_layer,
+                specular_color_layer,
+                clearcoat_layer,
+                clearcoat_roughness_layer,
+                clearcoat_normal_layer,
+                wrap_modes,
                 uv_transforms
             ]
         );

@@ -83,6 +83,8 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         hardware_decals: false,
                         hardware_rays: false,
                         debug_views: false,
+                        // A pipeline constant: the same composed shader either way.
+                        material_extensions: true,
                     };
                     if decals.works_in(PipelineKind::Forward) {
                         shaders.push(super::forward_shade::shader(methods));

@@ -131,7 +131,7 @@ impl DeferredDecals {
         timer: Option<&mut GpuTimer>,
         scene: &GpuScene,
         decals: &VolumeStructure,
-        gbuffer: &[wgpu::TextureView; 4],
+        gbuffer: &[wgpu::TextureView; super::gbuffer_raster::GBUFFER_TARGETS],
         depth: &wgpu::TextureView,
     ) {
         let attachments = gbuffer[..3]

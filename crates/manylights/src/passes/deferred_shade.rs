@@ -21,7 +21,7 @@ pub struct DeferredShade {
 /// The images the pass reads and writes: the depth and the G-buffer it lights, the HDR image.
 pub struct DeferredShadeImages<'a> {
     pub depth: &'a wgpu::TextureView,
-    pub gbuffer: &'a [wgpu::TextureView; 4],
+    pub gbuffer: &'a [wgpu::TextureView; super::gbuffer_raster::GBUFFER_TARGETS],
     pub hdr: &'a wgpu::TextureView,
 }
 
@@ -46,17 +46,18 @@ impl DeferredShade {
             "deferred_shade",
             &[
                 texture(0, wgpu::TextureSampleType::Depth),
-                texture(1, float), // albedo
-                texture(2, float), // normal
-                texture(3, float), // roughness, metallic
-                texture(4, float), // emission
+                texture(1, float),                         // albedo
+                texture(2, float),                         // normal
+                texture(3, float),                         // roughness, metallic
+                texture(4, wgpu::TextureSampleType::Uint), // emission, specular, clear coat
                 bindings::storage_texture_write(5, compute, HDR_FORMAT),
                 ray_shadows::shading_mask_entry(6, compute), // sun visibility
             ],
         );
         let layouts = [&scene.bind_group_layout, &layout, &structures.lights.bind_group_layout, &structures.decals.bind_group_layout];
         let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
-        let constants = [("SUN_SHADOW_MASK", has_mask), methods.debug_views_constant(), methods.denoised_constant()];
+        let constants =
+            [("SUN_SHADOW_MASK", has_mask), methods.debug_views_constant(), methods.denoised_constant(), methods.material_constant()];
         let step = ComputeStep::new(device, &shader(methods), "deferred_shade", &layouts, &constants)?;
         let mut views = vec![wgpu::BindingResource::TextureView(images.depth)];
         views.extend(images.gbuffer.iter().map(wgpu::BindingResource::TextureView));

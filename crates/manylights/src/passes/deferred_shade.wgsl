@@ -14,7 +14,7 @@
 @group(1) @binding(1) var albedo: texture_2d<f32>;
 @group(1) @binding(2) var normals: texture_2d<f32>;
 @group(1) @binding(3) var roughness_metallic: texture_2d<f32>;
-@group(1) @binding(4) var emission: texture_2d<f32>;
+@group(1) @binding(4) var material: texture_2d<u32>;
 @group(1) @binding(5) var hdr_output: texture_storage_2d<rgba32float, write>;
 // The sun's visibility per pixel (`passes/ray_shadows.rs`), read when SUN_SHADOW_MASK is set.
 @group(1) @binding(6) var sun_shadow_mask: texture_2d<f32>;
@@ -43,7 +43,7 @@ fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     let rm = textureLoad(roughness_metallic, id.xy, 0);
     s.roughness = rm.x;
     s.metallic = rm.y;
-    s.emissive = textureLoad(emission, id.xy, 0).rgb;
+    gbuffer_decode_material(textureLoad(material, id.xy, 0), &s);
     // Rays leave along the geometric normal, rebuilt from depth only for frames that trace from here.
     s.ray_normal = s.normal;
     if frame.ray_options.z > 0u || frame.ray_options.w > 0u {

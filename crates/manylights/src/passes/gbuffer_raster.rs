@@ -8,16 +8,19 @@ use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::Result;
 
-/// Keep in sync with `gbuffer.wgsl`: albedo, normal, roughness-metallic, emission.
-pub const GBUFFER_FORMATS: [wgpu::TextureFormat; 4] =
-    [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::Rg16Float, wgpu::TextureFormat::Rg8Unorm, wgpu::TextureFormat::Rgba16Float];
+/// Keep in sync with `gbuffer.wgsl`: albedo, normal, roughness-metallic (the three deferred decals
+/// blend into) and the rest of the material, packed.
+pub const GBUFFER_FORMATS: [wgpu::TextureFormat; GBUFFER_TARGETS] =
+    [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::Rg16Float, wgpu::TextureFormat::Rg8Unorm, wgpu::TextureFormat::Rgba32Uint];
+
+pub const GBUFFER_TARGETS: usize = 4;
 
 pub struct GBufferRaster {
     pipelines: HashMap<RasterState, wgpu::RenderPipeline>,
 }
 
 impl GBufferRaster {
-    pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, methods: crate::plan::ShadingMethods) -> Result<Self> {
         let module = shaders::create_module(&ctx.device, &ShaderDesc::new("passes/gbuffer_raster.wgsl"))?;
         let layout = bindings::pipeline_layout(&ctx.device, "gbuffer_raster", &[&scene.bind_group_layout]);
         let targets = GBUFFER_FORMATS.map(|format| Some(wgpu::ColorTargetState::from(format)));
@@ -28,9 +31,10 @@ impl GBufferRaster {
             vertex_entry: "forward_vertex",
             depth: nearest_depth(),
         };
+        let constants = [methods.material_constant()];
         let pipelines = raster.per_state(&ctx.device, RasterState::all(), |state| {
             let entry = if state.alpha_mask { "gbuffer_masked" } else { "gbuffer_opaque" };
-            Some(Fragment { module: &module, entry, constants: &[], targets: &targets })
+            Some(Fragment { module: &module, entry, constants: &constants, targets: &targets })
         });
         Ok(Self { pipelines })
     }
@@ -41,7 +45,7 @@ impl GBufferRaster {
         timer: Option<&mut GpuTimer>,
         scene: &GpuScene,
         eye: glam::Vec3,
-        gbuffer: &[wgpu::TextureView; 4],
+        gbuffer: &[wgpu::TextureView; GBUFFER_TARGETS],
         depth: &wgpu::TextureView,
     ) {
         // Not cleared: the lighting pass reads the G-buffer only where depth says something was drawn.

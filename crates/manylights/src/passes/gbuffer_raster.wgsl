@@ -8,7 +8,7 @@ struct GBufferTexel {
     @location(0) albedo: vec4<f32>,
     @location(1) normal: vec4<f32>,
     @location(2) roughness_metallic: vec4<f32>,
-    @location(3) emission: vec4<f32>,
+    @location(3) material: vec4<u32>,
 }
 
 fn gbuffer_texel(s: ShadingInput) -> GBufferTexel {
@@ -16,7 +16,7 @@ fn gbuffer_texel(s: ShadingInput) -> GBufferTexel {
     out.albedo = vec4<f32>(s.base_color, 1.0);
     out.normal = gbuffer_encode_normal(s.normal);
     out.roughness_metallic = vec4<f32>(s.roughness, s.metallic, 0.0, 0.0);
-    out.emission = vec4<f32>(s.emissive, 0.0);
+    out.material = gbuffer_encode_material(s);
     return out;
 }
 

@@ -5,7 +5,7 @@
 //!
 //! ```text
 //! light / decal structures ─▶ (tlas/blas builds, when groups move or change; clustered lists)
-//! GpuScene ─▶ gbuffer_raster ─▶ albedo, normal, roughness-metallic, emission (not cleared)
+//! GpuScene ─▶ gbuffer_raster ─▶ albedo, normal, roughness-metallic, material (not cleared)
 //!                               + depth (cleared to 0)
 //!                                   │
 //!                                   ├─▶ surface_motion, when kept state follows animated instances ─▶ surface motions
@@ -30,7 +30,7 @@ use crate::passes::surface_motion::SurfaceMotion;
 use crate::passes::{
     deferred_decals::DeferredDecals,
     deferred_shade::{DeferredShade, DeferredShadeImages},
-    gbuffer_raster::{GBufferRaster, GBUFFER_FORMATS},
+    gbuffer_raster::{GBufferRaster, GBUFFER_FORMATS, GBUFFER_TARGETS},
     ray_shadows::RayShadows,
     transparent_shade::TransparentShade,
 };
@@ -44,7 +44,7 @@ use crate::{
 
 pub struct DeferredPipeline {
     pub targets: FrameTargets,
-    gbuffer: [wgpu::TextureView; 4],
+    gbuffer: [wgpu::TextureView; GBUFFER_TARGETS],
     depth_view: wgpu::TextureView,
     hdr_view: wgpu::TextureView,
     raster: GBufferRaster,
@@ -69,8 +69,8 @@ impl DeferredPipeline {
         let targets = FrameTargets::new(&ctx.device, width, height);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         use wgpu::TextureUsages as U;
-        let labels = ["gbuffer albedo", "gbuffer normal", "gbuffer roughness-metallic", "gbuffer emission"];
-        let textures: [wgpu::Texture; 4] = std::array::from_fn(|i| {
+        let labels = ["gbuffer albedo", "gbuffer normal", "gbuffer roughness-metallic", "gbuffer material"];
+        let textures: [wgpu::Texture; GBUFFER_TARGETS] = std::array::from_fn(|i| {
             super::target(
                 &ctx.device,
                 labels[i],
@@ -95,7 +95,7 @@ impl DeferredPipeline {
             .map(|mode| RayShadows::new(ctx, scene, mode, setup.methods.ray_trace_module(), &depth_view, (width, height)))
             .transpose()?;
         Ok(Self {
-            raster: GBufferRaster::new(ctx, scene)?,
+            raster: GBufferRaster::new(ctx, scene, methods)?,
             decals,
             shade: DeferredShade::new(
                 ctx,

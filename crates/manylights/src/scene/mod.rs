@@ -149,6 +149,46 @@ pub struct Material {
     pub emissive_texture: Option<TextureRef>,
     pub alpha_mode: AlphaMode,
     pub double_sided: bool,
+    /// `KHR_materials_unlit`: the base colour is the radiance sent, and nothing lights it.
+    pub unlit: bool,
+    /// The dielectric's reflectance (`KHR_materials_ior`, `KHR_materials_specular`).
+    pub specular: Specular,
+    /// A clear coat over the material (`KHR_materials_clearcoat`).
+    pub clearcoat: Option<Clearcoat>,
+}
+
+/// A dielectric's specular reflection, as `KHR_materials_ior` and `KHR_materials_specular` define
+/// it: at normal incidence `min(((ior − 1) / (ior + 1))² × colour, 1) × factor`, at grazing
+/// incidence `factor`; the diffuse lobe keeps what the specular lobe does not reflect.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Specular {
+    pub ior: f32,
+    pub factor: f32,
+    /// Its alpha channel scales `factor`.
+    pub texture: Option<TextureRef>,
+    pub color_factor: Vec3,
+    /// sRGB colour scaling `color_factor`.
+    pub color_texture: Option<TextureRef>,
+}
+
+impl Default for Specular {
+    /// glTF's core material: an index of refraction of 1.5 (4 % reflectance), untinted.
+    fn default() -> Self {
+        Self { ior: 1.5, factor: 1.0, texture: None, color_factor: Vec3::ONE, color_texture: None }
+    }
+}
+
+/// A clear coat (`KHR_materials_clearcoat`): a GGX layer of index of refraction 1.5 over the
+/// material, of strength `factor` (× the texture's R) and roughness `roughness_factor` (× the
+/// roughness texture's G), with a normal of its own (the normal texture's, else the geometry's).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clearcoat {
+    pub factor: f32,
+    pub texture: Option<TextureRef>,
+    pub roughness_factor: f32,
+    pub roughness_texture: Option<TextureRef>,
+    pub normal_texture: Option<TextureRef>,
+    pub normal_scale: f32,
 }
 
 impl Default for Material {
@@ -167,7 +207,22 @@ impl Default for Material {
             emissive_texture: None,
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
+            unlit: false,
+            specular: Specular::default(),
+            clearcoat: None,
         }
+    }
+}
+
+impl Material {
+    /// Every texture the material uses, with whether it holds sRGB colour (else linear data).
+    pub fn textures(&self) -> impl Iterator<Item = (TextureRef, bool)> + '_ {
+        let clearcoat = self.clearcoat.iter().flat_map(|c| [c.texture, c.roughness_texture, c.normal_texture]);
+        [(self.base_color_texture, true), (self.emissive_texture, true), (self.specular.color_texture, true)]
+            .into_iter()
+            .chain([self.metallic_roughness_texture, self.normal_texture, self.specular.texture].into_iter().map(|t| (t, false)))
+            .chain(clearcoat.map(|t| (t, false)))
+            .filter_map(|(t, srgb)| t.map(|t| (t, srgb)))
     }
 }
 
@@ -525,7 +580,7 @@ impl Scene {
         for (mi, m) in self.materials.iter().enumerate() {
             let named = if m.name == format!("material {mi}") { m.name.clone() } else { format!("material {mi} ({})", m.name) };
             validate_material(m).map_err(|reason| crate::Error::InvalidScene(format!("{named}: {reason}")))?;
-            for t in [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture].into_iter().flatten() {
+            for (t, _) in m.textures() {
                 if t.texture >= self.textures.len() {
                     return err(format!("material {mi} ({}): texture {} does not exist", m.name, t.texture));
                 }
@@ -579,6 +634,26 @@ pub fn validate_material(m: &Material) -> Result<(), String> {
     }
     if !m.normal_scale.is_finite() {
         return Err(format!("normal scale {} must be finite", m.normal_scale));
+    }
+    let specular = &m.specular;
+    // glTF allows an index of refraction of 0 (a perfect reflector) or at least 1.
+    if !(specular.ior.is_finite() && (specular.ior == 0.0 || specular.ior >= 1.0)) {
+        return Err(format!("index of refraction {} must be 0 or at least 1", specular.ior));
+    }
+    if !(unit(specular.factor) && specular.color_factor.is_finite() && specular.color_factor.min_element() >= 0.0) {
+        return Err(format!(
+            "specular factor {} must be 0 to 1 and specular colour {:?} finite and ≥ 0",
+            specular.factor,
+            specular.color_factor.to_array()
+        ));
+    }
+    if let Some(c) = &m.clearcoat {
+        if !unit(c.factor) || !unit(c.roughness_factor) || !c.normal_scale.is_finite() {
+            return Err(format!(
+                "clearcoat factor {} and roughness {} must be 0 to 1, its normal scale {} finite",
+                c.factor, c.roughness_factor, c.normal_scale
+            ));
+        }
     }
     if let AlphaMode::Mask { cutoff } = m.alpha_mode {
         if !(cutoff.is_finite() && cutoff >= 0.0) {

@@ -1,7 +1,11 @@
 #include "shading/shading_input.wgsl"
 
 // Cook-Torrance specular (GGX distribution, height-correlated Smith visibility, Schlick Fresnel) plus
-// Lambert diffuse: the glTF metallic-roughness BRDF.
+// Lambert diffuse: the glTF metallic-roughness BRDF, with its extensions' dielectric reflectance
+// (KHR_materials_ior, KHR_materials_specular) and clear coat (KHR_materials_clearcoat), as their
+// specifications compose them: mix(dielectric, metal, metallic) under the coat, where the
+// dielectric is `diffuse · (1 − weight · max(F)) + specular · weight · F`, and the coat mixes in
+// by `clearcoat · F_coat(n_coat · v)`.
 
 const PI: f32 = 3.141592653589793;
 // Below this perceptual roughness GGX highlights of point lights become sub-pixel and alias.
@@ -20,36 +24,69 @@ fn v_smith_ggx_correlated(n_dot_v: f32, n_dot_l: f32, alpha: f32) -> f32 {
     return 0.5 / max(gv + gl, 1e-7);
 }
 
-fn f_schlick(f0: vec3<f32>, v_dot_h: f32) -> vec3<f32> {
-    let f = pow(1.0 - v_dot_h, 5.0);
-    return f0 + (vec3<f32>(1.0) - f0) * f;
-}
-
 // The BRDF's two lobes, each times n·l.
 struct BrdfLobes {
     diffuse: vec3<f32>,
     specular: vec3<f32>,
 }
 
-// Reflected radiance for unit irradiance from direction `light_dir` (towards the light), already
-// multiplied by n·l, lobe by lobe. Zero below the horizon.
-fn brdf_lobes_times_cosine(s: ShadingInput, light_dir: vec3<f32>) -> BrdfLobes {
-    let n_dot_l = dot(s.normal, light_dir);
+// GGX's D · V for unit normal `n`, times n·l, towards `light_dir` (0 below n's horizon).
+fn ggx_times_cosine(n: vec3<f32>, view_dir: vec3<f32>, light_dir: vec3<f32>, roughness: f32) -> f32 {
+    let n_dot_l = dot(n, light_dir);
     if n_dot_l <= 0.0 {
-        return BrdfLobes(vec3<f32>(0.0), vec3<f32>(0.0));
+        return 0.0;
     }
-    let n_dot_v = max(dot(s.normal, s.view_dir), 1e-4);
-    let h = normalize(light_dir + s.view_dir);
-    let n_dot_h = saturate(dot(s.normal, h));
-    let v_dot_h = saturate(dot(s.view_dir, h));
-    let roughness = max(s.roughness, MIN_ROUGHNESS);
-    let alpha = roughness * roughness;
+    let n_dot_v = max(dot(n, view_dir), 1e-4);
+    let n_dot_h = saturate(dot(n, normalize(light_dir + view_dir)));
+    let alpha = max(roughness, MIN_ROUGHNESS) * max(roughness, MIN_ROUGHNESS);
+    return d_ggx(n_dot_h, alpha) * v_smith_ggx_correlated(n_dot_v, n_dot_l, alpha) * n_dot_l;
+}
 
-    let f0 = mix(vec3<f32>(0.04), s.base_color, s.metallic);
-    let fresnel = f_schlick(f0, v_dot_h);
-    let specular = d_ggx(n_dot_h, alpha) * v_smith_ggx_correlated(n_dot_v, n_dot_l, alpha) * fresnel;
-    let diffuse = (vec3<f32>(1.0) - fresnel) * s.base_color * (1.0 - s.metallic) / PI;
-    return BrdfLobes(diffuse * n_dot_l, specular * n_dot_l);
+// The dielectric's reflectance at normal incidence (xyz) and its weight (w): the surface's with the
+// extensions, glTF's core 4 % and 1 without (a pipeline constant, so the core path carries none).
+fn surface_dielectric(s: ShadingInput) -> vec4<f32> {
+    if MATERIAL_EXTENSIONS {
+        return vec4<f32>(s.dielectric_f0, s.specular_weight);
+    }
+    return vec4<f32>(vec3<f32>(0.04), 1.0);
+}
+
+// The share of light a clear coat reflects towards the viewer (Schlick, index of refraction 1.5):
+// what reaches the material below is scaled by one minus it.
+fn clearcoat_fresnel(s: ShadingInput) -> f32 {
+    if !MATERIAL_EXTENSIONS {
+        return 0.0;
+    }
+    return s.clearcoat * (0.04 + 0.96 * pow(1.0 - saturate(abs(dot(s.clearcoat_normal, s.view_dir))), 5.0));
+}
+
+// Reflected radiance for unit irradiance from direction `light_dir` (towards the light), already
+// multiplied by n·l, lobe by lobe (the coat in the specular lobe). Zero below the horizon.
+fn brdf_lobes_times_cosine(s: ShadingInput, light_dir: vec3<f32>) -> BrdfLobes {
+    var lobes = BrdfLobes(vec3<f32>(0.0), vec3<f32>(0.0));
+    let n_dot_l = dot(s.normal, light_dir);
+    if n_dot_l > 0.0 {
+        let n_dot_v = max(dot(s.normal, s.view_dir), 1e-4);
+        let h = normalize(light_dir + s.view_dir);
+        let n_dot_h = saturate(dot(s.normal, h));
+        let grazing = pow(1.0 - saturate(dot(s.view_dir, h)), 5.0);
+        let roughness = max(s.roughness, MIN_ROUGHNESS);
+        let alpha = roughness * roughness;
+        let dielectric = surface_dielectric(s);
+        let dielectric_fresnel = dielectric.xyz + (1.0 - dielectric.xyz) * grazing;
+        let metal_fresnel = s.base_color + (1.0 - s.base_color) * grazing;
+        let fresnel = mix(dielectric.w * dielectric_fresnel, metal_fresnel, s.metallic);
+        lobes.specular = d_ggx(n_dot_h, alpha) * v_smith_ggx_correlated(n_dot_v, n_dot_l, alpha) * n_dot_l * fresnel;
+        let reflected = dielectric.w * max(dielectric_fresnel.x, max(dielectric_fresnel.y, dielectric_fresnel.z));
+        lobes.diffuse = s.base_color * ((1.0 - s.metallic) * (1.0 - reflected) * n_dot_l / PI);
+    }
+    if MATERIAL_EXTENSIONS && s.clearcoat > 0.0 {
+        let coat = clearcoat_fresnel(s);
+        lobes.diffuse *= 1.0 - coat;
+        lobes.specular = lobes.specular * (1.0 - coat)
+            + vec3<f32>(coat * ggx_times_cosine(s.clearcoat_normal, s.view_dir, light_dir, s.clearcoat_roughness));
+    }
+    return lobes;
 }
 
 // Both lobes together.

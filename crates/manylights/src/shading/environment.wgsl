@@ -32,23 +32,37 @@ fn environment_reflection_direction(s: ShadingInput) -> vec3<f32> {
     return reflect(-s.view_dir, s.normal);
 }
 
-// The fraction of the (prefiltered) environment a surface reflects towards its viewer: F0 × scale
-// + bias from the BRDF table, by n·v and roughness.
-fn environment_specular_albedo(s: ShadingInput) -> vec3<f32> {
+// The BRDF table's scale and bias on F0 (F90 for the bias) for unit normal `n` and `roughness`.
+fn environment_scale_bias(n: vec3<f32>, view_dir: vec3<f32>, roughness: f32) -> vec2<f32> {
     let size = vec2<f32>(textureDimensions(environment_brdf_table));
-    let n_dot_v = max(dot(s.normal, s.view_dir), 1e-4);
+    let n_dot_v = max(dot(n, view_dir), 1e-4);
     // Clamped to the texel centres: the sampler wraps horizontally.
-    let uv = clamp(vec2<f32>(n_dot_v, s.roughness), 0.5 / size, 1.0 - 0.5 / size);
-    let scale_bias = textureSampleLevel(environment_brdf_table, environment_sampler, uv, 0.0).rg;
-    let f0 = mix(vec3<f32>(0.04), s.base_color, s.metallic);
-    return f0 * scale_bias.x + scale_bias.y;
+    let uv = clamp(vec2<f32>(n_dot_v, roughness), 0.5 / size, 1.0 - 0.5 / size);
+    return textureSampleLevel(environment_brdf_table, environment_sampler, uv, 0.0).rg;
 }
 
-// Diffuse and specular light from the environment.
+// The fraction of the (prefiltered) environment the material below any clear coat reflects towards
+// its viewer: F0 × scale + F90 × bias from the BRDF table, by n·v and roughness; the coat's share
+// removed.
+fn environment_specular_albedo(s: ShadingInput) -> vec3<f32> {
+    let scale_bias = environment_scale_bias(s.normal, s.view_dir, s.roughness);
+    let dielectric = surface_dielectric(s);
+    let f0 = mix(dielectric.w * dielectric.xyz, s.base_color, s.metallic);
+    let f90 = mix(dielectric.w, 1.0, s.metallic);
+    return (f0 * scale_bias.x + f90 * scale_bias.y) * (1.0 - clearcoat_fresnel(s));
+}
+
+// Diffuse and specular light from the environment, and the clear coat's reflection of it.
 fn environment_light(s: ShadingInput) -> vec3<f32> {
-    let diffuse = environment_irradiance(s.normal) * s.base_color * (1.0 - s.metallic);
+    let diffuse = environment_irradiance(s.normal) * s.base_color * (1.0 - s.metallic) * (1.0 - clearcoat_fresnel(s));
     let specular = environment_specular_albedo(s) * environment_specular_radiance(environment_reflection_direction(s), s.roughness);
-    return diffuse + specular;
+    var coat = vec3<f32>(0.0);
+    if MATERIAL_EXTENSIONS && s.clearcoat > 0.0 {
+        let scale_bias = environment_scale_bias(s.clearcoat_normal, s.view_dir, s.clearcoat_roughness);
+        let direction = reflect(-s.view_dir, s.clearcoat_normal);
+        coat = clearcoat_fresnel(s) * (scale_bias.x + scale_bias.y) * environment_specular_radiance(direction, s.clearcoat_roughness);
+    }
+    return diffuse + specular + coat;
 }
 
 // Radiance seen where no geometry was drawn and where reflected rays leave the scene: the

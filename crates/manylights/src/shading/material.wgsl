@@ -17,7 +17,7 @@ fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Materia
     let columns = material.uv_transforms[2u * slot];
     let linear = mat2x2<f32>(columns.xy, columns.zw);
     let g = UvGradients(linear * surface.uv + material.uv_transforms[2u * slot + 1u].xy, linear * surface.ddx, linear * surface.ddy);
-    switch (material.wrap_modes >> (slot * 8u)) & 0xFu {
+    switch (material.wrap_modes[slot / 8u] >> ((slot % 8u) * 4u)) & 0xFu {
         case 1u: { return textureSampleGrad(textures, wrap_u1_v0, g.uv, layer, g.ddx, g.ddy); }
         case 2u: { return textureSampleGrad(textures, wrap_u2_v0, g.uv, layer, g.ddx, g.ddy); }
         case 4u: { return textureSampleGrad(textures, wrap_u0_v1, g.uv, layer, g.ddx, g.ddy); }
@@ -30,9 +30,9 @@ fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Materia
     }
 }
 
-// The three below read a surface material's textures from `color_textures` (sRGB: base colour,
-// emissive) and `data_textures` (linear: metallic-roughness, normal); decals sample their own arrays,
-// clamped, in `decals.wgsl`.
+// The functions below read a surface material's textures from `color_textures` (sRGB: base colour,
+// emissive, specular colour) and `data_textures` (linear: the others); decals sample their own
+// arrays, clamped, in `decals.wgsl`.
 
 // Base colour with alpha; used for alpha masking too.
 fn material_base_color(material: Material, g: UvGradients) -> vec4<f32> {
@@ -102,15 +102,56 @@ fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, 
     }
     s.emissive = emissive;
 
+    let t = normalize(surface.tangent - surface.normal * dot(surface.normal, surface.tangent));
+    let b = cross(surface.normal, t) * surface.bitangent_sign;
     var normal = surface.normal;
     if material.normal_layer != NO_TEXTURE {
-        let t = normalize(surface.tangent - surface.normal * dot(surface.normal, surface.tangent));
-        let b = cross(surface.normal, t) * surface.bitangent_sign;
         normal = material_mapped_normal(material, g, surface.normal, t, b);
     }
     s.normal = normal;
+
     // Callers that know the triangle's own normal or an uncertain position set these.
     s.ray_normal = surface.normal;
     s.ray_clearance = 0.0;
+
+    // glTF's core material, unless the scene's materials use the extensions.
+    s.unlit = false;
+    s.dielectric_f0 = vec3<f32>(0.04);
+    s.specular_weight = 1.0;
+    s.clearcoat = 0.0;
+    s.clearcoat_roughness = 0.0;
+    s.clearcoat_normal = surface.normal;
+    if MATERIAL_EXTENSIONS {
+        material_extensions(material, g, surface, t, b, &s);
+    }
     return s;
+}
+
+// The extensions' parameters: KHR_materials_unlit, _ior and _specular (textures 4, 5), _clearcoat
+// (textures 6 to 8).
+fn material_extensions(material: Material, g: UvGradients, surface: SurfaceFrame, t: vec3<f32>, b: vec3<f32>, s: ptr<function, ShadingInput>) {
+    (*s).unlit = (material.flags & MATERIAL_UNLIT) != 0u;
+    var f0 = material.specular_color;
+    if material.specular_color_layer != NO_TEXTURE {
+        f0 *= sample_wrapped(color_textures, material.specular_color_layer, material, 5u, g).rgb;
+    }
+    (*s).dielectric_f0 = min(f0, vec3<f32>(1.0));
+    (*s).specular_weight = material.specular_factor;
+    if material.specular_layer != NO_TEXTURE {
+        (*s).specular_weight *= sample_wrapped(data_textures, material.specular_layer, material, 4u, g).a;
+    }
+    if (material.flags & MATERIAL_CLEARCOAT) != 0u {
+        (*s).clearcoat = material.clearcoat_factor;
+        if material.clearcoat_layer != NO_TEXTURE {
+            (*s).clearcoat *= sample_wrapped(data_textures, material.clearcoat_layer, material, 6u, g).r;
+        }
+        (*s).clearcoat_roughness = material.clearcoat_roughness_factor;
+        if material.clearcoat_roughness_layer != NO_TEXTURE {
+            (*s).clearcoat_roughness *= sample_wrapped(data_textures, material.clearcoat_roughness_layer, material, 7u, g).g;
+        }
+        if material.clearcoat_normal_layer != NO_TEXTURE {
+            let texel = sample_wrapped(data_textures, material.clearcoat_normal_layer, material, 8u, g).xyz;
+            (*s).clearcoat_normal = normal_map_applied(texel, material.clearcoat_normal_scale, surface.normal, t, b);
+        }
+    }
 }

@@ -17,6 +17,9 @@
 // BRDF's share, as `shade` gives the prefiltered environment, zero above the roughness threshold and
 // fading in over its last quarter so no edge shows where the threshold cuts.
 fn reflection_weight(s: ShadingInput) -> vec3<f32> {
+    if MATERIAL_EXTENSIONS && s.unlit {
+        return vec3<f32>(0.0);
+    }
     let threshold = frame.ray_settings.y;
     let fade = saturate((threshold - s.roughness) / (0.25 * threshold));
     return environment_specular_albedo(s) * fade;

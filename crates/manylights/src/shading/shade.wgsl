@@ -27,6 +27,9 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
         debug_restir_confidence = 0u;
         debug_restir_weight = 0u;
     }
+    if MATERIAL_EXTENSIONS && s.unlit {
+        return min(s.base_color, vec3<f32>(MAX_RADIANCE));
+    }
     // The environment (sky, image or uniform ambient) stands in for indirect light.
     var radiance = s.emissive + environment_light(s);
     if frame.sun_direction.w > 0.0 && sun_visibility > 0.0 {

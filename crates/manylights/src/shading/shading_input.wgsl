@@ -1,6 +1,11 @@
 // The surface every pipeline hands to the shading core: built by the visibility-buffer resolve, the
 // G-buffer decode and forward fragments. Decals modify it before `shade`.
 
+// Some material of the scene uses the extensions' parameters below (`ShadingMethods::
+// material_extensions`); where none does, the passes compile glTF's core material alone, the same
+// formulas at the parameters' default values.
+override MATERIAL_EXTENSIONS: bool = true;
+
 struct ShadingInput {
     position: vec3<f32>,
     // Shading normal (after normal mapping), unit, facing the viewer's side.
@@ -13,6 +18,18 @@ struct ShadingInput {
     // Perceptual roughness (alpha = roughness²).
     roughness: f32,
     emissive: vec3<f32>,
+    // The dielectric's specular reflectance at normal incidence and its weight, which is also its
+    // reflectance at grazing incidence (KHR_materials_ior, KHR_materials_specular; 0.04 and 1 for
+    // glTF's core material); a metal reflects its base colour.
+    dielectric_f0: vec3<f32>,
+    specular_weight: f32,
+    // A clear coat over it (KHR_materials_clearcoat): its strength (0: none), perceptual roughness
+    // and unit normal, on the viewer's side as `normal` is.
+    clearcoat: f32,
+    clearcoat_roughness: f32,
+    clearcoat_normal: vec3<f32>,
+    // KHR_materials_unlit: `base_color` is the radiance sent, and nothing lights it.
+    unlit: bool,
     // Where rays leave the surface (shadow rays towards local lights): its geometric normal on the
     // viewer's side, and how far off the surface `position` may lie — `surface_clearance` for a
     // position rebuilt from depth or interpolated by the raster, 0 at a ray's hit, which is exact.

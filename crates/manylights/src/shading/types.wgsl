@@ -41,18 +41,40 @@ struct Material {
     metallic_factor: f32,
     roughness_factor: f32,
     normal_scale: f32,
-    // Four bytes, one per texture slot in the order below, each `(wrap_v << 2) | wrap_u`.
-    wrap_modes: u32,
-    // Layers in `color_textures` (base colour, emissive) and `data_textures` (metallic-roughness,
-    // normal); NO_TEXTURE when absent.
+    // MATERIAL_UNLIT, MATERIAL_CLEARCOAT.
+    flags: u32,
+    // Layers in `color_textures` (base colour, emissive, specular colour) and `data_textures` (the
+    // others); NO_TEXTURE when absent. Texture slots, in order: base colour 0, emissive 1,
+    // metallic-roughness 2, normal 3, specular 4, specular colour 5, clearcoat 6, clearcoat
+    // roughness 7, clearcoat normal 8.
     base_color_layer: i32,
     emissive_layer: i32,
     metallic_roughness_layer: i32,
     normal_layer: i32,
+    // The dielectric's reflectance at normal incidence before the colour texture, the clamp to 1 and
+    // the specular factor, ((ior − 1) / (ior + 1))² × colour factor; and the specular factor
+    // (KHR_materials_ior, KHR_materials_specular).
+    specular_color: vec3<f32>,
+    specular_factor: f32,
+    clearcoat_factor: f32,
+    clearcoat_roughness_factor: f32,
+    clearcoat_normal_scale: f32,
+    _pad0: u32,
+    specular_layer: i32,
+    specular_color_layer: i32,
+    clearcoat_layer: i32,
+    clearcoat_roughness_layer: i32,
+    clearcoat_normal_layer: i32,
+    _pad1: u32,
+    // Four bits a texture slot, `(wrap_v << 2) | wrap_u`, eight slots a word.
+    wrap_modes: vec2<u32>,
     // Each slot's texture coordinates from the mesh's (glTF's KHR_texture_transform): two vec4s a
     // slot, the 2×2 matrix's columns (xy, zw), then the translation (xy).
-    uv_transforms: array<vec4<f32>, 8>,
+    uv_transforms: array<vec4<f32>, 18>,
 }
+
+const MATERIAL_UNLIT: u32 = 1u;
+const MATERIAL_CLEARCOAT: u32 = 2u;
 
 const LIGHT_POINT: u32 = 0u;
 const LIGHT_SPOT: u32 = 1u;

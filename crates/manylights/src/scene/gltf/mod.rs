@@ -32,12 +32,16 @@ use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::{Error, Result};
 
 /// Extensions a file may require; every other optional extension is ignored.
-const SUPPORTED_EXTENSIONS: [&str; 9] = [
+const SUPPORTED_EXTENSIONS: [&str; 13] = [
     INSTANCING,
     compression::MESHOPT,
     "EXT_texture_webp",
     "KHR_lights_punctual",
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_specular",
+    "KHR_materials_unlit",
     compression::DRACO,
     "KHR_mesh_quantization",
     "KHR_texture_basisu",
@@ -567,7 +571,7 @@ pub(crate) fn to_rgba8(data: ::gltf::image::Data) -> Vec<u8> {
 }
 
 fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Texture>) -> Result<Scene, String> {
-    let mut materials: Vec<Material> = document.materials().map(|m| material(&m)).collect::<Result<_, _>>()?;
+    let mut materials: Vec<Material> = document.materials().map(|m| material(&m, document)).collect::<Result<_, _>>()?;
     // Primitives without a material use the glTF default material, appended only when needed.
     let default_material = materials.len();
     let (meshes, sources): (Vec<Mesh>, Vec<_>) =
@@ -1009,7 +1013,7 @@ fn place_light(scene: &mut Scene, light: &::gltf::khr_lights_punctual::Light, wo
     scene.lights.push(Light { kind, position: world.transform_point3(Vec3::ZERO), direction, color, intensity, range, cast_shadows: true });
 }
 
-fn material(m: &::gltf::Material) -> Result<Material, String> {
+fn material(m: &::gltf::Material, document: &Document) -> Result<Material, String> {
     let name = m.name().map_or_else(|| format!("material {}", m.index().unwrap_or_default()), str::to_owned);
     let named = m.name().map_or_else(|| name.clone(), |n| format!("material {} ({n})", m.index().unwrap_or_default()));
     // glTF bounds the factor to 0..1 and leaves brightness to the extension, which may be as bright
@@ -1065,8 +1069,72 @@ fn material(m: &::gltf::Material) -> Result<Material, String> {
             ::gltf::material::AlphaMode::Blend => AlphaMode::Blend,
         },
         double_sided: m.double_sided(),
+        unlit: m.extension_value("KHR_materials_unlit").is_some(),
+        specular: specular(m, document, &named)?,
+        clearcoat: clearcoat(m, document, &named)?,
         name,
     })
+}
+
+/// A number member of an extension object, or its default.
+fn number(object: &serde_json::Value, name: &str, default: f32) -> f32 {
+    object.get(name).and_then(serde_json::Value::as_f64).map_or(default, |v| v as f32)
+}
+
+/// A texture info member of an extension object (glTF's `textureInfo`, with its own
+/// `KHR_texture_transform`).
+fn extension_texture(object: &serde_json::Value, name: &str, document: &Document, material: &str) -> Result<Option<TextureRef>, String> {
+    let Some(info) = object.get(name) else { return Ok(None) };
+    let index = info.get("index").and_then(serde_json::Value::as_u64).ok_or_else(|| format!("{material}: {name} has no texture index"))?;
+    let texture =
+        document.textures().nth(index as usize).ok_or_else(|| format!("{material}: {name} names texture {index}, which does not exist"))?;
+    let tex_coord = info.get("texCoord").and_then(serde_json::Value::as_u64).unwrap_or(0) as u32;
+    let transform = match info.get("extensions").and_then(|e| e.get("KHR_texture_transform")) {
+        Some(value) => {
+            let parsed = ::gltf::json::deserialize::from_value::<::gltf::json::extensions::texture::TextureTransform>(value.clone())
+                .map_err(|e| format!("{material}: {name}'s KHR_texture_transform: {e}"))?;
+            Some((parsed.offset.0, parsed.rotation.0, parsed.scale.0, parsed.tex_coord))
+        }
+        None => None,
+    };
+    texture_ref(&texture, tex_coord, transform, material).map(Some)
+}
+
+/// `KHR_materials_ior` and `KHR_materials_specular`.
+fn specular(m: &::gltf::Material, document: &Document, named: &str) -> Result<super::Specular, String> {
+    let mut specular = super::Specular::default();
+    if let Some(ior) = m.extension_value("KHR_materials_ior") {
+        specular.ior = number(ior, "ior", 1.5);
+    }
+    if let Some(ext) = m.extension_value("KHR_materials_specular") {
+        specular.factor = number(ext, "specularFactor", 1.0);
+        specular.texture = extension_texture(ext, "specularTexture", document, named)?;
+        if let Some(color) = ext.get("specularColorFactor").and_then(serde_json::Value::as_array) {
+            let c: Vec<f32> = color.iter().filter_map(serde_json::Value::as_f64).map(|v| v as f32).collect();
+            let [r, g, b] = c[..] else { return Err(format!("{named}: specularColorFactor {color:?} must be three numbers")) };
+            specular.color_factor = Vec3::new(r, g, b);
+        }
+        specular.color_texture = extension_texture(ext, "specularColorTexture", document, named)?;
+    }
+    Ok(specular)
+}
+
+/// `KHR_materials_clearcoat`; none where its factor is 0 (the coat is absent).
+fn clearcoat(m: &::gltf::Material, document: &Document, named: &str) -> Result<Option<super::Clearcoat>, String> {
+    let Some(ext) = m.extension_value("KHR_materials_clearcoat") else { return Ok(None) };
+    let factor = number(ext, "clearcoatFactor", 0.0);
+    if factor == 0.0 {
+        return Ok(None);
+    }
+    let normal_scale = ext.get("clearcoatNormalTexture").map_or(1.0, |t| number(t, "scale", 1.0));
+    Ok(Some(super::Clearcoat {
+        factor,
+        texture: extension_texture(ext, "clearcoatTexture", document, named)?,
+        roughness_factor: number(ext, "clearcoatRoughnessFactor", 0.0),
+        roughness_texture: extension_texture(ext, "clearcoatRoughnessTexture", document, named)?,
+        normal_texture: extension_texture(ext, "clearcoatNormalTexture", document, named)?,
+        normal_scale,
+    }))
 }
 
 /// `KHR_texture_transform`'s offset, rotation (radians) and scale, and the `texCoord` it overrides.

@@ -1,0 +1,336 @@
+//! The glTF material extensions the shading core honours (`shading/brdf.wgsl`, `material.wgsl`):
+//! `KHR_materials_ior`, `KHR_materials_specular` and `KHR_materials_clearcoat` shade a wall under a
+//! point light as their specifications' formulas say, computed here on the CPU, in every pipeline;
+//! their textures scale their factors; `KHR_materials_unlit` shows its base colour whatever lights
+//! it; and the importer reads all four from a glTF file.
+
+mod common;
+
+use std::f32::consts::PI;
+
+use common::*;
+use glam::{Vec3, Vec4};
+use manylights::{
+    scene::{Clearcoat, Light, Material, Scene, Specular, Texture, TextureRef, Wrap},
+    settings::{LightMethod, PipelineKind, RenderConfig},
+};
+
+/// The wall's material parameters the reference needs.
+struct Params {
+    base: Vec3,
+    metallic: f32,
+    roughness: f32,
+    ior: f32,
+    specular: f32,
+    specular_color: Vec3,
+    clearcoat: f32,
+    clearcoat_roughness: f32,
+}
+
+impl Params {
+    fn material(&self) -> Material {
+        Material {
+            base_color_factor: self.base.extend(1.0),
+            metallic_factor: self.metallic,
+            roughness_factor: self.roughness,
+            specular: Specular { ior: self.ior, factor: self.specular, color_factor: self.specular_color, ..Default::default() },
+            clearcoat: (self.clearcoat > 0.0).then_some(Clearcoat {
+                factor: self.clearcoat,
+                texture: None,
+                roughness_factor: self.clearcoat_roughness,
+                roughness_texture: None,
+                normal_texture: None,
+                normal_scale: 1.0,
+            }),
+            ..Default::default()
+        }
+    }
+}
+
+fn schlick(f0: Vec3, cos: f32) -> Vec3 {
+    f0 + (Vec3::ONE - f0) * (1.0 - cos).powi(5)
+}
+
+/// GGX D · V (height-correlated Smith) for perceptual roughness `roughness`.
+fn ggx(n_l: f32, n_v: f32, n_h: f32, roughness: f32) -> f32 {
+    let alpha = roughness.max(0.045).powi(2);
+    let a2 = alpha * alpha;
+    let d = a2 / (PI * (n_h * n_h * (a2 - 1.0) + 1.0).powi(2));
+    let gv = n_l * (n_v * n_v * (1.0 - a2) + a2).sqrt();
+    let gl = n_v * (n_l * n_l * (1.0 - a2) + a2).sqrt();
+    d * 0.5 / (gv + gl)
+}
+
+/// The specifications' BRDF on the CPU: `mix(dielectric, metal, metallic)` with the dielectric's
+/// `fresnel_mix` of KHR_materials_specular, under KHR_materials_clearcoat's `fresnel_coat`, for the
+/// wall's normal +Z, times the point light's irradiance.
+fn reference(m: &Params, light: &Light, point: Vec3, eye: Vec3) -> Vec3 {
+    let n = Vec3::Z;
+    let to_light = light.position - point;
+    let d2 = to_light.length_squared();
+    let (l, v) = (to_light.normalize(), (eye - point).normalize());
+    let h = (l + v).normalize();
+    let (n_l, n_v, n_h, v_h) = (n.dot(l), n.dot(v), n.dot(h), v.dot(h));
+    let ratio2 = d2 / (light.range * light.range);
+    let irradiance = light.intensity * (1.0 - ratio2 * ratio2).clamp(0.0, 1.0).powi(2) / d2 * n_l;
+    let f0 = (((m.ior - 1.0) / (m.ior + 1.0)).powi(2) * m.specular_color).min(Vec3::ONE);
+    let fr = schlick(f0, v_h);
+    let specular = ggx(n_l, n_v, n_h, m.roughness);
+    let dielectric = m.base / PI * (1.0 - m.specular * fr.max_element()) + m.specular * fr * specular;
+    let metal = schlick(m.base, v_h) * specular;
+    let material = dielectric * (1.0 - m.metallic) + metal * m.metallic;
+    let coat = m.clearcoat * (0.04 + 0.96 * (1.0 - n_v).powi(5));
+    let coated = material * (1.0 - coat) + Vec3::splat(coat * ggx(n_l, n_v, n_h, m.clearcoat_roughness));
+    coated * irradiance
+}
+
+/// The wall point under pixel (x, y) of `wall_scene`'s camera.
+fn wall_point(x: u32, y: u32) -> Vec3 {
+    let ndc = glam::Vec2::new((x as f32 + 0.5) / WIDTH as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / HEIGHT as f32 * 2.0);
+    let half_height = 30f32.to_radians().tan() * 4.0;
+    Vec3::new(ndc.x * half_height * WIDTH as f32 / HEIGHT as f32, ndc.y * half_height, 0.0)
+}
+
+fn wall(material: Material, lights: Vec<Light>) -> (Scene, manylights::scene::Camera) {
+    let (mut scene, camera) = wall_scene(lights);
+    scene.materials[0] = material;
+    (scene, camera)
+}
+
+fn frame(scene: &Scene, camera: &manylights::scene::Camera, pipeline: PipelineKind) -> manylights::renderer::Image<[f32; 4]> {
+    render_with(scene, camera, RenderConfig { pipeline, ..config(WIDTH, HEIGHT, LightMethod::Brute) }).1
+}
+
+#[test]
+fn ior_specular_and_clearcoat_shade_as_their_specifications_say_in_every_pipeline() {
+    let light = point_light(Vec3::new(0.6, -0.3, 1.2), 3.0, 6.0);
+    let plain = Params {
+        base: Vec3::new(0.6, 0.3, 0.2),
+        metallic: 0.0,
+        roughness: 0.4,
+        ior: 1.5,
+        specular: 1.0,
+        specular_color: Vec3::ONE,
+        clearcoat: 0.0,
+        clearcoat_roughness: 0.0,
+    };
+    let cases = [
+        ("ior 2.4", Params { ior: 2.4, ..plain }),
+        ("tinted, half-weight specular", Params { specular: 0.5, specular_color: Vec3::new(1.0, 0.5, 0.25), ior: 1.8, ..plain }),
+        ("ior 1 (no reflection at normal incidence)", Params { ior: 1.0, ..plain }),
+        (
+            "clear coat over a rough half-metal",
+            Params { roughness: 0.9, metallic: 0.5, clearcoat: 0.8, clearcoat_roughness: 0.15, ..plain },
+        ),
+    ];
+    let pixels = [(WIDTH / 2, HEIGHT / 2), (150, 60), (170, 85), (60, 110)];
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+        let (scene, camera) = wall(plain.material(), vec![light]);
+        let base_image = frame(&scene, &camera, pipeline);
+        for (name, params) in &cases {
+            let (scene, camera) = wall(params.material(), vec![light]);
+            let image = frame(&scene, &camera, pipeline);
+            let mut changed = false;
+            for (x, y) in pixels {
+                let expected = reference(params, &light, wall_point(x, y), camera.position());
+                let got = Vec4::from(pixel(&image, x, y)).truncate();
+                let error = (got - expected).abs().max_element() / expected.max_element().max(1e-4);
+                // The deferred G-buffer keeps the surface in 8 and 16 bits.
+                let tolerance = if pipeline == PipelineKind::Deferred { 0.02 } else { 0.005 };
+                assert!(error < tolerance, "{} {name} at ({x}, {y}): GPU {got}, reference {expected}", pipeline.name());
+                changed |= (got - Vec4::from(pixel(&base_image, x, y)).truncate()).abs().max_element() > 0.01 * expected.max_element();
+            }
+            assert!(changed, "{} {name}: the image is the plain material's", pipeline.name());
+        }
+    }
+}
+
+#[test]
+fn the_extensions_textures_scale_their_factors() {
+    // One-texel textures: a value v in a texture times a factor f shades as the factor f · v.
+    let texel = |rgba: [u8; 4]| Texture { name: "texel".into(), width: 1, height: 1, rgba8: rgba.to_vec() };
+    let textured = Material {
+        base_color_factor: Vec4::new(0.5, 0.5, 0.5, 1.0),
+        metallic_factor: 0.0,
+        roughness_factor: 0.5,
+        specular: Specular {
+            ior: 1.5,
+            factor: 1.0,
+            texture: Some(TextureRef::new(0, Wrap::Repeat, Wrap::Repeat)),
+            color_factor: Vec3::ONE,
+            color_texture: Some(TextureRef::new(1, Wrap::Repeat, Wrap::Repeat)),
+        },
+        clearcoat: Some(Clearcoat {
+            factor: 1.0,
+            texture: Some(TextureRef::new(2, Wrap::Repeat, Wrap::Repeat)),
+            roughness_factor: 1.0,
+            roughness_texture: Some(TextureRef::new(2, Wrap::Repeat, Wrap::Repeat)),
+            normal_texture: None,
+            normal_scale: 1.0,
+        }),
+        ..Default::default()
+    };
+    let light = point_light(Vec3::new(0.2, 0.1, 1.0), 3.0, 6.0);
+    let (mut scene, camera) = wall(textured.clone(), vec![light]);
+    // Specular weight 0.6 (alpha); colour (1, 0.5, 0.5) in sRGB; clearcoat 0.4 (R), its roughness 0.2 (G).
+    scene.textures = vec![texel([0, 0, 0, 153]), texel([255, 188, 188, 255]), texel([102, 51, 0, 255])];
+    let srgb = |c: f32| ((c + 0.055) / 1.055).powf(2.4);
+    let factors = Material {
+        specular: Specular { factor: 0.6, color_factor: Vec3::new(1.0, srgb(188.0 / 255.0), srgb(188.0 / 255.0)), ..Default::default() },
+        clearcoat: Some(Clearcoat {
+            factor: 0.4,
+            texture: None,
+            roughness_factor: 0.2,
+            roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        }),
+        ..textured
+    };
+    let (reference_scene, _) = wall(factors, vec![light]);
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+        let (got, expected) = (frame(&scene, &camera, pipeline), frame(&reference_scene, &camera, pipeline));
+        let peak = expected.pixels.iter().map(|&p| luminance(p)).fold(0.0, f32::max);
+        let difference = max_abs_difference(&got, &expected);
+        assert!(difference < 0.01 * peak, "{}: textures and factors differ by {difference} (peak {peak})", pipeline.name());
+    }
+}
+
+#[test]
+fn a_clearcoat_normal_map_tilts_the_coat_as_tilted_geometry_does() {
+    // Only the coat reflects (black base, no specular): its normal from a one-texel normal map on a
+    // flat wall shades as the wall whose vertex normals are that normal, without the map.
+    let coat_only = |normal_texture| Material {
+        base_color_factor: Vec4::new(0.0, 0.0, 0.0, 1.0),
+        metallic_factor: 0.0,
+        specular: Specular { factor: 0.0, ..Default::default() },
+        clearcoat: Some(Clearcoat {
+            factor: 1.0,
+            texture: None,
+            roughness_factor: 0.3,
+            roughness_texture: None,
+            normal_texture,
+            normal_scale: 1.0,
+        }),
+        ..Default::default()
+    };
+    let light = point_light(Vec3::new(0.2, 0.1, 1.0), 3.0, 6.0);
+    let texel = [200u8, 128, 230, 255];
+    let (mut mapped, camera) = wall(coat_only(Some(TextureRef::new(0, Wrap::Repeat, Wrap::Repeat))), vec![light]);
+    mapped.textures = vec![Texture { name: "normal".into(), width: 1, height: 1, rgba8: texel.to_vec() }];
+    // The wall's tangent frame is (+X, +Y, +Z) in the world; its vertex normals go through the
+    // inverse transpose of its scale, so the world's tilted normal is scaled by it into the mesh.
+    let tilted = Vec3::new(f32::from(texel[0]), f32::from(texel[1]), f32::from(texel[2])) / 255.0 * 2.0 - Vec3::ONE;
+    let (mut geometry, _) = wall(coat_only(None), vec![light]);
+    let scale = geometry.instances[0].world_from_local.to_scale_rotation_translation().0;
+    for v in &mut geometry.meshes[0].primitives[0].vertices {
+        v.normal = (tilted * scale).normalize().to_array();
+    }
+    let (flat, _) = wall(coat_only(None), vec![light]);
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+        let (got, expected) = (frame(&mapped, &camera, pipeline), frame(&geometry, &camera, pipeline));
+        let peak = expected.pixels.iter().map(|&p| luminance(p)).fold(0.0, f32::max);
+        let difference = max_abs_difference(&got, &expected);
+        assert!(difference < 0.01 * peak, "{}: the mapped coat differs from the tilted one by {difference} (peak {peak})", pipeline.name());
+        assert!(max_abs_difference(&got, &frame(&flat, &camera, pipeline)) > 0.1 * peak, "{}: the map tilts nothing", pipeline.name());
+    }
+}
+
+#[test]
+fn a_clear_coat_reflects_the_environment_by_its_fresnel_and_the_split_sum() {
+    // Only the coat reflects a uniform white environment: at normal incidence it sends 4 % of the
+    // split-sum's directional albedo for its roughness (scale + bias at F0 = 1), in every pipeline.
+    let roughness = 0.5;
+    let coat_only = Material {
+        base_color_factor: Vec4::new(0.0, 0.0, 0.0, 1.0),
+        metallic_factor: 0.0,
+        specular: Specular { factor: 0.0, ..Default::default() },
+        clearcoat: Some(Clearcoat {
+            factor: 1.0,
+            texture: None,
+            roughness_factor: roughness,
+            roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        }),
+        ..Default::default()
+    };
+    let (mut scene, camera) = wall(coat_only, vec![]);
+    scene.ambient = Vec3::ONE;
+    // The table's texels at n·v → 1 (its last column, where the lookup clamps) and the two rows
+    // either side of roughness 0.5, which a bilinear lookup averages.
+    let size = manylights::scene::ibl::BRDF_TABLE_SIZE as usize;
+    let table = manylights::scene::ibl::brdf_table();
+    let albedo = |row: usize| table[row * size + size - 1][0] + table[row * size + size - 1][1];
+    let expected = 0.04 * 0.5 * (albedo(size / 2 - 1) + albedo(size / 2));
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+        let got = pixel(&frame(&scene, &camera, pipeline), WIDTH / 2, HEIGHT / 2)[1];
+        assert!((got - expected).abs() < 0.02 * expected, "{}: coat reflects {got}, the split sum says {expected}", pipeline.name());
+    }
+}
+
+#[test]
+fn the_core_material_shades_alike_on_the_core_and_the_extended_path() {
+    // A scene whose materials use no extension compiles the core path alone
+    // (`ShadingMethods::material_extensions`); an unused coated material switches the extended path
+    // on, and the core material must look the same through it.
+    let light = point_light(Vec3::new(0.6, -0.3, 1.2), 3.0, 6.0);
+    let plain =
+        Material { base_color_factor: Vec4::new(0.6, 0.3, 0.2, 1.0), metallic_factor: 0.3, roughness_factor: 0.4, ..Default::default() };
+    let (core, camera) = wall(plain, vec![light]);
+    let mut extended = core.clone();
+    extended.materials.push(Material {
+        clearcoat: Some(Clearcoat {
+            factor: 1.0,
+            texture: None,
+            roughness_factor: 0.1,
+            roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        }),
+        ..Default::default()
+    });
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+        let (a, b) = (frame(&core, &camera, pipeline), frame(&extended, &camera, pipeline));
+        let difference = max_abs_difference(&a, &b);
+        assert!(difference < 1e-5, "{}: the paths differ by {difference}", pipeline.name());
+    }
+}
+
+#[test]
+fn unlit_materials_show_their_base_colour_whatever_lights_them() {
+    let color = Vec3::new(0.2, 0.5, 0.8);
+    let unlit = Material { base_color_factor: color.extend(1.0), unlit: true, ..Default::default() };
+    let (mut scene, camera) = wall(unlit, vec![point_light(Vec3::new(0.0, 0.0, 1.0), 5.0, 6.0)]);
+    scene.ambient = Vec3::splat(0.7);
+    scene.sun = Some(manylights::scene::Sun { direction: Vec3::new(0.0, -0.5, -1.0), color: Vec3::ONE, illuminance: 4.0 });
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+        let image = frame(&scene, &camera, pipeline);
+        for p in &image.pixels {
+            let got = Vec4::from(*p).truncate();
+            // The deferred G-buffer keeps the base colour in 8-bit sRGB.
+            assert!((got - color).abs().max_element() < 5e-3, "{}: {got}, not {color}", pipeline.name());
+        }
+    }
+}
+
+#[test]
+fn the_importer_reads_the_material_extensions() {
+    let json = r#"{"asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_materials_ior", "KHR_materials_specular", "KHR_materials_clearcoat", "KHR_materials_unlit"],
+        "materials": [
+            {"extensions": {"KHR_materials_ior": {"ior": 1.7},
+                            "KHR_materials_specular": {"specularFactor": 0.3, "specularColorFactor": [1.0, 0.8, 0.6]},
+                            "KHR_materials_clearcoat": {"clearcoatFactor": 0.9, "clearcoatRoughnessFactor": 0.25}}},
+            {"extensions": {"KHR_materials_unlit": {}}}
+        ]}"#;
+    let path = std::env::temp_dir().join(format!("manylights-materials-{}.gltf", std::process::id()));
+    std::fs::write(&path, json).unwrap();
+    let scene = manylights::scene::gltf::import(&path).unwrap();
+    let (coated, unlit) = (&scene.materials[0], &scene.materials[1]);
+    assert_eq!((coated.specular.ior, coated.specular.factor), (1.7, 0.3));
+    assert_eq!(coated.specular.color_factor, Vec3::new(1.0, 0.8, 0.6));
+    let coat = coated.clearcoat.expect("a clear coat");
+    assert_eq!((coat.factor, coat.roughness_factor), (0.9, 0.25));
+    assert!(!coated.unlit && unlit.unlit && unlit.clearcoat.is_none());
+}
