@@ -17,7 +17,9 @@
 #   scripts/bench-device.sh exact        262,144 and 1,048,576 particles as exact lights, every pipeline (issue 6)
 #   scripts/bench-device.sh rays         ray-traced sun shadows and reflections on Sponza (issue 7)
 #   scripts/bench-device.sh post         the post chain's effects, alone and together, on Sponza (issue 7)
-#   scripts/bench-device.sh deform       Sponza's curtains waving: GPU deformation and BLAS refit (issue 7)
+#   scripts/bench-device.sh deform       Sponza's curtains waving and a skinned tube posed: GPU deformation and BLAS
+#                                        refit (issues 7, 37)
+#   scripts/bench-device.sh materials    every Sponza material coated against none: the material extensions (issue 37)
 #   scripts/bench-device.sh soak         10,000 frames of everything rebuilt per frame, memory sampled (issue 31)
 #   scripts/bench-device.sh direct       shadowed local lights: exact, reference and restir on 4,096 and 28k lights (issue 34)
 #   scripts/bench-device.sh direct_error restir's error against the reference, sampled and denoised (light-error)
@@ -222,6 +224,23 @@ deform() {
   run deform_still 200 --scene .bench/sun.toml $off --shadows hard --reflections
   run deform_curtains 200 --scene .bench/curtains.toml $off --shadows hard --reflections
   run deform_curtains_no_rays 200 --scene .bench/curtains.toml $off
+  # A skinned, morphed tube (scripts/make-bench-scenes.py) posed every frame.
+  if [ -f .bench/skin/tube.gltf ]; then
+    run deform_tube 200 --scene .bench/skin/tube.gltf --shadows hard
+    run deform_tube_no_rays 200 --scene .bench/skin/tube.gltf
+  fi
+}
+
+# The material extensions' path: Sponza with every material coated (scripts/make-bench-scenes.py)
+# against Sponza as it is, 28k lights, visibility buffer and deferred.
+materials() {
+  local s p
+  for s in lite coated; do
+    printf 'gltf = "sponza_%s/Sponza.gltf"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' $s >.bench/sun_$s.toml
+    for p in visbuffer deferred; do
+      run materials_${s}_$p 200 --scene .bench/sun_$s.toml --lights 28000 --seed 1 --light-method bvh --decal-method off --pipeline $p
+    done
+  done
 }
 
 # Test binaries built with `cargo test --release --no-run`, run here against the GPU, each test in its
@@ -378,6 +397,7 @@ for set in "${@:-structures}"; do
     rays) rays ;;
     post) post ;;
     deform) deform ;;
+    materials) materials ;;
     soak) soak ;;
     direct) direct ;;
     direct_error) direct_error ;;

@@ -1,0 +1,120 @@
+#!/usr/bin/env python3
+"""Makes the device bench's generated glTF scenes under .bench/ (run here, before carrying .bench to
+the GPU machine; scripts/bench-device.sh reads them):
+
+  .bench/skin/tube.gltf       a skinned, morphed tube: 512 rings of 256 vertices up 8 m, 16 joints in
+                              a chain bending over a 2 s loop, every vertex weighted to its two
+                              nearest joints, one morph target bulging it; a 20 m floor (`deform`)
+  .bench/sponza_coated/       sponza_lite with every material coated: clear coat 0.5 (roughness 0.1),
+                              ior 1.7, specular 0.8 tinted (1, 0.9, 0.8), textures shared (`materials`)
+"""
+import json
+import math
+import os
+import struct
+
+
+def tube(out):
+    rings, sides, joints, height = 512, 256, 16, 8.0
+    pos, nor, jts, wts, bulge, idx = [], [], [], [], [], []
+    for r in range(rings):
+        y = height * r / (rings - 1)
+        f = y / height * (joints - 1)
+        j0 = min(int(f), joints - 2)
+        t = f - j0
+        for s in range(sides):
+            a = 2 * math.pi * s / sides
+            pos += [0.3 * math.cos(a), y, 0.3 * math.sin(a)]
+            nor += [math.cos(a), 0.0, math.sin(a)]
+            jts += [j0, j0 + 1, 0, 0]
+            wts += [1 - t, t, 0.0, 0.0]
+            b = 0.15 * math.sin(math.pi * y / height)
+            bulge += [b * math.cos(a), 0.0, b * math.sin(a)]
+    for r in range(rings - 1):
+        for s in range(sides):
+            a, b = r * sides + s, r * sides + (s + 1) % sides
+            idx += [a, a + sides, b, b, a + sides, b + sides]
+    n = rings * sides
+    keys = 9
+    inverse_bind = []
+    for j in range(joints):
+        inverse_bind += [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, -height * j / (joints - 1), 0, 1]
+    turns = []
+    for k in range(keys):
+        angle = 0.12 * math.sin(2 * math.pi * k / (keys - 1))
+        turns += [0.0, 0.0, math.sin(angle / 2), math.cos(angle / 2)]
+    blobs = [
+        struct.pack(f"<{len(pos)}f", *pos), struct.pack(f"<{len(nor)}f", *nor), struct.pack(f"<{len(jts)}B", *jts),
+        struct.pack(f"<{len(wts)}f", *wts), struct.pack(f"<{len(bulge)}f", *bulge), struct.pack(f"<{len(idx)}I", *idx),
+        struct.pack(f"<{len(inverse_bind)}f", *inverse_bind),
+        struct.pack(f"<{keys}f", *[2.0 * k / (keys - 1) for k in range(keys)]),
+        struct.pack(f"<{len(turns)}f", *turns),
+        struct.pack(f"<{keys}f", *[0.5 + 0.5 * math.sin(2 * math.pi * k / (keys - 1)) for k in range(keys)]),
+        struct.pack("<12f", -10, 0, -10, 10, 0, -10, 10, 0, 10, -10, 0, 10),
+        struct.pack("<12f", *([0, 1, 0] * 4)),
+        struct.pack("<6I", 0, 2, 1, 0, 3, 2),
+    ]
+    buffer, views = b"", []
+    for blob in blobs:
+        buffer += b"\0" * ((-len(buffer)) % 4)
+        views.append({"buffer": 0, "byteOffset": len(buffer), "byteLength": len(blob)})
+        buffer += blob
+
+    def accessor(view, component, count, kind, **more):
+        return dict(bufferView=view, componentType=component, count=count, type=kind, **more)
+
+    accessors = [
+        accessor(0, 5126, n, "VEC3", min=[-0.3, 0, -0.3], max=[0.3, height, 0.3]), accessor(1, 5126, n, "VEC3"),
+        accessor(2, 5121, n, "VEC4"), accessor(3, 5126, n, "VEC4"), accessor(4, 5126, n, "VEC3"),
+        accessor(5, 5125, len(idx), "SCALAR"), accessor(6, 5126, joints, "MAT4"),
+        accessor(7, 5126, keys, "SCALAR", min=[0.0], max=[2.0]), accessor(8, 5126, keys, "VEC4"), accessor(9, 5126, keys, "SCALAR"),
+        accessor(10, 5126, 4, "VEC3", min=[-10, 0, -10], max=[10, 0, 10]), accessor(11, 5126, 4, "VEC3"), accessor(12, 5125, 6, "SCALAR"),
+    ]
+    nodes = [{"mesh": 0, "skin": 0}, {"mesh": 1}]
+    for j in range(joints):
+        node = {"translation": [0, 0 if j == 0 else height / (joints - 1), 0]}
+        if j + 1 < joints:
+            node["children"] = [3 + j]
+        nodes.append(node)
+    channels = [{"sampler": 0, "target": {"node": 2 + j, "path": "rotation"}} for j in range(joints)]
+    channels.append({"sampler": 1, "target": {"node": 0, "path": "weights"}})
+    document = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 1, 2]}], "nodes": nodes,
+        "meshes": [
+            {"weights": [0.0], "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "JOINTS_0": 2, "WEIGHTS_0": 3},
+                                               "indices": 5, "targets": [{"POSITION": 4}]}]},
+            {"primitives": [{"attributes": {"POSITION": 10, "NORMAL": 11}, "indices": 12}]},
+        ],
+        "skins": [{"joints": list(range(2, 2 + joints)), "inverseBindMatrices": 6}],
+        "animations": [{"channels": channels, "samplers": [{"input": 7, "output": 8}, {"input": 7, "output": 9}]}],
+        "accessors": accessors, "bufferViews": views,
+        "buffers": [{"byteLength": len(buffer), "uri": "tube.bin"}],
+    }
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "tube.bin"), "wb") as f:
+        f.write(buffer)
+    with open(os.path.join(out, "tube.gltf"), "w") as f:
+        json.dump(document, f)
+
+
+def coated(source, out):
+    with open(source) as f:
+        document = json.load(f)
+    for item in document.get("buffers", []) + document.get("images", []):
+        if "uri" in item:
+            item["uri"] = "../sponza_lite/" + item["uri"]
+    for material in document.get("materials", []):
+        extensions = material.setdefault("extensions", {})
+        extensions["KHR_materials_clearcoat"] = {"clearcoatFactor": 0.5, "clearcoatRoughnessFactor": 0.1}
+        extensions["KHR_materials_ior"] = {"ior": 1.7}
+        extensions["KHR_materials_specular"] = {"specularFactor": 0.8, "specularColorFactor": [1.0, 0.9, 0.8]}
+    used = set(document.get("extensionsUsed", [])) | {"KHR_materials_clearcoat", "KHR_materials_ior", "KHR_materials_specular"}
+    document["extensionsUsed"] = sorted(used)
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "Sponza.gltf"), "w") as f:
+        json.dump(document, f)
+
+
+if __name__ == "__main__":
+    tube(".bench/skin")
+    coated(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_coated")
