@@ -510,7 +510,7 @@ pub struct SceneStatistics {
     /// (`accel::overlap::centre_overlap`), measured where [`Measurements::decal_centre_overlap`]
     /// asks: `None` where it was not.
     pub decal_centre_overlap: Option<f32>,
-    /// The scene's animation moves instances of its meshes.
+    /// Surfaces move: the scene's animation moves instances of its meshes, or meshes deform.
     pub animated_instances: bool,
     /// Some material uses an extension the shading core evaluates beyond glTF's core material
     /// (its own index of refraction or specular, a clear coat, unlit).

@@ -283,8 +283,11 @@ impl Renderer {
             for &(instance, transform) in &moved {
                 motion.transforms[instance] = transform;
             }
-            for deformed in &mut rays.deformed {
-                deformed.set_time(time, motion.animation.as_ref());
+            if rays.deformed.iter().any(crate::rays::DeformedBlas::is_posed) {
+                let clock = crate::scene::deform::PoseClock::at(time, motion.animation.as_ref());
+                for deformed in &mut rays.deformed {
+                    deformed.set_time(&clock);
+                }
             }
             rays.place(&motion.transforms, parity)?;
         }

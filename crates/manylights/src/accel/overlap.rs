@@ -131,7 +131,7 @@ pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<Sce
         decal_overlap,
         placed_decal_groups: instances.iter().filter(|i| !ranges[i.group].is_empty()).count(),
         decal_centre_overlap,
-        animated_instances: scene.animation.as_ref().is_some_and(|a| !a.instances.is_empty()),
+        animated_instances: scene.animation.as_ref().is_some_and(|a| !a.instances.is_empty()) || !scene.deformers.is_empty(),
         material_extensions: scene
             .materials
             .iter()

@@ -261,7 +261,7 @@ pub struct GpuScene {
     pub primitive_ranges: Vec<Vec<(u32, u32, u32)>>,
     /// Each draw's transform (world from local) a frame interval before the current one, for motion
     /// blur's velocity (`post/velocity.rs`) and the surface motions (`passes/surface_motion.rs`), and
-    /// which draws belong to animated instances.
+    /// which draws move (animated instances', deformed meshes').
     pub previous_transforms: wgpu::Buffer,
     /// Where each deformed mesh's vertices were a frame before (xyz; w 1 for a deformed vertex),
     /// written by `passes/deform.rs` for the velocities; one zero record when nothing deforms.
@@ -660,7 +660,7 @@ impl DrawList {
     }
 }
 
-/// Which draws the node animation moves.
+/// Which draws move: those of instances the node animation moves and of deformed meshes.
 fn moving_draws(scene: &Scene, instance_first_draw: &[usize], draw_count: usize) -> Vec<bool> {
     let mut moving = vec![false; draw_count];
     let mut deformed = vec![false; scene.meshes.len()];

@@ -5,7 +5,7 @@
 
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::scene::animation::Animation;
-use crate::scene::deform::{pose_state, Deformation, Deformer};
+use crate::scene::deform::{pose_state, Deformation, Deformer, PoseClock};
 use crate::scene::{Scene, Vertex};
 use crate::Result;
 
@@ -184,12 +184,14 @@ impl Deform {
     /// Writes the frame's time, and the time a frame before (for the velocities), for the next frame
     /// submitted; poses take their joints and weights from `animation` at those times.
     pub fn write_time(&mut self, queue: &wgpu::Queue, time: f32, previous_time: f32, animation: Option<&Animation>) {
+        let posed = self.jobs.iter().any(|job| matches!(job.deformer.deformation, Deformation::Pose(_)));
+        let clocks = posed.then(|| [time, previous_time].map(|t| PoseClock::at(t, animation)));
         for (i, job) in self.jobs.iter_mut().enumerate() {
             job.gpu.time = time;
             job.gpu.previous_time = previous_time;
             queue.write_buffer(&self.job_buffer, i as u64 * JOB_STRIDE, bytemuck::bytes_of(&job.gpu));
-            let Deformation::Pose(pose) = &job.deformer.deformation else { continue };
-            let [now, before] = [time, previous_time].map(|t| pose_state(pose, t, animation));
+            let (Deformation::Pose(pose), Some(clocks)) = (&job.deformer.deformation, &clocks) else { continue };
+            let [now, before] = [&clocks[0], &clocks[1]].map(|clock| pose_state(pose, clock));
             let mut state: Vec<[f32; 4]> = Vec::with_capacity(state_len(now.joints.len(), now.weights.len()) as usize);
             for joints in [&now.joints, &before.joints] {
                 state.extend(joints.iter().flat_map(|m| m.to_cols_array_2d()));

@@ -126,9 +126,13 @@ fn deform(@builtin(global_invocation_id) id: vec3<u32>) {
         previous = m.previous_position;
         if job.influence_sets > 0u {
             let now = skin_matrix(id.x, false);
+            // A mirroring blend (negative determinant) turns the cofactor's normal around and the
+            // tangent frame's handedness over.
+            let flip = select(1.0, -1.0, determinant(mat3x3<f32>(now[0].xyz, now[1].xyz, now[2].xyz)) < 0.0);
             position = (now * vec4<f32>(position, 1.0)).xyz;
-            normal = cofactor(now) * normal;
+            normal = cofactor(now) * normal * flip;
             tangent = (now * vec4<f32>(tangent, 0.0)).xyz;
+            v.tangent.w *= flip;
             previous = (skin_matrix(id.x, true) * vec4<f32>(previous, 1.0)).xyz;
         }
         v.position = position;

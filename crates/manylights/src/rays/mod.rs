@@ -142,10 +142,15 @@ impl DeformedBlas {
             .collect()
     }
 
-    /// Moves a pose's box to scene `time`; a wave's holds every time.
-    pub fn set_time(&mut self, time: f32, animation: Option<&crate::scene::animation::Animation>) {
+    /// Whether a pose deforms it (whose box moves with the animation).
+    pub fn is_posed(&self) -> bool {
+        self.pose_bounds.is_some()
+    }
+
+    /// Moves a pose's box to the clock's time; a wave's holds every time.
+    pub fn set_time(&mut self, clock: &crate::scene::deform::PoseClock) {
         if let (crate::scene::deform::Deformation::Pose(pose), Some(measures)) = (&self.deformer.deformation, &self.pose_bounds) {
-            self.bounds = pose.bounds(measures, &crate::scene::deform::pose_state(pose, time, animation));
+            self.bounds = pose.bounds(measures, &crate::scene::deform::pose_state(pose, clock));
         }
     }
 }
@@ -326,7 +331,7 @@ impl RayStructure {
                     rest,
                     corners,
                 };
-                deformed.set_time(0.0, scene.animation.as_ref());
+                deformed.set_time(&crate::scene::deform::PoseClock::at(0.0, scene.animation.as_ref()));
                 deformed
             })
             .collect();

@@ -52,23 +52,36 @@ impl Deformer {
                 })
                 .collect(),
             Deformation::Pose(pose) => {
-                let state = pose_state(pose, time, animation);
+                let state = pose_state(pose, &PoseClock::at(time, animation));
                 rest.iter().enumerate().map(|(i, v)| pose.pose_vertex(i, v, &state)).collect()
             }
         }
     }
 }
 
-/// A pose's state at scene `time`: the animation's nodes and weights there (looped over its
-/// duration); without an animation (and so without a skin), its weights at `time`.
-pub fn pose_state(pose: &Pose, time: f32, animation: Option<&Animation>) -> super::pose::PoseState {
-    match animation {
-        Some(animation) => {
-            let t = animation.looped(time);
-            pose.state(t, &animation.node_worlds(t))
+/// What poses read from the animation at a scene time, computed once a frame for them all: the
+/// time within its loop and every node's world matrix there; without an animation (and so without
+/// skins), the time itself.
+pub struct PoseClock {
+    time: f32,
+    node_worlds: Vec<glam::Mat4>,
+}
+
+impl PoseClock {
+    pub fn at(time: f32, animation: Option<&Animation>) -> Self {
+        match animation {
+            Some(animation) => {
+                let time = animation.looped(time);
+                Self { time, node_worlds: animation.node_worlds(time) }
+            }
+            None => Self { time, node_worlds: Vec::new() },
         }
-        None => pose.state(time, &[]),
     }
+}
+
+/// A pose's state at the clock's time.
+pub fn pose_state(pose: &Pose, clock: &PoseClock) -> super::pose::PoseState {
+    pose.state(clock.time, &clock.node_worlds)
 }
 
 impl Wave {

@@ -127,9 +127,13 @@ impl Pose {
                     }
                 }
             }
+            // A mirroring blend (negative determinant) turns the cofactor's normal around and the
+            // tangent frame's handedness over.
+            let mirrored = Mat3::from_mat4(m).determinant() < 0.0;
+            let flip = if mirrored { -1.0 } else { 1.0 };
             position = m.transform_point3(position);
-            normal = normal_matrix(m) * normal;
-            tangent = (m.transform_vector3(tangent.truncate())).extend(tangent.w);
+            normal = normal_matrix(m) * normal * flip;
+            tangent = (m.transform_vector3(tangent.truncate())).extend(tangent.w * flip);
         }
         let normal = normal.normalize_or(Vec3::from(rest.normal));
         let tangent = tangent.truncate().normalize_or(Vec3::from_slice(&rest.tangent[..3])).extend(tangent.w);
@@ -297,6 +301,24 @@ mod tests {
         let bad = Pose { rest_weights: vec![], ..pose.clone() };
         assert!(bad.validate(2, 2).unwrap_err().contains("morph weights"));
         assert!(pose.validate(2, 1).unwrap_err().contains("joint node 1"));
+    }
+
+    #[test]
+    fn a_mirroring_joint_mirrors_normals_and_the_tangent_frame() {
+        let skin = Skin {
+            joints: vec![0],
+            inverse_bind: vec![Mat4::IDENTITY],
+            sets: 1,
+            joint_indices: vec![[0; 4]],
+            weights: vec![[1.0, 0.0, 0.0, 0.0]],
+        };
+        let pose = Pose { targets: Vec::new(), rest_weights: Vec::new(), weight_keys: None, skin: Some(skin) };
+        let rest = Vertex { position: [1.0, 2.0, 3.0], u: 0.0, normal: [1.0, 0.0, 0.0], v: 0.0, tangent: [0.0, 1.0, 0.0, 1.0] };
+        let mirror = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        let posed = pose.pose_vertex(0, &rest, &pose.state(0.0, &[mirror]));
+        assert_eq!(posed.position, [-1.0, 2.0, 3.0]);
+        assert_eq!(posed.normal, [-1.0, 0.0, 0.0], "the normal is mirrored with the surface");
+        assert_eq!(posed.tangent, [0.0, 1.0, 0.0, -1.0], "the bitangent's handedness flips");
     }
 
     #[test]

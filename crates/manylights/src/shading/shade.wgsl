@@ -30,8 +30,9 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
     if MATERIAL_EXTENSIONS && s.unlit {
         return min(s.base_color, vec3<f32>(MAX_RADIANCE));
     }
-    // The environment (sky, image or uniform ambient) stands in for indirect light.
-    var radiance = s.emissive + environment_light(s);
+    // The environment (sky, image or uniform ambient) stands in for indirect light. A clear coat
+    // lies over the emission too, which it dims by its Fresnel term (KHR_materials_clearcoat).
+    var radiance = s.emissive * (1.0 - clearcoat_fresnel(s)) + environment_light(s);
     if frame.sun_direction.w > 0.0 && sun_visibility > 0.0 {
         radiance += frame.sun_radiance.rgb * sun_visibility * brdf_times_cosine(s, -frame.sun_direction.xyz);
     }

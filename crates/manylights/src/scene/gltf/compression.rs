@@ -91,7 +91,6 @@ fn decode_view(source: &[u8], count: usize, stride: usize, mode: &str, filter: &
                 ("OCTAHEDRAL", 4 | 8) => Some(meshopt::ffi::meshopt_decodeFilterOct as unsafe extern "C" fn(_, _, _)),
                 ("QUATERNION", 8) => Some(meshopt::ffi::meshopt_decodeFilterQuat as unsafe extern "C" fn(_, _, _)),
                 ("EXPONENTIAL", _) => Some(meshopt::ffi::meshopt_decodeFilterExp as unsafe extern "C" fn(_, _, _)),
-                ("COLOR", 4 | 8) => Some(meshopt::ffi::meshopt_decodeFilterColor as unsafe extern "C" fn(_, _, _)),
                 _ => return Err(format!("filter {filter} with byteStride {stride} is not one the extension defines")),
             };
             if let Some(filter_fn) = filter_fn {
@@ -104,6 +103,10 @@ fn decode_view(source: &[u8], count: usize, stride: usize, mode: &str, filter: &
         "TRIANGLES" | "INDICES" => {
             if filter != "NONE" {
                 return Err(format!("filter {filter} does not apply to {mode}"));
+            }
+            // meshoptimizer asserts (aborting the process) on a triangle list that is not one.
+            if mode == "TRIANGLES" && !count.is_multiple_of(3) {
+                return Err(format!("TRIANGLES has {count} indices, not a multiple of 3"));
             }
             match (mode, stride) {
                 ("TRIANGLES", 2) => meshopt::decode_index_buffer::<u16>(source, count).map(|v| bytemuck::cast_slice(&v).to_vec()),

@@ -121,21 +121,46 @@ fn import_bytes(path: &Path, bytes: Vec<u8>, budget: &LoadBudget) -> Result<Scen
 
 /// Checks, before anything is read, what the meshes and animations expand to: accessors may name
 /// billions of elements (a sparse one without a buffer view costs no bytes in the file), and strips,
-/// fans and flat shading multiply them.
+/// fans, flat shading, morph targets, skins, GPU instances and the copies of posed meshes multiply
+/// them.
 fn check_geometry_size(document: &Document) -> Result<(), String> {
     let vertex = std::mem::size_of::<Vertex>() as u64;
     let mut bytes = 0u64;
+    // Each mesh's bytes, and whether nodes pose it (a copy per node).
+    let mut mesh_bytes = Vec::with_capacity(document.meshes().len());
+    let mut morphed = Vec::with_capacity(document.meshes().len());
     for mesh in document.meshes() {
+        let mut this = 0u64;
+        let mut targets = false;
         for p in mesh.primitives() {
             let vertices = p.get(&Semantic::Positions).map_or(0, |a| a.count() as u64);
             let indices = p.indices().map_or(vertices, |a| a.count() as u64);
             let triangle_corners = if matches!(p.mode(), Mode::TriangleStrip | Mode::TriangleFan) { indices * 3 } else { indices };
             // Read attributes (up to 4 of 16 bytes), the vertices, the index list, and flat shading's
-            // vertex per corner.
+            // vertex per corner; each morph target's three offsets read and kept, each skin set's
+            // joints and weights.
             let attributes = vertices * (4 * 16 + vertex);
             let flat = if p.get(&Semantic::Normals).is_none() { triangle_corners * vertex } else { 0 };
-            bytes = bytes.saturating_add(attributes).saturating_add(triangle_corners * 8).saturating_add(flat);
+            let morph = (p.morph_targets().len() as u64).saturating_mul(vertices * 96);
+            let sets = (0..).take_while(|&s| p.get(&Semantic::Joints(s)).is_some()).count() as u64;
+            targets |= p.morph_targets().len() > 0;
+            this = this.saturating_add(attributes).saturating_add(triangle_corners * 8).saturating_add(flat);
+            this = this.saturating_add(morph).saturating_add(sets.saturating_mul(vertices * 64));
         }
+        bytes = bytes.saturating_add(this);
+        mesh_bytes.push(this);
+        morphed.push(targets);
+    }
+    for node in document.nodes() {
+        let instances = node.extension_value(INSTANCING).and_then(|e| e.get("attributes")?.as_object().cloned()).map_or(1, |attributes| {
+            attributes.values().filter_map(|i| document.accessors().nth(i.as_u64()? as usize)).map(|a| a.count() as u64).max().unwrap_or(1)
+        });
+        let posed = node.mesh().is_some_and(|m| morphed[m.index()] || node.skin().is_some());
+        let copy = node.mesh().filter(|_| posed).map_or(0, |m| mesh_bytes[m.index()]);
+        bytes = bytes.saturating_add(instances.saturating_mul(80 + copy));
+    }
+    for skin in document.skins() {
+        bytes = bytes.saturating_add(skin.inverse_bind_matrices().map_or(0, |a| a.count() as u64 * 64));
     }
     for animation in document.animations() {
         for channel in animation.channels() {
@@ -688,7 +713,7 @@ fn poses(
     scene: &mut Scene,
     hierarchy: &Hierarchy,
     sources: &[Vec<Vec<u32>>],
-    mut weight_keys: WeightKeysByNode,
+    weight_keys: WeightKeysByNode,
 ) -> Result<Vec<Deformer>, String> {
     let mut deformers = Vec::new();
     let mut users = vec![0usize; scene.meshes.len()];
@@ -714,7 +739,8 @@ fn poses(
         if rest_weights.len() != targets {
             return Err(format!("{at}: {} morph weights for {targets} morph targets; give one weight per target", rest_weights.len()));
         }
-        let keys = weight_keys[source].take();
+        // GPU instances of one node share its keyed weights.
+        let keys = weight_keys[source].clone();
         if let Some(keys) = &keys {
             let per_key = if keys.interpolation == animation::Interpolation::CubicSpline { 3 } else { 1 } * targets;
             if keys.values.len() != per_key * keys.times.len() {
@@ -738,6 +764,14 @@ fn poses(
             let inverse_bind = match skin.inverse_bind_matrices() {
                 Some(accessor) => {
                     check_accessor(&accessor, "inverseBindMatrices", Dimensions::Mat4, FLOATS)?;
+                    if accessor.count() != joints.len() {
+                        return Err(format!(
+                            "{at}: skin {} has {} inverse bind matrices for {} joints",
+                            skin.index(),
+                            accessor.count(),
+                            joints.len()
+                        ));
+                    }
                     let matrices: Vec<Mat4> = skin
                         .reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()))
                         .read_inverse_bind_matrices()
@@ -786,8 +820,11 @@ fn poses(
         }
         pose.skin = skin_data;
         if pose.skin.is_some() {
-            // Skinned vertices are placed in world space by their joints.
-            scene.instances[instance].world_from_local = Mat4::IDENTITY;
+            // Skinned vertices are placed in world space by their joints, the node's transform
+            // ignored; a GPU instance of the node keeps its own transform on top.
+            let node_index = hierarchy.instance_nodes[instance];
+            let gpu_instance = hierarchy.index_of[source] != Some(node_index);
+            scene.instances[instance].world_from_local = if gpu_instance { hierarchy.nodes[node_index].rest } else { Mat4::IDENTITY };
         }
         deformers.push(Deformer { mesh, deformation: Deformation::Pose(Box::new(pose)) });
     }
@@ -799,6 +836,9 @@ fn morph_offsets(target: &::gltf::mesh::MorphTarget, buffers: &[buffer::Data], c
     let read = |accessor: Option<Accessor>, name: &str, types| -> Result<Vec<Vec3>, String> {
         let Some(accessor) = accessor else { return Ok(vec![Vec3::ZERO; count]) };
         check_accessor(&accessor, name, Dimensions::Vec3, types)?;
+        if accessor.count() != count {
+            return Err(format!("{name} has {} offsets for {count} vertices", accessor.count()));
+        }
         let values: Vec<[f32; 3]> = read_floats(&accessor, buffers).ok_or_else(|| format!("{name} lies outside its buffer"))?;
         if values.len() != count || values.iter().flatten().any(|c| !c.is_finite()) {
             return Err(format!("{name} has {} offsets for {count} vertices, or one is not finite", values.len()));
@@ -831,6 +871,13 @@ fn skin_influences(
         };
         check_accessor(&joints, &format!("JOINTS_{set}"), Dimensions::Vec4, JOINTS)?;
         check_accessor(&weights, &format!("WEIGHTS_{set}"), Dimensions::Vec4, WEIGHTS)?;
+        if joints.count() != count || weights.count() != count {
+            return Err(format!(
+                "JOINTS_{set} and WEIGHTS_{set} have {} and {} elements for {count} vertices",
+                joints.count(),
+                weights.count()
+            ));
+        }
         let joints: Vec<[u16; 4]> =
             reader.read_joints(set as u32).ok_or_else(|| format!("JOINTS_{set} lies outside its buffer"))?.into_u16().collect();
         let weights: Vec<[f32; 4]> =
@@ -935,23 +982,33 @@ fn gpu_instances(node: &Node, document: &Document, buffers: &[buffer::Data]) -> 
         check_accessor(&accessor, &format!("{at} {name}"), dimensions, types)?;
         Ok(Some(accessor))
     };
+    let accessors = [
+        accessor("TRANSLATION", Dimensions::Vec3, POSITIONS)?,
+        accessor("ROTATION", Dimensions::Vec4, DIRECTIONS)?,
+        accessor("SCALE", Dimensions::Vec3, POSITIONS)?,
+    ];
+    let counts: Vec<usize> = accessors.iter().flatten().map(Accessor::count).collect();
+    let count = counts.iter().copied().max().ok_or_else(|| format!("{at} has no TRANSLATION, ROTATION or SCALE"))?;
+    if counts.iter().any(|&c| c != count) {
+        return Err(format!("{at}: its attributes have different counts {counts:?}; give each instance every attribute"));
+    }
+    let [translation, rotation, scale] = accessors;
     let outside = |name: &str| format!("{at}: {name} lies outside its buffer");
-    let translations: Option<Vec<[f32; 3]>> = match accessor("TRANSLATION", Dimensions::Vec3, POSITIONS)? {
+    let translations: Option<Vec<[f32; 3]>> = match translation {
         Some(a) => Some(read_floats(&a, buffers).ok_or_else(|| outside("TRANSLATION"))?),
         None => None,
     };
-    let rotations: Option<Vec<[f32; 4]>> = match accessor("ROTATION", Dimensions::Vec4, DIRECTIONS)? {
+    let rotations: Option<Vec<[f32; 4]>> = match rotation {
         Some(a) => Some(read_floats(&a, buffers).ok_or_else(|| outside("ROTATION"))?),
         None => None,
     };
-    let scales: Option<Vec<[f32; 3]>> = match accessor("SCALE", Dimensions::Vec3, POSITIONS)? {
+    let scales: Option<Vec<[f32; 3]>> = match scale {
         Some(a) => Some(read_floats(&a, buffers).ok_or_else(|| outside("SCALE"))?),
         None => None,
     };
-    let counts = [translations.as_ref().map(Vec::len), rotations.as_ref().map(Vec::len), scales.as_ref().map(Vec::len)];
-    let count = counts.iter().flatten().copied().max().ok_or_else(|| format!("{at} has no TRANSLATION, ROTATION or SCALE"))?;
-    if counts.iter().flatten().any(|&c| c != count) {
-        return Err(format!("{at}: its attributes have different counts {counts:?}; give each instance every attribute"));
+    let read_counts = [translations.as_ref().map(Vec::len), rotations.as_ref().map(Vec::len), scales.as_ref().map(Vec::len)];
+    if read_counts.iter().flatten().any(|&c| c != count) {
+        return Err(format!("{at}: an attribute lies partly outside its buffer"));
     }
     let instances: Vec<animation::Trs> = (0..count)
         .map(|i| animation::Trs {
@@ -1306,13 +1363,15 @@ where
         Some(items.map(|item| item.map(&to_float)).collect())
     }
     let normalized = accessor.normalized();
-    let scale = |max: f32| if normalized { 1.0 / max } else { 1.0 };
+    // Normalized signed integers map their most negative value to −1 too.
+    let signed = |c: f32, max: f32| if normalized { (c / max).max(-1.0) } else { c };
+    let unsigned = |c: f32, max: f32| if normalized { c / max } else { c };
     match accessor.data_type() {
         DataType::F32 => read::<f32, N>(accessor, buffers, |c| c),
-        DataType::I8 => read::<i8, N>(accessor, buffers, |c| (f32::from(c) * scale(127.0)).max(-1.0f32.max(f32::from(c)))),
-        DataType::U8 => read::<u8, N>(accessor, buffers, |c| f32::from(c) * scale(255.0)),
-        DataType::I16 => read::<i16, N>(accessor, buffers, |c| (f32::from(c) * scale(32767.0)).max(-1.0f32.max(f32::from(c)))),
-        DataType::U16 => read::<u16, N>(accessor, buffers, |c| f32::from(c) * scale(65535.0)),
+        DataType::I8 => read::<i8, N>(accessor, buffers, |c| signed(f32::from(c), 127.0)),
+        DataType::U8 => read::<u8, N>(accessor, buffers, |c| unsigned(f32::from(c), 255.0)),
+        DataType::I16 => read::<i16, N>(accessor, buffers, |c| signed(f32::from(c), 32767.0)),
+        DataType::U16 => read::<u16, N>(accessor, buffers, |c| unsigned(f32::from(c), 65535.0)),
         DataType::U32 => read::<u32, N>(accessor, buffers, |c| c as f32),
     }
 }
@@ -1747,6 +1806,36 @@ mod tests {
         );
         std::fs::write(dir.join("quad.gltf"), json).unwrap();
         import(&dir.join("quad.gltf"))
+    }
+
+    #[test]
+    fn quantized_attributes_read_as_the_extension_says() {
+        // Positions as plain (not normalized) 16-bit integers, negative ones included; texture
+        // coordinates as normalized 8-bit ones.
+        let positions: [[i16; 3]; 3] = [[-300, 0, 7], [200, -1, 0], [0, 500, -32768]];
+        let mut bytes: Vec<u8> = positions.iter().flat_map(|p| [p[0], p[1], p[2], 0]).flat_map(i16::to_le_bytes).collect();
+        bytes.extend([0u8, 255, 255, 0, 128, 64, 0, 0]);
+        let data = ::base64::encode(&bytes);
+        let json = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_mesh_quantization"], "extensionsRequired": ["KHR_mesh_quantization"],
+            "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}],
+            "bufferViews": [{{"buffer": 0, "byteLength": 24, "byteStride": 8}}, {{"buffer": 0, "byteOffset": 24, "byteLength": 6}}],
+            "accessors": [{{"bufferView": 0, "componentType": 5122, "count": 3, "type": "VEC3", "min": [-300, -1, -32768], "max": [200, 500, 7]}},
+                          {{"bufferView": 1, "componentType": 5121, "normalized": true, "count": 3, "type": "VEC2"}}],
+            "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1}}}}]}}],
+            "nodes": [{{"mesh": 0}}], "scenes": [{{"nodes": [0]}}]}}"#,
+            len = bytes.len()
+        );
+        let dir = temp_dir("gltf_quantized");
+        let path = dir.join("quantized.gltf");
+        std::fs::write(&path, json).unwrap();
+        let scene = import(&path).unwrap();
+        // Flat shading gives each corner its own vertex, in order.
+        let vertices = &scene.meshes[0].primitives[0].vertices;
+        let read: Vec<[f32; 3]> = vertices.iter().map(|v| v.position).collect();
+        assert_eq!(read, positions.map(|p| p.map(f32::from)).to_vec());
+        let uvs: Vec<[f32; 2]> = vertices.iter().map(|v| [v.u, v.v]).collect();
+        assert_eq!(uvs, vec![[0.0, 1.0], [1.0, 0.0], [128.0 / 255.0, 64.0 / 255.0]]);
     }
 
     #[test]
