@@ -34,14 +34,7 @@ impl Params {
             metallic_factor: self.metallic,
             roughness_factor: self.roughness,
             specular: Specular { ior: self.ior, factor: self.specular, color_factor: self.specular_color, ..Default::default() },
-            clearcoat: (self.clearcoat > 0.0).then_some(Clearcoat {
-                factor: self.clearcoat,
-                texture: None,
-                roughness_factor: self.clearcoat_roughness,
-                roughness_texture: None,
-                normal_texture: None,
-                normal_scale: 1.0,
-            }),
+            clearcoat: (self.clearcoat > 0.0).then_some(Clearcoat::untextured(self.clearcoat, self.clearcoat_roughness)),
             ..Default::default()
         }
     }
@@ -89,6 +82,17 @@ fn wall_point(x: u32, y: u32) -> Vec3 {
     let ndc = glam::Vec2::new((x as f32 + 0.5) / WIDTH as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / HEIGHT as f32 * 2.0);
     let half_height = 30f32.to_radians().tan() * 4.0;
     Vec3::new(ndc.x * half_height * WIDTH as f32 / HEIGHT as f32, ndc.y * half_height, 0.0)
+}
+
+/// A material whose coat alone reflects: a black base without specular reflection.
+fn coat_only(coat: Clearcoat) -> Material {
+    Material {
+        base_color_factor: Vec4::new(0.0, 0.0, 0.0, 1.0),
+        metallic_factor: 0.0,
+        specular: Specular { factor: 0.0, ..Default::default() },
+        clearcoat: Some(coat),
+        ..Default::default()
+    }
 }
 
 fn wall(material: Material, lights: Vec<Light>) -> (Scene, manylights::scene::Camera) {
@@ -177,14 +181,7 @@ fn the_extensions_textures_scale_their_factors() {
     let srgb = |c: f32| ((c + 0.055) / 1.055).powf(2.4);
     let factors = Material {
         specular: Specular { factor: 0.6, color_factor: Vec3::new(1.0, srgb(188.0 / 255.0), srgb(188.0 / 255.0)), ..Default::default() },
-        clearcoat: Some(Clearcoat {
-            factor: 0.4,
-            texture: None,
-            roughness_factor: 0.2,
-            roughness_texture: None,
-            normal_texture: None,
-            normal_scale: 1.0,
-        }),
+        clearcoat: Some(Clearcoat::untextured(0.4, 0.2)),
         ..textured
     };
     let (reference_scene, _) = wall(factors, vec![light]);
@@ -200,33 +197,20 @@ fn the_extensions_textures_scale_their_factors() {
 fn a_clearcoat_normal_map_tilts_the_coat_as_tilted_geometry_does() {
     // Only the coat reflects (black base, no specular): its normal from a one-texel normal map on a
     // flat wall shades as the wall whose vertex normals are that normal, without the map.
-    let coat_only = |normal_texture| Material {
-        base_color_factor: Vec4::new(0.0, 0.0, 0.0, 1.0),
-        metallic_factor: 0.0,
-        specular: Specular { factor: 0.0, ..Default::default() },
-        clearcoat: Some(Clearcoat {
-            factor: 1.0,
-            texture: None,
-            roughness_factor: 0.3,
-            roughness_texture: None,
-            normal_texture,
-            normal_scale: 1.0,
-        }),
-        ..Default::default()
-    };
+    let coated = |normal_texture| coat_only(Clearcoat { normal_texture, ..Clearcoat::untextured(1.0, 0.3) });
     let light = point_light(Vec3::new(0.2, 0.1, 1.0), 3.0, 6.0);
     let texel = [200u8, 128, 230, 255];
-    let (mut mapped, camera) = wall(coat_only(Some(TextureRef::new(0, Wrap::Repeat, Wrap::Repeat))), vec![light]);
+    let (mut mapped, camera) = wall(coated(Some(TextureRef::new(0, Wrap::Repeat, Wrap::Repeat))), vec![light]);
     mapped.textures = vec![Texture { name: "normal".into(), width: 1, height: 1, rgba8: texel.to_vec() }];
     // The wall's tangent frame is (+X, +Y, +Z) in the world; its vertex normals go through the
     // inverse transpose of its scale, so the world's tilted normal is scaled by it into the mesh.
     let tilted = Vec3::new(f32::from(texel[0]), f32::from(texel[1]), f32::from(texel[2])) / 255.0 * 2.0 - Vec3::ONE;
-    let (mut geometry, _) = wall(coat_only(None), vec![light]);
+    let (mut geometry, _) = wall(coated(None), vec![light]);
     let scale = geometry.instances[0].world_from_local.to_scale_rotation_translation().0;
     for v in &mut geometry.meshes[0].primitives[0].vertices {
         v.normal = (tilted * scale).normalize().to_array();
     }
-    let (flat, _) = wall(coat_only(None), vec![light]);
+    let (flat, _) = wall(coated(None), vec![light]);
     for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
         let (got, expected) = (frame(&mapped, &camera, pipeline), frame(&geometry, &camera, pipeline));
         let peak = expected.pixels.iter().map(|&p| luminance(p)).fold(0.0, f32::max);
@@ -241,21 +225,7 @@ fn a_clear_coat_reflects_the_environment_by_its_fresnel_and_the_split_sum() {
     // Only the coat reflects a uniform white environment: at normal incidence it sends 4 % of the
     // split-sum's directional albedo for its roughness (scale + bias at F0 = 1), in every pipeline.
     let roughness = 0.5;
-    let coat_only = Material {
-        base_color_factor: Vec4::new(0.0, 0.0, 0.0, 1.0),
-        metallic_factor: 0.0,
-        specular: Specular { factor: 0.0, ..Default::default() },
-        clearcoat: Some(Clearcoat {
-            factor: 1.0,
-            texture: None,
-            roughness_factor: roughness,
-            roughness_texture: None,
-            normal_texture: None,
-            normal_scale: 1.0,
-        }),
-        ..Default::default()
-    };
-    let (mut scene, camera) = wall(coat_only, vec![]);
+    let (mut scene, camera) = wall(coat_only(Clearcoat::untextured(1.0, roughness)), vec![]);
     scene.ambient = Vec3::ONE;
     // The table's texels at n·v → 1 (its last column, where the lookup clamps) and the two rows
     // either side of roughness 0.5, which a bilinear lookup averages.
@@ -279,17 +249,7 @@ fn the_core_material_shades_alike_on_the_core_and_the_extended_path() {
         Material { base_color_factor: Vec4::new(0.6, 0.3, 0.2, 1.0), metallic_factor: 0.3, roughness_factor: 0.4, ..Default::default() };
     let (core, camera) = wall(plain, vec![light]);
     let mut extended = core.clone();
-    extended.materials.push(Material {
-        clearcoat: Some(Clearcoat {
-            factor: 1.0,
-            texture: None,
-            roughness_factor: 0.1,
-            roughness_texture: None,
-            normal_texture: None,
-            normal_scale: 1.0,
-        }),
-        ..Default::default()
-    });
+    extended.materials.push(Material { clearcoat: Some(Clearcoat::untextured(1.0, 0.1)), ..Default::default() });
     for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
         let (a, b) = (frame(&core, &camera, pipeline), frame(&extended, &camera, pipeline));
         let difference = max_abs_difference(&a, &b);

@@ -858,14 +858,7 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
     };
     let specular = &m.specular;
     let ior_reflectance = ((specular.ior - 1.0) / (specular.ior + 1.0)).powi(2);
-    let clearcoat = m.clearcoat.unwrap_or(crate::scene::Clearcoat {
-        factor: 0.0,
-        texture: None,
-        roughness_factor: 0.0,
-        roughness_texture: None,
-        normal_texture: None,
-        normal_scale: 1.0,
-    });
+    let clearcoat = m.clearcoat.unwrap_or(crate::scene::Clearcoat::untextured(0.0, 0.0));
     // Slot order matches the WGSL (`TEXTURE_SLOTS`).
     let slots = [
         m.base_color_texture,

@@ -191,6 +191,13 @@ pub struct Clearcoat {
     pub normal_scale: f32,
 }
 
+impl Clearcoat {
+    /// A coat of `factor` and `roughness` without textures.
+    pub fn untextured(factor: f32, roughness: f32) -> Self {
+        Self { factor, texture: None, roughness_factor: roughness, roughness_texture: None, normal_texture: None, normal_scale: 1.0 }
+    }
+}
+
 impl Default for Material {
     /// The glTF default material.
     fn default() -> Self {
