@@ -7,6 +7,8 @@ the GPU machine; scripts/bench-device.sh reads them):
                               nearest joints, one morph target bulging it; a 20 m floor (`deform`)
   .bench/sponza_coated/       sponza_lite with every material coated: clear coat 0.5 (roughness 0.1),
                               ior 1.7, specular 0.8 tinted (1, 0.9, 0.8), textures shared (`materials`)
+  .bench/sponza_colored/      sponza_lite with a COLOR_0 (RGBA unorm8, pale tints varying vertex by vertex)
+                              on every primitive, buffers and textures shared (`materials`)
 """
 import json
 import math
@@ -115,6 +117,33 @@ def coated(source, out):
         json.dump(document, f)
 
 
+def colored(source, out):
+    with open(source) as f:
+        document = json.load(f)
+    for item in document.get("buffers", []) + document.get("images", []):
+        if "uri" in item:
+            item["uri"] = "../sponza_lite/" + item["uri"]
+    colors = b""
+    for mesh in document["meshes"]:
+        for primitive in mesh["primitives"]:
+            count = document["accessors"][primitive["attributes"]["POSITION"]]["count"]
+            tints = [(195 + (i * 37) % 61, 195 + (i * 91) % 61, 215 + (i * 13) % 41, 255) for i in range(count)]
+            view = {"buffer": len(document["buffers"]), "byteOffset": len(colors), "byteLength": 4 * count}
+            colors += b"".join(struct.pack("<4B", *t) for t in tints)
+            document["bufferViews"].append(view)
+            document["accessors"].append(
+                {"bufferView": len(document["bufferViews"]) - 1, "componentType": 5121, "normalized": True, "count": count, "type": "VEC4"}
+            )
+            primitive["attributes"]["COLOR_0"] = len(document["accessors"]) - 1
+    document["buffers"].append({"byteLength": len(colors), "uri": "colors.bin"})
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "colors.bin"), "wb") as f:
+        f.write(colors)
+    with open(os.path.join(out, "Sponza.gltf"), "w") as f:
+        json.dump(document, f)
+
+
 if __name__ == "__main__":
     tube(".bench/skin")
     coated(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_coated")
+    colored(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_colored")

@@ -294,12 +294,21 @@ pub struct ShadingMethods {
     /// `shading/shading_input.wgsl`, a pipeline constant: [`ShadingMethods::material_constant`]);
     /// without, the shading passes compile only glTF's core material.
     pub material_extensions: bool,
+    /// Some mesh has vertex colours (`VERTEX_COLORS` in `shading/material.wgsl`, a pipeline
+    /// constant: [`ShadingMethods::vertex_color_constant`]); without, the shading passes neither
+    /// interpolate nor apply them.
+    pub vertex_colors: bool,
 }
 
 impl ShadingMethods {
     /// The shading core's pipeline constant for the material extensions' path.
     pub fn material_constant(&self) -> (&'static str, f64) {
         ("MATERIAL_EXTENSIONS", f64::from(u8::from(self.material_extensions)))
+    }
+
+    /// The shading passes' pipeline constant for vertex colours.
+    pub fn vertex_color_constant(&self) -> (&'static str, f64) {
+        ("VERTEX_COLORS", f64::from(u8::from(self.vertex_colors)))
     }
 
     /// The shading core's pipeline constant for its debug views' counters.
@@ -515,6 +524,8 @@ pub struct SceneStatistics {
     /// Some material uses an extension the shading core evaluates beyond glTF's core material
     /// (its own index of refraction or specular, a clear coat, unlit).
     pub material_extensions: bool,
+    /// Some vertex has a colour other than white.
+    pub vertex_colors: bool,
 }
 
 /// Which statistics the plan reads for these settings, so that nothing else is measured.
@@ -652,6 +663,7 @@ impl FramePlan {
             decal_cell_lists: false,
             debug_views: config.debug_view != DebugView::Off,
             material_extensions: stats.material_extensions,
+            vertex_colors: stats.vertex_colors,
         };
         // Lights and decals crowded enough get wide leaves, walked a subgroup at a time, their leaves
         // shared out; decals, as one group placed once, cell lists too. Groups rebuilt every frame get
@@ -953,6 +965,10 @@ mod tests {
         let coated = SceneStatistics { material_extensions: true, ..Default::default() };
         let methods = FramePlan::resolve(&bvh, SUBGROUPS, &coated).unwrap().shading_methods(true);
         assert_eq!(methods.material_constant(), ("MATERIAL_EXTENSIONS", 1.0));
+        assert_eq!(methods.vertex_color_constant(), ("VERTEX_COLORS", 0.0));
+        let colored = SceneStatistics { vertex_colors: true, ..Default::default() };
+        let methods = FramePlan::resolve(&bvh, SUBGROUPS, &colored).unwrap().shading_methods(true);
+        assert_eq!(methods.vertex_color_constant(), ("VERTEX_COLORS", 1.0));
     }
 
     #[test]

@@ -32,6 +32,7 @@ fn grid_mesh(n: u32) -> Mesh {
                 normal: [0.0, 0.0, 1.0],
                 v: 0.5 - y * 0.5,
                 tangent: [1.0, 0.0, 0.0, 1.0],
+                ..Vertex::default()
             });
         }
     }

@@ -284,6 +284,29 @@ fn any_hit_rays_are_occluded_exactly_when_something_lies_before_their_end() {
     assert!(expected.iter().filter(|&&o| o).count() > 500);
 }
 
+#[test]
+fn rays_pass_where_a_vertex_alpha_masks_the_surface_out() {
+    // An alpha-masked quad at z = 0 whose vertex alpha runs from 0.1 (x = -1) to 0.9 (x = 1), cut at
+    // 0.5, before an opaque quad at z = -2: rays along -Z hit the first at x > 0 only.
+    let masked = Material { alpha_mode: AlphaMode::Mask { cutoff: 0.5 }, ..Default::default() };
+    let mut scene = Scene { materials: vec![masked, Material::default()], ..Default::default() };
+    for (material, z) in [(0, 0.0), (1, -2.0)] {
+        let mut quad = common::quad_mesh();
+        quad.primitives[0].material = material;
+        for v in &mut quad.primitives[0].vertices {
+            v.color = manylights::scene::Vertex::color_from([1.0, 1.0, 1.0, 0.5 + 0.4 * v.position[0]]);
+        }
+        scene.meshes.push(quad);
+        scene.instances.push(Instance { mesh: material, world_from_local: Mat4::from_translation(Vec3::new(0.0, 0.0, z)) });
+    }
+    let xs = [-0.75, -0.25, 0.25, 0.75];
+    let rays: Vec<_> = xs.iter().map(|&x| (Vec3::new(x, 0.3, 1.0), f32::INFINITY, Vec3::NEG_Z, false)).collect();
+    for (&x, hit) in xs.iter().zip(trace_on_gpu(&scene, &rays)) {
+        let expected = if x > 0.0 { 0 } else { 1 };
+        assert_eq!(hit.triangle.map(|t| t.0), Some(expected), "ray at x = {x}: {hit:?}");
+    }
+}
+
 /// A 2×2 texture whose alpha is a checkerboard: opaque top-left and bottom-right.
 fn checker_texture() -> Texture {
     let texel = |opaque: bool| [255, 255, 255, if opaque { 255 } else { 0 }];

@@ -136,6 +136,11 @@ pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<Sce
             .materials
             .iter()
             .any(|m| m.unlit || m.clearcoat.is_some() || m.specular != crate::scene::Specular::default()),
+        vertex_colors: scene
+            .meshes
+            .iter()
+            .flat_map(|m| &m.primitives)
+            .any(|p| p.vertices.iter().any(|v| v.color != crate::scene::Vertex::WHITE)),
     })
 }
 

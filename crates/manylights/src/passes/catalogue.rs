@@ -85,6 +85,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         debug_views: false,
                         // A pipeline constant: the same composed shader either way.
                         material_extensions: true,
+                        vertex_colors: true,
                     };
                     if decals.works_in(PipelineKind::Forward) {
                         shaders.push(super::forward_shade::shader(methods));

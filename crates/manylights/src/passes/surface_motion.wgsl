@@ -17,6 +17,8 @@ struct MotionVertex {
     @location(0) moved: vec3<f32>,
     @location(1) @interpolate(flat) draw_index: u32,
     @location(2) uv: vec2<f32>,
+    // The vertex colour's alpha, for alpha masks.
+    @location(3) alpha: f32,
 }
 
 @vertex
@@ -30,6 +32,7 @@ fn surface_motion_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(inst
     out.moved = (previous_world_from_local[draw_index] * previous_vertex_position(vertex_index, vertex.position)).xyz - world.xyz;
     out.draw_index = draw_index;
     out.uv = vec2<f32>(vertex.u, vertex.v);
+    out.alpha = vertex_color(vertex).a;
     return out;
 }
 
@@ -59,7 +62,7 @@ fn surface_motion_masked(in: MotionVertex) {
     let reach = depth_reach(in);
     let material = materials[draws[in.draw_index].material];
     let g = UvGradients(in.uv, dpdx(in.uv), dpdy(in.uv));
-    if material_base_color(material, g).a < material.alpha_cutoff {
+    if material_base_color(material, g, vec4<f32>(1.0, 1.0, 1.0, in.alpha)).a < material.alpha_cutoff {
         discard;
     }
     keep_motion(in, reach);

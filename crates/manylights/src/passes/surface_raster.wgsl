@@ -17,6 +17,7 @@ struct ForwardVertex {
     // Local-space normal and tangent: the fragment takes them to world space as the resolve does.
     @location(3) normal: vec3<f32>,
     @location(4) tangent: vec4<f32>,
+    @location(5) color: vec4<f32>,
 }
 
 @vertex
@@ -32,6 +33,7 @@ fn forward_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(instance_in
     out.relative_position = world.xyz - frame.world_from_view[3].xyz;
     out.normal = vertex.normal;
     out.tangent = vertex.tangent;
+    out.color = vertex_color(vertex);
     return out;
 }
 
@@ -52,7 +54,7 @@ fn fragment_surface(in: ForwardVertex, front_facing: bool, g: UvGradients) -> Sh
         surface.tangent = -surface.tangent;
         surface.bitangent_sign = -surface.bitangent_sign;
     }
-    return evaluate_material(materials[draw.material], surface, g, position, view_dir);
+    return evaluate_material(materials[draw.material], surface, g, in.color, position, view_dir);
 }
 
 // The fragment's surface for shading passes, which trace rays from it: with its triangle's normal and
@@ -67,7 +69,7 @@ fn fragment_shading_surface(in: ForwardVertex, front_facing: bool, g: UvGradient
 // Whether an alpha-masked fragment covers its pixel (derivatives taken before any discard).
 fn forward_alpha_covers(in: ForwardVertex, g: UvGradients) -> bool {
     let material = materials[draws[in.draw_index].material];
-    return material_base_color(material, g).a >= material.alpha_cutoff;
+    return material_base_color(material, g, in.color).a >= material.alpha_cutoff;
 }
 
 // The unit geometric normal of the fragment's triangle, from its position derivatives, on the

@@ -17,6 +17,8 @@ struct VertexOutput {
     @location(0) @interpolate(flat) visibility_id: u32,
     @location(1) @interpolate(flat) draw_index: u32,
     @location(2) uv: vec2<f32>,
+    // The vertex colour's alpha, for alpha masks.
+    @location(3) alpha: f32,
 }
 
 fn raster_vertex(draw_index: u32, vertex: Vertex, visibility_id: u32) -> VertexOutput {
@@ -25,6 +27,7 @@ fn raster_vertex(draw_index: u32, vertex: Vertex, visibility_id: u32) -> VertexO
     out.visibility_id = visibility_id;
     out.draw_index = draw_index;
     out.uv = vec2<f32>(vertex.u, vertex.v);
+    out.alpha = vertex_color(vertex).a;
     return out;
 }
 
@@ -32,5 +35,5 @@ fn raster_vertex(draw_index: u32, vertex: Vertex, visibility_id: u32) -> VertexO
 fn raster_alpha_covers(in: VertexOutput) -> bool {
     let material = materials[draws[in.draw_index].material];
     let g = UvGradients(in.uv, dpdx(in.uv), dpdy(in.uv));
-    return material_base_color(material, g).a >= material.alpha_cutoff;
+    return material_base_color(material, g, vec4<f32>(1.0, 1.0, 1.0, in.alpha)).a >= material.alpha_cutoff;
 }

@@ -58,7 +58,7 @@ fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {
         camera_ray(pixel + vec2<f32>(0.0, 1.0)),
     );
     let position = surface.relative_position + eye;
-    var material_surface = evaluate_material(materials[draw.material], surface.frame, surface.g, position, -ray.dir);
+    var material_surface = evaluate_material(materials[draw.material], surface.frame, surface.g, surface.vertex_color, position, -ray.dir);
     material_surface.ray_normal = surface.geometric_normal;
     material_surface.ray_clearance = surface_clearance(surface.relative_position);
     let s = apply_decals(material_surface, surface.dp);

@@ -16,6 +16,8 @@ struct VelocityVertex {
     @location(0) previous_clip: vec4<f32>,
     @location(1) @interpolate(flat) draw_index: u32,
     @location(2) uv: vec2<f32>,
+    // The vertex colour's alpha, for alpha masks.
+    @location(3) alpha: f32,
 }
 
 @vertex
@@ -26,6 +28,7 @@ fn velocity_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(instance_i
     var out: VelocityVertex;
     out.draw_index = draw_index;
     out.uv = vec2<f32>(vertex.u, vertex.v);
+    out.alpha = vertex_color(vertex).a;
     out.clip_position = frame.clip_from_world * (draws[draw_index].world_from_local * position);
     let previous_world = previous_world_from_local[draw_index] * previous_vertex_position(vertex_index, vertex.position);
     out.previous_clip = post.previous_clip_from_relative * vec4<f32>(previous_world.xyz - frame.world_from_view[3].xyz, 1.0);
@@ -50,7 +53,7 @@ fn velocity_raster(in: VelocityVertex) -> @location(0) vec4<f32> {
 fn velocity_raster_masked(in: VelocityVertex) -> @location(0) vec4<f32> {
     let material = materials[draws[in.draw_index].material];
     let g = UvGradients(in.uv, dpdx(in.uv), dpdy(in.uv));
-    if material_base_color(material, g).a < material.alpha_cutoff {
+    if material_base_color(material, g, vec4<f32>(1.0, 1.0, 1.0, in.alpha)).a < material.alpha_cutoff {
         discard;
     }
     return moved_since_previous(in);

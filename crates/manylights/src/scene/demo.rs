@@ -156,7 +156,7 @@ fn mesh(name: &str, (mut vertices, mut indices): (Vec<Vertex>, Vec<u32>), materi
 }
 
 fn vertex(position: Vec3, normal: Vec3, u: f32, v: f32) -> Vertex {
-    Vertex { position: position.to_array(), u, normal: normal.to_array(), v, tangent: [0.0; 4] }
+    Vertex { position: position.to_array(), u, normal: normal.to_array(), v, ..Vertex::default() }
 }
 
 /// A `width` × `depth` rectangle in the XZ plane facing +Y, its texture repeated `repeat` times

@@ -59,7 +59,7 @@ pub fn load_path(path: &Path) -> crate::Result<Scene> {
 
 /// One vertex, laid out exactly as the shaders read it (`shading/types.wgsl`, `Vertex`).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Vertex {
     pub position: [f32; 3],
     pub u: f32,
@@ -67,6 +67,26 @@ pub struct Vertex {
     pub v: f32,
     /// xyz: tangent, w: bitangent sign (glTF / MikkTSpace convention).
     pub tangent: [f32; 4],
+    /// Linear RGBA as 16-bit unsigned normalized integers (glTF's `COLOR_0`), which multiplies the
+    /// material's base colour and alpha: [`Vertex::WHITE`] where a mesh has none.
+    pub color: [u16; 4],
+    /// The shaders' struct rounds up to 16 bytes.
+    pub _padding: [u32; 2],
+}
+
+impl Vertex {
+    pub const WHITE: [u16; 4] = [u16::MAX; 4];
+
+    /// `color`, components clamped to 0..1 (NaN taken as 1), as [`Vertex::color`] stores it.
+    pub fn color_from(color: [f32; 4]) -> [u16; 4] {
+        color.map(|c| if c.is_nan() { u16::MAX } else { (c.clamp(0.0, 1.0) * 65535.0).round() as u16 })
+    }
+}
+
+impl Default for Vertex {
+    fn default() -> Self {
+        Self { position: [0.0; 3], u: 0.0, normal: [0.0; 3], v: 0.0, tangent: [0.0; 4], color: Self::WHITE, _padding: [0; 2] }
+    }
 }
 
 /// An indexed triangle list with one material.

@@ -137,7 +137,7 @@ impl Pose {
         }
         let normal = normal.normalize_or(Vec3::from(rest.normal));
         let tangent = tangent.truncate().normalize_or(Vec3::from_slice(&rest.tangent[..3])).extend(tangent.w);
-        Vertex { position: position.into(), u: rest.u, normal: normal.into(), v: rest.v, tangent: tangent.into() }
+        Vertex { position: position.into(), normal: normal.into(), tangent: tangent.into(), ..*rest }
     }
 
     /// A box holding the mesh posed by `state`, from `bounds` (`PoseBounds::of` the same mesh): each
@@ -263,7 +263,7 @@ mod tests {
     use glam::Quat;
 
     fn vertex(position: Vec3) -> Vertex {
-        Vertex { position: position.into(), u: 0.0, normal: [0.0, 1.0, 0.0], v: 0.0, tangent: [1.0, 0.0, 0.0, 1.0] }
+        Vertex { position: position.into(), normal: [0.0, 1.0, 0.0], tangent: [1.0, 0.0, 0.0, 1.0], ..Vertex::default() }
     }
 
     #[test]
@@ -313,7 +313,7 @@ mod tests {
             weights: vec![[1.0, 0.0, 0.0, 0.0]],
         };
         let pose = Pose { targets: Vec::new(), rest_weights: Vec::new(), weight_keys: None, skin: Some(skin) };
-        let rest = Vertex { position: [1.0, 2.0, 3.0], u: 0.0, normal: [1.0, 0.0, 0.0], v: 0.0, tangent: [0.0, 1.0, 0.0, 1.0] };
+        let rest = Vertex { position: [1.0, 2.0, 3.0], normal: [1.0, 0.0, 0.0], tangent: [0.0, 1.0, 0.0, 1.0], ..Vertex::default() };
         let mirror = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
         let posed = pose.pose_vertex(0, &rest, &pose.state(0.0, &[mirror]));
         assert_eq!(posed.position, [-1.0, 2.0, 3.0]);

@@ -117,7 +117,7 @@ mod tests {
     use super::*;
 
     fn vertex(position: [f32; 3], uv: [f32; 2]) -> Vertex {
-        Vertex { position, u: uv[0], normal: [0.0, 0.0, 1.0], v: uv[1], tangent: [0.0; 4] }
+        Vertex { position, u: uv[0], normal: [0.0, 0.0, 1.0], v: uv[1], ..Vertex::default() }
     }
 
     /// A quad facing +Z with the image upright on it (u right, v down), counter-clockwise.

@@ -34,9 +34,17 @@ fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Materia
 // emissive, specular colour) and `data_textures` (linear: the others); decals sample their own
 // arrays, clamped, in `decals.wgsl`.
 
-// Base colour with alpha; used for alpha masking too.
-fn material_base_color(material: Material, g: UvGradients) -> vec4<f32> {
+// Whether any mesh has vertex colours: a pipeline constant of the shading passes (`plan.rs`,
+// `ShadingMethods::vertex_colors`), so scenes without them neither interpolate nor apply them.
+override VERTEX_COLORS: bool = true;
+
+// Base colour with alpha, times the interpolated vertex colour (glTF's COLOR_0, white without);
+// used for alpha masking too.
+fn material_base_color(material: Material, g: UvGradients, vertex_color: vec4<f32>) -> vec4<f32> {
     var color = material.base_color_factor;
+    if VERTEX_COLORS {
+        color *= vertex_color;
+    }
     if material.base_color_layer != NO_TEXTURE {
         color *= sample_wrapped(color_textures, material.base_color_layer, material, 0u, g);
     }
@@ -83,12 +91,12 @@ struct SurfaceFrame {
 }
 
 // Fills a ShadingInput from a material and the interpolated surface.
-fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, position: vec3<f32>, view_dir: vec3<f32>) -> ShadingInput {
+fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, vertex_color: vec4<f32>, position: vec3<f32>, view_dir: vec3<f32>) -> ShadingInput {
     var s: ShadingInput;
     s.position = position;
     s.view_dir = view_dir;
 
-    let base = material_base_color(material, g);
+    let base = material_base_color(material, g, vertex_color);
     s.base_color = base.rgb;
     s.alpha = base.a;
 

@@ -80,7 +80,7 @@ fn reflected_radiance(s: ShadingInput, geometric_normal: vec3<f32>, footprint: f
         let ray = Ray(vec3<f32>(0.0), dir);
         let hit_surface = triangle_surface(draw, tri.triangle, origin, ray, Ray(across[0], dir), Ray(across[1], dir));
         let position = hit_surface.relative_position + origin;
-        var hit_material = evaluate_material(materials[draw.material], hit_surface.frame, hit_surface.g, position, -dir);
+        var hit_material = evaluate_material(materials[draw.material], hit_surface.frame, hit_surface.g, hit_surface.vertex_color, position, -dir);
         hit_material.ray_normal = hit_surface.geometric_normal;
         let hit_s = apply_decals(hit_material, hit_surface.dp);
         radiance += weight * (shade(hit_s, sun_visibility_traced(position, hit_surface.geometric_normal, 0.0)) - replaced);

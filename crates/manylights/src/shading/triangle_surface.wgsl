@@ -9,6 +9,7 @@
 struct TriangleSurface {
     frame: SurfaceFrame,
     g: UvGradients,
+    vertex_color: vec4<f32>,
     // Relative to the reference point.
     relative_position: vec3<f32>,
     dp: PositionGradients,
@@ -62,6 +63,7 @@ fn triangle_surface(draw: Draw, triangle: u32, reference: vec3<f32>, ray: Ray, r
     let uv2 = vec2<f32>(v2.u, v2.v);
     let uv = interpolate2(b, uv0, uv1, uv2);
     out.g = UvGradients(uv, interpolate2(b_dx, uv0, uv1, uv2) - uv, interpolate2(b_dy, uv0, uv1, uv2) - uv);
+    out.vertex_color = vertex_color(v0) * b.x + vertex_color(v1) * b.y + vertex_color(v2) * b.z;
     out.relative_position = interpolate3(b, p0, p1, p2);
     out.dp = PositionGradients(interpolate3(b_dx, p0, p1, p2) - out.relative_position, interpolate3(b_dy, p0, p1, p2) - out.relative_position);
 

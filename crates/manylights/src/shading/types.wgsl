@@ -11,6 +11,13 @@ struct Vertex {
     v: f32,
     // xyz tangent, w bitangent sign
     tangent: vec4<f32>,
+    // Linear RGBA as 16-bit unorms (`vertex_color`), white where the mesh has no colours; the
+    // struct's size rounds up to 64 bytes.
+    color: vec2<u32>,
+}
+
+fn vertex_color(v: Vertex) -> vec4<f32> {
+    return vec4<f32>(unpack2x16unorm(v.color.x), unpack2x16unorm(v.color.y));
 }
 
 // One instance of one mesh primitive.

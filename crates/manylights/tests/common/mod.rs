@@ -93,6 +93,7 @@ pub fn quad_mesh() -> Mesh {
         normal: [0.0, 0.0, 1.0],
         v: 0.5 - y * 0.5,
         tangent: [1.0, 0.0, 0.0, 1.0],
+        ..Vertex::default()
     };
     Mesh {
         name: "quad".into(),

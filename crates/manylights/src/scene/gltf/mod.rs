@@ -1275,6 +1275,7 @@ fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: 
     let normals: Option<Vec<[f32; 3]>> = vertex_attribute(p.get(&Semantic::Normals), "NORMAL", buffers, count)?;
     let uvs: Option<Vec<[f32; 2]>> = vertex_attribute(p.get(&Semantic::TexCoords(0)), "TEXCOORD_0", buffers, count)?;
     let file_tangents: Option<Vec<[f32; 4]>> = vertex_attribute(p.get(&Semantic::Tangents), "TANGENT", buffers, count)?;
+    let colors = vertex_colors(p.get(&Semantic::Colors(0)), buffers, count)?;
     let indices: Vec<u32> = match reader.read_indices() {
         Some(indices) => indices.into_u32().collect(),
         None if p.indices().is_some() => return Err("the indices lie outside their buffer".into()),
@@ -1299,6 +1300,8 @@ fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: 
                 normal: normals.as_ref().map_or([0.0; 3], |n| Vec3::from(n[i]).normalize_or(Vec3::Y).to_array()),
                 v,
                 tangent: file_tangents.as_ref().map_or([0.0; 4], |t| t[i]),
+                color: colors.as_ref().map_or(Vertex::WHITE, |c| Vertex::color_from(c[i])),
+                ..Vertex::default()
             }
         })
         .collect();
@@ -1336,6 +1339,7 @@ const DIRECTIONS: &[(DataType, bool)] = &[(DataType::F32, false), (DataType::I8,
 const MORPH_POSITIONS: &[(DataType, bool)] =
     &[(DataType::F32, false), (DataType::I8, false), (DataType::I8, true), (DataType::I16, false), (DataType::I16, true)];
 const TEX_COORDS: &[(DataType, bool)] = POSITIONS;
+const COLORS: &[(DataType, bool)] = &[(DataType::F32, false), (DataType::U8, true), (DataType::U16, true)];
 const INDICES: &[(DataType, bool)] = &[(DataType::U8, false), (DataType::U16, false), (DataType::U32, false)];
 const JOINTS: &[(DataType, bool)] = &[(DataType::U8, false), (DataType::U16, false)];
 const WEIGHTS: &[(DataType, bool)] = &[(DataType::F32, false), (DataType::U8, true), (DataType::U16, true)];
@@ -1407,6 +1411,18 @@ where
     [u32; N]: Item,
 {
     attribute(name, accessor.is_some(), accessor.and_then(|a| read_floats(&a, buffers)).map(Vec::into_iter), count)
+}
+
+/// `COLOR_0` as RGBA: RGB colours get an alpha of 1.
+fn vertex_colors(accessor: Option<Accessor>, buffers: &[buffer::Data], count: usize) -> Result<Option<Vec<[f32; 4]>>, String> {
+    let Some(accessor) = accessor else { return Ok(None) };
+    if accessor.dimensions() == Dimensions::Vec3 {
+        check_accessor(&accessor, "COLOR_0", Dimensions::Vec3, COLORS)?;
+        let rgb: Option<Vec<[f32; 3]>> = vertex_attribute(Some(accessor), "COLOR_0", buffers, count)?;
+        return Ok(rgb.map(|rgb| rgb.into_iter().map(|[r, g, b]| [r, g, b, 1.0]).collect()));
+    }
+    check_accessor(&accessor, "COLOR_0", Dimensions::Vec4, COLORS)?;
+    vertex_attribute(Some(accessor), "COLOR_0", buffers, count)
 }
 
 /// Reads an optional vertex attribute, telling an absent one (`None`) from one that cannot be read.
