@@ -232,8 +232,8 @@ deform() {
   fi
 }
 
-# The material extensions' path: Sponza with every material coated (scripts/make-bench-scenes.py)
-# against Sponza as it is, 28k lights, visibility buffer and deferred.
+# The material extensions' path and vertex colours: Sponza with every material coated, or every
+# vertex coloured (scripts/make-bench-scenes.py), against Sponza as it is; 28k lights, every pipeline.
 materials() {
   local s p
   for s in lite coated colored; do

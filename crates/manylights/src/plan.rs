@@ -295,8 +295,8 @@ pub struct ShadingMethods {
     /// without, the shading passes compile only glTF's core material.
     pub material_extensions: bool,
     /// Some mesh has vertex colours (`VERTEX_COLORS` in `shading/material.wgsl`, a pipeline
-    /// constant: [`ShadingMethods::vertex_color_constant`]); without, the shading passes neither
-    /// interpolate nor apply them.
+    /// constant: [`ShadingMethods::vertex_color_constant`]); without, the shading passes do not
+    /// apply them.
     pub vertex_colors: bool,
 }
 

@@ -2,7 +2,8 @@
 //! `KHR_materials_ior`, `KHR_materials_specular` and `KHR_materials_clearcoat` shade a wall under a
 //! point light as their specifications' formulas say, computed here on the CPU, in every pipeline;
 //! their textures scale their factors; `KHR_materials_unlit` shows its base colour whatever lights
-//! it; and the importer reads all four from a glTF file.
+//! it; and the importer reads all four from a glTF file. glTF's occlusion texture darkens the
+//! environment's light alone, and not what traced reflections see.
 
 mod common;
 
@@ -271,6 +272,74 @@ fn unlit_materials_show_their_base_colour_whatever_lights_them() {
             // The deferred G-buffer keeps the base colour in 8-bit sRGB.
             assert!((got - color).abs().max_element() < 5e-3, "{}: {got}, not {color}", pipeline.name());
         }
+    }
+}
+
+/// A uniform occlusion texture: R = 64/255 everywhere.
+fn occlusion_texture() -> Texture {
+    Texture { name: "occlusion".into(), width: 1, height: 1, rgba8: vec![64, 64, 64, 255] }
+}
+
+fn occluded(scene: &mut Scene, material: usize, strength: f32) {
+    scene.textures = vec![occlusion_texture()];
+    scene.materials[material].occlusion_texture = Some(TextureRef::new(0, Wrap::Repeat, Wrap::Repeat));
+    scene.materials[material].occlusion_strength = strength;
+}
+
+#[test]
+fn occlusion_darkens_the_environments_light_and_not_the_lights_in_every_pipeline() {
+    // A wall in a uniform environment with a point light: the environment's part of its radiance
+    // scales by 1 + strength × (R − 1); the light's stays.
+    let light = point_light(Vec3::new(0.5, 0.3, 1.0), 2.0, 5.0);
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+        let config = RenderConfig { pipeline, ..config(WIDTH, HEIGHT, LightMethod::Brute) };
+        let (ambient_only, camera) = ambient_wall();
+        let environment = render_with(&ambient_only, &camera, config.clone()).1;
+        let mut light_only = ambient_only.clone();
+        light_only.ambient = Vec3::ZERO;
+        light_only.lights = vec![light];
+        let direct = render_with(&light_only, &camera, config.clone()).1;
+        for strength in [1.0, 0.5] {
+            let mut scene = ambient_only.clone();
+            scene.lights = vec![light];
+            occluded(&mut scene, 0, strength);
+            let image = render_with(&scene, &camera, config.clone()).1;
+            let k = 1.0 + strength * (64.0 / 255.0 - 1.0);
+            for (i, p) in image.pixels.iter().enumerate() {
+                let expected = Vec4::from(environment.pixels[i]).truncate() * k + Vec4::from(direct.pixels[i]).truncate();
+                let got = Vec4::from(*p).truncate();
+                assert!(
+                    (got - expected).abs().max_element() < 2e-3,
+                    "{} strength {strength}, pixel {i}: {got}, expected {expected}",
+                    pipeline.name()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_traced_reflection_is_not_darkened_by_occlusion() {
+    // A mirror under a uniform sky: without traced reflections occlusion darkens the prefiltered
+    // sky it reflects; traced, the mirror shows the sky its rays reach, occluded or not.
+    let (mut plain, camera) = ambient_wall();
+    plain.materials[0].metallic_factor = 1.0;
+    plain.materials[0].roughness_factor = 0.0;
+    plain.materials[0].base_color_factor = Vec4::ONE;
+    let mut scene = plain.clone();
+    occluded(&mut scene, 0, 1.0);
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+        let frame = |scene: &Scene, bounces: u32| {
+            let rays = manylights::settings::RaySettings { reflection_bounces: bounces, ..Default::default() };
+            render_with(scene, &camera, RenderConfig { pipeline, rays, ..config(WIDTH, HEIGHT, LightMethod::Off) }).1
+        };
+        let name = pipeline.name();
+        let (prefiltered, prefiltered_occluded) = (frame(&plain, 0), frame(&scene, 0));
+        let centre = |image: &manylights::renderer::Image<[f32; 4]>| luminance(pixel(image, WIDTH / 2, HEIGHT / 2));
+        let ratio = centre(&prefiltered_occluded) / centre(&prefiltered);
+        assert!((ratio - 64.0 / 255.0).abs() < 0.01, "{name}: occlusion scaled the prefiltered sky by {ratio}");
+        let difference = max_abs_difference(&frame(&plain, 1), &frame(&scene, 1));
+        assert!(difference < 2e-3, "{name}: occlusion changed the traced reflection by {difference}");
     }
 }
 

@@ -21,7 +21,7 @@ use manylights::{
         deform::{Deformer, Wave},
         demo::demo_scene,
         generators::{self, ScatterDecals, ScatterLights},
-        ParticleSettings, Scene,
+        AlphaMode, ParticleSettings, Scene, Vertex,
     },
     settings::{
         BvhBuild, DecalMethod, DirectLighting, LightMethod, ParticleMethod, PipelineKind, RayBackend, RaySettings, RenderConfig, SunShadows,
@@ -208,9 +208,16 @@ fn auto_takes_ray_queries_only_where_the_gpu_runs_them() {
 }
 
 /// The demo scene with every effect that traces the triangles: sun shadows, shadowed lamps and
-/// glossy reflections; its perforated panel is alpha-masked.
+/// glossy reflections; its perforated panel is alpha-masked, by its texture and by vertex alphas
+/// alternating 1 and 0.2.
 fn traced_scene() -> Scene {
     let mut scene = demo_scene();
+    let masked: Vec<bool> = scene.materials.iter().map(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. })).collect();
+    for primitive in scene.meshes.iter_mut().flat_map(|m| &mut m.primitives).filter(|p| masked[p.material]) {
+        for (i, v) in primitive.vertices.iter_mut().enumerate() {
+            v.color = Vertex::color_from([1.0, 1.0, 1.0, if i % 2 == 0 { 1.0 } else { 0.2 }]);
+        }
+    }
     for light in &mut scene.lights {
         light.cast_shadows = true;
     }

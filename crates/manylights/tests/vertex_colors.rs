@@ -197,4 +197,6 @@ fn the_importer_reads_every_encoding_of_vertex_colours() {
     assert_eq!(colors(&scene), vec![[h, 0, 1000, h], [1, 2, 3, 4], [0; 4]], "RGBA unorm16, as they are");
     let error = triangle_with_colors(r#""componentType": 5120, "normalized": true, "type": "VEC4""#, &unorm8, 4).unwrap_err().to_string();
     assert!(error.contains("COLOR_0") && error.contains("glTF allows"), "{error}");
+    let error = triangle_with_colors(r#""componentType": 5126, "type": "VEC2""#, &floats[..24], 8).unwrap_err().to_string();
+    assert!(error.contains("COLOR_0") && error.contains("Vec3 or Vec4"), "{error}");
 }

@@ -53,13 +53,13 @@ pub struct GpuMaterial {
     pub clearcoat_factor: f32,
     pub clearcoat_roughness_factor: f32,
     pub clearcoat_normal_scale: f32,
-    pub _pad0: u32,
+    pub occlusion_strength: f32,
     pub specular_layer: i32,
     pub specular_color_layer: i32,
     pub clearcoat_layer: i32,
     pub clearcoat_roughness_layer: i32,
     pub clearcoat_normal_layer: i32,
-    pub _pad1: u32,
+    pub occlusion_layer: i32,
     /// Four bits a texture slot, `(wrap_v << 2) | wrap_u`, eight slots a word, in the slots' order.
     pub wrap_modes: [u32; 2],
     /// Each texture slot's coordinates from the mesh's (`TextureRef::uv_transform`), in the slots'
@@ -69,8 +69,8 @@ pub struct GpuMaterial {
 
 /// A material's texture slots, in the order of `shading/material.wgsl`: base colour, emissive,
 /// metallic-roughness, normal, specular, specular colour, clearcoat, clearcoat roughness,
-/// clearcoat normal.
-pub const TEXTURE_SLOTS: usize = 9;
+/// clearcoat normal, occlusion.
+pub const TEXTURE_SLOTS: usize = 10;
 
 /// `GpuMaterial::flags` (`MATERIAL_*` in `shading/types.wgsl`).
 pub const MATERIAL_UNLIT: u32 = 1;
@@ -870,6 +870,7 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
         clearcoat.texture,
         clearcoat.roughness_texture,
         clearcoat.normal_texture,
+        m.occlusion_texture,
     ];
     let mut wrap_modes = [0u32; 2];
     for (k, slot) in slots.iter().enumerate() {
@@ -893,13 +894,13 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
         clearcoat_factor: clearcoat.factor,
         clearcoat_roughness_factor: clearcoat.roughness_factor,
         clearcoat_normal_scale: clearcoat.normal_scale,
-        _pad0: 0,
+        occlusion_strength: m.occlusion_strength,
         specular_layer: layer(specular.texture, data),
         specular_color_layer: layer(specular.color_texture, color),
         clearcoat_layer: layer(clearcoat.texture, data),
         clearcoat_roughness_layer: layer(clearcoat.roughness_texture, data),
         clearcoat_normal_layer: layer(clearcoat.normal_texture, data),
-        _pad1: 0,
+        occlusion_layer: layer(m.occlusion_texture, data),
         wrap_modes,
         uv_transforms: uv_transforms(slots),
     }
@@ -948,7 +949,7 @@ mod tests {
                 assert_eq!(wgsl, rust, "members of {}", $wgsl);
             }};
         }
-        check!("Vertex", Vertex, [position, u, normal, v, tangent]);
+        check!("Vertex", Vertex, [position, u, normal, v, tangent, color]);
         check!("Draw", GpuDraw, [world_from_local, normal_from_local, first_index, first_visibility_id, base_vertex, material]);
         check!(
             "Material",
@@ -970,11 +971,13 @@ mod tests {
                 clearcoat_factor,
                 clearcoat_roughness_factor,
                 clearcoat_normal_scale,
+                occlusion_strength,
                 specular_layer,
                 specular_color_layer,
                 clearcoat_layer,
                 clearcoat_roughness_layer,
                 clearcoat_normal_layer,
+                occlusion_layer,
                 wrap_modes,
                 uv_transforms
             ]

@@ -51,7 +51,8 @@ impl DeferredDecals {
         let empty = bindings::layout(device, "no lights", &[]);
         let pipeline_layout =
             bindings::pipeline_layout(device, "deferred_decals", &[&scene.bind_group_layout, &layout, &empty, &decals.bind_group_layout]);
-        // Over blending on the three attributes decals change; each output's alpha is its coverage.
+        // Over blending on the three attributes decals change; each output's alpha is its coverage,
+        // never written (the albedo target's alpha holds the surface's occlusion).
         let over = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::SrcAlpha,
             dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
@@ -61,7 +62,7 @@ impl DeferredDecals {
             Some(wgpu::ColorTargetState {
                 format,
                 blend: Some(wgpu::BlendState { color: over, alpha: over }),
-                write_mask: wgpu::ColorWrites::ALL,
+                write_mask: wgpu::ColorWrites::COLOR,
             })
         };
         let targets = [target(GBUFFER_FORMATS[0]), target(GBUFFER_FORMATS[1]), target(GBUFFER_FORMATS[2])];

@@ -38,7 +38,9 @@ fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     s.position = relative_position + frame.world_from_view[3].xyz;
     s.normal = gbuffer_decode_normal(textureLoad(normals, id.xy, 0));
     s.view_dir = -ray.dir;
-    s.base_color = textureLoad(albedo, id.xy, 0).rgb;
+    let albedo_occlusion = textureLoad(albedo, id.xy, 0);
+    s.base_color = albedo_occlusion.rgb;
+    s.occlusion = albedo_occlusion.a;
     s.alpha = 1.0;
     let rm = textureLoad(roughness_metallic, id.xy, 0);
     s.roughness = rm.x;

@@ -2,7 +2,7 @@
 // paper's 112 bits a pixel, plus emission and the glTF material extensions' parameters, which glTF
 // materials have and the paper's scenes did not (packed in one target: wgpu allows 32 bytes a pixel,
 // counting albedo as 8, and a compute pass 16 textures):
-//   albedo              Rgba8UnormSrgb   base colour (alpha unused)
+//   albedo              Rgba8UnormSrgb   base colour; alpha (linear): occlusion
 //   normal              Rg16Float        octahedral shading normal (blendable, for deferred decals)
 //   roughness_metallic  Rg8Unorm         perceptual roughness, metallic
 //   material            Rgba32Uint       x: the dielectric's specular weight × F0 (√, 8 bits a

@@ -13,7 +13,7 @@ struct GBufferTexel {
 
 fn gbuffer_texel(s: ShadingInput) -> GBufferTexel {
     var out: GBufferTexel;
-    out.albedo = vec4<f32>(s.base_color, 1.0);
+    out.albedo = vec4<f32>(s.base_color, s.occlusion);
     out.normal = gbuffer_encode_normal(s.normal);
     out.roughness_metallic = vec4<f32>(s.roughness, s.metallic, 0.0, 0.0);
     out.material = gbuffer_encode_material(s);

@@ -165,6 +165,10 @@ pub struct Material {
     pub metallic_roughness_texture: Option<TextureRef>,
     pub normal_texture: Option<TextureRef>,
     pub normal_scale: f32,
+    /// glTF's ambient occlusion: R = how much of the environment's light reaches the surface.
+    pub occlusion_texture: Option<TextureRef>,
+    /// How far the occlusion texture darkens: 1 + strength × (R − 1).
+    pub occlusion_strength: f32,
     pub emissive_factor: Vec3,
     pub emissive_texture: Option<TextureRef>,
     pub alpha_mode: AlphaMode,
@@ -230,6 +234,8 @@ impl Default for Material {
             metallic_roughness_texture: None,
             normal_texture: None,
             normal_scale: 1.0,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
             emissive_factor: Vec3::ZERO,
             emissive_texture: None,
             alpha_mode: AlphaMode::Opaque,
@@ -247,7 +253,11 @@ impl Material {
         let clearcoat = self.clearcoat.iter().flat_map(|c| [c.texture, c.roughness_texture, c.normal_texture]);
         [(self.base_color_texture, true), (self.emissive_texture, true), (self.specular.color_texture, true)]
             .into_iter()
-            .chain([self.metallic_roughness_texture, self.normal_texture, self.specular.texture].into_iter().map(|t| (t, false)))
+            .chain(
+                [self.metallic_roughness_texture, self.normal_texture, self.specular.texture, self.occlusion_texture]
+                    .into_iter()
+                    .map(|t| (t, false)),
+            )
             .chain(clearcoat.map(|t| (t, false)))
             .filter_map(|(t, srgb)| t.map(|t| (t, srgb)))
     }

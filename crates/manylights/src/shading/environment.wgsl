@@ -52,7 +52,8 @@ fn environment_specular_albedo(s: ShadingInput) -> vec3<f32> {
     return (f0 * scale_bias.x + f90 * scale_bias.y) * (1.0 - clearcoat_fresnel(s));
 }
 
-// Diffuse and specular light from the environment, and the clear coat's reflection of it.
+// Diffuse and specular light from the environment, and the clear coat's reflection of it, as much as
+// the surface's occlusion lets through.
 fn environment_light(s: ShadingInput) -> vec3<f32> {
     let diffuse = environment_irradiance(s.normal) * s.base_color * (1.0 - s.metallic) * (1.0 - clearcoat_fresnel(s));
     let specular = environment_specular_albedo(s) * environment_specular_radiance(environment_reflection_direction(s), s.roughness);
@@ -62,7 +63,7 @@ fn environment_light(s: ShadingInput) -> vec3<f32> {
         let direction = reflect(-s.view_dir, s.clearcoat_normal);
         coat = clearcoat_fresnel(s) * (scale_bias.x + scale_bias.y) * environment_specular_radiance(direction, s.clearcoat_roughness);
     }
-    return diffuse + specular + coat;
+    return (diffuse + specular + coat) * s.occlusion;
 }
 
 // Radiance seen where no geometry was drawn and where reflected rays leave the scene: the

@@ -34,8 +34,8 @@ fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Materia
 // emissive, specular colour) and `data_textures` (linear: the others); decals sample their own
 // arrays, clamped, in `decals.wgsl`.
 
-// Whether any mesh has vertex colours: a pipeline constant of the shading passes (`plan.rs`,
-// `ShadingMethods::vertex_colors`), so scenes without them neither interpolate nor apply them.
+// Whether any mesh has vertex colours: a pipeline constant of the shading passes' compute and
+// fragment stages (`plan.rs`, `ShadingMethods::vertex_colors`); scenes without them skip them there.
 override VERTEX_COLORS: bool = true;
 
 // Base colour with alpha, times the interpolated vertex colour (glTF's COLOR_0, white without);
@@ -58,6 +58,15 @@ fn material_roughness_metallic(material: Material, g: UvGradients) -> vec2<f32> 
         roughness_metallic *= sample_wrapped(data_textures, material.metallic_roughness_layer, material, 2u, g).gb;
     }
     return saturate(roughness_metallic);
+}
+
+// The environment's light reaching the surface: 1 + strength × (R − 1) of the occlusion texture.
+fn material_occlusion(material: Material, g: UvGradients) -> f32 {
+    if material.occlusion_layer == NO_TEXTURE {
+        return 1.0;
+    }
+    let r = sample_wrapped(data_textures, material.occlusion_layer, material, 9u, g).r;
+    return 1.0 + material.occlusion_strength * (r - 1.0);
 }
 
 // The material's normal map (it must have one) applied in the frame (t, b, n); a zero-length result
@@ -109,6 +118,7 @@ fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, 
         emissive *= sample_wrapped(color_textures, material.emissive_layer, material, 1u, g).rgb;
     }
     s.emissive = emissive;
+    s.occlusion = material_occlusion(material, g);
 
     let t = normalize(surface.tangent - surface.normal * dot(surface.normal, surface.tangent));
     let b = cross(surface.normal, t) * surface.bitangent_sign;

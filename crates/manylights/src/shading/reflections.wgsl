@@ -65,8 +65,9 @@ fn reflected_radiance(s: ShadingInput, geometric_normal: vec3<f32>, footprint: f
         // The cone widens faster off rough surfaces: their reflections are blurrier.
         spread += surface.roughness * surface.roughness;
         // The traced radiance replaces the prefiltered environment that `shade` gave the surface for
-        // the same share (`weight`).
-        let replaced = environment_specular_radiance(environment_reflection_direction(surface), surface.roughness);
+        // the same share (`weight`), as much of it as the surface's occlusion let through: traced
+        // rays see what occludes them.
+        let replaced = environment_specular_radiance(environment_reflection_direction(surface), surface.roughness) * surface.occlusion;
         let hit = trace_closest(origin, dir, 3.0e38);
         if hit.triangle == RAY_NO_HIT {
             radiance += weight * (sky_radiance(dir) - replaced);

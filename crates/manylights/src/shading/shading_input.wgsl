@@ -30,6 +30,9 @@ struct ShadingInput {
     clearcoat_normal: vec3<f32>,
     // KHR_materials_unlit: `base_color` is the radiance sent, and nothing lights it.
     unlit: bool,
+    // The share of the environment's light reaching the surface (glTF's occlusion texture, 1
+    // without): it darkens the environment standing in for indirect light, not the lights.
+    occlusion: f32,
     // Where rays leave the surface (shadow rays towards local lights): its geometric normal on the
     // viewer's side, and how far off the surface `position` may lie — `surface_clearance` for a
     // position rebuilt from depth or interpolated by the raster, 0 at a ray's hit, which is exact.

@@ -53,7 +53,7 @@ struct Material {
     // Layers in `color_textures` (base colour, emissive, specular colour) and `data_textures` (the
     // others); NO_TEXTURE when absent. Texture slots, in order: base colour 0, emissive 1,
     // metallic-roughness 2, normal 3, specular 4, specular colour 5, clearcoat 6, clearcoat
-    // roughness 7, clearcoat normal 8.
+    // roughness 7, clearcoat normal 8, occlusion 9.
     base_color_layer: i32,
     emissive_layer: i32,
     metallic_roughness_layer: i32,
@@ -66,18 +66,19 @@ struct Material {
     clearcoat_factor: f32,
     clearcoat_roughness_factor: f32,
     clearcoat_normal_scale: f32,
-    _pad0: u32,
+    // How far the occlusion texture darkens the environment's light.
+    occlusion_strength: f32,
     specular_layer: i32,
     specular_color_layer: i32,
     clearcoat_layer: i32,
     clearcoat_roughness_layer: i32,
     clearcoat_normal_layer: i32,
-    _pad1: u32,
+    occlusion_layer: i32,
     // Four bits a texture slot, `(wrap_v << 2) | wrap_u`, eight slots a word.
     wrap_modes: vec2<u32>,
     // Each slot's texture coordinates from the mesh's (glTF's KHR_texture_transform): two vec4s a
     // slot, the 2×2 matrix's columns (xy, zw), then the translation (xy).
-    uv_transforms: array<vec4<f32>, 18>,
+    uv_transforms: array<vec4<f32>, 20>,
 }
 
 const MATERIAL_UNLIT: u32 = 1u;

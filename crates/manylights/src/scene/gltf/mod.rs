@@ -136,10 +136,10 @@ fn check_geometry_size(document: &Document) -> Result<(), String> {
             let vertices = p.get(&Semantic::Positions).map_or(0, |a| a.count() as u64);
             let indices = p.indices().map_or(vertices, |a| a.count() as u64);
             let triangle_corners = if matches!(p.mode(), Mode::TriangleStrip | Mode::TriangleFan) { indices * 3 } else { indices };
-            // Read attributes (up to 4 of 16 bytes), the vertices, the index list, and flat shading's
+            // Read attributes (up to 5 of 16 bytes), the vertices, the index list, and flat shading's
             // vertex per corner; each morph target's three offsets read and kept, each skin set's
             // joints and weights.
-            let attributes = vertices * (4 * 16 + vertex);
+            let attributes = vertices * (5 * 16 + vertex);
             let flat = if p.get(&Semantic::Normals).is_none() { triangle_corners * vertex } else { 0 };
             let morph = (p.morph_targets().len() as u64).saturating_mul(vertices * 96);
             let sets = (0..).take_while(|&s| p.get(&Semantic::Joints(s)).is_some()).count() as u64;
@@ -1094,22 +1094,31 @@ fn material(m: &::gltf::Material, document: &Document) -> Result<Material, Strin
         })
         .transpose()
     };
-    // The gltf crate parses the extension on texture infos only; a normal texture's is read here.
-    let normal_texture = match m.normal_texture() {
-        Some(t) => {
-            let transform = match t.extension_value("KHR_texture_transform") {
-                Some(value) => {
-                    let parsed =
-                        ::gltf::json::deserialize::from_value::<::gltf::json::extensions::texture::TextureTransform>(value.clone())
-                            .map_err(|e| format!("{named}: normal texture's KHR_texture_transform: {e}"))?;
-                    Some((parsed.offset.0, parsed.rotation.0, parsed.scale.0, parsed.tex_coord))
-                }
-                None => None,
-            };
-            Some(texture_ref(&t.texture(), t.tex_coord(), transform, &named)?)
-        }
-        None => None,
+    // The gltf crate parses the extension on texture infos only; normal and occlusion textures' are
+    // read here.
+    let special_texture = |what: &str, texture: ::gltf::Texture, tex_coord: u32, extension: Option<&serde_json::Value>| {
+        let transform = match extension {
+            Some(value) => {
+                let parsed = ::gltf::json::deserialize::from_value::<::gltf::json::extensions::texture::TextureTransform>(value.clone())
+                    .map_err(|e| format!("{named}: {what} texture's KHR_texture_transform: {e}"))?;
+                Some((parsed.offset.0, parsed.rotation.0, parsed.scale.0, parsed.tex_coord))
+            }
+            None => None,
+        };
+        texture_ref(&texture, tex_coord, transform, &named)
     };
+    let normal_texture = m
+        .normal_texture()
+        .map(|t| special_texture("normal", t.texture(), t.tex_coord(), t.extension_value("KHR_texture_transform")))
+        .transpose()?;
+    let occlusion_texture = m
+        .occlusion_texture()
+        .map(|t| special_texture("occlusion", t.texture(), t.tex_coord(), t.extension_value("KHR_texture_transform")))
+        .transpose()?;
+    let occlusion_strength = m.occlusion_texture().map_or(1.0, |t| t.strength());
+    if !(0.0..=1.0).contains(&occlusion_strength) {
+        return Err(format!("{named}: occlusion strength {occlusion_strength} must be 0 to 1; give a strength in 0 to 1"));
+    }
     Ok(Material {
         base_color_factor: Vec4::from(pbr.base_color_factor()),
         base_color_texture: texture(pbr.base_color_texture())?,
@@ -1118,6 +1127,8 @@ fn material(m: &::gltf::Material, document: &Document) -> Result<Material, Strin
         metallic_roughness_texture: texture(pbr.metallic_roughness_texture())?,
         normal_texture,
         normal_scale: m.normal_texture().map_or(1.0, |t| t.scale()),
+        occlusion_texture,
+        occlusion_strength,
         emissive_factor: Vec3::from(emissive_factor) * strength,
         emissive_texture: texture(m.emissive_texture())?,
         alpha_mode: match m.alpha_mode() {
@@ -1416,13 +1427,18 @@ where
 /// `COLOR_0` as RGBA: RGB colours get an alpha of 1.
 fn vertex_colors(accessor: Option<Accessor>, buffers: &[buffer::Data], count: usize) -> Result<Option<Vec<[f32; 4]>>, String> {
     let Some(accessor) = accessor else { return Ok(None) };
-    if accessor.dimensions() == Dimensions::Vec3 {
-        check_accessor(&accessor, "COLOR_0", Dimensions::Vec3, COLORS)?;
-        let rgb: Option<Vec<[f32; 3]>> = vertex_attribute(Some(accessor), "COLOR_0", buffers, count)?;
-        return Ok(rgb.map(|rgb| rgb.into_iter().map(|[r, g, b]| [r, g, b, 1.0]).collect()));
+    match accessor.dimensions() {
+        Dimensions::Vec3 => {
+            check_accessor(&accessor, "COLOR_0", Dimensions::Vec3, COLORS)?;
+            let rgb: Option<Vec<[f32; 3]>> = vertex_attribute(Some(accessor), "COLOR_0", buffers, count)?;
+            Ok(rgb.map(|rgb| rgb.into_iter().map(|[r, g, b]| [r, g, b, 1.0]).collect()))
+        }
+        Dimensions::Vec4 => {
+            check_accessor(&accessor, "COLOR_0", Dimensions::Vec4, COLORS)?;
+            vertex_attribute(Some(accessor), "COLOR_0", buffers, count)
+        }
+        other => Err(format!("COLOR_0 (accessor {}) is {other:?}; glTF allows Vec3 or Vec4", accessor.index())),
     }
-    check_accessor(&accessor, "COLOR_0", Dimensions::Vec4, COLORS)?;
-    vertex_attribute(Some(accessor), "COLOR_0", buffers, count)
 }
 
 /// Reads an optional vertex attribute, telling an absent one (`None`) from one that cannot be read.
@@ -1536,6 +1552,8 @@ mod tests {
         assert_eq!(scene.textures.len(), 5);
         let helmet = &scene.materials[0];
         assert!(helmet.normal_texture.is_some() && helmet.emissive_texture.is_some());
+        // Its own texture (image 3), at full strength.
+        assert_eq!((helmet.occlusion_texture.map(|t| t.texture), helmet.occlusion_strength), (Some(3), 1.0));
         assert_tangent_frames(&scene);
     }
 
