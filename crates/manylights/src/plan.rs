@@ -298,6 +298,10 @@ pub struct ShadingMethods {
     /// constant: [`ShadingMethods::vertex_color_constant`]); without, the shading passes do not
     /// apply them.
     pub vertex_colors: bool,
+    /// Some material has an occlusion texture (`OCCLUSION_TEXTURES` in `shading/material.wgsl`, a
+    /// pipeline constant: [`ShadingMethods::occlusion_constant`]); without, the shading passes do
+    /// not sample one.
+    pub occlusion_textures: bool,
 }
 
 impl ShadingMethods {
@@ -309,6 +313,11 @@ impl ShadingMethods {
     /// The shading passes' pipeline constant for vertex colours.
     pub fn vertex_color_constant(&self) -> (&'static str, f64) {
         ("VERTEX_COLORS", f64::from(u8::from(self.vertex_colors)))
+    }
+
+    /// The shading passes' pipeline constant for occlusion textures.
+    pub fn occlusion_constant(&self) -> (&'static str, f64) {
+        ("OCCLUSION_TEXTURES", f64::from(u8::from(self.occlusion_textures)))
     }
 
     /// The shading core's pipeline constant for its debug views' counters.
@@ -526,6 +535,8 @@ pub struct SceneStatistics {
     pub material_extensions: bool,
     /// Some vertex has a colour other than white.
     pub vertex_colors: bool,
+    /// Some material has an occlusion texture.
+    pub occlusion_textures: bool,
 }
 
 /// Which statistics the plan reads for these settings, so that nothing else is measured.
@@ -664,6 +675,7 @@ impl FramePlan {
             debug_views: config.debug_view != DebugView::Off,
             material_extensions: stats.material_extensions,
             vertex_colors: stats.vertex_colors,
+            occlusion_textures: stats.occlusion_textures,
         };
         // Lights and decals crowded enough get wide leaves, walked a subgroup at a time, their leaves
         // shared out; decals, as one group placed once, cell lists too. Groups rebuilt every frame get
@@ -969,6 +981,10 @@ mod tests {
         let colored = SceneStatistics { vertex_colors: true, ..Default::default() };
         let methods = FramePlan::resolve(&bvh, SUBGROUPS, &colored).unwrap().shading_methods(true);
         assert_eq!(methods.vertex_color_constant(), ("VERTEX_COLORS", 1.0));
+        assert_eq!(methods.occlusion_constant(), ("OCCLUSION_TEXTURES", 0.0));
+        let occluded = SceneStatistics { occlusion_textures: true, ..Default::default() };
+        let methods = FramePlan::resolve(&bvh, SUBGROUPS, &occluded).unwrap().shading_methods(true);
+        assert_eq!(methods.occlusion_constant(), ("OCCLUSION_TEXTURES", 1.0));
     }
 
     #[test]

@@ -86,6 +86,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         // A pipeline constant: the same composed shader either way.
                         material_extensions: true,
                         vertex_colors: true,
+                        occlusion_textures: true,
                     };
                     if decals.works_in(PipelineKind::Forward) {
                         shaders.push(super::forward_shade::shader(methods));

@@ -62,6 +62,7 @@ impl DeferredShade {
             methods.denoised_constant(),
             methods.material_constant(),
             methods.vertex_color_constant(),
+            methods.occlusion_constant(),
         ];
         let step = ComputeStep::new(device, &shader(methods), "deferred_shade", &layouts, &constants)?;
         let mut views = vec![wgpu::BindingResource::TextureView(images.depth)];

@@ -53,6 +53,7 @@ impl ForwardShade {
             methods.denoised_constant(),
             methods.material_constant(),
             methods.vertex_color_constant(),
+            methods.occlusion_constant(),
         ];
         // One fragment module per entry point, shared by the raster states' pipelines.
         let fragment = |entry: &'static str| -> Result<_> {

@@ -58,6 +58,7 @@ impl VisbufferShade {
             methods.denoised_constant(),
             methods.material_constant(),
             methods.vertex_color_constant(),
+            methods.occlusion_constant(),
         ];
         let step = ComputeStep::new(device, &shader(methods), "visbuffer_shade", &layouts, &constants)?;
         let bind_group = bindings::bind_group(

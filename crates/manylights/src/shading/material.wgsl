@@ -60,9 +60,13 @@ fn material_roughness_metallic(material: Material, g: UvGradients) -> vec2<f32> 
     return saturate(roughness_metallic);
 }
 
+// Whether any material has an occlusion texture: a pipeline constant of the shading passes, as
+// VERTEX_COLORS is.
+override OCCLUSION_TEXTURES: bool = true;
+
 // The environment's light reaching the surface: 1 + strength × (R − 1) of the occlusion texture.
 fn material_occlusion(material: Material, g: UvGradients) -> f32 {
-    if material.occlusion_layer == NO_TEXTURE {
+    if !OCCLUSION_TEXTURES || material.occlusion_layer == NO_TEXTURE {
         return 1.0;
     }
     let r = sample_wrapped(data_textures, material.occlusion_layer, material, 9u, g).r;
