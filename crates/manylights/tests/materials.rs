@@ -275,9 +275,9 @@ fn unlit_materials_show_their_base_colour_whatever_lights_them() {
     }
 }
 
-/// A uniform occlusion texture: R = 64/255 everywhere.
+/// A uniform occlusion texture: R = 64/255 everywhere (G and B differ, as packed textures' do).
 fn occlusion_texture() -> Texture {
-    Texture { name: "occlusion".into(), width: 1, height: 1, rgba8: vec![64, 64, 64, 255] }
+    Texture { name: "occlusion".into(), width: 1, height: 1, rgba8: vec![64, 200, 10, 255] }
 }
 
 fn occluded(scene: &mut Scene, material: usize, strength: f32) {
@@ -299,7 +299,7 @@ fn occlusion_darkens_the_environments_light_and_not_the_lights_in_every_pipeline
         light_only.ambient = Vec3::ZERO;
         light_only.lights = vec![light];
         let direct = render_with(&light_only, &camera, config.clone()).1;
-        for strength in [1.0, 0.5] {
+        for strength in [1.0, 0.6] {
             let mut scene = ambient_only.clone();
             scene.lights = vec![light];
             occluded(&mut scene, 0, strength);
@@ -316,6 +316,26 @@ fn occlusion_darkens_the_environments_light_and_not_the_lights_in_every_pipeline
             }
         }
     }
+}
+
+#[test]
+fn deferred_decals_keep_the_g_buffers_occlusion() {
+    // A half-transparent decal over the occluded wall: blended into the G-buffer, it must leave the
+    // occlusion in the albedo's alpha as decals applied at shading do.
+    let (mut scene, camera) = ambient_wall();
+    occluded(&mut scene, 0, 1.0);
+    scene.materials.push(Material { base_color_factor: Vec4::new(0.9, 0.1, 0.1, 0.5), metallic_factor: 0.0, ..Default::default() });
+    let world_from_decal = glam::Affine3A::from_scale_rotation_translation(Vec3::new(3.0, 3.0, 1.0), glam::Quat::IDENTITY, Vec3::ZERO);
+    scene.decals.push(manylights::scene::Decal { world_from_decal, material: 1, layer: 0, weight: 1.0 });
+    let frame = |decal_method| {
+        let config = RenderConfig { pipeline: PipelineKind::Deferred, decal_method, ..config(WIDTH, HEIGHT, LightMethod::Off) };
+        render_with(&scene, &camera, config).1
+    };
+    let (bvh, deferred) = (frame(manylights::settings::DecalMethod::Bvh), frame(manylights::settings::DecalMethod::DeferredDecals));
+    let centre = Vec4::from(pixel(&bvh, WIDTH / 2, HEIGHT / 2));
+    assert!(centre.x > 2.0 * centre.y, "the decal does not tint the wall: {centre}");
+    let difference = max_abs_difference(&bvh, &deferred);
+    assert!(difference <= 0.01, "deferred decals differ from bvh decals by {difference} over an occluded wall");
 }
 
 #[test]
@@ -341,6 +361,33 @@ fn a_traced_reflection_is_not_darkened_by_occlusion() {
         let difference = max_abs_difference(&frame(&plain, 1), &frame(&scene, 1));
         assert!(difference < 2e-3, "{name}: occlusion changed the traced reflection by {difference}");
     }
+}
+
+#[test]
+fn the_importer_reads_occlusion_on_the_first_coordinates_and_refuses_a_bad_strength() {
+    let gltf = |materials: &str| {
+        format!(
+            r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_texture_transform"], "materials": [{materials}], "textures": [{{"source": 0}}],
+            "images": [{{"uri": "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="}}]}}"#
+        )
+    };
+    let import = |json: String| {
+        let path = std::env::temp_dir().join(format!("manylights-occlusion-{}-{}.gltf", std::process::id(), json.len()));
+        std::fs::write(&path, json).unwrap();
+        let scene = manylights::scene::gltf::import(&path);
+        std::fs::remove_file(&path).ok();
+        scene
+    };
+    let scene = import(gltf(
+        r#"{"occlusionTexture": {"index": 0, "strength": 0.3}}, {"occlusionTexture": {"index": 0, "texCoord": 1}},
+           {"occlusionTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"texCoord": 1}}}}"#,
+    ))
+    .unwrap();
+    let occlusion: Vec<_> = scene.materials.iter().map(|m| (m.occlusion_texture.map(|t| t.texture), m.occlusion_strength)).collect();
+    // On TEXCOORD_1 (by texCoord or by the transform's override) it is left out.
+    assert_eq!(occlusion, vec![(Some(0), 0.3), (None, 1.0), (None, 1.0)]);
+    let error = import(gltf(r#"{"occlusionTexture": {"index": 0, "strength": 1.5}}"#)).unwrap_err().to_string();
+    assert!(error.contains("occlusion strength 1.5"), "{error}");
 }
 
 #[test]

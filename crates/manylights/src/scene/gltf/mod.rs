@@ -1096,25 +1096,33 @@ fn material(m: &::gltf::Material, document: &Document) -> Result<Material, Strin
     };
     // The gltf crate parses the extension on texture infos only; normal and occlusion textures' are
     // read here.
-    let special_texture = |what: &str, texture: ::gltf::Texture, tex_coord: u32, extension: Option<&serde_json::Value>| {
-        let transform = match extension {
-            Some(value) => {
-                let parsed = ::gltf::json::deserialize::from_value::<::gltf::json::extensions::texture::TextureTransform>(value.clone())
-                    .map_err(|e| format!("{named}: {what} texture's KHR_texture_transform: {e}"))?;
-                Some((parsed.offset.0, parsed.rotation.0, parsed.scale.0, parsed.tex_coord))
-            }
-            None => None,
-        };
-        texture_ref(&texture, tex_coord, transform, &named)
+    let transform_of = |what: &str, extension: Option<&serde_json::Value>| -> Result<Option<UvTransform>, String> {
+        let Some(value) = extension else { return Ok(None) };
+        let parsed = ::gltf::json::deserialize::from_value::<::gltf::json::extensions::texture::TextureTransform>(value.clone())
+            .map_err(|e| format!("{named}: {what} texture's KHR_texture_transform: {e}"))?;
+        Ok(Some((parsed.offset.0, parsed.rotation.0, parsed.scale.0, parsed.tex_coord)))
     };
-    let normal_texture = m
-        .normal_texture()
-        .map(|t| special_texture("normal", t.texture(), t.tex_coord(), t.extension_value("KHR_texture_transform")))
-        .transpose()?;
-    let occlusion_texture = m
-        .occlusion_texture()
-        .map(|t| special_texture("occlusion", t.texture(), t.tex_coord(), t.extension_value("KHR_texture_transform")))
-        .transpose()?;
+    let normal_texture = match m.normal_texture() {
+        Some(t) => {
+            Some(texture_ref(&t.texture(), t.tex_coord(), transform_of("normal", t.extension_value("KHR_texture_transform"))?, &named)?)
+        }
+        None => None,
+    };
+    // Baked occlusion often lies on a second set of coordinates; read through TEXCOORD_0 it would
+    // darken the wrong places, so it is left out instead.
+    let occlusion_texture = match m.occlusion_texture() {
+        Some(t) => {
+            let transform = transform_of("occlusion", t.extension_value("KHR_texture_transform"))?;
+            let set = transform.and_then(|t| t.3).unwrap_or(t.tex_coord());
+            if set == 0 {
+                Some(texture_ref(&t.texture(), set, transform, &named)?)
+            } else {
+                log::warn!("{named}: the occlusion texture uses TEXCOORD_{set}; only TEXCOORD_0 is supported, so it is left out");
+                None
+            }
+        }
+        None => None,
+    };
     let occlusion_strength = m.occlusion_texture().map_or(1.0, |t| t.strength());
     if !(0.0..=1.0).contains(&occlusion_strength) {
         return Err(format!("{named}: occlusion strength {occlusion_strength} must be 0 to 1; give a strength in 0 to 1"));
