@@ -99,12 +99,18 @@ def tube(out):
         json.dump(document, f)
 
 
-def coated(source, out):
+def sponza_copy(source):
+    """sponza_lite's document, its buffers and images named from a sibling folder."""
     with open(source) as f:
         document = json.load(f)
     for item in document.get("buffers", []) + document.get("images", []):
         if "uri" in item:
             item["uri"] = "../sponza_lite/" + item["uri"]
+    return document
+
+
+def coated(source, out):
+    document = sponza_copy(source)
     for material in document.get("materials", []):
         extensions = material.setdefault("extensions", {})
         extensions["KHR_materials_clearcoat"] = {"clearcoatFactor": 0.5, "clearcoatRoughnessFactor": 0.1}
@@ -118,11 +124,7 @@ def coated(source, out):
 
 
 def colored(source, out):
-    with open(source) as f:
-        document = json.load(f)
-    for item in document.get("buffers", []) + document.get("images", []):
-        if "uri" in item:
-            item["uri"] = "../sponza_lite/" + item["uri"]
+    document = sponza_copy(source)
     colors = b""
     for mesh in document["meshes"]:
         for primitive in mesh["primitives"]:

@@ -291,33 +291,29 @@ pub struct ShadingMethods {
     /// `shading/debug_view.wgsl`, a pipeline constant: [`ShadingMethods::debug_views_constant`]).
     pub debug_views: bool,
     /// Some material needs the core's extended material path (`MATERIAL_EXTENSIONS` in
-    /// `shading/shading_input.wgsl`, a pipeline constant: [`ShadingMethods::material_constant`]);
+    /// `shading/shading_input.wgsl`, a pipeline constant: [`ShadingMethods::material_constants`]);
     /// without, the shading passes compile only glTF's core material.
     pub material_extensions: bool,
     /// Some mesh has vertex colours (`VERTEX_COLORS` in `shading/material.wgsl`, a pipeline
-    /// constant: [`ShadingMethods::vertex_color_constant`]); without, the shading passes do not
+    /// constant: [`ShadingMethods::material_constants`]); without, the shading passes do not
     /// apply them.
     pub vertex_colors: bool,
     /// Some material has an occlusion texture (`OCCLUSION_TEXTURES` in `shading/material.wgsl`, a
-    /// pipeline constant: [`ShadingMethods::occlusion_constant`]); without, the shading passes do
+    /// pipeline constant: [`ShadingMethods::material_constants`]); without, the shading passes do
     /// not sample one.
     pub occlusion_textures: bool,
 }
 
 impl ShadingMethods {
-    /// The shading core's pipeline constant for the material extensions' path.
-    pub fn material_constant(&self) -> (&'static str, f64) {
-        ("MATERIAL_EXTENSIONS", f64::from(u8::from(self.material_extensions)))
-    }
-
-    /// The shading passes' pipeline constant for vertex colours.
-    pub fn vertex_color_constant(&self) -> (&'static str, f64) {
-        ("VERTEX_COLORS", f64::from(u8::from(self.vertex_colors)))
-    }
-
-    /// The shading passes' pipeline constant for occlusion textures.
-    pub fn occlusion_constant(&self) -> (&'static str, f64) {
-        ("OCCLUSION_TEXTURES", f64::from(u8::from(self.occlusion_textures)))
+    /// The pipeline constants of every pass that evaluates materials: the extensions' path, vertex
+    /// colours and occlusion textures, each compiled in only where the scene has it.
+    pub fn material_constants(&self) -> [(&'static str, f64); 3] {
+        let flag = |on: bool| f64::from(u8::from(on));
+        [
+            ("MATERIAL_EXTENSIONS", flag(self.material_extensions)),
+            ("VERTEX_COLORS", flag(self.vertex_colors)),
+            ("OCCLUSION_TEXTURES", flag(self.occlusion_textures)),
+        ]
     }
 
     /// The shading core's pipeline constant for its debug views' counters.
@@ -973,18 +969,16 @@ mod tests {
         assert!(methods.reflections && methods.direct == DirectShading::Budget && methods.debug_views && methods.subgroups);
         assert_eq!(methods.light_enumeration_module(), "shading/enumerate/lights_bvh.wgsl");
         assert_eq!(methods.debug_views_constant(), ("DEBUG_VIEWS", 1.0));
-        assert_eq!(methods.material_constant(), ("MATERIAL_EXTENSIONS", 0.0));
+        assert_eq!(methods.material_constants(), [("MATERIAL_EXTENSIONS", 0.0), ("VERTEX_COLORS", 0.0), ("OCCLUSION_TEXTURES", 0.0)]);
         let coated = SceneStatistics { material_extensions: true, ..Default::default() };
         let methods = FramePlan::resolve(&bvh, SUBGROUPS, &coated).unwrap().shading_methods(true);
-        assert_eq!(methods.material_constant(), ("MATERIAL_EXTENSIONS", 1.0));
-        assert_eq!(methods.vertex_color_constant(), ("VERTEX_COLORS", 0.0));
+        assert_eq!(methods.material_constants()[0], ("MATERIAL_EXTENSIONS", 1.0));
         let colored = SceneStatistics { vertex_colors: true, ..Default::default() };
         let methods = FramePlan::resolve(&bvh, SUBGROUPS, &colored).unwrap().shading_methods(true);
-        assert_eq!(methods.vertex_color_constant(), ("VERTEX_COLORS", 1.0));
-        assert_eq!(methods.occlusion_constant(), ("OCCLUSION_TEXTURES", 0.0));
+        assert_eq!(methods.material_constants()[1], ("VERTEX_COLORS", 1.0));
         let occluded = SceneStatistics { occlusion_textures: true, ..Default::default() };
         let methods = FramePlan::resolve(&bvh, SUBGROUPS, &occluded).unwrap().shading_methods(true);
-        assert_eq!(methods.occlusion_constant(), ("OCCLUSION_TEXTURES", 1.0));
+        assert_eq!(methods.material_constants()[2], ("OCCLUSION_TEXTURES", 1.0));
     }
 
     #[test]

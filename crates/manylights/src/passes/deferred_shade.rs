@@ -57,13 +57,10 @@ impl DeferredShade {
         let layouts = [&scene.bind_group_layout, &layout, &structures.lights.bind_group_layout, &structures.decals.bind_group_layout];
         let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
         let constants = [
-            ("SUN_SHADOW_MASK", has_mask),
-            methods.debug_views_constant(),
-            methods.denoised_constant(),
-            methods.material_constant(),
-            methods.vertex_color_constant(),
-            methods.occlusion_constant(),
-        ];
+            &[("SUN_SHADOW_MASK", has_mask), methods.debug_views_constant(), methods.denoised_constant()][..],
+            &methods.material_constants(),
+        ]
+        .concat();
         let step = ComputeStep::new(device, &shader(methods), "deferred_shade", &layouts, &constants)?;
         let mut views = vec![wgpu::BindingResource::TextureView(images.depth)];
         views.extend(images.gbuffer.iter().map(wgpu::BindingResource::TextureView));

@@ -48,13 +48,10 @@ impl ForwardShade {
         );
         let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
         let constants = [
-            ("SUN_SHADOW_MASK", has_mask),
-            methods.debug_views_constant(),
-            methods.denoised_constant(),
-            methods.material_constant(),
-            methods.vertex_color_constant(),
-            methods.occlusion_constant(),
-        ];
+            &[("SUN_SHADOW_MASK", has_mask), methods.debug_views_constant(), methods.denoised_constant()][..],
+            &methods.material_constants(),
+        ]
+        .concat();
         // One fragment module per entry point, shared by the raster states' pipelines.
         let fragment = |entry: &'static str| -> Result<_> {
             Ok((shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, entry, &constants)?, entry))

@@ -31,7 +31,7 @@ impl GBufferRaster {
             vertex_entry: "forward_vertex",
             depth: nearest_depth(),
         };
-        let constants = [methods.material_constant(), methods.vertex_color_constant(), methods.occlusion_constant()];
+        let constants = methods.material_constants();
         let pipelines = raster.per_state(&ctx.device, RasterState::all(), |state| {
             let entry = if state.alpha_mask { "gbuffer_masked" } else { "gbuffer_opaque" };
             Some(Fragment { module: &module, entry, constants: &constants, targets: &targets })

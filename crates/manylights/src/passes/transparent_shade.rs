@@ -58,8 +58,7 @@ impl TransparentShade {
             dst_factor: wgpu::BlendFactor::One,
             operation: wgpu::BlendOperation::Add,
         };
-        let constants =
-            [methods.debug_views_constant(), methods.material_constant(), methods.vertex_color_constant(), methods.occlusion_constant()];
+        let constants = [&[methods.debug_views_constant()][..], &methods.material_constants()].concat();
         let fragment_module = shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, "transparent_shade", &constants)?;
         let states: std::collections::BTreeSet<RasterState> = scene.transparent_draw_commands.iter().map(|c| c.state).collect();
         let targets = [Some(wgpu::ColorTargetState {

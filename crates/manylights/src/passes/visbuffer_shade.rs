@@ -53,13 +53,10 @@ impl VisbufferShade {
         let layouts = [&scene.bind_group_layout, &layout, &structures.lights.bind_group_layout, &structures.decals.bind_group_layout];
         let (mask, has_mask) = ray_shadows::shading_mask_binding(device, shadows);
         let constants = [
-            ("SUN_SHADOW_MASK", has_mask),
-            methods.debug_views_constant(),
-            methods.denoised_constant(),
-            methods.material_constant(),
-            methods.vertex_color_constant(),
-            methods.occlusion_constant(),
-        ];
+            &[("SUN_SHADOW_MASK", has_mask), methods.debug_views_constant(), methods.denoised_constant()][..],
+            &methods.material_constants(),
+        ]
+        .concat();
         let step = ComputeStep::new(device, &shader(methods), "visbuffer_shade", &layouts, &constants)?;
         let bind_group = bindings::bind_group(
             device,
