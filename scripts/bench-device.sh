@@ -19,8 +19,9 @@
 #   scripts/bench-device.sh post         the post chain's effects, alone and together, on Sponza (issue 7)
 #   scripts/bench-device.sh deform       Sponza's curtains waving and a skinned tube posed: GPU deformation and BLAS
 #                                        refit (issues 7, 37)
-#   scripts/bench-device.sh materials    every Sponza material coated, or every vertex coloured, against neither: the
-#                                        material extensions and vertex colours (issues 37, 33)
+#   scripts/bench-device.sh materials    every Sponza material coated, every vertex coloured, or every texture on
+#                                        TEXCOORD_1, against none: material extensions, vertex colours and the
+#                                        second UV set (issues 37, 33)
 #   scripts/bench-device.sh soak         10,000 frames of everything rebuilt per frame, memory sampled (issue 31)
 #   scripts/bench-device.sh direct       shadowed local lights: exact, reference and restir on 4,096 and 28k lights (issue 34)
 #   scripts/bench-device.sh direct_error restir's error against the reference, sampled and denoised (light-error)
@@ -232,11 +233,12 @@ deform() {
   fi
 }
 
-# The material extensions' path and vertex colours: Sponza with every material coated, or every
-# vertex coloured (scripts/make-bench-scenes.py), against Sponza as it is; 28k lights, every pipeline.
+# The material extensions' path, vertex colours and the second UV set: Sponza with every material
+# coated, every vertex coloured, or every texture on TEXCOORD_1 (scripts/make-bench-scenes.py),
+# against Sponza as it is; 28k lights, every pipeline.
 materials() {
   local s p
-  for s in lite coated colored; do
+  for s in lite coated colored uv1; do
     printf 'gltf = "sponza_%s/Sponza.gltf"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' $s >.bench/sun_$s.toml
     for p in visbuffer deferred forward; do
       run materials_${s}_$p 200 --scene .bench/sun_$s.toml --lights 28000 --seed 1 --light-method bvh --decal-method off --pipeline $p

@@ -9,6 +9,8 @@ the GPU machine; scripts/bench-device.sh reads them):
                               ior 1.7, specular 0.8 tinted (1, 0.9, 0.8), textures shared (`materials`)
   .bench/sponza_colored/      sponza_lite with a COLOR_0 (RGBA unorm8, pale tints varying vertex by vertex)
                               on every primitive, buffers and textures shared (`materials`)
+  .bench/sponza_uv1/          sponza_lite with every texture read through TEXCOORD_1 (TEXCOORD_0's
+                              accessor named again), buffers and textures shared (`materials`)
 """
 import json
 import math
@@ -145,7 +147,30 @@ def colored(source, out):
         json.dump(document, f)
 
 
+def second_set(source, out):
+    document = sponza_copy(source)
+    for mesh in document["meshes"]:
+        for primitive in mesh["primitives"]:
+            attributes = primitive["attributes"]
+            if "TEXCOORD_0" in attributes:
+                attributes["TEXCOORD_1"] = attributes["TEXCOORD_0"]
+
+    def reads_second(info):
+        if isinstance(info, dict):
+            if "index" in info:
+                info["texCoord"] = 1
+            for value in info.values():
+                reads_second(value)
+
+    for material in document.get("materials", []):
+        reads_second(material)
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "Sponza.gltf"), "w") as f:
+        json.dump(document, f)
+
+
 if __name__ == "__main__":
     tube(".bench/skin")
     coated(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_coated")
     colored(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_colored")
+    second_set(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_uv1")

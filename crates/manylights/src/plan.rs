@@ -302,17 +302,23 @@ pub struct ShadingMethods {
     /// pipeline constant: [`ShadingMethods::material_constants`]); without, the shading passes do
     /// not sample one.
     pub occlusion_textures: bool,
+    /// Some texture reads the second set of coordinates (`SECOND_UV_SET` in
+    /// `shading/material.wgsl`, a pipeline constant: [`ShadingMethods::material_constants`]);
+    /// without, the shading passes neither interpolate nor choose it.
+    pub second_uv_set: bool,
 }
 
 impl ShadingMethods {
     /// The pipeline constants of every pass that evaluates materials: the extensions' path, vertex
-    /// colours and occlusion textures, each compiled in only where the scene has it.
-    pub fn material_constants(&self) -> [(&'static str, f64); 3] {
+    /// colours, occlusion textures and the second set of coordinates, each compiled in only where
+    /// the scene has it.
+    pub fn material_constants(&self) -> [(&'static str, f64); 4] {
         let flag = |on: bool| f64::from(u8::from(on));
         [
             ("MATERIAL_EXTENSIONS", flag(self.material_extensions)),
             ("VERTEX_COLORS", flag(self.vertex_colors)),
             ("OCCLUSION_TEXTURES", flag(self.occlusion_textures)),
+            ("SECOND_UV_SET", flag(self.second_uv_set)),
         ]
     }
 
@@ -533,6 +539,8 @@ pub struct SceneStatistics {
     pub vertex_colors: bool,
     /// Some material has an occlusion texture.
     pub occlusion_textures: bool,
+    /// Some material's texture reads `TEXCOORD_1`.
+    pub second_uv_set: bool,
 }
 
 /// Which statistics the plan reads for these settings, so that nothing else is measured.
@@ -672,6 +680,7 @@ impl FramePlan {
             material_extensions: stats.material_extensions,
             vertex_colors: stats.vertex_colors,
             occlusion_textures: stats.occlusion_textures,
+            second_uv_set: stats.second_uv_set,
         };
         // Lights and decals crowded enough get wide leaves, walked a subgroup at a time, their leaves
         // shared out; decals, as one group placed once, cell lists too. Groups rebuilt every frame get
@@ -969,7 +978,10 @@ mod tests {
         assert!(methods.reflections && methods.direct == DirectShading::Budget && methods.debug_views && methods.subgroups);
         assert_eq!(methods.light_enumeration_module(), "shading/enumerate/lights_bvh.wgsl");
         assert_eq!(methods.debug_views_constant(), ("DEBUG_VIEWS", 1.0));
-        assert_eq!(methods.material_constants(), [("MATERIAL_EXTENSIONS", 0.0), ("VERTEX_COLORS", 0.0), ("OCCLUSION_TEXTURES", 0.0)]);
+        assert_eq!(
+            methods.material_constants(),
+            [("MATERIAL_EXTENSIONS", 0.0), ("VERTEX_COLORS", 0.0), ("OCCLUSION_TEXTURES", 0.0), ("SECOND_UV_SET", 0.0)]
+        );
         let coated = SceneStatistics { material_extensions: true, ..Default::default() };
         let methods = FramePlan::resolve(&bvh, SUBGROUPS, &coated).unwrap().shading_methods(true);
         assert_eq!(methods.material_constants()[0], ("MATERIAL_EXTENSIONS", 1.0));
@@ -979,6 +991,9 @@ mod tests {
         let occluded = SceneStatistics { occlusion_textures: true, ..Default::default() };
         let methods = FramePlan::resolve(&bvh, SUBGROUPS, &occluded).unwrap().shading_methods(true);
         assert_eq!(methods.material_constants()[2], ("OCCLUSION_TEXTURES", 1.0));
+        let second_set = SceneStatistics { second_uv_set: true, ..Default::default() };
+        let methods = FramePlan::resolve(&bvh, SUBGROUPS, &second_set).unwrap().shading_methods(true);
+        assert_eq!(methods.material_constants()[3], ("SECOND_UV_SET", 1.0));
     }
 
     #[test]

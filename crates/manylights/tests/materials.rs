@@ -364,7 +364,7 @@ fn a_traced_reflection_is_not_darkened_by_occlusion() {
 }
 
 #[test]
-fn the_importer_reads_occlusion_on_the_first_coordinates_and_refuses_a_bad_strength() {
+fn the_importer_reads_occlusion_on_the_first_two_coordinates_and_refuses_a_bad_strength() {
     let gltf = |materials: &str| {
         format!(
             r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_texture_transform"], "materials": [{materials}], "textures": [{{"source": 0}}],
@@ -380,12 +380,13 @@ fn the_importer_reads_occlusion_on_the_first_coordinates_and_refuses_a_bad_stren
     };
     let scene = import(gltf(
         r#"{"occlusionTexture": {"index": 0, "strength": 0.3}}, {"occlusionTexture": {"index": 0, "texCoord": 1}},
-           {"occlusionTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"texCoord": 1}}}}"#,
+           {"occlusionTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"texCoord": 1}}}},
+           {"occlusionTexture": {"index": 0, "texCoord": 2}}"#,
     ))
     .unwrap();
-    let occlusion: Vec<_> = scene.materials.iter().map(|m| (m.occlusion_texture.map(|t| t.texture), m.occlusion_strength)).collect();
-    // On TEXCOORD_1 (by texCoord or by the transform's override) it is left out.
-    assert_eq!(occlusion, vec![(Some(0), 0.3), (None, 1.0), (None, 1.0)]);
+    let occlusion: Vec<_> = scene.materials.iter().map(|m| (m.occlusion_texture.map(|t| t.tex_coord), m.occlusion_strength)).collect();
+    // TEXCOORD_1 by texCoord or by the transform's override; past it the texture is left out.
+    assert_eq!(occlusion, vec![(Some(0), 0.3), (Some(1), 1.0), (Some(1), 1.0), (None, 1.0)]);
     let error = import(gltf(r#"{"occlusionTexture": {"index": 0, "strength": 1.5}}"#)).unwrap_err().to_string();
     assert!(error.contains("occlusion strength 1.5"), "{error}");
 }

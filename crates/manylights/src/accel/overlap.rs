@@ -142,6 +142,7 @@ pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<Sce
             .flat_map(|m| &m.primitives)
             .any(|p| p.vertices.iter().any(|v| v.color != crate::scene::Vertex::WHITE)),
         occlusion_textures: scene.materials.iter().any(|m| m.occlusion_texture.is_some()),
+        second_uv_set: scene.materials.iter().flat_map(|m| m.textures()).any(|(t, _)| t.tex_coord == 1),
     })
 }
 

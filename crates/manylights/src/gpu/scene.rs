@@ -63,7 +63,8 @@ pub struct GpuMaterial {
     /// Four bits a texture slot, `(wrap_v << 2) | wrap_u`, eight slots a word, in the slots' order.
     pub wrap_modes: [u32; 2],
     /// Each texture slot's coordinates from the mesh's (`TextureRef::uv_transform`), in the slots'
-    /// order: two vec4s a slot, the 2×2 matrix's columns, then the translation.
+    /// order: two vec4s a slot, the 2×2 matrix's columns, then the translation and the set of
+    /// coordinates it transforms (`TextureRef::tex_coord`, 0 or 1, in z).
     pub uv_transforms: [[f32; 4]; 2 * TEXTURE_SLOTS],
 }
 
@@ -906,14 +907,14 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
     }
 }
 
-/// The slots' coordinate transforms as `GpuMaterial::uv_transforms` lays them out (identity where a
-/// slot has no texture).
+/// The slots' coordinate sets and transforms as `GpuMaterial::uv_transforms` lays them out (the
+/// first set, as it is, where a slot has no texture).
 fn uv_transforms(slots: [Option<TextureRef>; TEXTURE_SLOTS]) -> [[f32; 4]; 2 * TEXTURE_SLOTS] {
     let mut packed = [[0.0; 4]; 2 * TEXTURE_SLOTS];
     for (k, slot) in slots.iter().enumerate() {
         let t = slot.map_or(glam::Affine2::IDENTITY, |t| t.uv_transform);
         packed[2 * k] = [t.matrix2.x_axis.x, t.matrix2.x_axis.y, t.matrix2.y_axis.x, t.matrix2.y_axis.y];
-        packed[2 * k + 1] = [t.translation.x, t.translation.y, 0.0, 0.0];
+        packed[2 * k + 1] = [t.translation.x, t.translation.y, slot.map_or(0.0, |t| t.tex_coord as f32), 0.0];
     }
     packed
 }
@@ -949,7 +950,7 @@ mod tests {
                 assert_eq!(wgsl, rust, "members of {}", $wgsl);
             }};
         }
-        check!("Vertex", Vertex, [position, u, normal, v, tangent, color]);
+        check!("Vertex", Vertex, [position, u, normal, v, tangent, color, uv1]);
         check!("Draw", GpuDraw, [world_from_local, normal_from_local, first_index, first_visibility_id, base_vertex, material]);
         check!(
             "Material",

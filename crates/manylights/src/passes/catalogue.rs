@@ -87,6 +87,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         material_extensions: true,
                         vertex_colors: true,
                         occlusion_textures: true,
+                        second_uv_set: true,
                     };
                     if decals.works_in(PipelineKind::Forward) {
                         shaders.push(super::forward_shade::shader(methods));

@@ -16,7 +16,7 @@ struct MotionVertex {
     // Where the point was a frame before, less where it is (world space).
     @location(0) moved: vec3<f32>,
     @location(1) @interpolate(flat) draw_index: u32,
-    @location(2) uv: vec2<f32>,
+    @location(2) uv: vec4<f32>,
     // The vertex colour's alpha, for alpha masks.
     @location(3) alpha: f32,
 }
@@ -31,7 +31,7 @@ fn surface_motion_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(inst
     out.clip_position = frame.clip_from_world * world;
     out.moved = (previous_world_from_local[draw_index] * previous_vertex_position(vertex_index, vertex.position)).xyz - world.xyz;
     out.draw_index = draw_index;
-    out.uv = vec2<f32>(vertex.u, vertex.v);
+    out.uv = vertex_uvs(vertex);
     out.alpha = vertex_color(vertex).a;
     return out;
 }

@@ -10,7 +10,7 @@
 struct ForwardVertex {
     @builtin(position) @invariant clip_position: vec4<f32>,
     @location(0) @interpolate(flat) draw_index: u32,
-    @location(1) uv: vec2<f32>,
+    @location(1) uv: vec4<f32>,
     // World position relative to the camera, like the visibility-buffer resolve's (precision far from
     // the origin).
     @location(2) relative_position: vec3<f32>,
@@ -29,7 +29,7 @@ fn forward_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(instance_in
     var out: ForwardVertex;
     out.clip_position = frame.clip_from_world * world;
     out.draw_index = draw_index;
-    out.uv = vec2<f32>(vertex.u, vertex.v);
+    out.uv = vertex_uvs(vertex);
     out.relative_position = world.xyz - frame.world_from_view[3].xyz;
     out.normal = vertex.normal;
     out.tangent = vertex.tangent;

@@ -16,7 +16,7 @@ struct VertexOutput {
     // The visibility id of the draw's first triangle (indexed) or of this triangle (pulled).
     @location(0) @interpolate(flat) visibility_id: u32,
     @location(1) @interpolate(flat) draw_index: u32,
-    @location(2) uv: vec2<f32>,
+    @location(2) uv: vec4<f32>,
     // The vertex colour's alpha, for alpha masks.
     @location(3) alpha: f32,
 }
@@ -26,7 +26,7 @@ fn raster_vertex(draw_index: u32, vertex: Vertex, visibility_id: u32) -> VertexO
     out.clip_position = frame.clip_from_world * (draws[draw_index].world_from_local * vec4<f32>(vertex.position, 1.0));
     out.visibility_id = visibility_id;
     out.draw_index = draw_index;
-    out.uv = vec2<f32>(vertex.u, vertex.v);
+    out.uv = vertex_uvs(vertex);
     out.alpha = vertex_color(vertex).a;
     return out;
 }

@@ -15,7 +15,7 @@ struct VelocityVertex {
     @builtin(position) @invariant clip_position: vec4<f32>,
     @location(0) previous_clip: vec4<f32>,
     @location(1) @interpolate(flat) draw_index: u32,
-    @location(2) uv: vec2<f32>,
+    @location(2) uv: vec4<f32>,
     // The vertex colour's alpha, for alpha masks.
     @location(3) alpha: f32,
 }
@@ -27,7 +27,7 @@ fn velocity_vertex(@builtin(vertex_index) vertex_index: u32, @builtin(instance_i
     let position = vec4<f32>(vertex.position, 1.0);
     var out: VelocityVertex;
     out.draw_index = draw_index;
-    out.uv = vec2<f32>(vertex.u, vertex.v);
+    out.uv = vertex_uvs(vertex);
     out.alpha = vertex_color(vertex).a;
     out.clip_position = frame.clip_from_world * (draws[draw_index].world_from_local * position);
     let previous_world = previous_world_from_local[draw_index] * previous_vertex_position(vertex_index, vertex.position);

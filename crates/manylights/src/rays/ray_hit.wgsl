@@ -30,10 +30,10 @@ fn ray_alpha_covers(instance: RayInstance, tri: RayTriangle, b1: f32, b2: f32) -
     let v1 = vertices[draw.base_vertex + indices[first + 1u]];
     let v2 = vertices[draw.base_vertex + indices[first + 2u]];
     let b0 = 1.0 - b1 - b2;
-    let uv = vec2<f32>(v0.u, v0.v) * b0 + vec2<f32>(v1.u, v1.v) * b1 + vec2<f32>(v2.u, v2.v) * b2;
+    let uv = vertex_uvs(v0) * b0 + vertex_uvs(v1) * b1 + vertex_uvs(v2) * b2;
     let vertex_color = vertex_color(v0) * b0 + vertex_color(v1) * b1 + vertex_color(v2) * b2;
     let material = materials[draw.material];
-    return material_base_color(material, UvGradients(uv, vec2<f32>(0.0), vec2<f32>(0.0)), vertex_color).a >= material.alpha_cutoff;
+    return material_base_color(material, UvGradients(uv, vec4<f32>(0.0), vec4<f32>(0.0)), vertex_color).a >= material.alpha_cutoff;
 }
 
 // A ray origin off the surface at `p` with geometric normal `n` (facing the side the ray leaves

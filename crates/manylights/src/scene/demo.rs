@@ -151,7 +151,7 @@ fn upright(normal: Vec3, center: Vec3) -> Mat4 {
 }
 
 fn mesh(name: &str, (mut vertices, mut indices): (Vec<Vertex>, Vec<u32>), material: usize) -> Mesh {
-    tangents::generate(&mut vertices, &mut indices);
+    tangents::generate(&mut vertices, &mut indices, 0);
     Mesh { name: name.into(), primitives: vec![Primitive { vertices, indices, material }] }
 }
 

@@ -70,8 +70,9 @@ pub struct Vertex {
     /// Linear RGBA as 16-bit unsigned normalized integers (glTF's `COLOR_0`), which multiplies the
     /// material's base colour and alpha: [`Vertex::WHITE`] where a mesh has none.
     pub color: [u16; 4],
-    /// The shaders' struct rounds up to 16 bytes.
-    pub _padding: [u32; 2],
+    /// The second set of texture coordinates (glTF's `TEXCOORD_1`), read by the textures whose
+    /// [`TextureRef::tex_coord`] is 1; zero where a mesh has none.
+    pub uv1: [f32; 2],
 }
 
 impl Vertex {
@@ -81,11 +82,20 @@ impl Vertex {
     pub fn color_from(color: [f32; 4]) -> [u16; 4] {
         color.map(|c| if c.is_nan() { u16::MAX } else { (c.clamp(0.0, 1.0) * 65535.0).round() as u16 })
     }
+
+    /// Texture coordinates `set`: 0 is `TEXCOORD_0` (u, v), 1 `TEXCOORD_1` (`uv1`).
+    pub fn uv(&self, set: u32) -> [f32; 2] {
+        if set == 1 {
+            self.uv1
+        } else {
+            [self.u, self.v]
+        }
+    }
 }
 
 impl Default for Vertex {
     fn default() -> Self {
-        Self { position: [0.0; 3], u: 0.0, normal: [0.0; 3], v: 0.0, tangent: [0.0; 4], color: Self::WHITE, _padding: [0; 2] }
+        Self { position: [0.0; 3], u: 0.0, normal: [0.0; 3], v: 0.0, tangent: [0.0; 4], color: Self::WHITE, uv1: [0.0; 2] }
     }
 }
 
@@ -136,20 +146,22 @@ pub enum Wrap {
     ClampToEdge,
 }
 
-/// A material's use of a texture: which image, how its coordinates wrap, and how they come from the
-/// mesh's `TEXCOORD_0` (glTF's `KHR_texture_transform`).
+/// A material's use of a texture: which image, how its coordinates wrap, which of the mesh's sets of
+/// coordinates it reads and how they are transformed (glTF's `texCoord` and `KHR_texture_transform`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TextureRef {
     pub texture: usize,
     pub wrap_u: Wrap,
     pub wrap_v: Wrap,
+    /// 0: `TEXCOORD_0` (the vertices' u, v); 1: `TEXCOORD_1` ([`Vertex::uv1`]).
+    pub tex_coord: u32,
     pub uv_transform: Affine2,
 }
 
 impl TextureRef {
-    /// Image `texture` read at the mesh's coordinates as they are.
+    /// Image `texture` read at the mesh's first coordinates as they are.
     pub fn new(texture: usize, wrap_u: Wrap, wrap_v: Wrap) -> Self {
-        Self { texture, wrap_u, wrap_v, uv_transform: Affine2::IDENTITY }
+        Self { texture, wrap_u, wrap_v, tex_coord: 0, uv_transform: Affine2::IDENTITY }
     }
 }
 
@@ -620,6 +632,12 @@ impl Scene {
             for (t, _) in m.textures() {
                 if t.texture >= self.textures.len() {
                     return err(format!("material {mi} ({}): texture {} does not exist", m.name, t.texture));
+                }
+                if t.tex_coord > 1 {
+                    return err(format!(
+                        "material {mi} ({}): a texture reads TEXCOORD_{}; give 0 (TEXCOORD_0) or 1 (TEXCOORD_1)",
+                        m.name, t.tex_coord
+                    ));
                 }
             }
         }

@@ -11,15 +11,16 @@ use glam::{Vec3, Vec4};
 
 use super::Vertex;
 
-/// Computes MikkTSpace tangents for an indexed triangle list, then orthonormalizes them.
+/// Computes MikkTSpace tangents for an indexed triangle list along texture coordinates `uv_set`
+/// ([`Vertex::uv`]), then orthonormalizes them.
 ///
 /// MikkTSpace works per triangle corner. Where corners sharing a vertex get different tangents (UV
 /// seams, mirrored UVs), the vertex is split so that each copy keeps its own; `indices` are updated.
 /// Returns the vertex each vertex now is a copy of (itself for those that were there), for what
 /// else is stored per vertex (skin weights, morph targets). Normals must be unit length.
-pub(crate) fn generate(vertices: &mut Vec<Vertex>, indices: &mut [u32]) -> Vec<u32> {
+pub(crate) fn generate(vertices: &mut Vec<Vertex>, indices: &mut [u32], uv_set: u32) -> Vec<u32> {
     let mut sources: Vec<u32> = (0..vertices.len() as u32).collect();
-    let mut corners = Corners { vertices, indices, tangents: vec![[0.0; 4]; indices.len()] };
+    let mut corners = Corners { vertices, indices, uv_set, tangents: vec![[0.0; 4]; indices.len()] };
     // On failure (no usable triangles) the tangents stay zero and orthonormalize() substitutes
     // arbitrary ones, which is all a mesh without a usable UV layout can have.
     if mikktspace::generate_tangents(&mut corners) {
@@ -73,6 +74,7 @@ fn weld(vertices: &mut Vec<Vertex>, indices: &mut [u32], tangents: &[[f32; 4]], 
 struct Corners<'a> {
     vertices: &'a [Vertex],
     indices: &'a [u32],
+    uv_set: u32,
     tangents: Vec<[f32; 4]>,
 }
 
@@ -103,8 +105,8 @@ impl mikktspace::Geometry for Corners<'_> {
         // glTF's v runs down the image while normal maps store +Y (green) up the image, the
         // convention tangents in glTF files follow (w = +1 for an unmirrored layout). MikkTSpace takes
         // the bitangent sign from the direction of increasing v, so it is given v flipped.
-        let v = self.vertex(face, vert);
-        [v.u, -v.v]
+        let [u, v] = self.vertex(face, vert).uv(self.uv_set);
+        [u, -v]
     }
 
     fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
@@ -134,12 +136,28 @@ mod tests {
     #[test]
     fn upright_image_gets_tangent_along_u_and_bitangent_up_the_image() {
         let (mut vertices, mut indices) = upright_quad();
-        generate(&mut vertices, &mut indices);
+        generate(&mut vertices, &mut indices, 0);
         assert_eq!(vertices.len(), 4, "no seam, no split");
         for v in &vertices {
             let t = Vec4::from(v.tangent);
             assert!(t.truncate().abs_diff_eq(Vec3::X, 1e-5), "{t}");
             // bitangent = cross(normal, tangent) * w = +Y: up the image, as glTF normal maps expect.
+            assert_eq!(t.w, 1.0);
+        }
+    }
+
+    #[test]
+    fn tangents_follow_the_set_of_coordinates_asked_for() {
+        // The second set turns the image a quarter: its u runs up the quad (+Y), its v along +X.
+        let (mut vertices, mut indices) = upright_quad();
+        for v in &mut vertices {
+            v.uv1 = [(v.position[1] + 1.0) / 2.0, (v.position[0] + 1.0) / 2.0];
+        }
+        generate(&mut vertices, &mut indices, 1);
+        for v in &vertices {
+            let t = Vec4::from(v.tangent);
+            assert!(t.truncate().abs_diff_eq(Vec3::Y, 1e-5), "{t}");
+            // v runs down the image along +X, so the bitangent (up the image) is −X = cross(Z, Y) × 1.
             assert_eq!(t.w, 1.0);
         }
     }
@@ -151,7 +169,7 @@ mod tests {
         vertices.push(vertex([3.0, -1.0, 0.0], [0.0, 1.0]));
         vertices.push(vertex([3.0, 1.0, 0.0], [0.0, 0.0]));
         indices.extend([1, 4, 5, 1, 5, 2]);
-        generate(&mut vertices, &mut indices);
+        generate(&mut vertices, &mut indices, 0);
         assert!(vertices.len() > 6, "the shared edge's vertices are split");
         let signs: Vec<f32> = indices.iter().map(|&i| vertices[i as usize].tangent[3]).collect();
         assert!(signs[..6].iter().all(|&w| w == 1.0), "{signs:?}");

@@ -88,7 +88,7 @@ fn decal_accumulate(index: u32, instance: VolumeInstance, local: vec3<f32>, surf
     let ddx = surface.ddx * to_decal;
     let ddy = surface.ddy * to_decal;
     // u along +x, v down along -y: the image as seen from the projector.
-    let g = UvGradients(vec2<f32>(p.x + 0.5, 0.5 - p.y), vec2<f32>(ddx.x, -ddx.y), vec2<f32>(ddy.x, -ddy.y));
+    let g = TextureCoordinates(vec2<f32>(p.x + 0.5, 0.5 - p.y), vec2<f32>(ddx.x, -ddx.y), vec2<f32>(ddy.x, -ddy.y));
 
     let material = decals[index].material;
     let color = decal_base_color(material, g);
@@ -162,7 +162,7 @@ fn decal_accumulate_top_down(index: u32, layer: u32, instance: VolumeInstance, l
 // field. Decals sample their textures clamped to the edges (`wrap_u2_v2`), whatever the material's
 // wrap modes (`scene::Decal`): the switch over the nine wrap-mode samplers that surfaces take is
 // costly for crowded decals, most of all in fragments (benchmarks/LOG.md, topic 2).
-fn decal_base_color(material: u32, g: UvGradients) -> vec4<f32> {
+fn decal_base_color(material: u32, g: TextureCoordinates) -> vec4<f32> {
     var color = materials[material].base_color_factor;
     let layer = materials[material].base_color_layer;
     if layer != NO_TEXTURE {
@@ -171,7 +171,7 @@ fn decal_base_color(material: u32, g: UvGradients) -> vec4<f32> {
     return color;
 }
 
-fn decal_roughness_metallic(material: u32, g: UvGradients) -> vec2<f32> {
+fn decal_roughness_metallic(material: u32, g: TextureCoordinates) -> vec2<f32> {
     var roughness_metallic = vec2<f32>(materials[material].roughness_factor, materials[material].metallic_factor);
     let layer = materials[material].metallic_roughness_layer;
     if layer != NO_TEXTURE {

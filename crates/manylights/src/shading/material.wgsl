@@ -4,19 +4,37 @@
 // Material evaluation: glTF metallic-roughness textures sampled with explicit gradients, so the same
 // code runs in compute (visibility-buffer resolve, ray hits) and fragment stages.
 
-// Texture coordinates and their screen-space derivatives.
-struct UvGradients {
+// One set of texture coordinates and their screen-space derivatives.
+struct TextureCoordinates {
     uv: vec2<f32>,
     ddx: vec2<f32>,
     ddy: vec2<f32>,
 }
 
+// A surface's two sets of texture coordinates (glTF's TEXCOORD_0 in xy, TEXCOORD_1 in zw) and their
+// screen-space derivatives.
+struct UvGradients {
+    uv: vec4<f32>,
+    ddx: vec4<f32>,
+    ddy: vec4<f32>,
+}
+
+// Whether any texture reads the second set: a pipeline constant of the shading passes (`plan.rs`,
+// `ShadingMethods::second_uv_set`); without, they neither interpolate nor choose it.
+override SECOND_UV_SET: bool = true;
+
 // Samples a layer with the sampler of a slot's wrap modes (`Material.wrap_modes`), at the slot's
-// transform of the coordinates (`Material.uv_transforms`), their gradients through its linear part.
+// transform of its set of coordinates (`Material.uv_transforms`), their gradients through its linear
+// part.
 fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Material, slot: u32, surface: UvGradients) -> vec4<f32> {
     let columns = material.uv_transforms[2u * slot];
     let linear = mat2x2<f32>(columns.xy, columns.zw);
-    let g = UvGradients(linear * surface.uv + material.uv_transforms[2u * slot + 1u].xy, linear * surface.ddx, linear * surface.ddy);
+    let translation_set = material.uv_transforms[2u * slot + 1u];
+    var coordinates = TextureCoordinates(surface.uv.xy, surface.ddx.xy, surface.ddy.xy);
+    if SECOND_UV_SET && translation_set.z != 0.0 {
+        coordinates = TextureCoordinates(surface.uv.zw, surface.ddx.zw, surface.ddy.zw);
+    }
+    let g = TextureCoordinates(linear * coordinates.uv + translation_set.xy, linear * coordinates.ddx, linear * coordinates.ddy);
     switch (material.wrap_modes[slot / 8u] >> ((slot % 8u) * 4u)) & 0xFu {
         case 1u: { return textureSampleGrad(textures, wrap_u1_v0, g.uv, layer, g.ddx, g.ddy); }
         case 2u: { return textureSampleGrad(textures, wrap_u2_v0, g.uv, layer, g.ddx, g.ddy); }

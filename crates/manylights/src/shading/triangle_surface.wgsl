@@ -31,7 +31,7 @@ fn ray_plane_barycentrics(ray: Ray, p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>)
     return vec3<f32>(1.0 - b1 - b2, b1, b2);
 }
 
-fn interpolate2(b: vec3<f32>, a0: vec2<f32>, a1: vec2<f32>, a2: vec2<f32>) -> vec2<f32> {
+fn interpolate4(b: vec3<f32>, a0: vec4<f32>, a1: vec4<f32>, a2: vec4<f32>) -> vec4<f32> {
     return a0 * b.x + a1 * b.y + a2 * b.z;
 }
 
@@ -58,11 +58,12 @@ fn triangle_surface(draw: Draw, triangle: u32, reference: vec3<f32>, ray: Ray, r
     let b_dy = ray_plane_barycentrics(ray_dy, p0, p1, p2);
 
     var out: TriangleSurface;
-    let uv0 = vec2<f32>(v0.u, v0.v);
-    let uv1 = vec2<f32>(v1.u, v1.v);
-    let uv2 = vec2<f32>(v2.u, v2.v);
-    let uv = interpolate2(b, uv0, uv1, uv2);
-    out.g = UvGradients(uv, interpolate2(b_dx, uv0, uv1, uv2) - uv, interpolate2(b_dy, uv0, uv1, uv2) - uv);
+    // Without SECOND_UV_SET nothing reads the second set (zw), and the compiler drops it.
+    let uv0 = vertex_uvs(v0);
+    let uv1 = vertex_uvs(v1);
+    let uv2 = vertex_uvs(v2);
+    let uv = interpolate4(b, uv0, uv1, uv2);
+    out.g = UvGradients(uv, interpolate4(b_dx, uv0, uv1, uv2) - uv, interpolate4(b_dy, uv0, uv1, uv2) - uv);
     out.vertex_color = vertex_color(v0) * b.x + vertex_color(v1) * b.y + vertex_color(v2) * b.z;
     out.relative_position = interpolate3(b, p0, p1, p2);
     out.dp = PositionGradients(interpolate3(b_dx, p0, p1, p2) - out.relative_position, interpolate3(b_dy, p0, p1, p2) - out.relative_position);

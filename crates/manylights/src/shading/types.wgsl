@@ -11,9 +11,15 @@ struct Vertex {
     v: f32,
     // xyz tangent, w bitangent sign
     tangent: vec4<f32>,
-    // Linear RGBA as 16-bit unorms (`vertex_color`), white where the mesh has no colours; the
-    // struct's size rounds up to 64 bytes.
+    // Linear RGBA as 16-bit unorms (`vertex_color`), white where the mesh has no colours.
     color: vec2<u32>,
+    // TEXCOORD_1, zero where the mesh has none.
+    uv1: vec2<f32>,
+}
+
+// Both sets of texture coordinates: TEXCOORD_0 in xy, TEXCOORD_1 in zw (`UvGradients`).
+fn vertex_uvs(v: Vertex) -> vec4<f32> {
+    return vec4<f32>(v.u, v.v, v.uv1);
 }
 
 fn vertex_color(v: Vertex) -> vec4<f32> {

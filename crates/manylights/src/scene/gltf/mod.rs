@@ -600,7 +600,7 @@ fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Text
     // Primitives without a material use the glTF default material, appended only when needed.
     let default_material = materials.len();
     let (meshes, sources): (Vec<Mesh>, Vec<_>) =
-        document.meshes().map(|m| mesh(&m, buffers, default_material)).collect::<Result<Vec<_>, _>>()?.into_iter().unzip();
+        document.meshes().map(|m| mesh(&m, buffers, &materials, default_material)).collect::<Result<Vec<_>, _>>()?.into_iter().unzip();
     if meshes.iter().flat_map(|m| &m.primitives).any(|p| p.material == default_material) {
         materials.push(Material::default());
     }
@@ -1108,16 +1108,18 @@ fn material(m: &::gltf::Material, document: &Document) -> Result<Material, Strin
         }
         None => None,
     };
-    // Baked occlusion often lies on a second set of coordinates; read through TEXCOORD_0 it would
-    // darken the wrong places, so it is left out instead.
+    // Baked occlusion read through other coordinates than its own would darken the wrong places, so
+    // on a set past the two manylights reads it is left out instead.
     let occlusion_texture = match m.occlusion_texture() {
         Some(t) => {
             let transform = transform_of("occlusion", t.extension_value("KHR_texture_transform"))?;
             let set = transform.and_then(|t| t.3).unwrap_or(t.tex_coord());
-            if set == 0 {
+            if set <= 1 {
                 Some(texture_ref(&t.texture(), set, transform, &named)?)
             } else {
-                log::warn!("{named}: the occlusion texture uses TEXCOORD_{set}; only TEXCOORD_0 is supported, so it is left out");
+                log::warn!(
+                    "{named}: the occlusion texture uses TEXCOORD_{set}; only TEXCOORD_0 and TEXCOORD_1 are read, so it is left out"
+                );
                 None
             }
         }
@@ -1225,9 +1227,10 @@ fn texture_ref(texture: &::gltf::Texture, tex_coord: u32, transform: Option<UvTr
             "{material}: KHR_texture_transform offset {offset:?}, rotation {rotation} and scale {scale:?} must be finite; give finite values"
         ));
     }
-    let tex_coord = tex_coord_override.unwrap_or(tex_coord);
-    if tex_coord != 0 {
-        log::warn!("{material}: texture uses TEXCOORD_{tex_coord}; only TEXCOORD_0 is supported, using it");
+    let mut tex_coord = tex_coord_override.unwrap_or(tex_coord);
+    if tex_coord > 1 {
+        log::warn!("{material}: texture uses TEXCOORD_{tex_coord}; only TEXCOORD_0 and TEXCOORD_1 are read, using TEXCOORD_0");
+        tex_coord = 0;
     }
     let (sin, cos) = rotation.sin_cos();
     let linear = Mat2::from_cols(Vec2::new(cos, sin), Vec2::new(-sin, cos)) * Mat2::from_diagonal(Vec2::from(scale));
@@ -1247,13 +1250,19 @@ fn texture_ref(texture: &::gltf::Texture, tex_coord: u32, transform: Option<UvTr
         texture: source,
         wrap_u: wrap(sampler.wrap_s()),
         wrap_v: wrap(sampler.wrap_t()),
+        tex_coord,
         uv_transform: Affine2::from_mat2_translation(linear, Vec2::from(offset)),
     })
 }
 
 /// A mesh, and for each of its primitives the glTF vertex each of its vertices was made from (flat
 /// normals and tangent seams copy vertices), for the attributes read later (skins, morph targets).
-fn mesh(mesh: &::gltf::Mesh, buffers: &[buffer::Data], default_material: usize) -> Result<(Mesh, Vec<Vec<u32>>), String> {
+fn mesh(
+    mesh: &::gltf::Mesh,
+    buffers: &[buffer::Data],
+    materials: &[Material],
+    default_material: usize,
+) -> Result<(Mesh, Vec<Vec<u32>>), String> {
     let name = mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned);
     let mut primitives = Vec::new();
     let mut sources = Vec::new();
@@ -1263,19 +1272,28 @@ fn mesh(mesh: &::gltf::Mesh, buffers: &[buffer::Data], default_material: usize) 
             log::warn!("{}: {:?} are not rendered, skipped", at(), p.mode());
             continue;
         }
-        let (primitive, source) = primitive(&p, buffers, default_material).map_err(|e| format!("{}: {e}", at()))?;
+        let material = p.material().index().unwrap_or(default_material);
+        let (primitive, source) = primitive(&p, buffers, material, materials.get(material)).map_err(|e| format!("{}: {e}", at()))?;
         primitives.push(primitive);
         sources.push(source);
     }
     Ok((Mesh { name, primitives }, sources))
 }
 
-fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: usize) -> Result<(Primitive, Vec<u32>), String> {
+/// Primitive `p` with `material` (index `material_index`; `None` for glTF's default material), whose
+/// textures say which sets of coordinates it needs and which one its normal map's tangents follow.
+fn primitive(
+    p: &::gltf::Primitive,
+    buffers: &[buffer::Data],
+    material_index: usize,
+    material: Option<&Material>,
+) -> Result<(Primitive, Vec<u32>), String> {
     for (semantic, name, dimensions, types) in [
         (Semantic::Positions, "POSITION", Dimensions::Vec3, POSITIONS),
         (Semantic::Normals, "NORMAL", Dimensions::Vec3, DIRECTIONS),
         (Semantic::Tangents, "TANGENT", Dimensions::Vec4, DIRECTIONS),
         (Semantic::TexCoords(0), "TEXCOORD_0", Dimensions::Vec2, TEX_COORDS),
+        (Semantic::TexCoords(1), "TEXCOORD_1", Dimensions::Vec2, TEX_COORDS),
     ] {
         if let Some(accessor) = p.get(&semantic) {
             check_accessor(&accessor, name, dimensions, types)?;
@@ -1293,6 +1311,12 @@ fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: 
     let count = positions.len();
     let normals: Option<Vec<[f32; 3]>> = vertex_attribute(p.get(&Semantic::Normals), "NORMAL", buffers, count)?;
     let uvs: Option<Vec<[f32; 2]>> = vertex_attribute(p.get(&Semantic::TexCoords(0)), "TEXCOORD_0", buffers, count)?;
+    let mut uvs1: Option<Vec<[f32; 2]>> = vertex_attribute(p.get(&Semantic::TexCoords(1)), "TEXCOORD_1", buffers, count)?;
+    if uvs1.is_none() && material.is_some_and(|m| m.textures().any(|(t, _)| t.tex_coord == 1)) {
+        // glTF requires the set a texture names; TEXCOORD_0 is the likeliest intent.
+        log::warn!("material {material_index} reads TEXCOORD_1, which this primitive lacks; reading TEXCOORD_0 instead");
+        uvs1.clone_from(&uvs);
+    }
     let file_tangents: Option<Vec<[f32; 4]>> = vertex_attribute(p.get(&Semantic::Tangents), "TANGENT", buffers, count)?;
     let colors = vertex_colors(p.get(&Semantic::Colors(0)), buffers, count)?;
     let indices: Vec<u32> = match reader.read_indices() {
@@ -1308,10 +1332,11 @@ fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: 
         return Err(format!("index count {} is not a multiple of 3", indices.len()));
     }
 
+    // Non-finite coordinates read as 0 rather than spreading NaN through sampling.
+    let finite = |uv: [f32; 2]| if uv.iter().all(|c| c.is_finite()) { uv } else { [0.0; 2] };
     let mut vertices: Vec<Vertex> = (0..count)
         .map(|i| {
-            let [u, v] = uvs.as_ref().map_or([0.0; 2], |t| t[i]);
-            let (u, v) = if u.is_finite() && v.is_finite() { (u, v) } else { (0.0, 0.0) };
+            let [u, v] = finite(uvs.as_ref().map_or([0.0; 2], |t| t[i]));
             Vertex {
                 position: positions[i],
                 u,
@@ -1320,7 +1345,7 @@ fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: 
                 v,
                 tangent: file_tangents.as_ref().map_or([0.0; 4], |t| t[i]),
                 color: colors.as_ref().map_or(Vertex::WHITE, |c| Vertex::color_from(c[i])),
-                ..Vertex::default()
+                uv1: finite(uvs1.as_ref().map_or([0.0; 2], |t| t[i])),
             }
         })
         .collect();
@@ -1329,13 +1354,16 @@ fn primitive(p: &::gltf::Primitive, buffers: &[buffer::Data], default_material: 
         sources = indices.clone();
         (vertices, indices) = flat_shaded(&vertices, &indices);
     }
-    if file_tangents.is_none() && uvs.is_some() {
-        let copied = tangents::generate(&mut vertices, &mut indices);
+    // Tangents follow the coordinates of the normal map they serve.
+    let normal_set = material.and_then(|m| m.normal_texture).map_or(0, |t| t.tex_coord);
+    let has_normal_set = if normal_set == 1 { uvs1.is_some() } else { uvs.is_some() };
+    if file_tangents.is_none() && has_normal_set {
+        let copied = tangents::generate(&mut vertices, &mut indices, normal_set);
         sources = copied.iter().map(|&v| sources[v as usize]).collect();
     } else {
         tangents::orthonormalize(&mut vertices);
     }
-    Ok((Primitive { vertices, indices, material: p.material().index().unwrap_or(default_material) }, sources))
+    Ok((Primitive { vertices, indices, material: material_index }, sources))
 }
 
 /// Component types (with `normalized`) the glTF specification allows for each use of an accessor we

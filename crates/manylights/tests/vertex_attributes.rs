@@ -1,7 +1,9 @@
-//! Vertex colours (glTF's `COLOR_0`): they multiply the material's base colour and alpha wherever a
-//! surface is shaded — the visibility-buffer resolve, the deferred G-buffer, forward fragments,
-//! transparent surfaces and reflection hits — and in every alpha test; the importer reads each
-//! encoding glTF allows.
+//! Vertex attributes beyond position and frame, wherever a surface is shaded — the visibility-buffer
+//! resolve, the deferred G-buffer, forward fragments, transparent surfaces and reflection hits — and
+//! in every alpha test:
+//! - colours (glTF's `COLOR_0`) multiply the material's base colour and alpha; the importer reads
+//!   each encoding glTF allows;
+//! - a texture may read the second set of coordinates (`TEXCOORD_1`), as glTF's `texCoord` says.
 
 mod common;
 
@@ -9,8 +11,8 @@ use common::*;
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use manylights::{
     renderer::Image,
-    scene::{AlphaMode, Camera, Instance, Material, Mesh, Scene, Vertex},
-    settings::{LightMethod, PipelineKind, RaySettings, RenderConfig},
+    scene::{AlphaMode, Camera, Instance, Material, Mesh, Scene, Sun, Texture, TextureRef, Vertex, Wrap},
+    settings::{LightMethod, PipelineKind, RaySettings, RenderConfig, SunShadows},
 };
 
 /// `quad_mesh` with each vertex's colour from its local (x, y).
@@ -199,4 +201,127 @@ fn the_importer_reads_every_encoding_of_vertex_colours() {
     assert!(error.contains("COLOR_0") && error.contains("glTF allows"), "{error}");
     let error = triangle_with_colors(r#""componentType": 5126, "type": "VEC2""#, &floats[..24], 8).unwrap_err().to_string();
     assert!(error.contains("COLOR_0") && error.contains("Vec3 or Vec4"), "{error}");
+}
+
+/// A 4 × 4 image of distinct texels; alpha 0.2 in a checker, 1 elsewhere.
+fn checker(name: &str, seed: u8) -> Texture {
+    let rgba8 = (0..16u8)
+        .flat_map(|i| {
+            let alpha = if (i + i / 4) % 2 == 0 { 255 } else { 51 };
+            [40 + 13 * i, 230 - 11 * i, seed.wrapping_add(29 * i), alpha]
+        })
+        .collect();
+    Texture { name: name.into(), width: 4, height: 4, rgba8 }
+}
+
+/// Where a texture's coordinates run as the quad's own, the other set takes a different map of the
+/// quad, so that reading the wrong set shows.
+fn other_uv([u, v]: [f32; 2]) -> [f32; 2] {
+    [0.3 * v + 0.1, 0.7 - 0.5 * u]
+}
+
+/// `tinted_scene`'s mirror floor, reflected panel and blended pane, with a masked panel casting a sun
+/// shadow onto the floor, every material textured: base colours (with the mask's alpha), a normal
+/// map on the panel, occlusion and an emissive texture on the floor. Each texture reads the quad's
+/// own coordinates from `TEXCOORD_1` where `second_set`, else from `TEXCOORD_0`; `read_set` is the set
+/// the materials name.
+fn textured_scene(second_set: bool, read_set: u32) -> (Scene, Camera) {
+    let (mut scene, camera) = tinted_scene(false);
+    for mesh in &mut scene.meshes {
+        for v in &mut mesh.primitives[0].vertices {
+            let own = [v.u, v.v];
+            let [u, w] = if second_set { other_uv(own) } else { own };
+            (v.u, v.v) = (u, w);
+            v.uv1 = if second_set { own } else { other_uv(own) };
+        }
+    }
+    let mut masked = scene.meshes[1].clone();
+    masked.primitives[0].material = 3;
+    scene.meshes.push(masked);
+    scene.materials.push(Material { alpha_mode: AlphaMode::Mask { cutoff: 0.5 }, ..scene.materials[1].clone() });
+    scene.instances.push(Instance {
+        mesh: 3,
+        world_from_local: Mat4::from_scale_rotation_translation(Vec3::splat(0.8), Quat::IDENTITY, Vec3::new(-1.2, 1.0, 0.5)),
+    });
+    scene.sun = Some(Sun { direction: Vec3::new(0.3, -1.0, -0.4).normalize(), color: Vec3::ONE, illuminance: 2.0 });
+    scene.textures = vec![checker("colour", 7), checker("data", 101)];
+    let texture = |index| Some(TextureRef { tex_coord: read_set, ..TextureRef::new(index, Wrap::Repeat, Wrap::Repeat) });
+    for material in &mut scene.materials {
+        material.base_color_texture = texture(0);
+    }
+    scene.materials[0].occlusion_texture = texture(1);
+    scene.materials[0].emissive_texture = texture(0);
+    scene.materials[0].emissive_factor = Vec3::splat(0.2);
+    scene.materials[1].normal_texture = texture(1);
+    (scene, camera)
+}
+
+#[test]
+fn textures_on_the_second_coordinates_read_them_in_every_pipeline_pane_mask_shadow_and_reflection() {
+    let rays = RaySettings { reflection_bounces: 1, sun_shadows: SunShadows::Hard, ..Default::default() };
+    let (first, camera) = textured_scene(false, 0);
+    let second = textured_scene(true, 1).0;
+    let wrong = textured_scene(true, 0).0;
+    for pipeline in PipelineKind::ALL {
+        let name = pipeline.name();
+        let a = frame(&first, &camera, pipeline, rays);
+        let difference = max_abs_difference(&a, &frame(&second, &camera, pipeline, rays));
+        assert!(difference < 2e-3, "{name}: textures read through TEXCOORD_1 differ from TEXCOORD_0's by {difference}");
+        let misread = max_abs_difference(&a, &frame(&wrong, &camera, pipeline, rays));
+        assert!(misread > 0.1, "{name}: reading the other set changed the image by only {misread}");
+    }
+}
+
+/// A glTF of two triangles in the z = 0 plane facing +Z, one with TEXCOORD_1 and one without, each
+/// with a material of `materials` (JSON) and one image; TEXCOORD_0 runs u along +X, TEXCOORD_1 along +Y.
+fn triangles_with_two_sets(materials: &str) -> Result<Scene, manylights::Error> {
+    let floats = |values: &[[f32; 3]]| values.iter().flatten().flat_map(|f| f.to_le_bytes()).collect::<Vec<u8>>();
+    let mut buffer = floats(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    buffer.extend(floats(&[[0.0, 0.0, 1.0]; 3]));
+    let pairs = |values: &[[f32; 2]]| values.iter().flatten().flat_map(|f| f.to_le_bytes()).collect::<Vec<u8>>();
+    buffer.extend(pairs(&[[0.0, 1.0], [1.0, 1.0], [0.0, 0.0]]));
+    buffer.extend(pairs(&[[0.0, 0.5], [0.0, 0.0], [1.0, 0.5]]));
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2, "TEXCOORD_1": 3}}, "material": 0}},
+                                   {{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}, "material": 1}}]}}],
+        "materials": [{materials}], "textures": [{{"source": 0}}],
+        "images": [{{"uri": "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="}}],
+        "buffers": [{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}],
+        "bufferViews": [{{"buffer": 0, "byteLength": 72}}, {{"buffer": 0, "byteOffset": 72, "byteLength": 48}}],
+        "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+                      {{"bufferView": 0, "byteOffset": 36, "componentType": 5126, "count": 3, "type": "VEC3"}},
+                      {{"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}},
+                      {{"bufferView": 1, "byteOffset": 24, "componentType": 5126, "count": 3, "type": "VEC2"}}]}}"#,
+        buffer.len(),
+        base64::encode(&buffer),
+    );
+    let path = std::env::temp_dir().join(format!("manylights-uv-sets-{}-{}.gltf", std::process::id(), json.len()));
+    std::fs::write(&path, json).unwrap();
+    let scene = manylights::scene::gltf::import(&path);
+    std::fs::remove_file(&path).ok();
+    scene
+}
+
+#[test]
+fn the_importer_reads_the_second_coordinates_and_the_sets_textures_name() {
+    let scene = triangles_with_two_sets(
+        r#"{"normalTexture": {"index": 0, "texCoord": 1}, "occlusionTexture": {"index": 0, "texCoord": 1},
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 2}}},
+           {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"texCoord": 1}}}}}"#,
+    )
+    .unwrap();
+    let (with_set, without_set) = (&scene.meshes[0].primitives[0], &scene.meshes[0].primitives[1]);
+    assert_eq!(with_set.vertices.iter().map(|v| v.uv1).collect::<Vec<_>>(), vec![[0.0, 0.5], [0.0, 0.0], [1.0, 0.5]]);
+    let set = |t: Option<TextureRef>| t.map(|t| t.tex_coord);
+    let first = &scene.materials[0];
+    // Occlusion and the normal map read TEXCOORD_1; a set past the second reads TEXCOORD_0.
+    assert_eq!((set(first.normal_texture), set(first.occlusion_texture), set(first.base_color_texture)), (Some(1), Some(1), Some(0)));
+    assert_eq!(set(scene.materials[1].base_color_texture), Some(1), "the transform's texCoord overrides");
+    // The normal map's tangents follow its set: TEXCOORD_1's u runs along +Y.
+    for v in &with_set.vertices {
+        assert!(Vec3::from_slice(&v.tangent[..3]).abs_diff_eq(Vec3::Y, 1e-5), "{:?}", v.tangent);
+    }
+    // A primitive without the set its material names reads TEXCOORD_0 there.
+    assert!(without_set.vertices.iter().all(|v| v.uv1 == [v.u, v.v]), "{:?}", without_set.vertices);
 }
