@@ -22,6 +22,8 @@
 #   scripts/bench-device.sh materials    every Sponza material coated, every vertex coloured, or every texture on
 #                                        TEXCOORD_1, against none: material extensions, vertex colours and the
 #                                        second UV set (issues 37, 33)
+#   scripts/bench-device.sh draws        1,024 to 40,000 draws (scripts/make-bench-scenes.py's cubes), every pipeline:
+#                                        the CPU's frame against the GPU's (issue 33)
 #   scripts/bench-device.sh soak         10,000 frames of everything rebuilt per frame, memory sampled (issue 31)
 #   scripts/bench-device.sh direct       shadowed local lights: exact, reference and restir on 4,096 and 28k lights (issue 34)
 #   scripts/bench-device.sh direct_error restir's error against the reference, sampled and denoised (light-error)
@@ -246,6 +248,17 @@ materials() {
   done
 }
 
+# Many draws: a cube a draw, 1,024 to 40,000 of them (scripts/make-bench-scenes.py), every pipeline;
+# the JSON holds the CPU's time per frame beside the GPU's.
+draws() {
+  local n p
+  for n in 1024 10000 40000; do
+    for p in visbuffer deferred forward; do
+      run draws_${n}_$p 200 --scene .bench/many/cubes_$n.gltf --pipeline $p
+    done
+  done
+}
+
 # Test binaries built with `cargo test --release --no-run`, run here against the GPU, each test in its
 # own process (after a dozen devices opened and closed in one process, the NVIDIA driver listed no
 # adapter to the next).
@@ -401,6 +414,7 @@ for set in "${@:-structures}"; do
     post) post ;;
     deform) deform ;;
     materials) materials ;;
+    draws) draws ;;
     soak) soak ;;
     direct) direct ;;
     direct_error) direct_error ;;

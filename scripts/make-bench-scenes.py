@@ -11,6 +11,8 @@ the GPU machine; scripts/bench-device.sh reads them):
                               on every primitive, buffers and textures shared (`materials`)
   .bench/sponza_uv1/          sponza_lite with every texture read through TEXCOORD_1 (TEXCOORD_0's
                               accessor named again), buffers and textures shared (`materials`)
+  .bench/many/cubes_N.gltf    N = 1,024, 10,000 and 40,000 cubes of 0.4 m, a draw each, on a grid 1 m
+                              apart over a floor (EXT_mesh_gpu_instancing) (`draws`)
 """
 import json
 import math
@@ -101,6 +103,55 @@ def tube(out):
         json.dump(document, f)
 
 
+def cubes(side, out):
+    positions, normals, indices = [], [], []
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            normal = [0.0, 0.0, 0.0]
+            normal[axis] = sign
+            u, v = [0.0] * 3, [0.0] * 3
+            u[(axis + 1) % 3], v[(axis + 2) % 3] = 1.0, sign
+            first = len(positions)
+            for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                positions.append([0.2 * (normal[k] + su * u[k] + sv * v[k]) for k in range(3)])
+                normals.append(normal)
+            indices += [first, first + 1, first + 2, first, first + 2, first + 3]
+    half = side / 2 + 5
+    translations = [[i - side / 2, 0.2, j - side / 2] for i in range(side) for j in range(side)]
+    floor = [[-half, 0, -half], [half, 0, -half], [half, 0, half], [-half, 0, half]]
+    blobs = [
+        b"".join(struct.pack("<3f", *p) for p in positions), b"".join(struct.pack("<3f", *n) for n in normals),
+        struct.pack(f"<{len(indices)}I", *indices), b"".join(struct.pack("<3f", *t) for t in translations),
+        b"".join(struct.pack("<3f", *p) for p in floor), struct.pack("<12f", *([0, 1, 0] * 4)), struct.pack("<6I", 0, 2, 1, 0, 3, 2),
+    ]
+    buffer, views = b"", []
+    for blob in blobs:
+        views.append({"buffer": 0, "byteOffset": len(buffer), "byteLength": len(blob)})
+        buffer += blob
+    vec3 = lambda view, count, **more: dict(bufferView=view, componentType=5126, count=count, type="VEC3", **more)
+    document = {
+        "asset": {"version": "2.0"}, "extensionsUsed": ["EXT_mesh_gpu_instancing"], "scene": 0, "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 3}}}}, {"mesh": 1}],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2, "material": 0}]},
+            {"primitives": [{"attributes": {"POSITION": 4, "NORMAL": 5}, "indices": 6, "material": 0}]},
+        ],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.7, 0.6, 1], "metallicFactor": 0}}],
+        "accessors": [
+            vec3(0, 24, min=[-0.2] * 3, max=[0.2] * 3), vec3(1, 24), dict(bufferView=2, componentType=5125, count=36, type="SCALAR"),
+            vec3(3, len(translations)), vec3(4, 4, min=[-half, 0, -half], max=[half, 0, half]), vec3(5, 4),
+            dict(bufferView=6, componentType=5125, count=6, type="SCALAR"),
+        ],
+        "bufferViews": views,
+        "buffers": [{"byteLength": len(buffer), "uri": f"cubes_{side * side}.bin"}],
+    }
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, f"cubes_{side * side}.bin"), "wb") as f:
+        f.write(buffer)
+    with open(os.path.join(out, f"cubes_{side * side}.gltf"), "w") as f:
+        json.dump(document, f)
+
+
 def sponza_copy(source):
     """sponza_lite's document, its buffers and images named from a sibling folder."""
     with open(source) as f:
@@ -174,3 +225,5 @@ if __name__ == "__main__":
     coated(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_coated")
     colored(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_colored")
     second_set(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_uv1")
+    for side in (32, 100, 200):
+        cubes(side, ".bench/many")

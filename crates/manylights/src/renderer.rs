@@ -391,6 +391,7 @@ impl Renderer {
             uniforms.previous_clip_from_world = previous.clip_from_world(self.config.width, self.config.height).to_cols_array_2d();
             self.scene.write_frame(&self.ctx.queue, &uniforms);
             self.move_instances(self.time, parity)?;
+            self.scene.order_draws(&self.ctx.queue, camera.position());
             // Deformed meshes first: every pass after draws or traces them.
             if let Some(deform) = &mut self.deform {
                 let animation = self.motion.as_ref().and_then(|m| m.animation.as_ref());
@@ -426,7 +427,7 @@ impl Renderer {
             if let Some(particles) = &self.particles {
                 particles.record_lights(&mut encoder, self.timer.as_mut());
             }
-            let inputs = FrameInputs { scene: &self.scene, lights: &self.lights, decals: &self.decals, eye: camera.position(), parity };
+            let inputs = FrameInputs { scene: &self.scene, lights: &self.lights, decals: &self.decals, parity };
             self.pipeline.record(&mut encoder, self.timer.as_mut(), &inputs);
             if let Some(timer) = &self.timer {
                 timer.resolve(&mut encoder);

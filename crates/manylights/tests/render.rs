@@ -262,6 +262,84 @@ fn raster_without_primitive_index_draws_the_same_image() {
     assert_eq!(max_abs_difference(&a, &b), 0.0, "indexed and pulled rasters draw different images");
 }
 
+/// Draws of every kind a raster pass orders: opaque, alpha-masked, double-sided, mirrored, blended
+/// and moving (with motion blur, whose velocity pass draws the moving ones again).
+fn draws_of_every_kind() -> (manylights::scene::Scene, Camera) {
+    use glam::{Mat4, Quat, Vec4};
+    use manylights::scene::{AlphaMode, Instance, Material};
+    let (mut scene, camera) = wall_scene(vec![point_light(Vec3::new(0.5, 0.5, 2.0), 3.0, 6.0)]);
+    scene.ambient = Vec3::splat(0.2);
+    let material = |color: Vec4, alpha_mode: AlphaMode, double_sided: bool| Material {
+        base_color_factor: color,
+        alpha_mode,
+        double_sided,
+        base_color_texture: Some(TextureRef::new(0, Wrap::Repeat, Wrap::Repeat)),
+        ..Default::default()
+    };
+    scene.textures = vec![Texture {
+        name: "checker".into(),
+        width: 2,
+        height: 2,
+        rgba8: vec![255, 255, 255, 255, 90, 90, 90, 40, 90, 90, 90, 40, 255, 255, 255, 255],
+    }];
+    scene.materials.extend([
+        material(Vec4::new(0.9, 0.3, 0.2, 1.0), AlphaMode::Mask { cutoff: 0.5 }, false),
+        material(Vec4::new(0.2, 0.8, 0.3, 1.0), AlphaMode::Opaque, true),
+        material(Vec4::new(0.3, 0.4, 1.0, 0.5), AlphaMode::Blend, false),
+    ]);
+    for (material, (x, y), z, mirrored) in
+        [(1, (-1.2, 0.6), 0.5, false), (2, (1.2, 0.6), 0.5, true), (3, (0.0, -0.7), 1.0, false), (0, (0.0, 0.7), 0.8, false)]
+    {
+        let mut quad = quad_mesh();
+        quad.primitives[0].material = material;
+        scene.meshes.push(quad);
+        let scale = Vec3::new(if mirrored { -0.5 } else { 0.5 }, 0.5, 1.0);
+        let world_from_local = Mat4::from_scale_rotation_translation(scale, Quat::from_rotation_y(0.3), Vec3::new(x, y, z));
+        scene.instances.push(Instance { mesh: scene.meshes.len() - 1, world_from_local });
+    }
+    let last = scene.instances.len() - 1;
+    fly(&mut scene, last, Vec3::new(-0.3, 0.7, 0.8), Vec3::new(0.3, 0.7, 0.8));
+    (scene, camera)
+}
+
+#[test]
+fn indirect_draws_and_a_call_per_draw_draw_the_same_image_in_every_pipeline() {
+    let (scene, camera) = draws_of_every_kind();
+    let indirect = GpuContext::new().expect("a GPU adapter");
+    assert!(
+        indirect.features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE),
+        "this test compares indirect draws with direct ones, and needs an adapter with indirect_first_instance (lavapipe has it)"
+    );
+    let direct = GpuContext::without(wgpu::Features::INDIRECT_FIRST_INSTANCE).expect("a GPU adapter");
+    assert!(!direct.features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE));
+    let blur = manylights::settings::MotionBlur { shutter: 1.0, samples: 8, max_length: 16.0 };
+    for pipeline in manylights::settings::PipelineKind::ALL {
+        let config = manylights::settings::RenderConfig {
+            pipeline,
+            post: manylights::settings::PostSettings { motion_blur: Some(blur), ..still_post() },
+            ..config(WIDTH, HEIGHT, LightMethod::Brute)
+        };
+        // The displayed image: motion blur is part of the post chain.
+        let frame = |ctx: &GpuContext, scene: &manylights::scene::Scene, config: &manylights::settings::RenderConfig| {
+            let mut r = manylights::renderer::Renderer::new(ctx.clone(), scene, config.clone()).expect("renderer");
+            r.time = 0.05;
+            r.render(&camera).expect("frame");
+            r.read_ldr().expect("ldr")
+        };
+        let name = pipeline.name();
+        let image = frame(&indirect, &scene, &config);
+        assert!(image.pixels == frame(&direct, &scene, &config).pixels, "{name}: indirect and direct draws differ");
+        let differing =
+            |other: manylights::renderer::Image<[u8; 4]>| image.pixels.iter().zip(&other.pixels).filter(|(p, q)| p != q).count();
+        let wall_only = manylights::scene::Scene { instances: scene.instances[..1].to_vec(), animation: None, ..scene.clone() };
+        let quads = differing(frame(&indirect, &wall_only, &config));
+        assert!(quads > 2000, "{name}: the quads before the wall changed only {quads} pixels");
+        let still = manylights::settings::RenderConfig { post: still_post(), ..config.clone() };
+        let smeared = differing(frame(&indirect, &scene, &still));
+        assert!(smeared > 100, "{name}: motion blur changed only {smeared} pixels: the moving draws were not drawn again");
+    }
+}
+
 #[test]
 fn sky_pixels_do_not_show_triangles_of_earlier_frames() {
     // Ids are not cleared between frames: a pixel that turns to sky must be shaded as sky, not as

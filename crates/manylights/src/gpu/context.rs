@@ -26,7 +26,10 @@ const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     // Forward fragments keeping `restir`'s reservoirs test depth first (`plan::FramePlan::keeps_reservoirs`).
     .union(wgpu::Features::SHADER_EARLY_DEPTH_TEST)
     // The hardware ray backend (`settings::RayBackend`, `accel/hardware.rs`).
-    .union(wgpu::Features::EXPERIMENTAL_RAY_QUERY);
+    .union(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
+    // Raster passes draw a run of draws in one indirect call, each taking its draw index as its
+    // first instance (`GpuScene::draw_arguments`).
+    .union(wgpu::Features::INDIRECT_FIRST_INSTANCE);
 
 /// Clones share the device: several renderers (a benchmark's configurations) can use one.
 #[derive(Clone)]

@@ -231,6 +231,28 @@ pub struct DrawCommand {
     pub local_center: glam::Vec3,
 }
 
+/// One frame's draws of a kind in the order the raster passes draw them: indices into the scene's
+/// commands (opaque or transparent), in runs of one raster state, and their indirect arguments from
+/// record `first_argument` of [`GpuScene::draw_arguments`] on.
+#[derive(Clone, Debug, Default)]
+pub struct OrderedDraws {
+    pub commands: Vec<u32>,
+    /// (state, first position in `commands`, count).
+    pub runs: Vec<(RasterState, u32, u32)>,
+    pub first_argument: u32,
+}
+
+/// The frame's draw orders ([`GpuScene::order_draws`]).
+#[derive(Clone, Debug, Default)]
+pub struct FrameDraws {
+    /// Opaque and alpha-masked draws ([`GpuScene::draw_order`]).
+    pub opaque: OrderedDraws,
+    /// Those of them that move: animated instances', deformed meshes'.
+    pub moving: OrderedDraws,
+    /// Alpha-blended draws, back to front ([`GpuScene::transparent_order`]).
+    pub transparent: OrderedDraws,
+}
+
 pub struct GpuScene {
     pub bind_group_layout: wgpu::BindGroupLayout,
     pub bind_group: wgpu::BindGroup,
@@ -239,6 +261,14 @@ pub struct GpuScene {
     pub draw_commands: Vec<DrawCommand>,
     /// Alpha-blended draws (glTF BLEND): drawn after shading by `passes::transparent_shade`.
     pub transparent_draw_commands: Vec<DrawCommand>,
+    /// This frame's orders of the draws, written by [`order_draws`](Self::order_draws).
+    pub frame_draws: FrameDraws,
+    /// `FrameDraws`' indirect arguments (`wgpu::util::DrawIndexedIndirectArgs`): opaque, moving,
+    /// then transparent draws, each as many records as it may hold. `None` where the device cannot
+    /// take a first instance (the draw index) from indirect arguments: it draws one call per draw.
+    pub draw_arguments: Option<wgpu::Buffer>,
+    /// The eye `frame_draws` were ordered from; `None` once a draw moved.
+    ordered_from: Option<glam::Vec3>,
     pub constants: SceneConstants,
     pub triangle_count: u64,
     /// The record of scene material m as decals use it is `decal_material_base + m` (its textures
@@ -275,29 +305,68 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    /// The opaque draws in the order raster passes submit them: opaque before alpha-masked (whose
-    /// discard defeats early depth tests), each front to back from `eye`. Raster passes on our
-    /// benchmark GPUs are bound by fragment work, and early-Z rejects what nearer draws hide.
-    pub fn draw_order(&self, eye: glam::Vec3) -> Vec<&DrawCommand> {
-        let mut order: Vec<&DrawCommand> = self.draw_commands.iter().collect();
-        order.sort_by(|a, b| a.state.cmp(&b.state).then(a.center.distance_squared(eye).total_cmp(&b.center.distance_squared(eye))));
-        order
+    /// The opaque draws (indices into `draw_commands`) in the order raster passes submit them:
+    /// opaque before alpha-masked (whose discard defeats early depth tests), each front to back from
+    /// `eye`. Raster passes on our benchmark GPUs are bound by fragment work, and early-Z rejects
+    /// what nearer draws hide.
+    pub fn draw_order(&self, eye: glam::Vec3) -> Vec<u32> {
+        // Sorted by keys made once per draw (a non-negative float's bits order as the float does);
+        // ties keep the commands' order.
+        let mut keyed: Vec<(RasterState, u32, u32)> =
+            self.draw_commands.iter().enumerate().map(|(i, c)| (c.state, c.center.distance_squared(eye).to_bits(), i as u32)).collect();
+        keyed.sort_unstable();
+        keyed.into_iter().map(|(_, _, i)| i).collect()
     }
 
-    /// The opaque draws of animated instances, in `draw_order`: the only ones whose velocity differs
-    /// from the camera's.
-    pub fn moving_draw_order(&self, eye: glam::Vec3) -> Vec<&DrawCommand> {
-        self.draw_order(eye).into_iter().filter(|c| self.moving_draws[c.draw_index as usize]).collect()
+    /// The alpha-blended draws (indices into `transparent_draw_commands`) back to front from `eye`
+    /// (by the centres of their bounds), so each blends over what lies behind it. Triangles within a
+    /// draw keep their order.
+    pub fn transparent_order(&self, eye: glam::Vec3) -> Vec<u32> {
+        let mut keyed: Vec<(std::cmp::Reverse<u32>, u32, u32)> = self
+            .transparent_draw_commands
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (std::cmp::Reverse(c.center.distance_squared(eye).to_bits()), c.draw_index, i as u32))
+            .collect();
+        keyed.sort_unstable();
+        keyed.into_iter().map(|(_, _, i)| i).collect()
     }
 
-    /// The alpha-blended draws back to front from `eye` (by the centres of their bounds), so each
-    /// blends over what lies behind it. Triangles within a draw keep their order.
-    pub fn transparent_order(&self, eye: glam::Vec3) -> Vec<&DrawCommand> {
-        let mut order: Vec<&DrawCommand> = self.transparent_draw_commands.iter().collect();
-        order.sort_by(|a, b| {
-            b.center.distance_squared(eye).total_cmp(&a.center.distance_squared(eye)).then(a.draw_index.cmp(&b.draw_index))
-        });
-        order
+    /// Orders the frame's draws from `eye` ([`frame_draws`](Self::frame_draws)) and writes their
+    /// indirect arguments, which land before the next submitted frame; keeps the last order where
+    /// neither the eye nor a draw moved. Call once a frame, after instances move.
+    pub fn order_draws(&mut self, queue: &wgpu::Queue, eye: glam::Vec3) {
+        if self.ordered_from == Some(eye) {
+            return;
+        }
+        self.ordered_from = Some(eye);
+        let opaque = self.draw_order(eye);
+        let moving: Vec<u32> =
+            opaque.iter().copied().filter(|&c| self.moving_draws[self.draw_commands[c as usize].draw_index as usize]).collect();
+        let transparent = self.transparent_order(eye);
+        let opaque_count = self.draw_commands.len() as u32;
+        self.frame_draws = FrameDraws {
+            opaque: ordered(&self.draw_commands, opaque, 0),
+            moving: ordered(&self.draw_commands, moving, opaque_count),
+            transparent: ordered(&self.transparent_draw_commands, transparent, 2 * opaque_count),
+        };
+        let Some(buffer) = &self.draw_arguments else { return };
+        let d = &self.frame_draws;
+        for (list, commands) in
+            [(&d.opaque, &self.draw_commands), (&d.moving, &self.draw_commands), (&d.transparent, &self.transparent_draw_commands)]
+        {
+            if list.commands.is_empty() {
+                continue;
+            }
+            let mut arguments: Vec<[u32; 5]> = Vec::with_capacity(list.commands.len());
+            for &c in &list.commands {
+                let c = &commands[c as usize];
+                // wgpu::util::DrawIndexedIndirectArgs: index count, instance count, first index,
+                // base vertex, first instance (the draw index the shaders read).
+                arguments.push([c.index_count, 1, c.first_index, c.base_vertex, c.draw_index]);
+            }
+            queue.write_buffer(buffer, u64::from(list.first_argument) * DRAW_ARGUMENT_BYTES, bytemuck::cast_slice(&arguments));
+        }
     }
 
     /// Uploads `scene`. `max_texture_size` caps the layer size of the texture arrays; `anisotropy` is
@@ -402,6 +471,16 @@ impl GpuScene {
             .chain(rays.tlas.map(wgpu::Tlas::as_binding))
             .collect(),
         );
+        // Room for every opaque draw twice (all of them, the moving ones) and every transparent one.
+        let argument_count = (2 * draw_commands.len() + transparent_draw_commands.len()).max(1) as u64;
+        let draw_arguments = ctx.features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE).then(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("draw arguments"),
+                size: argument_count * DRAW_ARGUMENT_BYTES,
+                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
         ctx.check_errors()?;
 
         Ok(Self {
@@ -410,6 +489,9 @@ impl GpuScene {
             frame_uniforms,
             draw_commands,
             transparent_draw_commands,
+            frame_draws: FrameDraws::default(),
+            draw_arguments,
+            ordered_from: None,
             constants: SceneConstants { sun: scene.sun, environment: environment.lighting, bounds: scene.bounds() },
             triangle_count: scene.drawn_triangle_count() as u64,
             decal_material_base: scene.materials.len() as u32,
@@ -471,6 +553,9 @@ impl GpuScene {
             }
             touched = Some(touched.map_or(draws.clone(), |t| t.start.min(draws.start)..t.end.max(draws.end)));
         }
+        if !draw_placements.is_empty() {
+            self.ordered_from = None;
+        }
         for command in self.draw_commands.iter_mut().chain(&mut self.transparent_draw_commands) {
             if let Some(world_from_local) = draw_placements.get(&command.draw_index) {
                 command.center = world_from_local.transform_point3(command.local_center);
@@ -530,6 +615,22 @@ impl GpuScene {
     pub fn write_frame(&self, queue: &wgpu::Queue, uniforms: &FrameUniforms) {
         queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(uniforms));
     }
+}
+
+/// Bytes of one `wgpu::util::DrawIndexedIndirectArgs`.
+pub const DRAW_ARGUMENT_BYTES: u64 = 20;
+
+/// `order` of `commands` in runs of one raster state, its arguments from record `first_argument`.
+fn ordered(commands: &[DrawCommand], order: Vec<u32>, first_argument: u32) -> OrderedDraws {
+    let mut runs: Vec<(RasterState, u32, u32)> = Vec::new();
+    for (position, &c) in order.iter().enumerate() {
+        let state = commands[c as usize].state;
+        match runs.last_mut() {
+            Some((last, _, count)) if *last == state => *count += 1,
+            _ => runs.push((state, position as u32, 1)),
+        }
+    }
+    OrderedDraws { commands: order, runs, first_argument }
 }
 
 /// A draw's transforms as the shaders read them: world from local, and the inverse transpose of its

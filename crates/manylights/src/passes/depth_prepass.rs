@@ -29,14 +29,7 @@ impl DepthPrepass {
         Ok(Self { pipelines })
     }
 
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: Option<&mut GpuTimer>,
-        scene: &GpuScene,
-        eye: glam::Vec3,
-        depth: &wgpu::TextureView,
-    ) {
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, depth: &wgpu::TextureView) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("depth_prepass"),
             color_attachments: &[],
@@ -49,6 +42,6 @@ impl DepthPrepass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        super::draw_scene(&mut pass, scene, eye, &self.pipelines);
+        super::draw_scene(&mut pass, scene, &self.pipelines);
     }
 }

@@ -97,7 +97,7 @@ impl ForwardShade {
         pass.set_bind_group(1, &self.bind_group, &[]);
         pass.set_bind_group(2, &inputs.lights.bind_group, &[]);
         pass.set_bind_group(3, &inputs.decals.bind_group, &[]);
-        super::draw_scene(&mut pass, inputs.scene, inputs.eye, &self.pipelines);
+        super::draw_scene(&mut pass, inputs.scene, &self.pipelines);
         pass.set_pipeline(&self.sky);
         pass.draw(0..3, 0..1);
     }

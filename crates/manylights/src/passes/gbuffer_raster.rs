@@ -44,7 +44,6 @@ impl GBufferRaster {
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&mut GpuTimer>,
         scene: &GpuScene,
-        eye: glam::Vec3,
         gbuffer: &[wgpu::TextureView; GBUFFER_TARGETS],
         depth: &wgpu::TextureView,
     ) {
@@ -69,6 +68,6 @@ impl GBufferRaster {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        super::draw_scene(&mut pass, scene, eye, &self.pipelines);
+        super::draw_scene(&mut pass, scene, &self.pipelines);
     }
 }

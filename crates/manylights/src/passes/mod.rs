@@ -6,7 +6,7 @@ use std::collections::HashMap;
 
 use crate::accel::VolumeStructure;
 use crate::gpu::{
-    scene::{DrawCommand, RasterState},
+    scene::{DrawCommand, OrderedDraws, RasterState, DRAW_ARGUMENT_BYTES},
     shaders::ShaderDesc,
     GpuScene,
 };
@@ -55,14 +55,13 @@ pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: 
 }
 
 /// What a frame reads besides its pipeline's own images: the scene, the light and decal structures
-/// (bound as groups 2 and 3 by the shading passes), the eye, which orders draws front to back, and
-/// the frame's parity, which picks the halves of what passes keep from frame to frame.
+/// (bound as groups 2 and 3 by the shading passes), and the frame's parity, which picks the halves of
+/// what passes keep from frame to frame.
 #[derive(Clone, Copy)]
 pub struct FrameInputs<'a> {
     pub scene: &'a GpuScene,
     pub lights: &'a VolumeStructure,
     pub decals: &'a VolumeStructure,
-    pub eye: glam::Vec3,
     pub parity: usize,
 }
 
@@ -87,29 +86,38 @@ pub fn dispatch_size(width: u32, height: u32) -> (u32, u32) {
     (width.div_ceil(TILE), height.div_ceil(TILE))
 }
 
-/// Draws the scene's opaque draws indexed, in `GpuScene::draw_order`, with the pipeline of each
-/// draw's raster state; binds the scene as group 0.
-pub fn draw_scene(pass: &mut wgpu::RenderPass, scene: &GpuScene, eye: glam::Vec3, pipelines: &HashMap<RasterState, wgpu::RenderPipeline>) {
-    draw_commands(pass, scene, &scene.draw_order(eye), pipelines);
+/// Draws the scene's opaque draws indexed, in the frame's order (`GpuScene::order_draws`), with the
+/// pipeline of each draw's raster state; binds the scene as group 0.
+pub fn draw_scene(pass: &mut wgpu::RenderPass, scene: &GpuScene, pipelines: &HashMap<RasterState, wgpu::RenderPipeline>) {
+    draw_ordered(pass, scene, &scene.frame_draws.opaque, &scene.draw_commands, pipelines);
 }
 
-/// Draws `commands` indexed, in order, with the pipeline of each draw's raster state; binds the scene
-/// as group 0.
-pub fn draw_commands(
+/// Draws `draws` of `commands` indexed, in order, with the pipeline of each run's raster state: a run
+/// in one indirect call where the scene has indirect arguments, a call per draw otherwise. Binds the
+/// scene as group 0.
+pub fn draw_ordered(
     pass: &mut wgpu::RenderPass,
     scene: &GpuScene,
-    commands: &[&DrawCommand],
+    draws: &OrderedDraws,
+    commands: &[DrawCommand],
     pipelines: &HashMap<RasterState, wgpu::RenderPipeline>,
 ) {
     pass.set_bind_group(0, &scene.bind_group, &[]);
     pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-    let mut current = None;
-    for &command in commands {
-        if current != Some(command.state) {
-            pass.set_pipeline(&pipelines[&command.state]);
-            current = Some(command.state);
+    for &(state, first, count) in &draws.runs {
+        pass.set_pipeline(&pipelines[&state]);
+        match &scene.draw_arguments {
+            Some(arguments) => {
+                let offset = u64::from(draws.first_argument + first) * DRAW_ARGUMENT_BYTES;
+                pass.multi_draw_indexed_indirect(arguments, offset, count);
+            }
+            None => {
+                for &c in &draws.commands[first as usize..(first + count) as usize] {
+                    let command = &commands[c as usize];
+                    let draw = command.draw_index..command.draw_index + 1;
+                    pass.draw_indexed(command.first_index..command.first_index + command.index_count, command.base_vertex as i32, draw);
+                }
+            }
         }
-        let draw = command.draw_index..command.draw_index + 1;
-        pass.draw_indexed(command.first_index..command.first_index + command.index_count, command.base_vertex as i32, draw);
     }
 }

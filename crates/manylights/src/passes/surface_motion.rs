@@ -63,16 +63,9 @@ impl SurfaceMotion {
         Ok(Self { pipelines, bind_group })
     }
 
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: Option<&mut GpuTimer>,
-        scene: &GpuScene,
-        eye: glam::Vec3,
-        depth: &wgpu::TextureView,
-    ) {
-        let moving = scene.moving_draw_order(eye);
-        if moving.is_empty() {
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, depth: &wgpu::TextureView) {
+        let moving = &scene.frame_draws.moving;
+        if moving.commands.is_empty() {
             return;
         }
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -85,6 +78,6 @@ impl SurfaceMotion {
             multiview_mask: None,
         });
         pass.set_bind_group(1, &self.bind_group, &[]);
-        super::draw_commands(&mut pass, scene, &moving, &self.pipelines);
+        super::draw_ordered(&mut pass, scene, moving, &scene.draw_commands, &self.pipelines);
     }
 }

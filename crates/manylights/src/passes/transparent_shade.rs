@@ -103,6 +103,7 @@ impl TransparentShade {
         pass.set_bind_group(1, &self.empty, &[]);
         pass.set_bind_group(2, &inputs.lights.bind_group, &[]);
         pass.set_bind_group(3, &inputs.decals.bind_group, &[]);
-        super::draw_commands(&mut pass, inputs.scene, &inputs.scene.transparent_order(inputs.eye), &self.pipelines);
+        let scene = inputs.scene;
+        super::draw_ordered(&mut pass, scene, &scene.frame_draws.transparent, &scene.transparent_draw_commands, &self.pipelines);
     }
 }

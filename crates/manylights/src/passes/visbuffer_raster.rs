@@ -50,11 +50,8 @@ impl VisbufferRaster {
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&mut GpuTimer>,
         scene: &GpuScene,
-        eye: glam::Vec3,
         VisbufferImages { visibility, depth }: VisbufferImages,
     ) {
-        let order = scene.draw_order(eye);
-
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("visbuffer_raster"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -74,21 +71,18 @@ impl VisbufferRaster {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_bind_group(0, &scene.bind_group, &[]);
         if self.indexed {
-            pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+            super::draw_scene(&mut pass, scene, &self.pipelines);
+            return;
         }
-        let mut current = None;
-        for command in order {
-            if current != Some(command.state) {
-                pass.set_pipeline(&self.pipelines[&command.state]);
-                current = Some(command.state);
-            }
-            let draw = command.draw_index..command.draw_index + 1;
-            if self.indexed {
-                pass.draw_indexed(command.first_index..command.first_index + command.index_count, command.base_vertex as i32, draw);
-            } else {
-                pass.draw(0..command.index_count, draw);
+        // Pulled vertices: a call per draw, each vertex_index a corner of its range of the indices.
+        pass.set_bind_group(0, &scene.bind_group, &[]);
+        let draws = &scene.frame_draws.opaque;
+        for &(state, first, count) in &draws.runs {
+            pass.set_pipeline(&self.pipelines[&state]);
+            for &c in &draws.commands[first as usize..(first + count) as usize] {
+                let command = &scene.draw_commands[c as usize];
+                pass.draw(0..command.index_count, command.draw_index..command.draw_index + 1);
             }
         }
     }

@@ -120,9 +120,9 @@ impl DeferredPipeline {
     /// Records one frame. The frame uniforms must already be written.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         let (width, height) = (self.targets.width, self.targets.height);
-        self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.gbuffer, &self.depth_view);
+        self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, &self.gbuffer, &self.depth_view);
         if let Some(motion) = &self.surface_motion {
-            motion.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.depth_view);
+            motion.record(encoder, timer.as_deref_mut(), inputs.scene, &self.depth_view);
         }
         if let Some((decals, normals, copy)) = &self.decals {
             encoder.copy_texture_to_texture(normals.as_image_copy(), copy.as_image_copy(), normals.size());
@@ -138,6 +138,6 @@ impl DeferredPipeline {
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
         }
-        self.post.record(encoder, timer, inputs.scene, inputs.eye);
+        self.post.record(encoder, timer, inputs.scene);
     }
 }

@@ -84,9 +84,9 @@ impl ForwardPipeline {
 
     /// Records one frame. The frame uniforms must already be written.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
-        self.prepass.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.depth_view);
+        self.prepass.record(encoder, timer.as_deref_mut(), inputs.scene, &self.depth_view);
         if let Some(motion) = &self.surface_motion {
-            motion.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.depth_view);
+            motion.record(encoder, timer.as_deref_mut(), inputs.scene, &self.depth_view);
         }
         if let Some(shadows) = &self.shadows {
             shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (self.targets.width, self.targets.height));
@@ -98,6 +98,6 @@ impl ForwardPipeline {
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
         }
-        self.post.record(encoder, timer, inputs.scene, inputs.eye);
+        self.post.record(encoder, timer, inputs.scene);
     }
 }

@@ -98,9 +98,9 @@ impl VisbufferPipeline {
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         let (width, height) = (self.targets.width, self.targets.height);
         let images = VisbufferImages { visibility: &self.visibility_view, depth: &self.depth_view };
-        self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, images);
+        self.raster.record(encoder, timer.as_deref_mut(), inputs.scene, images);
         if let Some(motion) = &self.surface_motion {
-            motion.record(encoder, timer.as_deref_mut(), inputs.scene, inputs.eye, &self.depth_view);
+            motion.record(encoder, timer.as_deref_mut(), inputs.scene, &self.depth_view);
         }
         if let Some(shadows) = &self.shadows {
             shadows.record(encoder, timer.as_deref_mut(), inputs.scene, (width, height));
@@ -112,6 +112,6 @@ impl VisbufferPipeline {
         if let Some(transparent) = &self.transparent {
             transparent.record(encoder, timer.as_deref_mut(), inputs, ShadedImage { hdr: &self.hdr_view, depth: &self.depth_view });
         }
-        self.post.record(encoder, timer, inputs.scene, inputs.eye);
+        self.post.record(encoder, timer, inputs.scene);
     }
 }

@@ -331,7 +331,7 @@ impl PostChain {
     }
 
     /// Records the chain after the frame's HDR image is complete.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, scene: &GpuScene, eye: glam::Vec3) {
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, scene: &GpuScene) {
         if let Some(pass) = &self.depth_of_field {
             pass.record(encoder, timer.as_deref_mut(), scene);
         }
@@ -340,7 +340,6 @@ impl PostChain {
                 encoder,
                 timer.as_deref_mut(),
                 scene,
-                eye,
                 VelocityImages { depth: &self.depth, velocity: velocity_view },
                 self.size,
             );

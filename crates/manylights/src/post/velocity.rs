@@ -87,14 +87,13 @@ impl Velocity {
         encoder: &mut wgpu::CommandEncoder,
         mut timer: Option<&mut GpuTimer>,
         scene: &GpuScene,
-        eye: glam::Vec3,
         VelocityImages { depth, velocity }: VelocityImages,
         (width, height): (u32, u32),
     ) {
         let groups = [&scene.bind_group, &self.camera_bind_group];
         self.camera_step.record(encoder, timer.as_deref_mut(), &groups, crate::passes::dispatch_size(width, height));
-        let moving = scene.moving_draw_order(eye);
-        if moving.is_empty() {
+        let moving = &scene.frame_draws.moving;
+        if moving.commands.is_empty() {
             return;
         }
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -115,6 +114,6 @@ impl Velocity {
             multiview_mask: None,
         });
         pass.set_bind_group(1, &self.raster_bind_group, &[]);
-        crate::passes::draw_commands(&mut pass, scene, &moving, &self.raster_pipelines);
+        crate::passes::draw_ordered(&mut pass, scene, moving, &scene.draw_commands, &self.raster_pipelines);
     }
 }
