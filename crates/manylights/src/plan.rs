@@ -304,7 +304,7 @@ pub struct ShadingMethods {
     pub occlusion_textures: bool,
     /// Some texture reads the second set of coordinates (`SECOND_UV_SET` in
     /// `shading/material.wgsl`, a pipeline constant: [`ShadingMethods::material_constants`]);
-    /// without, the shading passes neither interpolate nor choose it.
+    /// without, the shading passes never choose it.
     pub second_uv_set: bool,
 }
 

@@ -208,7 +208,7 @@ fn checker(name: &str, seed: u8) -> Texture {
     let rgba8 = (0..16u8)
         .flat_map(|i| {
             let alpha = if (i + i / 4) % 2 == 0 { 255 } else { 51 };
-            [40 + 13 * i, 230 - 11 * i, seed.wrapping_add(29 * i), alpha]
+            [40 + 13 * i, 230 - 11 * i, seed.wrapping_add(i.wrapping_mul(29)), alpha]
         })
         .collect();
     Texture { name: name.into(), width: 4, height: 4, rgba8 }
@@ -272,8 +272,8 @@ fn textures_on_the_second_coordinates_read_them_in_every_pipeline_pane_mask_shad
     }
 }
 
-/// A glTF of two triangles in the z = 0 plane facing +Z, one with TEXCOORD_1 and one without, each
-/// with a material of `materials` (JSON) and one image; TEXCOORD_0 runs u along +X, TEXCOORD_1 along +Y.
+/// A glTF of three triangles in the z = 0 plane facing +Z, the second without TEXCOORD_1, each with
+/// a material of `materials` (JSON) and one image; TEXCOORD_0 runs u along +X, TEXCOORD_1 along +Y.
 fn triangles_with_two_sets(materials: &str) -> Result<Scene, manylights::Error> {
     let floats = |values: &[[f32; 3]]| values.iter().flatten().flat_map(|f| f.to_le_bytes()).collect::<Vec<u8>>();
     let mut buffer = floats(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
@@ -284,7 +284,9 @@ fn triangles_with_two_sets(materials: &str) -> Result<Scene, manylights::Error> 
     let json = format!(
         r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
         "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2, "TEXCOORD_1": 3}}, "material": 0}},
-                                   {{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}, "material": 1}}]}}],
+                                   {{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}, "material": 1}},
+                                   {{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2, "TEXCOORD_1": 3}}, "material": 2}}]}}],
+        "extensionsUsed": ["KHR_materials_clearcoat", "KHR_texture_transform"],
         "materials": [{materials}], "textures": [{{"source": 0}}],
         "images": [{{"uri": "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="}}],
         "buffers": [{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}],
@@ -308,7 +310,8 @@ fn the_importer_reads_the_second_coordinates_and_the_sets_textures_name() {
     let scene = triangles_with_two_sets(
         r#"{"normalTexture": {"index": 0, "texCoord": 1}, "occlusionTexture": {"index": 0, "texCoord": 1},
             "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 2}}},
-           {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"texCoord": 1}}}}}"#,
+           {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"texCoord": 1}}}}},
+           {"extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1.0, "clearcoatNormalTexture": {"index": 0, "texCoord": 1}}}}"#,
     )
     .unwrap();
     let (with_set, without_set) = (&scene.meshes[0].primitives[0], &scene.meshes[0].primitives[1]);
@@ -318,8 +321,9 @@ fn the_importer_reads_the_second_coordinates_and_the_sets_textures_name() {
     // Occlusion and the normal map read TEXCOORD_1; a set past the second reads TEXCOORD_0.
     assert_eq!((set(first.normal_texture), set(first.occlusion_texture), set(first.base_color_texture)), (Some(1), Some(1), Some(0)));
     assert_eq!(set(scene.materials[1].base_color_texture), Some(1), "the transform's texCoord overrides");
-    // The normal map's tangents follow its set: TEXCOORD_1's u runs along +Y.
-    for v in &with_set.vertices {
+    // The normal maps' tangents follow their set, the surface's or else the clear coat's:
+    // TEXCOORD_1's u runs along +Y.
+    for v in with_set.vertices.iter().chain(&scene.meshes[0].primitives[2].vertices) {
         assert!(Vec3::from_slice(&v.tangent[..3]).abs_diff_eq(Vec3::Y, 1e-5), "{:?}", v.tangent);
     }
     // A primitive without the set its material names reads TEXCOORD_0 there.

@@ -262,11 +262,11 @@ pub struct GpuScene {
     /// Alpha-blended draws (glTF BLEND): drawn after shading by `passes::transparent_shade`.
     pub transparent_draw_commands: Vec<DrawCommand>,
     /// This frame's orders of the draws, written by [`order_draws`](Self::order_draws).
-    pub frame_draws: FrameDraws,
+    pub(crate) frame_draws: FrameDraws,
     /// `FrameDraws`' indirect arguments (`wgpu::util::DrawIndexedIndirectArgs`): opaque, moving,
     /// then transparent draws, each as many records as it may hold. `None` where the device cannot
     /// take a first instance (the draw index) from indirect arguments: it draws one call per draw.
-    pub draw_arguments: Option<wgpu::Buffer>,
+    pub(crate) draw_arguments: Option<wgpu::Buffer>,
     /// The eye `frame_draws` were ordered from; `None` once a draw moved.
     ordered_from: Option<glam::Vec3>,
     pub constants: SceneConstants,

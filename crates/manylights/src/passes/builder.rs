@@ -109,7 +109,7 @@ impl Raster<'_> {
     }
 
     /// One pipeline per raster state of `states` (culling, winding, alpha mask), with the fragment
-    /// stage `fragment` gives for each, for the scene's draws (`super::draw_commands`).
+    /// stage `fragment` gives for each, for the scene's draws (`super::draw_ordered`).
     pub fn per_state<'f>(
         &self,
         device: &wgpu::Device,

@@ -60,7 +60,12 @@ impl TransparentShade {
         };
         let constants = [&[methods.debug_views_constant()][..], &methods.material_constants()].concat();
         let fragment_module = shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, "transparent_shade", &constants)?;
-        let states: std::collections::BTreeSet<RasterState> = scene.transparent_draw_commands.iter().map(|c| c.state).collect();
+        // The states present, each also mirrored: an animated instance may turn mirrored.
+        let states: std::collections::BTreeSet<RasterState> = scene
+            .transparent_draw_commands
+            .iter()
+            .flat_map(|c| [c.state, RasterState { mirrored: !c.state.mirrored, ..c.state }])
+            .collect();
         let targets = [Some(wgpu::ColorTargetState {
             format: HDR_FORMAT,
             blend: Some(wgpu::BlendState { color: over, alpha: keep }),

@@ -20,7 +20,8 @@ struct UvGradients {
 }
 
 // Whether any texture reads the second set: a pipeline constant of the shading passes (`plan.rs`,
-// `ShadingMethods::second_uv_set`); without, they neither interpolate nor choose it.
+// `ShadingMethods::second_uv_set`); without, they never choose it (and the resolve's interpolation of
+// it is dead code). Alpha-tested raster passes keep the default.
 override SECOND_UV_SET: bool = true;
 
 // Samples a layer with the sampler of a slot's wrap modes (`Material.wrap_modes`), at the slot's

@@ -82,8 +82,9 @@ struct Material {
     occlusion_layer: i32,
     // Four bits a texture slot, `(wrap_v << 2) | wrap_u`, eight slots a word.
     wrap_modes: vec2<u32>,
-    // Each slot's texture coordinates from the mesh's (glTF's KHR_texture_transform): two vec4s a
-    // slot, the 2×2 matrix's columns (xy, zw), then the translation (xy).
+    // Each slot's texture coordinates from the mesh's (glTF's texCoord and KHR_texture_transform):
+    // two vec4s a slot, the 2×2 matrix's columns (xy, zw), then the translation (xy) and the set of
+    // coordinates it transforms (z: 0 or 1).
     uv_transforms: array<vec4<f32>, 20>,
 }
 

@@ -1314,7 +1314,8 @@ fn primitive(
     let mut uvs1: Option<Vec<[f32; 2]>> = vertex_attribute(p.get(&Semantic::TexCoords(1)), "TEXCOORD_1", buffers, count)?;
     if uvs1.is_none() && material.is_some_and(|m| m.textures().any(|(t, _)| t.tex_coord == 1)) {
         // glTF requires the set a texture names; TEXCOORD_0 is the likeliest intent.
-        log::warn!("material {material_index} reads TEXCOORD_1, which this primitive lacks; reading TEXCOORD_0 instead");
+        let instead = if uvs.is_some() { "reading TEXCOORD_0 instead" } else { "and TEXCOORD_0, so its textures read (0, 0)" };
+        log::warn!("material {material_index} reads TEXCOORD_1, which this primitive lacks; {instead}");
         uvs1.clone_from(&uvs);
     }
     let file_tangents: Option<Vec<[f32; 4]>> = vertex_attribute(p.get(&Semantic::Tangents), "TANGENT", buffers, count)?;
@@ -1354,8 +1355,10 @@ fn primitive(
         sources = indices.clone();
         (vertices, indices) = flat_shaded(&vertices, &indices);
     }
-    // Tangents follow the coordinates of the normal map they serve.
-    let normal_set = material.and_then(|m| m.normal_texture).map_or(0, |t| t.tex_coord);
+    // Tangents follow the coordinates of the normal maps they serve (one frame: the surface's map,
+    // else the clear coat's).
+    let normal_map = material.and_then(|m| m.normal_texture.or(m.clearcoat.and_then(|c| c.normal_texture)));
+    let normal_set = normal_map.map_or(0, |t| t.tex_coord);
     let has_normal_set = if normal_set == 1 { uvs1.is_some() } else { uvs.is_some() };
     if file_tangents.is_none() && has_normal_set {
         let copied = tangents::generate(&mut vertices, &mut indices, normal_set);
