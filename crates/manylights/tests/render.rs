@@ -341,6 +341,43 @@ fn indirect_draws_and_a_call_per_draw_draw_the_same_image_in_every_pipeline() {
 }
 
 #[test]
+fn a_blended_instance_that_animation_turns_mirrored_is_drawn() {
+    // A single-sided blended pane whose animation scales it through −1 along x: mirrored at the time
+    // rendered, a raster state it did not have at load.
+    use glam::{Mat4, Quat, Vec4};
+    use manylights::scene::animation::{Animation, Channel, Interpolation, Node, Property, Trs};
+    use manylights::scene::{AlphaMode, Instance, Material};
+    let (mut scene, camera) = wall_scene(Vec::new());
+    scene.ambient = Vec3::splat(0.5);
+    scene.materials.push(Material { base_color_factor: Vec4::new(0.1, 0.3, 1.0, 0.6), alpha_mode: AlphaMode::Blend, ..Default::default() });
+    let mut pane = quad_mesh();
+    pane.primitives[0].material = 1;
+    scene.meshes.push(pane);
+    let place = Vec3::new(0.0, 0.0, 1.0);
+    scene.instances.push(Instance { mesh: 1, world_from_local: Mat4::from_translation(place) });
+    scene.animation = Some(Animation {
+        name: "turn".into(),
+        nodes: vec![Node::from_trs(None, Trs { translation: place, rotation: Quat::IDENTITY, scale: Vec3::ONE })],
+        channels: vec![Channel {
+            node: 0,
+            property: Property::Scale,
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 1.0],
+            values: vec![Vec4::new(1.0, 1.0, 1.0, 0.0), Vec4::new(-1.0, 1.0, 1.0, 0.0)],
+        }],
+        instances: vec![(1, 0)],
+        duration: 1.0,
+    });
+    let mut r =
+        manylights::renderer::Renderer::new(GpuContext::new().expect("a GPU adapter"), &scene, config(WIDTH, HEIGHT, LightMethod::Brute))
+            .expect("renderer");
+    r.time = 0.9;
+    r.render(&camera).expect("frame");
+    let centre = pixel(&r.read_hdr().expect("hdr"), WIDTH / 2, HEIGHT / 2);
+    assert!(centre[2] > 1.25 * centre[0], "the mirrored pane does not tint the wall: {centre:?}");
+}
+
+#[test]
 fn sky_pixels_do_not_show_triangles_of_earlier_frames() {
     // Ids are not cleared between frames: a pixel that turns to sky must be shaded as sky, not as
     // the triangle an earlier frame left there.
