@@ -22,8 +22,8 @@
 #   scripts/bench-device.sh materials    every Sponza material coated, every vertex coloured, or every texture on
 #                                        TEXCOORD_1, against none: material extensions, vertex colours and the
 #                                        second UV set (issues 37, 33)
-#   scripts/bench-device.sh draws        1,024 to 40,000 draws (scripts/make-bench-scenes.py's cubes), every pipeline:
-#                                        the CPU's frame against the GPU's (issue 33)
+#   scripts/bench-device.sh draws        1,024 to 40,000 draws (scripts/make-bench-scenes.py's cubes), every pipeline,
+#                                        all in view or most outside it: the CPU's frame against the GPU's (issue 33)
 #   scripts/bench-device.sh soak         10,000 frames of everything rebuilt per frame, memory sampled (issue 31)
 #   scripts/bench-device.sh direct       shadowed local lights: exact, reference and restir on 4,096 and 28k lights (issue 34)
 #   scripts/bench-device.sh direct_error restir's error against the reference, sampled and denoised (light-error)
@@ -248,14 +248,17 @@ materials() {
   done
 }
 
-# Many draws: a cube a draw, 1,024 to 40,000 of them (scripts/make-bench-scenes.py), every pipeline;
-# the JSON holds the CPU's time per frame beside the GPU's.
+# Many draws: a cube a draw, 1,024 to 40,000 of them (scripts/make-bench-scenes.py), every pipeline,
+# seen from above (all in view) and from among 40,000 (most outside the view); the JSON holds the
+# CPU's time per frame beside the GPU's.
 draws() {
   local n p
-  for n in 1024 10000 40000; do
-    for p in visbuffer deferred forward; do
+  printf 'gltf = "cubes_40000.gltf"\n[camera]\nposition = [0.0, 1.5, 0.0]\ntarget = [10.0, 1.0, 0.0]\n' >.bench/many/inside_40000.toml
+  for p in visbuffer deferred forward; do
+    for n in 1024 10000 40000; do
       run draws_${n}_$p 200 --scene .bench/many/cubes_$n.gltf --pipeline $p
     done
+    run draws_inside_40000_$p 200 --scene .bench/many/inside_40000.toml --pipeline $p
   done
 }
 

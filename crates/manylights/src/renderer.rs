@@ -391,7 +391,7 @@ impl Renderer {
             uniforms.previous_clip_from_world = previous.clip_from_world(self.config.width, self.config.height).to_cols_array_2d();
             self.scene.write_frame(&self.ctx.queue, &uniforms);
             self.move_instances(self.time, parity)?;
-            self.scene.order_draws(&self.ctx.queue, camera.position());
+            self.scene.order_draws(&self.ctx.queue, camera.clip_from_world(self.config.width, self.config.height), camera.position());
             // Deformed meshes first: every pass after draws or traces them.
             if let Some(deform) = &mut self.deform {
                 let animation = self.motion.as_ref().and_then(|m| m.animation.as_ref());

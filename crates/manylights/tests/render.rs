@@ -378,6 +378,62 @@ fn a_blended_instance_that_animation_turns_mirrored_is_drawn() {
 }
 
 #[test]
+fn draws_partly_in_view_are_drawn_and_the_view_leaves_out_only_unseen_ones() {
+    // Quads on a grid wider and taller than the view, some straddling its edges, and more beside
+    // and behind the eye: a draw each, or all in one draw, which no view leaves out. The images
+    // must be equal in every pipeline.
+    use glam::{Mat4, Vec4};
+    use manylights::scene::{Instance, Material, Mesh, Primitive, Scene};
+    let mut places: Vec<Vec3> = Vec::new();
+    for i in -9..=9 {
+        for j in -6..=6 {
+            places.push(Vec3::new(i as f32 * 0.7, j as f32 * 0.7, -3.0));
+        }
+    }
+    places.extend([Vec3::new(0.0, 0.0, 3.0), Vec3::new(10.0, 0.0, -1.0), Vec3::new(-10.0, 2.0, -1.0), Vec3::new(0.0, 9.0, -2.0)]);
+    let placed = |p: Vec3| Mat4::from_translation(p) * Mat4::from_scale(Vec3::splat(0.3));
+    let material = Material { base_color_factor: Vec4::new(0.8, 0.5, 0.3, 1.0), ..Default::default() };
+    let base = Scene {
+        materials: vec![material],
+        ambient: Vec3::splat(0.4),
+        lights: vec![point_light(Vec3::new(0.5, 0.5, -1.0), 3.0, 8.0)],
+        ..Default::default()
+    };
+    let apart = Scene {
+        meshes: vec![quad_mesh()],
+        instances: places.iter().map(|&p| Instance { mesh: 0, world_from_local: placed(p) }).collect(),
+        ..base.clone()
+    };
+    let quad = quad_mesh().primitives.remove(0);
+    let mut together = Primitive { vertices: Vec::new(), indices: Vec::new(), material: 0 };
+    for &p in &places {
+        let first = together.vertices.len() as u32;
+        together.vertices.extend(
+            quad.vertices
+                .iter()
+                .map(|v| manylights::scene::Vertex { position: placed(p).transform_point3(Vec3::from(v.position)).to_array(), ..*v }),
+        );
+        together.indices.extend(quad.indices.iter().map(|i| first + i));
+    }
+    let together = Scene {
+        meshes: vec![Mesh { name: "together".into(), primitives: vec![together] }],
+        instances: vec![Instance { mesh: 0, world_from_local: Mat4::IDENTITY }],
+        ..base
+    };
+    let camera = Camera::look_at("ahead", Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 60f32.to_radians(), 0.1);
+    for pipeline in manylights::settings::PipelineKind::ALL {
+        let config = manylights::settings::RenderConfig { pipeline, ..config(WIDTH, HEIGHT, LightMethod::Brute) };
+        let a = render_with(&apart, &camera, config.clone()).1;
+        let b = render_with(&together, &camera, config).1;
+        assert_eq!(max_abs_difference(&a, &b), 0.0, "{}: a draw each differs from one draw", pipeline.name());
+        // The grid's gaps show the background: the view holds both.
+        let quad = luminance(pixel(&a, WIDTH / 2, HEIGHT / 2));
+        let gaps = a.pixels.iter().filter(|p| (luminance(**p) - quad).abs() > 0.1 * quad).count();
+        assert!(gaps > a.pixels.len() / 20 && gaps < a.pixels.len() / 2, "{}: {gaps} pixels unlike a quad's", pipeline.name());
+    }
+}
+
+#[test]
 fn sky_pixels_do_not_show_triangles_of_earlier_frames() {
     // Ids are not cleared between frames: a pixel that turns to sky must be shaded as sky, not as
     // the triangle an earlier frame left there.

@@ -229,6 +229,10 @@ pub struct DrawCommand {
     /// the mesh's space, to place it again when its instance moves.
     pub center: glam::Vec3,
     pub local_center: glam::Vec3,
+    /// The primitive's bounds in world space, which raster passes skip the draw outside the view
+    /// by, and in the mesh's space; `None` for deformed meshes, whose vertices move on the GPU.
+    pub bounds: Option<crate::scene::Aabb>,
+    pub local_bounds: Option<crate::scene::Aabb>,
 }
 
 /// One frame's draws of a kind in the order the raster passes draw them: indices into the scene's
@@ -267,8 +271,8 @@ pub struct GpuScene {
     /// then transparent draws, each as many records as it may hold. `None` where the device cannot
     /// take a first instance (the draw index) from indirect arguments: it draws one call per draw.
     pub(crate) draw_arguments: Option<wgpu::Buffer>,
-    /// The eye `frame_draws` were ordered from; `None` once a draw moved.
-    ordered_from: Option<glam::Vec3>,
+    /// The view (clip from world) and eye `frame_draws` were made for; `None` once a draw moved.
+    ordered_for: Option<(glam::Mat4, glam::Vec3)>,
     pub constants: SceneConstants,
     pub triangle_count: u64,
     /// The record of scene material m as decals use it is `decal_material_base + m` (its textures
@@ -305,45 +309,43 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    /// The opaque draws (indices into `draw_commands`) in the order raster passes submit them:
-    /// opaque before alpha-masked (whose discard defeats early depth tests), each front to back from
-    /// `eye`. Raster passes on our benchmark GPUs are bound by fragment work, and early-Z rejects
-    /// what nearer draws hide.
-    pub fn draw_order(&self, eye: glam::Vec3) -> Vec<u32> {
+    /// The opaque draws in view (indices into `draw_commands`) in the order raster passes submit
+    /// them: opaque before alpha-masked (whose discard defeats early depth tests), each front to
+    /// back from `eye`. Raster passes on our benchmark GPUs are bound by fragment work, and early-Z
+    /// rejects what nearer draws hide.
+    fn draw_order(&self, view: &glam::Mat4, eye: glam::Vec3) -> Vec<u32> {
         // Sorted by keys made once per draw (a non-negative float's bits order as the float does);
         // ties keep the commands' order.
         let mut keyed: Vec<(RasterState, u32, u32)> =
-            self.draw_commands.iter().enumerate().map(|(i, c)| (c.state, c.center.distance_squared(eye).to_bits(), i as u32)).collect();
+            in_view(&self.draw_commands, view).map(|(i, c)| (c.state, c.center.distance_squared(eye).to_bits(), i)).collect();
         keyed.sort_unstable();
         keyed.into_iter().map(|(_, _, i)| i).collect()
     }
 
-    /// The alpha-blended draws (indices into `transparent_draw_commands`) back to front from `eye`
-    /// (by the centres of their bounds), so each blends over what lies behind it. Triangles within a
-    /// draw keep their order.
-    pub fn transparent_order(&self, eye: glam::Vec3) -> Vec<u32> {
-        let mut keyed: Vec<(std::cmp::Reverse<u32>, u32, u32)> = self
-            .transparent_draw_commands
-            .iter()
-            .enumerate()
-            .map(|(i, c)| (std::cmp::Reverse(c.center.distance_squared(eye).to_bits()), c.draw_index, i as u32))
+    /// The alpha-blended draws in view (indices into `transparent_draw_commands`) back to front
+    /// from `eye` (by the centres of their bounds), so each blends over what lies behind it.
+    /// Triangles within a draw keep their order.
+    fn transparent_order(&self, view: &glam::Mat4, eye: glam::Vec3) -> Vec<u32> {
+        let mut keyed: Vec<(std::cmp::Reverse<u32>, u32, u32)> = in_view(&self.transparent_draw_commands, view)
+            .map(|(i, c)| (std::cmp::Reverse(c.center.distance_squared(eye).to_bits()), c.draw_index, i))
             .collect();
         keyed.sort_unstable();
         keyed.into_iter().map(|(_, _, i)| i).collect()
     }
 
-    /// Orders the frame's draws from `eye` ([`frame_draws`](Self::frame_draws)) and writes their
+    /// Orders the frame's draws in the view `view` (clip from world) from `eye`
+    /// ([`frame_draws`](Self::frame_draws)), leaving out those wholly outside it, and writes their
     /// indirect arguments, which land before the next submitted frame; keeps the last order where
-    /// neither the eye nor a draw moved. Call once a frame, after instances move.
-    pub fn order_draws(&mut self, queue: &wgpu::Queue, eye: glam::Vec3) {
-        if self.ordered_from == Some(eye) {
+    /// neither the view nor a draw moved. Call once a frame, after instances move.
+    pub fn order_draws(&mut self, queue: &wgpu::Queue, view: glam::Mat4, eye: glam::Vec3) {
+        if self.ordered_for == Some((view, eye)) {
             return;
         }
-        self.ordered_from = Some(eye);
-        let opaque = self.draw_order(eye);
+        self.ordered_for = Some((view, eye));
+        let opaque = self.draw_order(&view, eye);
         let moving: Vec<u32> =
             opaque.iter().copied().filter(|&c| self.moving_draws[self.draw_commands[c as usize].draw_index as usize]).collect();
-        let transparent = self.transparent_order(eye);
+        let transparent = self.transparent_order(&view, eye);
         let opaque_count = self.draw_commands.len() as u32;
         self.frame_draws = FrameDraws {
             opaque: ordered(&self.draw_commands, opaque, 0),
@@ -491,7 +493,7 @@ impl GpuScene {
             transparent_draw_commands,
             frame_draws: FrameDraws::default(),
             draw_arguments,
-            ordered_from: None,
+            ordered_for: None,
             constants: SceneConstants { sun: scene.sun, environment: environment.lighting, bounds: scene.bounds() },
             triangle_count: scene.drawn_triangle_count() as u64,
             decal_material_base: scene.materials.len() as u32,
@@ -554,11 +556,12 @@ impl GpuScene {
             touched = Some(touched.map_or(draws.clone(), |t| t.start.min(draws.start)..t.end.max(draws.end)));
         }
         if !draw_placements.is_empty() {
-            self.ordered_from = None;
+            self.ordered_for = None;
         }
         for command in self.draw_commands.iter_mut().chain(&mut self.transparent_draw_commands) {
             if let Some(world_from_local) = draw_placements.get(&command.draw_index) {
                 command.center = world_from_local.transform_point3(command.local_center);
+                command.bounds = command.local_bounds.map(|b| b.transformed(&glam::Affine3A::from_mat4(*world_from_local)));
                 command.state.mirrored = world_from_local.determinant() < 0.0;
             }
         }
@@ -615,6 +618,11 @@ impl GpuScene {
     pub fn write_frame(&self, queue: &wgpu::Queue, uniforms: &FrameUniforms) {
         queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(uniforms));
     }
+}
+
+/// `commands` with their indices, but for those wholly outside the view `view` (clip from world).
+fn in_view<'a>(commands: &'a [DrawCommand], view: &'a glam::Mat4) -> impl Iterator<Item = (u32, &'a DrawCommand)> + 'a {
+    commands.iter().enumerate().filter(|(_, c)| !c.bounds.is_some_and(|b| b.outside_view(view))).map(|(i, c)| (i as u32, c))
 }
 
 /// Bytes of one `wgpu::util::DrawIndexedIndirectArgs`.
@@ -720,6 +728,7 @@ impl DrawList {
         };
         // Visibility ids number the drawn triangles from 0 (the background is told by depth).
         let mut next_visibility_id = 0u64;
+        let deformed: BTreeSet<usize> = scene.deformers.iter().map(|d| d.mesh).collect();
         for instance in &scene.instances {
             list.instance_first_draw.push(list.draws.len());
             let (world_from_local, normal_from_local) = draw_transforms(&instance.world_from_local);
@@ -736,6 +745,9 @@ impl DrawList {
                     base_vertex,
                     center: instance.world_from_local.transform_point3(primitive_center(primitive)),
                     local_center: primitive_center(primitive),
+                    bounds: (!deformed.contains(&instance.mesh))
+                        .then(|| primitive_bounds(primitive).transformed(&glam::Affine3A::from_mat4(instance.world_from_local))),
+                    local_bounds: (!deformed.contains(&instance.mesh)).then(|| primitive_bounds(primitive)),
                     state: RasterState {
                         alpha_mask: matches!(material.alpha_mode, AlphaMode::Mask { .. }),
                         double_sided: material.double_sided,
@@ -918,11 +930,15 @@ fn storage_records(device: &wgpu::Device, label: &str, records: Records, limit: 
 }
 
 fn primitive_center(primitive: &crate::scene::Primitive) -> glam::Vec3 {
+    primitive_bounds(primitive).center()
+}
+
+fn primitive_bounds(primitive: &crate::scene::Primitive) -> crate::scene::Aabb {
     let mut bounds = crate::scene::Aabb::EMPTY;
     for v in &primitive.vertices {
         bounds.grow_point(glam::Vec3::from(v.position));
     }
-    bounds.center()
+    bounds
 }
 
 /// Scene textures used as colour (sRGB) and as data (linear); a texture used both ways is in both.

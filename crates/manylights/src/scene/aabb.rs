@@ -1,6 +1,6 @@
 //! Axis-aligned boxes: scene bounds and the volumes of the acceleration structures.
 
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Mat4, Vec3, Vec4};
 
 /// An axis-aligned box, closed on all faces. A box with `min > max` on some axis is empty.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,6 +78,21 @@ impl Aabb {
         self.min * 0.5 + self.max * 0.5
     }
 
+    /// Whether the box lies wholly outside the view of `clip_from_world` (reverse-Z, any far plane):
+    /// past one of its side planes or behind its near plane. Boxes it cannot tell (straddling a
+    /// corner's two planes) count as inside, so this only ever errs towards drawing.
+    pub fn outside_view(&self, clip_from_world: &Mat4) -> bool {
+        let [x, y, z, w] = [0, 1, 2, 3].map(|i| clip_from_world.row(i));
+        // Inside where each plane · (p, 1) ≥ 0: −w ≤ x ≤ w, −w ≤ y ≤ w, z ≤ w (the near plane).
+        let planes: [Vec4; 5] = [w + x, w - x, w + y, w - y, w - z];
+        planes.iter().any(|plane| {
+            let normal = plane.truncate();
+            // The corner furthest along the plane's normal.
+            let corner = Vec3::select(normal.cmpge(Vec3::ZERO), self.max, self.min);
+            normal.dot(corner) + plane.w < 0.0
+        })
+    }
+
     /// Surface area in f64: the SAH compares areas of boxes from 1e-30 to 1e30 in size, whose squares
     /// underflow or overflow f32. Zero for an invalid box.
     pub fn surface_area(&self) -> f64 {
@@ -86,5 +101,42 @@ impl Aabb {
         }
         let e = self.max.as_dvec3() - self.min.as_dvec3();
         2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Camera;
+
+    #[test]
+    fn boxes_wholly_outside_the_view_and_only_those_are_outside_it() {
+        // From 5 m up +z, looking down −z with a 60° vertical field of view over a square image:
+        // the view spans ±tan 30° × distance on both axes (boxes are 1 m deep: their far face
+        // reaches 0.29 m further out).
+        let camera = Camera::look_at("test", Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, 60f32.to_radians(), 0.1);
+        let view = camera.clip_from_world(100, 100);
+        let at = |centre: Vec3, half: f32| Aabb::new(centre - half, centre + half);
+        let edge = 5.0 * 30f32.to_radians().tan();
+        for (name, b) in [
+            ("at the centre", at(Vec3::ZERO, 0.5)),
+            ("straddling the right edge", at(Vec3::new(edge + 0.4, 0.0, 0.0), 0.5)),
+            ("straddling a corner", at(Vec3::new(edge + 0.3, edge + 0.3, 0.0), 0.5)),
+            ("around the eye", at(Vec3::new(0.0, 0.0, 5.0), 1.0)),
+            ("far away ahead", at(Vec3::new(0.0, 0.0, -1.0e4), 1.0)),
+            ("a huge box behind and ahead", Aabb::new(Vec3::splat(-1.0e3), Vec3::splat(1.0e3))),
+        ] {
+            assert!(!b.outside_view(&view), "{name}");
+        }
+        for (name, b) in [
+            ("right of the view", at(Vec3::new(edge + 1.0, 0.0, 0.0), 0.5)),
+            ("left of it", at(Vec3::new(-edge - 1.0, 0.0, 0.0), 0.5)),
+            ("above it", at(Vec3::new(0.0, edge + 1.0, 0.0), 0.5)),
+            ("below it", at(Vec3::new(0.0, -edge - 1.0, 0.0), 0.5)),
+            ("behind the eye", at(Vec3::new(0.0, 0.0, 7.0), 0.5)),
+            ("between the eye and the near plane", at(Vec3::new(0.0, 0.0, 4.95), 0.01)),
+        ] {
+            assert!(b.outside_view(&view), "{name}");
+        }
     }
 }
