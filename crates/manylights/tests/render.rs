@@ -379,15 +379,17 @@ fn a_blended_instance_that_animation_turns_mirrored_is_drawn() {
 
 #[test]
 fn draws_partly_in_view_are_drawn_and_the_view_leaves_out_only_unseen_ones() {
-    // Quads on a grid wider and taller than the view, some straddling its edges, and more beside
-    // and behind the eye: a draw each, or all in one draw, which no view leaves out. The images
-    // must be equal in every pipeline.
+    // Quads on a grid wider and taller than the view, some straddling each of its edges, and more
+    // beside and behind the eye: a draw each, or all in one draw, which no view leaves out. The
+    // images must be equal in every pipeline.
     use glam::{Mat4, Vec4};
     use manylights::scene::{Instance, Material, Mesh, Primitive, Scene};
     let mut places: Vec<Vec3> = Vec::new();
-    for i in -9..=9 {
-        for j in -6..=6 {
-            places.push(Vec3::new(i as f32 * 0.7, j as f32 * 0.7, -3.0));
+    // At 3 m the view reaches ±3.08 m across and ±1.73 m up: the outer columns (±3.2 m) and rows
+    // (±1.6 m) of 0.6 m quads straddle its edges.
+    for i in -8..=8 {
+        for j in -5..=5 {
+            places.push(Vec3::new(i as f32 * 0.8, j as f32 * 0.8, -3.0));
         }
     }
     places.extend([Vec3::new(0.0, 0.0, 3.0), Vec3::new(10.0, 0.0, -1.0), Vec3::new(-10.0, 2.0, -1.0), Vec3::new(0.0, 9.0, -2.0)]);
@@ -423,14 +425,36 @@ fn draws_partly_in_view_are_drawn_and_the_view_leaves_out_only_unseen_ones() {
     let camera = Camera::look_at("ahead", Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 60f32.to_radians(), 0.1);
     for pipeline in manylights::settings::PipelineKind::ALL {
         let config = manylights::settings::RenderConfig { pipeline, ..config(WIDTH, HEIGHT, LightMethod::Brute) };
-        let a = render_with(&apart, &camera, config.clone()).1;
+        let mut renderer =
+            manylights::renderer::Renderer::new(GpuContext::new().expect("a GPU adapter"), &apart, config.clone()).expect("renderer");
+        renderer.render(&camera).expect("frame");
+        let a = renderer.read_hdr().expect("hdr");
+        let drawn = renderer.scene.drawn_count();
+        // 9 columns × 5 rows reach into the view; the rest lie outside it.
+        assert!((40..=50).contains(&drawn), "{}: {drawn} of {} draws drawn", pipeline.name(), places.len());
         let b = render_with(&together, &camera, config).1;
         assert_eq!(max_abs_difference(&a, &b), 0.0, "{}: a draw each differs from one draw", pipeline.name());
         // The grid's gaps show the background: the view holds both.
         let quad = luminance(pixel(&a, WIDTH / 2, HEIGHT / 2));
         let gaps = a.pixels.iter().filter(|p| (luminance(**p) - quad).abs() > 0.1 * quad).count();
-        assert!(gaps > a.pixels.len() / 20 && gaps < a.pixels.len() / 2, "{}: {gaps} pixels unlike a quad's", pipeline.name());
+        assert!(gaps > a.pixels.len() / 20 && gaps < a.pixels.len() * 3 / 4, "{}: {gaps} pixels unlike a quad's", pipeline.name());
     }
+    // An instance flying in from outside the view is drawn where it arrives: its bounds move too.
+    let mut flying = apart.clone();
+    flying.materials.push(Material { base_color_factor: Vec4::new(0.0, 1.0, 0.0, 1.0), unlit: true, ..Default::default() });
+    let mut green = quad_mesh();
+    green.primitives[0].material = 1;
+    flying.meshes.push(green);
+    flying.instances.push(Instance { mesh: 1, world_from_local: placed(Vec3::new(10.0, 0.0, -2.0)) });
+    // At 0.095 s of 0.1 it is 0.025 m right of the view's centre.
+    fly(&mut flying, places.len(), Vec3::new(10.0, 0.0, -2.0), Vec3::new(-0.5, 0.0, -2.0));
+    let mut renderer =
+        manylights::renderer::Renderer::new(GpuContext::new().expect("a GPU adapter"), &flying, config(WIDTH, HEIGHT, LightMethod::Brute))
+            .expect("renderer");
+    renderer.time = 0.095;
+    renderer.render(&camera).expect("frame");
+    let centre = pixel(&renderer.read_hdr().expect("hdr"), WIDTH / 2, HEIGHT / 2);
+    assert!(centre[1] > 0.9 && centre[0] < 0.1, "the quad that flew into the view is not drawn: {centre:?}");
 }
 
 #[test]

@@ -246,14 +246,14 @@ pub struct OrderedDraws {
     pub first_argument: u32,
 }
 
-/// The frame's draw orders ([`GpuScene::order_draws`]).
+/// The frame's draws in view, in the orders [`GpuScene::order_draws`] gives them.
 #[derive(Clone, Debug, Default)]
 pub struct FrameDraws {
-    /// Opaque and alpha-masked draws ([`GpuScene::draw_order`]).
+    /// Opaque and alpha-masked draws, front to back.
     pub opaque: OrderedDraws,
     /// Those of them that move: animated instances', deformed meshes'.
     pub moving: OrderedDraws,
-    /// Alpha-blended draws, back to front ([`GpuScene::transparent_order`]).
+    /// Alpha-blended draws, back to front.
     pub transparent: OrderedDraws,
 }
 
@@ -331,6 +331,11 @@ impl GpuScene {
             .collect();
         keyed.sort_unstable();
         keyed.into_iter().map(|(_, _, i)| i).collect()
+    }
+
+    /// How many of the scene's draws (opaque and blended) the last frame drew: those in its view.
+    pub fn drawn_count(&self) -> usize {
+        self.frame_draws.opaque.commands.len() + self.frame_draws.transparent.commands.len()
     }
 
     /// Orders the frame's draws in the view `view` (clip from world) from `eye`

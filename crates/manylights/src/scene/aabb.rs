@@ -107,17 +107,29 @@ impl Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::Camera;
+    use crate::scene::{Camera, Projection};
 
     #[test]
     fn boxes_wholly_outside_the_view_and_only_those_are_outside_it() {
         // From 5 m up +z, looking down −z with a 60° vertical field of view over a square image:
         // the view spans ±tan 30° × distance on both axes (boxes are 1 m deep: their far face
-        // reaches 0.29 m further out).
+        // reaches 0.29 m further out); with a far plane too, and orthographic, as wide at 5 m.
         let camera = Camera::look_at("test", Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, 60f32.to_radians(), 0.1);
+        let edge = 5.0 * 30f32.to_radians().tan();
+        let far =
+            Camera { projection: Projection::Perspective { yfov: 60f32.to_radians(), znear: 0.1, zfar: Some(1.0e5) }, ..camera.clone() };
+        let orthographic = Camera {
+            projection: Projection::Orthographic { xmag: edge + 0.29, ymag: edge + 0.29, znear: 0.1, zfar: 1.0e5 },
+            ..camera.clone()
+        };
+        for camera in [camera, far, orthographic] {
+            check_view(&camera, edge);
+        }
+    }
+
+    fn check_view(camera: &Camera, edge: f32) {
         let view = camera.clip_from_world(100, 100);
         let at = |centre: Vec3, half: f32| Aabb::new(centre - half, centre + half);
-        let edge = 5.0 * 30f32.to_radians().tan();
         for (name, b) in [
             ("at the centre", at(Vec3::ZERO, 0.5)),
             ("straddling the right edge", at(Vec3::new(edge + 0.4, 0.0, 0.0), 0.5)),
@@ -126,7 +138,7 @@ mod tests {
             ("far away ahead", at(Vec3::new(0.0, 0.0, -1.0e4), 1.0)),
             ("a huge box behind and ahead", Aabb::new(Vec3::splat(-1.0e3), Vec3::splat(1.0e3))),
         ] {
-            assert!(!b.outside_view(&view), "{name}");
+            assert!(!b.outside_view(&view), "{:?}: {name}", camera.projection);
         }
         for (name, b) in [
             ("right of the view", at(Vec3::new(edge + 1.0, 0.0, 0.0), 0.5)),
@@ -136,7 +148,7 @@ mod tests {
             ("behind the eye", at(Vec3::new(0.0, 0.0, 7.0), 0.5)),
             ("between the eye and the near plane", at(Vec3::new(0.0, 0.0, 4.95), 0.01)),
         ] {
-            assert!(b.outside_view(&view), "{name}");
+            assert!(b.outside_view(&view), "{:?}: {name}", camera.projection);
         }
     }
 }
