@@ -982,18 +982,18 @@ mod tests {
             methods.material_constants(),
             [("MATERIAL_EXTENSIONS", 0.0), ("VERTEX_COLORS", 0.0), ("OCCLUSION_TEXTURES", 0.0), ("SECOND_UV_SET", 0.0)]
         );
-        let coated = SceneStatistics { material_extensions: true, ..Default::default() };
-        let methods = FramePlan::resolve(&bvh, SUBGROUPS, &coated).unwrap().shading_methods(true);
-        assert_eq!(methods.material_constants()[0], ("MATERIAL_EXTENSIONS", 1.0));
-        let colored = SceneStatistics { vertex_colors: true, ..Default::default() };
-        let methods = FramePlan::resolve(&bvh, SUBGROUPS, &colored).unwrap().shading_methods(true);
-        assert_eq!(methods.material_constants()[1], ("VERTEX_COLORS", 1.0));
-        let occluded = SceneStatistics { occlusion_textures: true, ..Default::default() };
-        let methods = FramePlan::resolve(&bvh, SUBGROUPS, &occluded).unwrap().shading_methods(true);
-        assert_eq!(methods.material_constants()[2], ("OCCLUSION_TEXTURES", 1.0));
-        let second_set = SceneStatistics { second_uv_set: true, ..Default::default() };
-        let methods = FramePlan::resolve(&bvh, SUBGROUPS, &second_set).unwrap().shading_methods(true);
-        assert_eq!(methods.material_constants()[3], ("SECOND_UV_SET", 1.0));
+        let scenes = [
+            SceneStatistics { material_extensions: true, ..Default::default() },
+            SceneStatistics { vertex_colors: true, ..Default::default() },
+            SceneStatistics { occlusion_textures: true, ..Default::default() },
+            SceneStatistics { second_uv_set: true, ..Default::default() },
+        ];
+        for (index, (stats, name)) in
+            scenes.iter().zip(["MATERIAL_EXTENSIONS", "VERTEX_COLORS", "OCCLUSION_TEXTURES", "SECOND_UV_SET"]).enumerate()
+        {
+            let methods = FramePlan::resolve(&bvh, SUBGROUPS, stats).unwrap().shading_methods(true);
+            assert_eq!(methods.material_constants()[index], (name, 1.0));
+        }
     }
 
     #[test]

@@ -371,13 +371,7 @@ fn the_importer_reads_occlusion_on_the_first_two_coordinates_and_refuses_a_bad_s
             "images": [{{"uri": "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="}}]}}"#
         )
     };
-    let import = |json: String| {
-        let path = std::env::temp_dir().join(format!("manylights-occlusion-{}-{}.gltf", std::process::id(), json.len()));
-        std::fs::write(&path, json).unwrap();
-        let scene = manylights::scene::gltf::import(&path);
-        std::fs::remove_file(&path).ok();
-        scene
-    };
+    let import = |json: String| import_gltf_json(&json);
     let scene = import(gltf(
         r#"{"occlusionTexture": {"index": 0, "strength": 0.3}}, {"occlusionTexture": {"index": 0, "texCoord": 1}},
            {"occlusionTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"texCoord": 1}}}},
@@ -401,9 +395,7 @@ fn the_importer_reads_the_material_extensions() {
                             "KHR_materials_clearcoat": {"clearcoatFactor": 0.9, "clearcoatRoughnessFactor": 0.25}}},
             {"extensions": {"KHR_materials_unlit": {}}}
         ]}"#;
-    let path = std::env::temp_dir().join(format!("manylights-materials-{}.gltf", std::process::id()));
-    std::fs::write(&path, json).unwrap();
-    let scene = manylights::scene::gltf::import(&path).unwrap();
+    let scene = import_gltf_json(json).unwrap();
     let (coated, unlit) = (&scene.materials[0], &scene.materials[1]);
     assert_eq!((coated.specular.ior, coated.specular.factor), (1.7, 0.3));
     assert_eq!(coated.specular.color_factor, Vec3::new(1.0, 0.8, 0.6));

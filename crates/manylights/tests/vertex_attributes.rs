@@ -174,11 +174,7 @@ fn triangle_with_colors(color_accessor: &str, data: &[u8], stride: usize) -> Res
         base64::encode(&buffer),
         data.len()
     );
-    let path = std::env::temp_dir().join(format!("manylights-colors-{}-{}-{stride}.gltf", std::process::id(), data.len()));
-    std::fs::write(&path, json).unwrap();
-    let scene = manylights::scene::gltf::import(&path);
-    std::fs::remove_file(&path).ok();
-    scene
+    import_gltf_json(&json)
 }
 
 #[test]
@@ -298,11 +294,7 @@ fn triangles_with_two_sets(materials: &str) -> Result<Scene, manylights::Error> 
         buffer.len(),
         base64::encode(&buffer),
     );
-    let path = std::env::temp_dir().join(format!("manylights-uv-sets-{}-{}.gltf", std::process::id(), json.len()));
-    std::fs::write(&path, json).unwrap();
-    let scene = manylights::scene::gltf::import(&path);
-    std::fs::remove_file(&path).ok();
-    scene
+    import_gltf_json(&json)
 }
 
 #[test]

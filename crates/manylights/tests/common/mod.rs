@@ -17,6 +17,18 @@ use manylights::{
     settings::{RenderConfig, Tonemapper},
 };
 
+/// Imports a glTF document given as JSON text (written to a file of its own under the temporary
+/// directory, removed after).
+pub fn import_gltf_json(json: &str) -> manylights::Result<Scene> {
+    static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let path = std::env::temp_dir().join(format!("manylights-test-{}-{n}.gltf", std::process::id()));
+    std::fs::write(&path, json).unwrap();
+    let scene = manylights::scene::gltf::import(&path);
+    std::fs::remove_file(&path).ok();
+    scene
+}
+
 pub const WIDTH: u32 = 256;
 pub const HEIGHT: u32 = 144;
 
