@@ -11,6 +11,8 @@ the GPU machine; scripts/bench-device.sh reads them):
                               on every primitive, buffers and textures shared (`materials`)
   .bench/sponza_uv1/          sponza_lite with every texture read through TEXCOORD_1 (TEXCOORD_0's
                               accessor named again), buffers and textures shared (`materials`)
+  .bench/sponza_glass/        sponza_lite with its fabrics and vases transmissive: transmission 0.9, ior 1.5, a
+                              medium 2 cm deep tinted (0.9, 0.8, 0.6) after 5 cm (`materials`)
   .bench/many/cubes_N.gltf    N = 1,024, 10,000 and 40,000 cubes of 0.4 m, a draw each, on a grid 1 m
                               apart over a floor (EXT_mesh_gpu_instancing) (`draws`)
 """
@@ -198,6 +200,22 @@ def colored(source, out):
         json.dump(document, f)
 
 
+def glass(source, out):
+    document = sponza_copy(source)
+    for material in document.get("materials", []):
+        if material.get("name", "").startswith(("Fabric", "Vase")):
+            extensions = material.setdefault("extensions", {})
+            extensions["KHR_materials_transmission"] = {"transmissionFactor": 0.9}
+            extensions["KHR_materials_volume"] = {
+                "thicknessFactor": 0.02, "attenuationDistance": 0.05, "attenuationColor": [0.9, 0.8, 0.6]
+            }
+    used = set(document.get("extensionsUsed", [])) | {"KHR_materials_transmission", "KHR_materials_volume"}
+    document["extensionsUsed"] = sorted(used)
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "Sponza.gltf"), "w") as f:
+        json.dump(document, f)
+
+
 def second_set(source, out):
     document = sponza_copy(source)
     for mesh in document["meshes"]:
@@ -225,5 +243,6 @@ if __name__ == "__main__":
     coated(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_coated")
     colored(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_colored")
     second_set(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_uv1")
+    glass(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_glass")
     for side in (32, 100, 200):
         cubes(side, ".bench/many")

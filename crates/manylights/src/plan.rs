@@ -306,6 +306,10 @@ pub struct ShadingMethods {
     /// `shading/material.wgsl`, a pipeline constant: [`ShadingMethods::material_constants`]);
     /// without, the shading passes never choose it.
     pub second_uv_set: bool,
+    /// Some material lets light through (`KHR_materials_transmission`): the transparent pass reads
+    /// the light behind its surfaces from a mip chain of the opaque image
+    /// (`passes/transmission_background.rs`, `shading/transmitted_screen.wgsl`).
+    pub transmission: bool,
 }
 
 impl ShadingMethods {
@@ -533,7 +537,7 @@ pub struct SceneStatistics {
     /// Surfaces move: the scene's animation moves instances of its meshes, or meshes deform.
     pub animated_instances: bool,
     /// Some material uses an extension the shading core evaluates beyond glTF's core material
-    /// (its own index of refraction or specular, a clear coat, unlit).
+    /// (its own index of refraction or specular, a clear coat, transmission, unlit).
     pub material_extensions: bool,
     /// Some vertex has a colour other than white.
     pub vertex_colors: bool,
@@ -541,6 +545,8 @@ pub struct SceneStatistics {
     pub occlusion_textures: bool,
     /// Some material's texture reads `TEXCOORD_1`.
     pub second_uv_set: bool,
+    /// Some material lets light through.
+    pub transmission: bool,
 }
 
 /// Which statistics the plan reads for these settings, so that nothing else is measured.
@@ -681,6 +687,7 @@ impl FramePlan {
             vertex_colors: stats.vertex_colors,
             occlusion_textures: stats.occlusion_textures,
             second_uv_set: stats.second_uv_set,
+            transmission: stats.transmission,
         };
         // Lights and decals crowded enough get wide leaves, walked a subgroup at a time, their leaves
         // shared out; decals, as one group placed once, cell lists too. Groups rebuilt every frame get

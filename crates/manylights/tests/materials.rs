@@ -2,7 +2,8 @@
 //! `KHR_materials_ior`, `KHR_materials_specular` and `KHR_materials_clearcoat` shade a wall under a
 //! point light as their specifications' formulas say, computed here on the CPU, in every pipeline;
 //! their textures scale their factors; `KHR_materials_unlit` shows its base colour whatever lights
-//! it; and the importer reads all four from a glTF file. glTF's occlusion texture darkens the
+//! it; and the importer reads all four from a glTF file, and `KHR_materials_transmission` with
+//! `KHR_materials_volume` (rendered in `transparent.rs`). glTF's occlusion texture darkens the
 //! environment's light alone, and not what traced reflections see.
 
 mod common;
@@ -12,7 +13,7 @@ use std::f32::consts::PI;
 use common::*;
 use glam::{Vec3, Vec4};
 use manylights::{
-    scene::{Clearcoat, Light, Material, Scene, Specular, Texture, TextureRef, Wrap},
+    scene::{AlphaMode, Clearcoat, Light, Material, Scene, Specular, Texture, TextureRef, Transmission, Wrap},
     settings::{LightMethod, PipelineKind, RenderConfig},
 };
 
@@ -402,4 +403,41 @@ fn the_importer_reads_the_material_extensions() {
     let coat = coated.clearcoat.expect("a clear coat");
     assert_eq!((coat.factor, coat.roughness_factor), (0.9, 0.25));
     assert!(!coated.unlit && unlit.unlit && unlit.clearcoat.is_none());
+}
+
+#[test]
+fn the_importer_reads_transmission_and_its_medium() {
+    let gltf = |materials: &str| {
+        format!(
+            r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_volume"],
+            "materials": [{materials}], "textures": [{{"source": 0}}],
+            "images": [{{"uri": "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="}}]}}"#
+        )
+    };
+    let scene = import_gltf_json(&gltf(
+        r#"{"extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.8, "transmissionTexture": {"index": 0}},
+                           "KHR_materials_volume": {"thicknessFactor": 0.2, "thicknessTexture": {"index": 0, "texCoord": 1},
+                                                    "attenuationDistance": 0.5, "attenuationColor": [0.9, 0.6, 0.3]}}},
+           {"extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}},
+           {"extensions": {"KHR_materials_transmission": {}}}"#,
+    ))
+    .unwrap();
+    let glass = scene.materials[0].transmission.expect("transmission");
+    assert_eq!((glass.factor, glass.thickness_factor, glass.attenuation_distance), (0.8, 0.2, 0.5));
+    assert_eq!(glass.attenuation_color, Vec3::new(0.9, 0.6, 0.3));
+    assert_eq!((glass.texture.map(|t| t.tex_coord), glass.thickness_texture.map(|t| t.tex_coord)), (Some(0), Some(1)));
+    // Without KHR_materials_volume a surface is thin-walled and clear; a factor of 0 lets nothing through.
+    assert_eq!(scene.materials[1].transmission, Some(Transmission::thin(1.0)));
+    assert!(scene.materials[2].transmission.is_none() && scene.materials.iter().all(|m| m.alpha_mode == AlphaMode::Opaque));
+    for (bad, named) in [
+        (r#""KHR_materials_transmission": {"transmissionFactor": 1.5}"#, "transmission factor 1.5"),
+        (
+            r#""KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_volume": {"attenuationDistance": 0}"#,
+            "attenuation distance 0",
+        ),
+        (r#""KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_volume": {"thicknessFactor": -1}"#, "thickness -1"),
+    ] {
+        let error = import_gltf_json(&gltf(&format!(r#"{{"extensions": {{{bad}}}}}"#))).unwrap_err().to_string();
+        assert!(error.contains(named), "{error}");
+    }
 }

@@ -1,7 +1,9 @@
 //! Transparent surfaces (glTF BLEND materials): drawn after the opaque surfaces in every pipeline,
 //! blended back to front over what lies behind them, hidden behind opaque surfaces, and lit and
 //! decaled by the shading core through the frame's methods — which deferred decals, living in the
-//! G-buffer, cannot do.
+//! G-buffer, cannot do. Transmissive surfaces (KHR_materials_transmission, KHR_materials_volume):
+//! the light behind them through their colour and medium, refracted and blurred by roughness, and
+//! no traced shadow.
 
 mod common;
 
@@ -11,8 +13,9 @@ use manylights::{
     gpu::GpuContext,
     renderer::{Image, Renderer},
     scene::{demo::demo_scene, generators, generators::ScatterLights, AlphaMode, Camera, Decal, Instance, Material, Scene},
-    settings::RenderConfig,
+    scene::{Specular, Sun, Texture, TextureRef, Transmission, Wrap},
     settings::{DecalMethod, LightMethod, PipelineKind},
+    settings::{RaySettings, RenderConfig, SunShadows},
 };
 
 const TOLERANCE: f32 = 1e-3;
@@ -159,4 +162,202 @@ fn transparent_surfaces_need_float32_blending() {
     let error = Renderer::new(ctx, &scene, config(32, 18, LightMethod::Brute)).err().expect("an error without float32 blending");
     let message = error.to_string();
     assert!(message.contains("BLEND") && message.contains("float32-blendable"), "{message}");
+}
+
+/// A thin pane at `z` letting `transmission` through, of base colour `color`, reflecting nothing
+/// (specular factor 0), with `alpha` in its base colour that its OPAQUE mode ignores.
+fn transmissive_pane(scene: &mut Scene, z: f32, color: Vec3, transmission: Transmission) {
+    scene.materials.push(Material {
+        name: "transmissive".into(),
+        base_color_factor: color.extend(0.3),
+        metallic_factor: 0.0,
+        roughness_factor: 0.0,
+        specular: Specular { factor: 0.0, ..Default::default() },
+        transmission: Some(transmission),
+        ..Default::default()
+    });
+    let mut pane = quad_mesh();
+    pane.primitives[0].material = scene.materials.len() - 1;
+    scene.meshes.push(pane);
+    scene.instances.push(Instance { mesh: scene.meshes.len() - 1, world_from_local: Mat4::from_translation(Vec3::new(0.0, 0.0, z)) });
+}
+
+/// One texel of R = G = 128 (linear data ≈ 0.5).
+fn half_texture() -> Texture {
+    Texture { name: "half".into(), width: 1, height: 1, rgba8: vec![128, 128, 0, 255] }
+}
+
+fn texture(index: usize) -> TextureRef {
+    TextureRef::new(index, Wrap::Repeat, Wrap::Repeat)
+}
+
+#[test]
+fn transmissive_panes_pass_the_light_behind_them_through_their_colour_and_medium() {
+    const TINT: Vec3 = Vec3::new(0.5, 1.0, 0.25);
+    let (wall, camera) = ambient_wall();
+    // Relative: the background is stored in half floats.
+    let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() <= 2e-3 * b.max_element().max(0.1);
+    for pipeline in PipelineKind::ALL {
+        let name = pipeline.name();
+        let (wall_radiance, _) = centre_and_corner(&wall, &camera, pipeline);
+        // Wholly transmissive: the wall behind, through the pane's colour, however a light in front
+        // lights the pane; its alpha does not blend.
+        let light = point_light(Vec3::new(0.3, 0.2, 2.0), 2.0, 6.0);
+        let (mut lit_wall, _) = ambient_wall();
+        lit_wall.lights.push(light);
+        let (lit_wall_radiance, lit_corner) = centre_and_corner(&lit_wall, &camera, pipeline);
+        let mut full = lit_wall.clone();
+        transmissive_pane(&mut full, 1.0, TINT, Transmission::thin(1.0));
+        let (centre, corner) = centre_and_corner(&full, &camera, pipeline);
+        let expected = TINT * lit_wall_radiance;
+        assert!(close(centre, expected), "{name}: through the pane {centre}, expected {expected}");
+        assert!(close(corner, lit_corner), "{name}: the pane reaches the corner: {corner}");
+
+        // Part: the rest is the diffuse lobe, which the uniform environment lights to the base colour.
+        // The factor, then the same through the transmission texture's R.
+        let half_texel = 128.0 / 255.0;
+        for (transmission, share) in
+            [(Transmission::thin(0.5), 0.5), (Transmission { texture: Some(texture(0)), ..Transmission::thin(1.0) }, half_texel)]
+        {
+            let (mut part, _) = ambient_wall();
+            part.textures.push(half_texture());
+            transmissive_pane(&mut part, 1.0, TINT, transmission);
+            let (centre, _) = centre_and_corner(&part, &camera, pipeline);
+            let expected = TINT * wall_radiance * share + TINT * (1.0 - share);
+            assert!(close(centre, expected), "{name}: {share} transmissive {centre}, expected {expected}");
+        }
+
+        // A medium 1 m × the thickness texture's G (≈ 0.5) deep in the mesh's units, scaled by 2,
+        // entered at an index of 1 (unbent): Beer's law leaves the attenuation colour to the power
+        // of its depth ÷ 0.25 m.
+        let attenuation_color = Vec3::new(0.5, 0.8, 1.0);
+        let (mut thick, _) = ambient_wall();
+        thick.textures.push(half_texture());
+        let medium = Transmission {
+            thickness_factor: 1.0,
+            thickness_texture: Some(texture(0)),
+            attenuation_distance: 0.25,
+            attenuation_color,
+            ..Transmission::thin(1.0)
+        };
+        transmissive_pane(&mut thick, 1.0, Vec3::ONE, medium);
+        thick.materials.last_mut().unwrap().specular.ior = 1.0;
+        thick.instances.last_mut().unwrap().world_from_local =
+            Mat4::from_translation(Vec3::new(0.0, 0.0, 1.0)) * Mat4::from_scale(Vec3::splat(2.0));
+        let (centre, _) = centre_and_corner(&thick, &camera, pipeline);
+        let expected = attenuation_color.powf(2.0 * half_texel / 0.25) * wall_radiance;
+        assert!(close(centre, expected), "{name}: through the medium {centre}, expected {expected}");
+    }
+}
+
+/// Where `split_wall` changes colour.
+const EDGE_X: f32 = 1.6;
+
+/// A wall whose part left of `EDGE_X` is `ambient_wall`'s and the rest orange, lit by the uniform
+/// environment, seen as `ambient_wall` is.
+fn split_wall() -> (Scene, Camera) {
+    let (mut scene, camera) = ambient_wall();
+    scene.materials.push(Material { base_color_factor: Vec4::new(0.9, 0.5, 0.1, 1.0), ..scene.materials[0].clone() });
+    let mut right = quad_mesh();
+    right.primitives[0].material = 1;
+    scene.meshes.push(right);
+    // The right part, 1 mm in front of the left one.
+    scene.instances.push(Instance {
+        mesh: 1,
+        world_from_local: Mat4::from_translation(Vec3::new(EDGE_X + 5.0, 0.0, 0.001)) * Mat4::from_scale(Vec3::new(5.0, 10.0, 1.0)),
+    });
+    (scene, camera)
+}
+
+#[test]
+fn thick_media_refract_and_rough_ones_blur_the_light_behind_them() {
+    // A pane at z = 2 (2 m from the eye at z = 4) bounding a medium 1.5 m deep of index 1.5: rays
+    // bend towards its normal, so the wall's edge is seen further out than straight through.
+    let (width, height) = (160, 90);
+    let (ior, depth, pane_z, eye_z) = (1.5f32, 1.5f32, 2.0f32, 4.0f32);
+    let refracting = |roughness: f32| {
+        let (mut scene, camera) = split_wall();
+        let medium = Transmission { thickness_factor: depth, ..Transmission::thin(1.0) };
+        transmissive_pane(&mut scene, pane_z, Vec3::ONE, medium);
+        let material = scene.materials.last_mut().unwrap();
+        material.specular.ior = ior;
+        material.roughness_factor = roughness;
+        scene.instances.last_mut().unwrap().world_from_local = Mat4::from_translation(Vec3::new(0.0, 0.0, pane_z));
+        (scene, camera)
+    };
+    let row = |scene: &Scene, camera: &Camera| -> Vec<Vec3> {
+        let (_, hdr) =
+            render_with(scene, camera, configured(PipelineKind::Visbuffer, LightMethod::Brute, DecalMethod::Brute, (width, height)));
+        (0..width).map(|x| rgb(pixel(&hdr, x, height / 2))).collect()
+    };
+    let (wall, camera) = split_wall();
+    let bare = row(&wall, &camera);
+    let (left, right) = (bare[width as usize / 2], bare[width as usize - 1]);
+    let (sharp, _) = refracting(0.0);
+    let seen = row(&sharp, &camera);
+    // Where the eye's ray through each column's centre leaves the medium, and the wall point the
+    // eye sees there (the background image is read at that point's pixel).
+    let half_width = (30f32.to_radians().tan() * width as f32 / height as f32) * (eye_z - pane_z);
+    let mut bent_columns = 0;
+    for x in 0..width {
+        let pane_x = ((x as f32 + 0.5) / width as f32 * 2.0 - 1.0) * half_width;
+        if pane_x.abs() > 1.0 {
+            continue; // off the pane
+        }
+        let view = Vec3::new(pane_x, 0.0, pane_z - eye_z).normalize();
+        let cos_in = -view.z;
+        let sin_out = (1.0 - cos_in * cos_in).sqrt() / ior;
+        let refracted = Vec3::new(sin_out * pane_x.signum(), 0.0, -(1.0 - sin_out * sin_out).sqrt());
+        let exit = Vec3::new(pane_x, 0.0, pane_z) + refracted * depth;
+        let wall_x = exit.x * eye_z / (eye_z - exit.z);
+        let straight_x = pane_x * eye_z / (eye_z - pane_z);
+        // Columns a pixel or more from the edge as the refracted ray sees it.
+        let pixel_on_wall = 2.0 * 30f32.to_radians().tan() * eye_z / height as f32;
+        if (wall_x - EDGE_X).abs() < 1.5 * pixel_on_wall {
+            continue;
+        }
+        let expected = if wall_x < EDGE_X { left } else { right };
+        let got = seen[x as usize];
+        assert!(
+            (got - expected).abs().max_element() < 0.02 * expected.max_element(),
+            "column {x}: {got}, expected {expected} (wall x {wall_x})"
+        );
+        bent_columns += usize::from((wall_x < EDGE_X) != (straight_x < EDGE_X));
+    }
+    assert!(bent_columns >= 3, "only {bent_columns} columns see across the edge through the medium");
+
+    // Fully rough: the edge spreads over many columns.
+    let (rough, _) = refracting(1.0);
+    let blurred = row(&rough, &camera);
+    let mixed =
+        |row: &[Vec3]| row.iter().filter(|c| (**c - left).abs().max_element() > 0.05 && (**c - right).abs().max_element() > 0.05).count();
+    assert!(mixed(&seen) <= 3 && mixed(&blurred) >= 8, "edge columns: sharp {}, rough {}", mixed(&seen), mixed(&blurred));
+}
+
+#[test]
+fn transmissive_surfaces_cast_no_traced_shadow() {
+    // The sun shines from +X, 2 m across for every metre down: a pane at z = 1 over x in [-1, 1]
+    // shades the wall over x in [-3, -1], left of where the eye sees the pane.
+    // No pane, a transmissive one, or the same pane opaque.
+    let sunlit = |pane: Option<Option<Transmission>>| {
+        let (mut scene, camera) = ambient_wall();
+        scene.sun = Some(Sun { direction: Vec3::new(-2.0, 0.0, -1.0).normalize(), color: Vec3::ONE, illuminance: 2.0 });
+        if let Some(transmission) = pane {
+            transmissive_pane(&mut scene, 1.0, Vec3::ONE, Transmission::thin(1.0));
+            scene.materials.last_mut().unwrap().transmission = transmission;
+        }
+        let rays = RaySettings { sun_shadows: SunShadows::Hard, ..config(64, 36, LightMethod::Brute).rays };
+        let config = RenderConfig { rays, ..configured(PipelineKind::Visbuffer, LightMethod::Brute, DecalMethod::Brute, (64, 36)) };
+        let (_, hdr) = render_with(&scene, &camera, config);
+        // Wall x = -2.2 m, on the middle row.
+        rgb(pixel(&hdr, 14, 18))
+    };
+    let bare = sunlit(None);
+    let through_glass = sunlit(Some(Some(Transmission::thin(1.0))));
+    let behind_opaque = sunlit(Some(None));
+    assert!((through_glass - bare).abs().max_element() <= 1e-4, "the transmissive pane shades the wall: {through_glass} against {bare}");
+    assert!(
+        behind_opaque.max_element() < 0.8 * bare.max_element(),
+        "the opaque pane casts no shadow there: {behind_opaque} against {bare}"
+    );
 }

@@ -135,7 +135,7 @@ pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<Sce
         material_extensions: scene
             .materials
             .iter()
-            .any(|m| m.unlit || m.clearcoat.is_some() || m.specular != crate::scene::Specular::default()),
+            .any(|m| m.unlit || m.clearcoat.is_some() || m.transmission.is_some() || m.specular != crate::scene::Specular::default()),
         vertex_colors: scene
             .meshes
             .iter()
@@ -143,6 +143,7 @@ pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<Sce
             .any(|p| p.vertices.iter().any(|v| v.color != crate::scene::Vertex::WHITE)),
         occlusion_textures: scene.materials.iter().any(|m| m.occlusion_texture.is_some()),
         second_uv_set: scene.materials.iter().flat_map(|m| m.textures()).any(|(t, _)| t.tex_coord == 1),
+        transmission: scene.materials.iter().any(|m| m.transmission.is_some()),
     })
 }
 

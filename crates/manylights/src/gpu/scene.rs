@@ -40,7 +40,7 @@ pub struct GpuMaterial {
     pub metallic_factor: f32,
     pub roughness_factor: f32,
     pub normal_scale: f32,
-    /// MATERIAL_UNLIT, MATERIAL_CLEARCOAT.
+    /// MATERIAL_UNLIT, MATERIAL_CLEARCOAT, MATERIAL_TRANSMISSION, MATERIAL_BLENDED.
     pub flags: u32,
     pub base_color_layer: i32,
     pub emissive_layer: i32,
@@ -62,6 +62,17 @@ pub struct GpuMaterial {
     pub occlusion_layer: i32,
     /// Four bits a texture slot, `(wrap_v << 2) | wrap_u`, eight slots a word, in the slots' order.
     pub wrap_modes: [u32; 2],
+    /// The medium behind a transmissive surface: its colour after `attenuation_distance` (0: clear).
+    pub attenuation_color: [f32; 3],
+    pub attenuation_distance: f32,
+    pub transmission_factor: f32,
+    /// In the mesh's units; 0: thin-walled.
+    pub thickness_factor: f32,
+    /// The index of refraction light enters by, at least 1.
+    pub ior: f32,
+    pub transmission_layer: i32,
+    pub thickness_layer: i32,
+    pub _pad: [u32; 3],
     /// Each texture slot's coordinates from the mesh's (`TextureRef::uv_transform`), in the slots'
     /// order: two vec4s a slot, the 2×2 matrix's columns, then the translation and the set of
     /// coordinates it transforms (`TextureRef::tex_coord`, 0 or 1, in z).
@@ -70,12 +81,14 @@ pub struct GpuMaterial {
 
 /// A material's texture slots, in the order of `shading/material.wgsl`: base colour, emissive,
 /// metallic-roughness, normal, specular, specular colour, clearcoat, clearcoat roughness,
-/// clearcoat normal, occlusion.
-pub const TEXTURE_SLOTS: usize = 10;
+/// clearcoat normal, occlusion, transmission, thickness.
+pub const TEXTURE_SLOTS: usize = 12;
 
 /// `GpuMaterial::flags` (`MATERIAL_*` in `shading/types.wgsl`).
 pub const MATERIAL_UNLIT: u32 = 1;
 pub const MATERIAL_CLEARCOAT: u32 = 2;
+pub const MATERIAL_TRANSMISSION: u32 = 4;
+pub const MATERIAL_BLENDED: u32 = 8;
 
 const NO_TEXTURE: i32 = -1;
 
@@ -263,7 +276,8 @@ pub struct GpuScene {
     pub frame_uniforms: wgpu::Buffer,
     /// Opaque and alpha-masked draws: the raster passes' and the visibility buffer's.
     pub draw_commands: Vec<DrawCommand>,
-    /// Alpha-blended draws (glTF BLEND): drawn after shading by `passes::transparent_shade`.
+    /// Alpha-blended and transmissive draws (`Material::drawn_over_opaque`): drawn after shading
+    /// by `passes::transparent_shade`.
     pub transparent_draw_commands: Vec<DrawCommand>,
     /// This frame's orders of the draws, written by [`order_draws`](Self::order_draws).
     pub(crate) frame_draws: FrameDraws,
@@ -322,7 +336,7 @@ impl GpuScene {
         keyed.into_iter().map(|(_, _, i)| i).collect()
     }
 
-    /// The alpha-blended draws in view (indices into `transparent_draw_commands`) back to front
+    /// The transparent draws in view (indices into `transparent_draw_commands`) back to front
     /// from `eye` (by the centres of their bounds), so each blends over what lies behind it.
     /// Triangles within a draw keep their order.
     fn transparent_order(&self, view: &glam::Mat4, eye: glam::Vec3) -> Vec<u32> {
@@ -741,8 +755,7 @@ impl DrawList {
             let mesh = &scene.meshes[instance.mesh];
             for (primitive, &(first_index, index_count, base_vertex)) in mesh.primitives.iter().zip(&primitive_ranges[instance.mesh]) {
                 let material = &scene.materials[primitive.material];
-                let commands =
-                    if material.alpha_mode == AlphaMode::Blend { &mut list.transparent_draw_commands } else { &mut list.draw_commands };
+                let commands = if material.drawn_over_opaque() { &mut list.transparent_draw_commands } else { &mut list.draw_commands };
                 commands.push(DrawCommand {
                     draw_index: list.draws.len() as u32,
                     first_index,
@@ -982,6 +995,7 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
     let specular = &m.specular;
     let ior_reflectance = ((specular.ior - 1.0) / (specular.ior + 1.0)).powi(2);
     let clearcoat = m.clearcoat.unwrap_or(crate::scene::Clearcoat::untextured(0.0, 0.0));
+    let transmission = m.transmission.unwrap_or(crate::scene::Transmission::thin(0.0));
     // Slot order matches the WGSL (`TEXTURE_SLOTS`).
     let slots = [
         m.base_color_texture,
@@ -994,12 +1008,18 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
         clearcoat.roughness_texture,
         clearcoat.normal_texture,
         m.occlusion_texture,
+        transmission.texture,
+        transmission.thickness_texture,
     ];
     let mut wrap_modes = [0u32; 2];
     for (k, slot) in slots.iter().enumerate() {
         wrap_modes[k / 8] |= wrap_bits(*slot) << (4 * (k % 8));
     }
-    let flags = if m.unlit { MATERIAL_UNLIT } else { 0 } | if m.clearcoat.is_some() { MATERIAL_CLEARCOAT } else { 0 };
+    let flag = |on: bool, bit: u32| if on { bit } else { 0 };
+    let flags = flag(m.unlit, MATERIAL_UNLIT)
+        | flag(m.clearcoat.is_some(), MATERIAL_CLEARCOAT)
+        | flag(m.transmission.is_some(), MATERIAL_TRANSMISSION)
+        | flag(m.alpha_mode == AlphaMode::Blend, MATERIAL_BLENDED);
     GpuMaterial {
         base_color_factor: m.base_color_factor.to_array(),
         emissive_factor: m.emissive_factor.to_array(),
@@ -1025,6 +1045,14 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
         clearcoat_normal_layer: layer(clearcoat.normal_texture, data),
         occlusion_layer: layer(m.occlusion_texture, data),
         wrap_modes,
+        attenuation_color: transmission.attenuation_color.to_array(),
+        attenuation_distance: if transmission.attenuation_distance.is_finite() { transmission.attenuation_distance } else { 0.0 },
+        transmission_factor: transmission.factor,
+        thickness_factor: transmission.thickness_factor,
+        ior: specular.ior.max(1.0),
+        transmission_layer: layer(transmission.texture, data),
+        thickness_layer: layer(transmission.thickness_texture, data),
+        _pad: [0; 3],
         uv_transforms: uv_transforms(slots),
     }
 }
@@ -1102,6 +1130,13 @@ mod tests {
                 clearcoat_normal_layer,
                 occlusion_layer,
                 wrap_modes,
+                attenuation_color,
+                attenuation_distance,
+                transmission_factor,
+                thickness_factor,
+                ior,
+                transmission_layer,
+                thickness_layer,
                 uv_transforms
             ]
         );

@@ -99,6 +99,10 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/sun_shadow_mask.wgsl", include_str!("../shading/sun_shadow_mask.wgsl")),
     ("shading/reflections.wgsl", include_str!("../shading/reflections.wgsl")),
     ("shading/reflections_off.wgsl", include_str!("../shading/reflections_off.wgsl")),
+    ("shading/transmission.wgsl", include_str!("../shading/transmission.wgsl")),
+    ("shading/transmitted_none.wgsl", include_str!("../shading/transmitted_none.wgsl")),
+    ("shading/transmitted_screen.wgsl", include_str!("../shading/transmitted_screen.wgsl")),
+    ("passes/transmission_background.wgsl", include_str!("../passes/transmission_background.wgsl")),
     ("shading/octahedral.wgsl", include_str!("../shading/octahedral.wgsl")),
     ("passes/denoise/denoise_types.wgsl", include_str!("../passes/denoise/denoise_types.wgsl")),
     ("passes/denoise/temporal.wgsl", include_str!("../passes/denoise/temporal.wgsl")),
@@ -136,6 +140,7 @@ impl ShaderDesc {
         Self { entry, substitutions: Vec::new(), early_depth_test: false }
     }
 
+    /// Gives `$name` the file `path`, replacing any value given before.
     pub fn with(mut self, name: &'static str, path: &'static str) -> Self {
         self.substitutions.push((name, path));
         self
@@ -209,7 +214,7 @@ impl ShaderDesc {
                         Some(name) => self
                             .substitutions
                             .iter()
-                            .find(|(n, _)| *n == name)
+                            .rfind(|(n, _)| *n == name)
                             .map(|(_, p)| *p)
                             .ok_or_else(|| format!("{path}: no value given for `${name}`"))?,
                         None => embedded(target).map(|(p, _)| p).ok_or_else(|| format!("{path}: unknown include `{target}`"))?,

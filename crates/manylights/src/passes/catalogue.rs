@@ -39,6 +39,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("rays/hardware_corners.wgsl"),
         ShaderDesc::new("accel/hardware_boxes.wgsl"),
         ShaderDesc::new("passes/shadow_filter.wgsl"),
+        ShaderDesc::new("passes/transmission_background.wgsl"),
         ShaderDesc::new("passes/denoise/temporal.wgsl"),
         ShaderDesc::new("passes/denoise/variance.wgsl"),
         ShaderDesc::new("passes/denoise/filter.wgsl"),
@@ -88,11 +89,16 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         vertex_colors: true,
                         occlusion_textures: true,
                         second_uv_set: true,
+                        transmission: false,
                     };
                     if decals.works_in(PipelineKind::Forward) {
                         shaders.push(super::forward_shade::shader(methods));
                     }
                     shaders.push(super::transparent_shade::shader(methods));
+                    // Light through transmissive surfaces changes only the transparent pass.
+                    if particles == ParticleMethod::Off && !reflections && !subgroups {
+                        shaders.push(super::transparent_shade::shader(ShadingMethods { transmission: true, ..methods }));
+                    }
                     if decals.works_in(PipelineKind::Visbuffer) {
                         shaders.push(super::visbuffer_shade::shader(methods));
                     }

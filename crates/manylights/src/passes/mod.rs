@@ -25,13 +25,16 @@ pub mod gbuffer_raster;
 pub mod ray_shadows;
 pub mod shadow_filter;
 pub mod surface_motion;
+pub mod transmission_background;
 pub mod transparent_shade;
 pub mod visbuffer_raster;
 pub mod visbuffer_shade;
 
 /// A pass's shader that calls the shading core, composed with the WGSL modules of its methods
 /// (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION`, `$DECAL_ENUMERATION` and `$PARTICLE_LIGHTING`,
-/// the light modules `$DIRECT_LIGHTING`, rays `$RAY_TRACE`; the opaque surfaces' shading passes include `$REFLECTIONS`)
+/// the light modules `$DIRECT_LIGHTING`, rays `$RAY_TRACE`, and `shading/transmission.wgsl`
+/// `$TRANSMITTED_LIGHT`, which only the transparent pass gives a source; the opaque surfaces' shading
+/// passes include `$REFLECTIONS`)
 /// and of its point queries' walks ([`query_walks`]: `$LIGHT_QUERY`, `$DECAL_QUERY`, `$DECAL_LEAVES`).
 pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: ShadingStage) -> ShaderDesc {
     let walks = query_walks(methods, stage);
@@ -40,6 +43,7 @@ pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: 
         .with("DECAL_ENUMERATION", methods.decal_enumeration_module())
         .with("PARTICLE_LIGHTING", methods.particle_lighting_module())
         .with("REFLECTIONS", if methods.reflections { "shading/reflections.wgsl" } else { "shading/reflections_off.wgsl" })
+        .with("TRANSMITTED_LIGHT", "shading/transmitted_none.wgsl")
         .with("DIRECT_LIGHTING", methods.direct.module())
         .with("RAY_TRACE", methods.ray_trace_module())
         .with("LIGHT_QUERY", volume_query_module(walks.lights))

@@ -3,49 +3,74 @@
 //! is tested against the opaque surfaces and not written; each fragment is lit and decaled by the
 //! shading core through the frame's methods, so decals and lights reach transparent surfaces too.
 //! The fragment stage is the only place for them: no G-buffer or visibility buffer holds more than
-//! one surface per pixel.
+//! one surface per pixel. Transmissive surfaces (`KHR_materials_transmission`) are drawn here too,
+//! after `transmission_background` copies the opaque image into a mip chain they see through.
 
 use std::collections::HashMap;
 
 use super::builder::{depth_test, Fragment, Raster};
+use super::transmission_background::TransmissionBackground;
 use super::{visbuffer_shade::HDR_FORMAT, FrameInputs, ShadedImage, Structures};
 use crate::gpu::scene::RasterState;
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::plan::ShadingMethods;
 use crate::{Error, Result};
 
-/// The shader for a set of shading methods.
+/// The shader for a set of shading methods: with `transmission`, light behind transmissive surfaces
+/// comes from the background's mip chain.
 pub fn shader(methods: ShadingMethods) -> ShaderDesc {
-    super::shading_core_shader("passes/transparent_shade.wgsl", methods, crate::plan::ShadingStage::Fragment)
+    let desc = super::shading_core_shader("passes/transparent_shade.wgsl", methods, crate::plan::ShadingStage::Fragment);
+    if methods.transmission {
+        desc.with("TRANSMITTED_LIGHT", "shading/transmitted_screen.wgsl")
+    } else {
+        desc
+    }
 }
 
 pub struct TransparentShade {
     pipelines: HashMap<RasterState, wgpu::RenderPipeline>,
-    /// Group 1, empty: the shading core's light and decal bindings are groups 2 and 3 everywhere.
-    empty: wgpu::BindGroup,
+    /// With transmissive draws, the image they see through.
+    background: Option<TransmissionBackground>,
+    /// Group 1: the background and its sampler, or empty (the shading core's light and decal
+    /// bindings are groups 2 and 3 everywhere).
+    group: wgpu::BindGroup,
 }
 
 impl TransparentShade {
-    /// The pass for `scene`'s transparent draws; `None` when it has none.
-    pub fn new(ctx: &GpuContext, scene: &GpuScene, methods: ShadingMethods, structures: Structures) -> Result<Option<Self>> {
+    /// The pass for `scene`'s transparent draws over `hdr`, the frame's shaded image; `None` when
+    /// it has none.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        methods: ShadingMethods,
+        structures: Structures,
+        hdr: &wgpu::Texture,
+    ) -> Result<Option<Self>> {
         if scene.transparent_draw_commands.is_empty() {
             return Ok(None);
         }
         if !ctx.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
             return Err(Error::InvalidScene(format!(
-                "the scene has alpha-blended (glTF BLEND) materials, and {} cannot blend into the renderer's 32-bit float HDR \
-                 image (no float32-blendable feature); use a GPU or driver that has it, or make those materials OPAQUE or MASK",
+                "the scene has alpha-blended (glTF BLEND) or transmissive materials, and {} cannot blend into the renderer's \
+                 32-bit float HDR image (no float32-blendable feature); use a GPU or driver that has it, or make those materials \
+                 OPAQUE or MASK without KHR_materials_transmission",
                 ctx.info.name
             )));
         }
         let device = &ctx.device;
         let desc = shader(methods);
         let module = shaders::create_module(device, &desc)?;
-        let empty = bindings::layout(device, "transparent_shade (unused)", &[]);
+        let fragment_stage = wgpu::ShaderStages::FRAGMENT;
+        let background_entries = [
+            bindings::texture(0, fragment_stage, wgpu::TextureSampleType::Float { filterable: true }, wgpu::TextureViewDimension::D2),
+            bindings::sampler(1, fragment_stage),
+        ];
+        let entries: &[wgpu::BindGroupLayoutEntry] = if methods.transmission { &background_entries } else { &[] };
+        let group_layout = bindings::layout(device, "transparent_shade background", entries);
         let layout = bindings::pipeline_layout(
             device,
             "transparent_shade",
-            &[&scene.bind_group_layout, &empty, &structures.lights.bind_group_layout, &structures.decals.bind_group_layout],
+            &[&scene.bind_group_layout, &group_layout, &structures.lights.bind_group_layout, &structures.decals.bind_group_layout],
         );
         let over = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::SrcAlpha,
@@ -58,7 +83,8 @@ impl TransparentShade {
             dst_factor: wgpu::BlendFactor::One,
             operation: wgpu::BlendOperation::Add,
         };
-        let constants = [&[methods.debug_views_constant()][..], &methods.material_constants()].concat();
+        let transmission = ("TRANSMISSION", f64::from(u8::from(methods.transmission)));
+        let constants = [&[methods.debug_views_constant(), transmission][..], &methods.material_constants()].concat();
         let fragment_module = shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, "transparent_shade", &constants)?;
         // The states present, each also mirrored: an animated instance may turn mirrored.
         let states: std::collections::BTreeSet<RasterState> = scene
@@ -82,12 +108,35 @@ impl TransparentShade {
             depth: depth_test(false, wgpu::CompareFunction::Greater),
         };
         let pipelines = raster.per_state(device, states, |_| Some(fragment));
-        let empty = bindings::bind_group(device, "transparent_shade (unused)", &empty, Vec::new());
-        Ok(Some(Self { pipelines, empty }))
+        let background = methods.transmission.then(|| TransmissionBackground::new(ctx, hdr)).transpose()?;
+        let group = match &background {
+            Some(background) => {
+                // Trilinear: rough surfaces blend between the chain's levels.
+                let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+                    label: Some("transmission background"),
+                    mag_filter: wgpu::FilterMode::Linear,
+                    min_filter: wgpu::FilterMode::Linear,
+                    mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                    ..Default::default()
+                });
+                bindings::bind_group(
+                    device,
+                    "transparent_shade background",
+                    &group_layout,
+                    vec![wgpu::BindingResource::TextureView(&background.view), wgpu::BindingResource::Sampler(&sampler)],
+                )
+            }
+            None => bindings::bind_group(device, "transparent_shade background", &group_layout, Vec::new()),
+        };
+        Ok(Some(Self { pipelines, background, group }))
     }
 
-    /// Blends the transparent draws over `hdr`, tested against `depth`.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, inputs: &FrameInputs, image: ShadedImage) {
+    /// Blends the transparent draws over `hdr`, tested against `depth`, after copying the opaque
+    /// image that transmissive ones see through.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs, image: ShadedImage) {
+        if let Some(background) = &self.background {
+            background.record(encoder, timer.as_deref_mut());
+        }
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("transparent_shade"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -105,7 +154,7 @@ impl TransparentShade {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_bind_group(1, &self.empty, &[]);
+        pass.set_bind_group(1, &self.group, &[]);
         pass.set_bind_group(2, &inputs.lights.bind_group, &[]);
         pass.set_bind_group(3, &inputs.decals.bind_group, &[]);
         let scene = inputs.scene;

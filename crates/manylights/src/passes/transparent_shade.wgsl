@@ -1,20 +1,37 @@
-// Transparent surfaces (glTF BLEND materials), after the opaque surfaces are shaded, in every
-// pipeline: drawn back to front over the HDR image in the fragment stage, tested against the opaque
-// surfaces' depth without writing it. Each fragment is lit and decaled by the shading core through
-// the frame's light and decal methods, as an opaque surface is — what deferred decals, which exist
-// only in the G-buffer, cannot do — and shadowed by the sun through a ray of their own.
+// Transparent surfaces, after the opaque surfaces are shaded, in every pipeline: drawn back to front
+// over the HDR image in the fragment stage, tested against the opaque surfaces' depth without
+// writing it. Each fragment is lit and decaled by the shading core through the frame's light and
+// decal methods, as an opaque surface is — what deferred decals, which exist only in the G-buffer,
+// cannot do — and shadowed by the sun through a ray of their own. Alpha-blended surfaces (glTF BLEND)
+// blend by their alpha; transmissive ones (KHR_materials_transmission) carry the light behind them
+// (`shading/transmission.wgsl`) and cover what they are drawn over, or mask it where alpha-masked.
 #include "shading/shade.wgsl"
 #include "passes/surface_raster.wgsl"
 #include "shading/sun_shadow.wgsl"
+
+// How much a draw scales lengths on average: the cube root of its transform's volume change.
+fn draw_scale(draw: Draw) -> f32 {
+    let m = draw.world_from_local;
+    return pow(abs(determinant(mat3x3<f32>(m[0].xyz, m[1].xyz, m[2].xyz))), 1.0 / 3.0);
+}
 
 @fragment
 fn transparent_shade(in: ForwardVertex, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
     let g = UvGradients(in.uv, dpdx(in.uv), dpdy(in.uv));
     let dp = PositionGradients(dpdx(in.relative_position), dpdy(in.relative_position));
-    let s = apply_decals(fragment_shading_surface(in, front_facing, g, dp), dp);
+    let draw = draws[in.draw_index];
+    let material = materials[draw.material];
+    var surface = fragment_shading_surface(in, front_facing, g, dp);
+    if surface.alpha < material.alpha_cutoff {
+        discard;
+    }
+    // The medium's thickness is given in the mesh's units.
+    surface.thickness *= draw_scale(draw);
+    let s = apply_decals(surface, dp);
     // No shadow mask holds a second surface per pixel: the sun's visibility is traced here, from the
     // interpolated position.
     let sun = sun_visibility_traced(s.position, s.ray_normal, s.ray_clearance);
     // The pipeline blends "over": radiance α + what lies behind (1 − α).
-    return vec4<f32>(shade(s, sun), s.alpha);
+    let alpha = select(1.0, s.alpha, (material.flags & MATERIAL_BLENDED) != 0u);
+    return vec4<f32>(shade(s, sun), alpha);
 }

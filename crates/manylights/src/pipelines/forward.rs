@@ -74,7 +74,7 @@ impl ForwardPipeline {
             shadows,
             surface_motion: setup.surface_motion.then(|| SurfaceMotion::new(ctx, scene, &depth_view)).transpose()?,
             denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, &targets.hdr, (width, height))).transpose()?,
-            transparent: TransparentShade::new(ctx, scene, methods, structures)?,
+            transparent: TransparentShade::new(ctx, scene, methods, structures, &targets.hdr)?,
             post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
             targets,
             depth_view,

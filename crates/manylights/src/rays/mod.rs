@@ -12,8 +12,9 @@
 //!
 //! Triangles are stored in leaf order with one vertex and two edges (Möller–Trumbore needs nothing
 //! else), so a leaf's triangles are one contiguous read; leaves and top-level leaves name their
-//! triangles and instances directly, without an index array. Alpha-blended (glTF `BLEND`)
-//! primitives are left out: rays see opaque and alpha-masked surfaces.
+//! triangles and instances directly, without an index array. Primitives drawn over the opaque
+//! image (alpha-blended or transmissive, `Material::drawn_over_opaque`) are left out: rays see
+//! opaque and alpha-masked surfaces.
 
 pub mod hardware;
 pub mod refit;
@@ -526,11 +527,11 @@ fn build_blas(scene: &Scene, m: usize, transform: &Affine3A) -> Result<Option<Bl
     let mesh = &scene.meshes[m];
     let mut triangles = Vec::new();
     for (p, primitive) in mesh.primitives.iter().enumerate() {
-        let flags = match scene.materials[primitive.material].alpha_mode {
-            AlphaMode::Blend => continue,
-            AlphaMode::Mask { .. } => ALPHA_MASKED,
-            AlphaMode::Opaque => 0,
-        };
+        let material = &scene.materials[primitive.material];
+        if material.drawn_over_opaque() {
+            continue;
+        }
+        let flags = if matches!(material.alpha_mode, AlphaMode::Mask { .. }) { ALPHA_MASKED } else { 0 };
         for (t, corners) in primitive.indices.chunks_exact(3).enumerate() {
             let [v0, v1, v2] = [0, 1, 2].map(|k| transform.transform_point3(Vec3::from(primitive.vertices[corners[k] as usize].position)));
             triangles.push(RayTriangle {
@@ -585,7 +586,7 @@ mod tests {
             .instances
             .iter()
             .flat_map(|i| &scene.meshes[i.mesh].primitives)
-            .filter(|p| scene.materials[p.material].alpha_mode != AlphaMode::Blend)
+            .filter(|p| !scene.materials[p.material].drawn_over_opaque())
             .map(|p| p.triangle_count())
             .sum();
         assert_eq!(triangles, expected);

@@ -191,6 +191,8 @@ pub struct Material {
     pub specular: Specular,
     /// A clear coat over the material (`KHR_materials_clearcoat`).
     pub clearcoat: Option<Clearcoat>,
+    /// Light passing through the surface (`KHR_materials_transmission`, `KHR_materials_volume`).
+    pub transmission: Option<Transmission>,
 }
 
 /// A dielectric's specular reflection, as `KHR_materials_ior` and `KHR_materials_specular` define
@@ -227,6 +229,36 @@ pub struct Clearcoat {
     pub normal_scale: f32,
 }
 
+/// Light passing through a dielectric (`KHR_materials_transmission`): a share `factor` (× the
+/// texture's R) of what its diffuse lobe would scatter is instead let through, refracted by the
+/// specular's index of refraction and blurred by its roughness. With `KHR_materials_volume`, the
+/// surface bounds a medium `thickness_factor` deep (× the thickness texture's G, in the mesh's units;
+/// 0: thin-walled) through which light of `attenuation_color` is left after `attenuation_distance`
+/// (Beer's law; infinite: clear).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transmission {
+    pub factor: f32,
+    pub texture: Option<TextureRef>,
+    pub thickness_factor: f32,
+    pub thickness_texture: Option<TextureRef>,
+    pub attenuation_distance: f32,
+    pub attenuation_color: Vec3,
+}
+
+impl Transmission {
+    /// A thin-walled surface letting `factor` through, without textures.
+    pub fn thin(factor: f32) -> Self {
+        Self {
+            factor,
+            texture: None,
+            thickness_factor: 0.0,
+            thickness_texture: None,
+            attenuation_distance: f32::INFINITY,
+            attenuation_color: Vec3::ONE,
+        }
+    }
+}
+
 impl Clearcoat {
     /// A coat of `factor` and `roughness` without textures.
     pub fn untextured(factor: f32, roughness: f32) -> Self {
@@ -255,14 +287,23 @@ impl Default for Material {
             unlit: false,
             specular: Specular::default(),
             clearcoat: None,
+            transmission: None,
         }
     }
 }
 
 impl Material {
+    /// Drawn after the opaque surfaces, over the image of them: blended (glTF BLEND) or letting
+    /// light through. Such surfaces hold no single pixel of a G-buffer or visibility buffer and are
+    /// left out of the ray structures: they cast no traced shadow and reflections see past them.
+    pub fn drawn_over_opaque(&self) -> bool {
+        self.alpha_mode == AlphaMode::Blend || self.transmission.is_some()
+    }
+
     /// Every texture the material uses, with whether it holds sRGB colour (else linear data).
     pub fn textures(&self) -> impl Iterator<Item = (TextureRef, bool)> + '_ {
         let clearcoat = self.clearcoat.iter().flat_map(|c| [c.texture, c.roughness_texture, c.normal_texture]);
+        let transmission = self.transmission.iter().flat_map(|t| [t.texture, t.thickness_texture]);
         [(self.base_color_texture, true), (self.emissive_texture, true), (self.specular.color_texture, true)]
             .into_iter()
             .chain(
@@ -270,7 +311,7 @@ impl Material {
                     .into_iter()
                     .map(|t| (t, false)),
             )
-            .chain(clearcoat.map(|t| (t, false)))
+            .chain(clearcoat.chain(transmission).map(|t| (t, false)))
             .filter_map(|(t, srgb)| t.map(|t| (t, srgb)))
     }
 }
@@ -707,6 +748,18 @@ pub fn validate_material(m: &Material) -> Result<(), String> {
             return Err(format!(
                 "clearcoat factor {} and roughness {} must be 0 to 1, its normal scale {} finite",
                 c.factor, c.roughness_factor, c.normal_scale
+            ));
+        }
+    }
+    if let Some(t) = &m.transmission {
+        if !(unit(t.factor) && t.thickness_factor.is_finite() && t.thickness_factor >= 0.0) {
+            return Err(format!("transmission factor {} must be 0 to 1 and thickness {} finite and ≥ 0", t.factor, t.thickness_factor));
+        }
+        if !(t.attenuation_distance > 0.0 && t.attenuation_color.to_array().into_iter().all(unit)) {
+            return Err(format!(
+                "attenuation distance {} must be > 0 (infinite: none) and attenuation colour {:?} 0 to 1 in each component",
+                t.attenuation_distance,
+                t.attenuation_color.to_array()
             ));
         }
     }

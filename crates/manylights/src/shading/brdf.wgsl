@@ -5,7 +5,8 @@
 // (KHR_materials_ior, KHR_materials_specular) and clear coat (KHR_materials_clearcoat), as their
 // specifications compose them: mix(dielectric, metal, metallic) under the coat, where the
 // dielectric is `diffuse · (1 − weight · max(F)) + specular · weight · F`, and the coat mixes in
-// by `clearcoat · F_coat(n_coat · v)`.
+// by `clearcoat · F_coat(n_coat · v)`. A transmissive dielectric (KHR_materials_transmission) lets
+// its `transmission` share of the diffuse lobe through instead.
 
 const PI: f32 = 3.141592653589793;
 // Below this perceptual roughness GGX highlights of point lights become sub-pixel and alias.
@@ -79,6 +80,10 @@ fn brdf_lobes_times_cosine(s: ShadingInput, light_dir: vec3<f32>) -> BrdfLobes {
         lobes.specular = d_ggx(n_dot_h, alpha) * v_smith_ggx_correlated(n_dot_v, n_dot_l, alpha) * n_dot_l * fresnel;
         let reflected = dielectric.w * max(dielectric_fresnel.x, max(dielectric_fresnel.y, dielectric_fresnel.z));
         lobes.diffuse = s.base_color * ((1.0 - s.metallic) * (1.0 - reflected) * n_dot_l / PI);
+        if TRANSMISSION {
+            // What a transmissive surface lets through it does not scatter (`shading/transmission.wgsl`).
+            lobes.diffuse *= 1.0 - s.transmission;
+        }
     }
     if MATERIAL_EXTENSIONS && s.clearcoat > 0.0 {
         let coat = clearcoat_fresnel(s);

@@ -55,7 +55,10 @@ fn environment_specular_albedo(s: ShadingInput) -> vec3<f32> {
 // Diffuse and specular light from the environment, and the clear coat's reflection of it, as much as
 // the surface's occlusion lets through.
 fn environment_light(s: ShadingInput) -> vec3<f32> {
-    let diffuse = environment_irradiance(s.normal) * s.base_color * (1.0 - s.metallic) * (1.0 - clearcoat_fresnel(s));
+    var diffuse = environment_irradiance(s.normal) * s.base_color * (1.0 - s.metallic) * (1.0 - clearcoat_fresnel(s));
+    if TRANSMISSION {
+        diffuse *= 1.0 - s.transmission;
+    }
     let specular = environment_specular_albedo(s) * environment_specular_radiance(environment_reflection_direction(s), s.roughness);
     var coat = vec3<f32>(0.0);
     if MATERIAL_EXTENSIONS && s.clearcoat > 0.0 {

@@ -162,6 +162,10 @@ fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, 
     s.clearcoat = 0.0;
     s.clearcoat_roughness = 0.0;
     s.clearcoat_normal = surface.normal;
+    s.transmission = 0.0;
+    s.ior = 1.5;
+    s.thickness = 0.0;
+    s.attenuation = vec4<f32>(1.0, 1.0, 1.0, 0.0);
     if MATERIAL_EXTENSIONS {
         material_extensions(material, g, surface, t, b, &s);
     }
@@ -169,7 +173,8 @@ fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, 
 }
 
 // The extensions' parameters: KHR_materials_unlit, _ior and _specular (textures 4, 5), _clearcoat
-// (textures 6 to 8).
+// (textures 6 to 8), _transmission and _volume (textures 10, 11; the thickness in the mesh's units,
+// which the caller scales to the world's).
 fn material_extensions(material: Material, g: UvGradients, surface: SurfaceFrame, t: vec3<f32>, b: vec3<f32>, s: ptr<function, ShadingInput>) {
     (*s).unlit = (material.flags & MATERIAL_UNLIT) != 0u;
     var f0 = material.specular_color;
@@ -194,5 +199,17 @@ fn material_extensions(material: Material, g: UvGradients, surface: SurfaceFrame
             let texel = sample_wrapped(data_textures, material.clearcoat_normal_layer, material, 8u, g).xyz;
             (*s).clearcoat_normal = normal_map_applied(texel, material.clearcoat_normal_scale, surface.normal, t, b);
         }
+    }
+    if (material.flags & MATERIAL_TRANSMISSION) != 0u {
+        (*s).transmission = material.transmission_factor;
+        if material.transmission_layer != NO_TEXTURE {
+            (*s).transmission *= sample_wrapped(data_textures, material.transmission_layer, material, 10u, g).r;
+        }
+        (*s).thickness = material.thickness_factor;
+        if material.thickness_layer != NO_TEXTURE {
+            (*s).thickness *= sample_wrapped(data_textures, material.thickness_layer, material, 11u, g).g;
+        }
+        (*s).ior = material.ior;
+        (*s).attenuation = vec4<f32>(material.attenuation_color, material.attenuation_distance);
     }
 }

@@ -10,6 +10,7 @@
 #include "$LIGHT_ENUMERATION"
 #include "$DECAL_ENUMERATION"
 #include "$PARTICLE_LIGHTING"
+#include "shading/transmission.wgsl"
 #include "shading/debug_view.wgsl"
 #include "shading/shading_pixel.wgsl"
 
@@ -19,7 +20,8 @@
 const MAX_RADIANCE: f32 = 1e30;
 
 // Outgoing radiance towards the viewer: emission, the environment's light (where traced reflections
-// replace its specular part, `reflections.wgsl` subtracts it), sun, local and particle lights;
+// replace its specular part, `reflections.wgsl` subtracts it), light let through from behind, sun,
+// local and particle lights;
 // `sun_visibility` is the fraction of the sun the point sees (`shading/sun_shadow*.wgsl`).
 fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
     if DEBUG_VIEWS {
@@ -35,6 +37,9 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
     var radiance = s.emissive * (1.0 - clearcoat_fresnel(s)) + environment_light(s);
     if frame.sun_direction.w > 0.0 && sun_visibility > 0.0 {
         radiance += frame.sun_radiance.rgb * sun_visibility * brdf_times_cosine(s, -frame.sun_direction.xyz);
+    }
+    if TRANSMISSION && s.transmission > 0.0 {
+        radiance += transmitted_radiance(s);
     }
     radiance += shade_local_lights(s);
     let particles = shade_particle_lights(s);

@@ -6,6 +6,11 @@
 // formulas at the parameters' default values.
 override MATERIAL_EXTENSIONS: bool = true;
 
+// The pass shades transmissive surfaces (KHR_materials_transmission): only the transparent pass, and
+// only where some material is (`ShadingMethods::transmission`). Elsewhere the transmission terms are
+// compiled out.
+override TRANSMISSION: bool = false;
+
 struct ShadingInput {
     position: vec3<f32>,
     // Shading normal (after normal mapping), unit, facing the viewer's side.
@@ -30,6 +35,14 @@ struct ShadingInput {
     clearcoat_normal: vec3<f32>,
     // KHR_materials_unlit: `base_color` is the radiance sent, and nothing lights it.
     unlit: bool,
+    // Light let through (KHR_materials_transmission): the share of the dielectric's diffuse lobe
+    // passed on instead, the index of refraction bending it, and the medium behind
+    // (KHR_materials_volume): its thickness in world units (0: thin-walled) and the colour left
+    // after distance w (w = 0: clear) in `attenuation`.
+    transmission: f32,
+    ior: f32,
+    thickness: f32,
+    attenuation: vec4<f32>,
     // The share of the environment's light reaching the surface (glTF's occlusion texture, 1
     // without): it darkens the environment standing in for indirect light, not the lights.
     occlusion: f32,

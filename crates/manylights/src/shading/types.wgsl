@@ -54,12 +54,12 @@ struct Material {
     metallic_factor: f32,
     roughness_factor: f32,
     normal_scale: f32,
-    // MATERIAL_UNLIT, MATERIAL_CLEARCOAT.
+    // MATERIAL_UNLIT, MATERIAL_CLEARCOAT, MATERIAL_TRANSMISSION, MATERIAL_BLENDED.
     flags: u32,
     // Layers in `color_textures` (base colour, emissive, specular colour) and `data_textures` (the
     // others); NO_TEXTURE when absent. Texture slots, in order: base colour 0, emissive 1,
     // metallic-roughness 2, normal 3, specular 4, specular colour 5, clearcoat 6, clearcoat
-    // roughness 7, clearcoat normal 8, occlusion 9.
+    // roughness 7, clearcoat normal 8, occlusion 9, transmission 10, thickness 11.
     base_color_layer: i32,
     emissive_layer: i32,
     metallic_roughness_layer: i32,
@@ -82,14 +82,28 @@ struct Material {
     occlusion_layer: i32,
     // Four bits a texture slot, `(wrap_v << 2) | wrap_u`, eight slots a word.
     wrap_modes: vec2<u32>,
+    // The medium behind a transmissive surface (KHR_materials_volume): the colour left after
+    // `attenuation_distance` (0: clear), its thickness in the mesh's units (0: thin-walled), and the
+    // index of refraction that bends light into it (KHR_materials_ior, at least 1).
+    attenuation_color: vec3<f32>,
+    attenuation_distance: f32,
+    // The share of the diffuse lobe let through instead (KHR_materials_transmission).
+    transmission_factor: f32,
+    thickness_factor: f32,
+    ior: f32,
+    transmission_layer: i32,
+    thickness_layer: i32,
     // Each slot's texture coordinates from the mesh's (glTF's texCoord and KHR_texture_transform):
     // two vec4s a slot, the 2×2 matrix's columns (xy, zw), then the translation (xy) and the set of
     // coordinates it transforms (z: 0 or 1).
-    uv_transforms: array<vec4<f32>, 20>,
+    uv_transforms: array<vec4<f32>, 24>,
 }
 
 const MATERIAL_UNLIT: u32 = 1u;
 const MATERIAL_CLEARCOAT: u32 = 2u;
+const MATERIAL_TRANSMISSION: u32 = 4u;
+// Alpha-blended (glTF BLEND): the transparent pass blends it by its alpha; others it draws opaque.
+const MATERIAL_BLENDED: u32 = 8u;
 
 const LIGHT_POINT: u32 = 0u;
 const LIGHT_SPOT: u32 = 1u;

@@ -32,7 +32,7 @@ use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::{Error, Result};
 
 /// Extensions a file may require; every other optional extension is ignored.
-const SUPPORTED_EXTENSIONS: [&str; 13] = [
+const SUPPORTED_EXTENSIONS: [&str; 15] = [
     INSTANCING,
     compression::MESHOPT,
     "EXT_texture_webp",
@@ -41,7 +41,9 @@ const SUPPORTED_EXTENSIONS: [&str; 13] = [
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_specular",
+    "KHR_materials_transmission",
     "KHR_materials_unlit",
+    "KHR_materials_volume",
     compression::DRACO,
     "KHR_mesh_quantization",
     "KHR_texture_basisu",
@@ -1150,6 +1152,7 @@ fn material(m: &::gltf::Material, document: &Document) -> Result<Material, Strin
         unlit: m.extension_value("KHR_materials_unlit").is_some(),
         specular: specular(m, document, &named)?,
         clearcoat: clearcoat(m, document, &named)?,
+        transmission: transmission(m, document, &named)?,
         name,
     })
 }
@@ -1213,6 +1216,28 @@ fn clearcoat(m: &::gltf::Material, document: &Document, named: &str) -> Result<O
         normal_texture: extension_texture(ext, "clearcoatNormalTexture", document, named)?,
         normal_scale,
     }))
+}
+
+/// `KHR_materials_transmission` with its medium (`KHR_materials_volume`); none where its factor is 0.
+fn transmission(m: &::gltf::Material, document: &Document, named: &str) -> Result<Option<super::Transmission>, String> {
+    let Some(ext) = m.extension_value("KHR_materials_transmission") else { return Ok(None) };
+    let factor = number(ext, "transmissionFactor", 0.0);
+    let texture = extension_texture(ext, "transmissionTexture", document, named)?;
+    if factor == 0.0 {
+        return Ok(None);
+    }
+    let mut transmission = super::Transmission { texture, ..super::Transmission::thin(factor) };
+    if let Some(volume) = m.extension_value("KHR_materials_volume") {
+        transmission.thickness_factor = number(volume, "thicknessFactor", 0.0);
+        transmission.thickness_texture = extension_texture(volume, "thicknessTexture", document, named)?;
+        transmission.attenuation_distance = number(volume, "attenuationDistance", f32::INFINITY);
+        if let Some(color) = volume.get("attenuationColor").and_then(serde_json::Value::as_array) {
+            let c: Vec<f32> = color.iter().filter_map(serde_json::Value::as_f64).map(|v| v as f32).collect();
+            let [r, g, b] = c[..] else { return Err(format!("{named}: attenuationColor {color:?} must be three numbers")) };
+            transmission.attenuation_color = Vec3::new(r, g, b);
+        }
+    }
+    Ok(Some(transmission))
 }
 
 /// `KHR_texture_transform`'s offset, rotation (radians) and scale, and the `texCoord` it overrides.
