@@ -12,7 +12,7 @@ use glam::{Affine3A, Mat4, Vec3, Vec4};
 use manylights::{
     gpu::GpuContext,
     renderer::{Image, Renderer},
-    scene::{demo::demo_scene, generators, generators::ScatterLights, AlphaMode, Camera, Decal, Instance, Material, Scene},
+    scene::{demo::demo_scene, generators, generators::ScatterLights, AlphaMode, Camera, Decal, Instance, Material, Scene, Vertex},
     scene::{Specular, Sun, Texture, TextureRef, Transmission, Wrap},
     settings::{DecalMethod, LightMethod, PipelineKind},
     settings::{RaySettings, RenderConfig, SunShadows},
@@ -332,6 +332,57 @@ fn thick_media_refract_and_rough_ones_blur_the_light_behind_them() {
     let mixed =
         |row: &[Vec3]| row.iter().filter(|c| (**c - left).abs().max_element() > 0.05 && (**c - right).abs().max_element() > 0.05).count();
     assert!(mixed(&seen) <= 3 && mixed(&blurred) >= 8, "edge columns: sharp {}, rough {}", mixed(&seen), mixed(&blurred));
+}
+
+#[test]
+fn only_the_nearest_transmissive_surface_shows_blended_ones_in_front_blend_over_it_and_masks_cut_it() {
+    const NEAR: Vec3 = Vec3::new(1.0, 0.5, 0.5);
+    const FAR: Vec3 = Vec3::new(0.5, 1.0, 0.5);
+    let (wall, camera) = ambient_wall();
+    let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() <= 2e-3 * b.max_element().max(0.1);
+    for pipeline in PipelineKind::ALL {
+        let name = pipeline.name();
+        let (wall_radiance, _) = centre_and_corner(&wall, &camera, pipeline);
+        // One draw holding a near quad (z = 2) before a far one (z = 1), told apart by their
+        // vertex colours: drawn in the order listed, the far one would cover the near one.
+        let (mut scene, _) = ambient_wall();
+        transmissive_pane(&mut scene, 0.0, Vec3::ONE, Transmission::thin(1.0));
+        let mesh = scene.meshes.last_mut().unwrap();
+        let primitive = &mut mesh.primitives[0];
+        let quad = primitive.vertices.clone();
+        primitive.vertices = [(2.0, NEAR), (1.0, FAR)]
+            .iter()
+            .flat_map(|&(z, color)| {
+                quad.iter().map(move |v| Vertex {
+                    position: [v.position[0], v.position[1], z],
+                    color: Vertex::color_from(color.extend(1.0).to_array()),
+                    ..*v
+                })
+            })
+            .collect();
+        primitive.indices = [0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7].to_vec();
+        let (centre, _) = centre_and_corner(&scene, &camera, pipeline);
+        assert!(close(centre, NEAR * wall_radiance), "{name}: {centre}, expected the near quad's {}", NEAR * wall_radiance);
+
+        // A blended pane in front of the glass blends over it; one behind it is hidden.
+        let mut front = scene.clone();
+        add_pane(&mut front, 3.0, Vec3::new(0.9, 0.1, 0.1), 0.25);
+        let mut behind = scene.clone();
+        add_pane(&mut behind, 0.5, Vec3::new(0.9, 0.1, 0.1), 0.9);
+        let (in_front, _) = centre_and_corner(&front, &camera, pipeline);
+        let (hidden, _) = centre_and_corner(&behind, &camera, pipeline);
+        assert!(close(hidden, centre), "{name}: a blended pane behind the glass shows: {hidden} against {centre}");
+        let blended_over = (in_front - centre * 0.75) / 0.25;
+        assert!(blended_over.x > 0.8 && blended_over.y < 0.3, "{name}: the pane in front does not blend over the glass: {in_front}");
+
+        // Alpha-masked glass is cut where its alpha (0.3) falls below the cutoff, and drawn where not.
+        for (cutoff, expected) in [(0.5, wall_radiance), (0.2, NEAR * wall_radiance)] {
+            let mut masked = scene.clone();
+            masked.materials.last_mut().unwrap().alpha_mode = AlphaMode::Mask { cutoff };
+            let (centre, _) = centre_and_corner(&masked, &camera, pipeline);
+            assert!(close(centre, expected), "{name}: masked at {cutoff}: {centre}, expected {expected}");
+        }
+    }
 }
 
 #[test]

@@ -268,6 +268,8 @@ pub struct FrameDraws {
     pub moving: OrderedDraws,
     /// Alpha-blended draws, back to front.
     pub transparent: OrderedDraws,
+    /// Transmissive draws that do not blend, front to back.
+    pub transmissive: OrderedDraws,
 }
 
 pub struct GpuScene {
@@ -276,13 +278,16 @@ pub struct GpuScene {
     pub frame_uniforms: wgpu::Buffer,
     /// Opaque and alpha-masked draws: the raster passes' and the visibility buffer's.
     pub draw_commands: Vec<DrawCommand>,
-    /// Alpha-blended and transmissive draws (`Material::drawn_over_opaque`): drawn after shading
-    /// by `passes::transparent_shade`.
+    /// Alpha-blended draws, transmissive or not: blended after shading by
+    /// `passes::transparent_shade`.
     pub transparent_draw_commands: Vec<DrawCommand>,
+    /// Transmissive draws that do not blend (`Material::transmissive_unblended`): drawn after
+    /// shading by `passes::transparent_shade`, before the blended ones, writing depth.
+    pub transmissive_draw_commands: Vec<DrawCommand>,
     /// This frame's orders of the draws, written by [`order_draws`](Self::order_draws).
     pub(crate) frame_draws: FrameDraws,
     /// `FrameDraws`' indirect arguments (`wgpu::util::DrawIndexedIndirectArgs`): opaque, moving,
-    /// then transparent draws, each as many records as it may hold. `None` where the device cannot
+    /// transparent, then transmissive draws, each as many records as it may hold. `None` where the device cannot
     /// take a first instance (the draw index) from indirect arguments: it draws one call per draw.
     pub(crate) draw_arguments: Option<wgpu::Buffer>,
     /// The view (clip from world) and eye `frame_draws` were made for; `None` once a draw moved.
@@ -328,12 +333,7 @@ impl GpuScene {
     /// back from `eye`. Raster passes on our benchmark GPUs are bound by fragment work, and early-Z
     /// rejects what nearer draws hide.
     fn draw_order(&self, view: &glam::Mat4, eye: glam::Vec3) -> Vec<u32> {
-        // Sorted by keys made once per draw (a non-negative float's bits order as the float does);
-        // ties keep the commands' order.
-        let mut keyed: Vec<(RasterState, u32, u32)> =
-            in_view(&self.draw_commands, view).map(|(i, c)| (c.state, c.center.distance_squared(eye).to_bits(), i)).collect();
-        keyed.sort_unstable();
-        keyed.into_iter().map(|(_, _, i)| i).collect()
+        front_to_back(&self.draw_commands, view, eye)
     }
 
     /// The transparent draws in view (indices into `transparent_draw_commands`) back to front
@@ -347,9 +347,11 @@ impl GpuScene {
         keyed.into_iter().map(|(_, _, i)| i).collect()
     }
 
-    /// How many of the scene's draws (opaque and blended) the last frame drew: those in its view.
+    /// How many of the scene's draws (opaque, blended and transmissive) the last frame drew: those
+    /// in its view.
     pub fn drawn_count(&self) -> usize {
-        self.frame_draws.opaque.commands.len() + self.frame_draws.transparent.commands.len()
+        let d = &self.frame_draws;
+        d.opaque.commands.len() + d.transparent.commands.len() + d.transmissive.commands.len()
     }
 
     /// Orders the frame's draws in the view `view` (clip from world) from `eye`
@@ -365,17 +367,24 @@ impl GpuScene {
         let moving: Vec<u32> =
             opaque.iter().copied().filter(|&c| self.moving_draws[self.draw_commands[c as usize].draw_index as usize]).collect();
         let transparent = self.transparent_order(&view, eye);
+        // Nearest first, so that early depth tests skip what a nearer one hides.
+        let transmissive = front_to_back(&self.transmissive_draw_commands, &view, eye);
         let opaque_count = self.draw_commands.len() as u32;
+        let transparent_end = 2 * opaque_count + self.transparent_draw_commands.len() as u32;
         self.frame_draws = FrameDraws {
             opaque: ordered(&self.draw_commands, opaque, 0),
             moving: ordered(&self.draw_commands, moving, opaque_count),
             transparent: ordered(&self.transparent_draw_commands, transparent, 2 * opaque_count),
+            transmissive: ordered(&self.transmissive_draw_commands, transmissive, transparent_end),
         };
         let Some(buffer) = &self.draw_arguments else { return };
         let d = &self.frame_draws;
-        for (list, commands) in
-            [(&d.opaque, &self.draw_commands), (&d.moving, &self.draw_commands), (&d.transparent, &self.transparent_draw_commands)]
-        {
+        for (list, commands) in [
+            (&d.opaque, &self.draw_commands),
+            (&d.moving, &self.draw_commands),
+            (&d.transparent, &self.transparent_draw_commands),
+            (&d.transmissive, &self.transmissive_draw_commands),
+        ] {
             if list.commands.is_empty() {
                 continue;
             }
@@ -410,7 +419,8 @@ impl GpuScene {
         let textures = SceneTextures::upload(ctx, scene, max_texture_size)?;
         let materials = textures.materials(scene);
         let Geometry { vertices, indices, primitive_ranges } = concatenate_primitives(scene);
-        let DrawList { draws, instance_first_draw, draw_commands, transparent_draw_commands } = DrawList::new(scene, &primitive_ranges)?;
+        let DrawList { draws, instance_first_draw, draw_commands, transparent_draw_commands, transmissive_draw_commands } =
+            DrawList::new(scene, &primitive_ranges)?;
 
         let limit = ctx.limits.max_storage_buffer_binding_size;
         // Deformed meshes' vertices are rewritten on the GPU every frame (`passes/deform.rs`).
@@ -492,8 +502,8 @@ impl GpuScene {
             .chain(rays.tlas.map(wgpu::Tlas::as_binding))
             .collect(),
         );
-        // Room for every opaque draw twice (all of them, the moving ones) and every transparent one.
-        let argument_count = (2 * draw_commands.len() + transparent_draw_commands.len()).max(1) as u64;
+        // Room for every opaque draw twice (all of them, the moving ones) and every other one.
+        let argument_count = (2 * draw_commands.len() + transparent_draw_commands.len() + transmissive_draw_commands.len()).max(1) as u64;
         let draw_arguments = ctx.features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE).then(|| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("draw arguments"),
@@ -510,6 +520,7 @@ impl GpuScene {
             frame_uniforms,
             draw_commands,
             transparent_draw_commands,
+            transmissive_draw_commands,
             frame_draws: FrameDraws::default(),
             draw_arguments,
             ordered_for: None,
@@ -577,7 +588,8 @@ impl GpuScene {
         if !draw_placements.is_empty() {
             self.ordered_for = None;
         }
-        for command in self.draw_commands.iter_mut().chain(&mut self.transparent_draw_commands) {
+        for command in self.draw_commands.iter_mut().chain(&mut self.transparent_draw_commands).chain(&mut self.transmissive_draw_commands)
+        {
             if let Some(world_from_local) = draw_placements.get(&command.draw_index) {
                 command.center = world_from_local.transform_point3(command.local_center);
                 command.bounds = command.local_bounds.map(|b| b.transformed(&glam::Affine3A::from_mat4(*world_from_local)));
@@ -648,6 +660,16 @@ fn in_view<'a>(commands: &'a [DrawCommand], view: &'a glam::Mat4) -> impl Iterat
 pub const DRAW_ARGUMENT_BYTES: u64 = 20;
 
 /// `order` of `commands` in runs of one raster state, its arguments from record `first_argument`.
+/// `commands` in view (indices into them) by raster state, each state's front to back from `eye`.
+fn front_to_back(commands: &[DrawCommand], view: &glam::Mat4, eye: glam::Vec3) -> Vec<u32> {
+    // Sorted by keys made once per draw (a non-negative float's bits order as the float does); ties
+    // keep the commands' order.
+    let mut keyed: Vec<(RasterState, u32, u32)> =
+        in_view(commands, view).map(|(i, c)| (c.state, c.center.distance_squared(eye).to_bits(), i)).collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, _, i)| i).collect()
+}
+
 fn ordered(commands: &[DrawCommand], order: Vec<u32>, first_argument: u32) -> OrderedDraws {
     let mut runs: Vec<(RasterState, u32, u32)> = Vec::new();
     for (position, &c) in order.iter().enumerate() {
@@ -729,12 +751,14 @@ fn concatenate_primitives(scene: &Scene) -> Geometry {
     Geometry { vertices, indices, primitive_ranges }
 }
 
-/// One draw per instance and primitive, and the commands that draw them, opaque and transparent.
+/// One draw per instance and primitive, and the commands that draw them: opaque, blended and
+/// transmissive.
 struct DrawList {
     draws: Vec<GpuDraw>,
     instance_first_draw: Vec<usize>,
     draw_commands: Vec<DrawCommand>,
     transparent_draw_commands: Vec<DrawCommand>,
+    transmissive_draw_commands: Vec<DrawCommand>,
 }
 
 impl DrawList {
@@ -744,6 +768,7 @@ impl DrawList {
             instance_first_draw: Vec::with_capacity(scene.instances.len()),
             draw_commands: Vec::new(),
             transparent_draw_commands: Vec::new(),
+            transmissive_draw_commands: Vec::new(),
         };
         // Visibility ids number the drawn triangles from 0 (the background is told by depth).
         let mut next_visibility_id = 0u64;
@@ -755,7 +780,13 @@ impl DrawList {
             let mesh = &scene.meshes[instance.mesh];
             for (primitive, &(first_index, index_count, base_vertex)) in mesh.primitives.iter().zip(&primitive_ranges[instance.mesh]) {
                 let material = &scene.materials[primitive.material];
-                let commands = if material.drawn_over_opaque() { &mut list.transparent_draw_commands } else { &mut list.draw_commands };
+                let commands = if material.transmissive_unblended() {
+                    &mut list.transmissive_draw_commands
+                } else if material.drawn_over_opaque() {
+                    &mut list.transparent_draw_commands
+                } else {
+                    &mut list.draw_commands
+                };
                 commands.push(DrawCommand {
                     draw_index: list.draws.len() as u32,
                     first_index,

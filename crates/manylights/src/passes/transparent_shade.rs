@@ -4,7 +4,9 @@
 //! shading core through the frame's methods, so decals and lights reach transparent surfaces too.
 //! The fragment stage is the only place for them: no G-buffer or visibility buffer holds more than
 //! one surface per pixel. Transmissive surfaces (`KHR_materials_transmission`) are drawn here too,
-//! after `transmission_background` copies the opaque image into a mip chain they see through.
+//! after `transmission_background` copies the opaque image into a mip chain they see through: those
+//! that do not blend first, front to back, writing depth (each pixel shows the nearest, and blended
+//! surfaces behind it are hidden as they are behind opaque ones), then the blended ones.
 
 use std::collections::HashMap;
 
@@ -28,7 +30,10 @@ pub fn shader(methods: ShadingMethods) -> ShaderDesc {
 }
 
 pub struct TransparentShade {
-    pipelines: HashMap<RasterState, wgpu::RenderPipeline>,
+    /// Blended draws: depth tested, not written.
+    blended: HashMap<RasterState, wgpu::RenderPipeline>,
+    /// Transmissive draws that do not blend: depth written, so only the nearest is seen.
+    nearest: HashMap<RasterState, wgpu::RenderPipeline>,
     /// With transmissive draws, the image they see through.
     background: Option<TransmissionBackground>,
     /// Group 1: the background and its sampler, or empty (the shading core's light and decal
@@ -46,7 +51,7 @@ impl TransparentShade {
         structures: Structures,
         hdr: &wgpu::Texture,
     ) -> Result<Option<Self>> {
-        if scene.transparent_draw_commands.is_empty() {
+        if scene.transparent_draw_commands.is_empty() && scene.transmissive_draw_commands.is_empty() {
             return Ok(None);
         }
         if !ctx.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
@@ -83,31 +88,45 @@ impl TransparentShade {
             dst_factor: wgpu::BlendFactor::One,
             operation: wgpu::BlendOperation::Add,
         };
-        let transmission = ("TRANSMISSION", f64::from(u8::from(methods.transmission)));
-        let constants = [&[methods.debug_views_constant(), transmission][..], &methods.material_constants()].concat();
-        let fragment_module = shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, "transparent_shade", &constants)?;
+        let flag = |on: bool| f64::from(u8::from(on));
+        let constants = |masked| {
+            let own = [methods.debug_views_constant(), ("TRANSMISSION", flag(methods.transmission)), ("ALPHA_MASKED", flag(masked))];
+            [&own[..], &methods.material_constants()].concat()
+        };
+        let (unmasked_constants, masked_constants) = (constants(false), constants(true));
+        let module_with = |constants: &[(&str, f64)]| {
+            shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, "transparent_shade", constants)
+        };
+        let unmasked_module = module_with(&unmasked_constants)?;
+        let any_masked = scene.transparent_draw_commands.iter().chain(&scene.transmissive_draw_commands).any(|c| c.state.alpha_mask);
+        let masked_module = any_masked.then(|| module_with(&masked_constants)).transpose()?;
         // The states present, each also mirrored: an animated instance may turn mirrored.
-        let states: std::collections::BTreeSet<RasterState> = scene
-            .transparent_draw_commands
-            .iter()
-            .flat_map(|c| [c.state, RasterState { mirrored: !c.state.mirrored, ..c.state }])
-            .collect();
+        let states = |commands: &[crate::gpu::scene::DrawCommand]| -> std::collections::BTreeSet<RasterState> {
+            commands.iter().flat_map(|c| [c.state, RasterState { mirrored: !c.state.mirrored, ..c.state }]).collect()
+        };
         let targets = [Some(wgpu::ColorTargetState {
             format: HDR_FORMAT,
             blend: Some(wgpu::BlendState { color: over, alpha: keep }),
             write_mask: wgpu::ColorWrites::ALL,
         })];
-        let fragment = Fragment { module: &fragment_module, entry: "transparent_shade", constants: &constants, targets: &targets };
-        let raster = Raster {
+        let fragment = |state: RasterState| {
+            let (module, constants) = match &masked_module {
+                Some(module) if state.alpha_mask => (module, &masked_constants),
+                _ => (&unmasked_module, &unmasked_constants),
+            };
+            Some(Fragment { module, entry: "transparent_shade", constants, targets: &targets })
+        };
+        let raster = |write_depth| Raster {
             label: "transparent_shade",
             layout: &layout,
             vertex_module: &module,
             vertex_entry: "forward_vertex",
-            // In front of the opaque surface; not written, so every transparent layer in front of it
-            // blends.
-            depth: depth_test(false, wgpu::CompareFunction::Greater),
+            // In front of the opaque surface. Not written by blended surfaces, so every layer in
+            // front of it blends; written by transmissive ones, whose α of 1 covers what lies behind.
+            depth: depth_test(write_depth, wgpu::CompareFunction::Greater),
         };
-        let pipelines = raster.per_state(device, states, |_| Some(fragment));
+        let blended = raster(false).per_state(device, states(&scene.transparent_draw_commands), fragment);
+        let nearest = raster(true).per_state(device, states(&scene.transmissive_draw_commands), fragment);
         let background = methods.transmission.then(|| TransmissionBackground::new(ctx, hdr)).transpose()?;
         let group = match &background {
             Some(background) => {
@@ -128,11 +147,11 @@ impl TransparentShade {
             }
             None => bindings::bind_group(device, "transparent_shade background", &group_layout, Vec::new()),
         };
-        Ok(Some(Self { pipelines, background, group }))
+        Ok(Some(Self { blended, nearest, background, group }))
     }
 
-    /// Blends the transparent draws over `hdr`, tested against `depth`, after copying the opaque
-    /// image that transmissive ones see through.
+    /// Draws the transmissive, then the blended draws over `hdr`, tested against `depth`, after
+    /// copying the opaque image that transmissive ones see through.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs, image: ShadedImage) {
         if let Some(background) = &self.background {
             background.record(encoder, timer.as_deref_mut());
@@ -158,6 +177,8 @@ impl TransparentShade {
         pass.set_bind_group(2, &inputs.lights.bind_group, &[]);
         pass.set_bind_group(3, &inputs.decals.bind_group, &[]);
         let scene = inputs.scene;
-        super::draw_ordered(&mut pass, scene, &scene.frame_draws.transparent, &scene.transparent_draw_commands, &self.pipelines);
+        let draws = &scene.frame_draws;
+        super::draw_ordered(&mut pass, scene, &draws.transmissive, &scene.transmissive_draw_commands, &self.nearest);
+        super::draw_ordered(&mut pass, scene, &draws.transparent, &scene.transparent_draw_commands, &self.blended);
     }
 }

@@ -9,6 +9,10 @@
 #include "passes/surface_raster.wgsl"
 #include "shading/sun_shadow.wgsl"
 
+// The pipeline draws alpha-masked (transmissive) surfaces: only they may discard, since a fragment
+// shader that can discard writes depth only after it has run.
+override ALPHA_MASKED: bool = true;
+
 // How much a draw scales lengths on average: the cube root of its transform's volume change.
 fn draw_scale(draw: Draw) -> f32 {
     let m = draw.world_from_local;
@@ -22,7 +26,7 @@ fn transparent_shade(in: ForwardVertex, @builtin(front_facing) front_facing: boo
     let draw = draws[in.draw_index];
     let material = materials[draw.material];
     var surface = fragment_shading_surface(in, front_facing, g, dp);
-    if surface.alpha < material.alpha_cutoff {
+    if ALPHA_MASKED && surface.alpha < material.alpha_cutoff {
         discard;
     }
     // The medium's thickness is given in the mesh's units.

@@ -300,6 +300,12 @@ impl Material {
         self.alpha_mode == AlphaMode::Blend || self.transmission.is_some()
     }
 
+    /// Transmissive without blending: drawn over the opaque image as a surface that hides what
+    /// lies behind it, so that at each pixel only the nearest is shaded.
+    pub fn transmissive_unblended(&self) -> bool {
+        self.alpha_mode != AlphaMode::Blend && self.transmission.is_some()
+    }
+
     /// Every texture the material uses, with whether it holds sRGB colour (else linear data).
     pub fn textures(&self) -> impl Iterator<Item = (TextureRef, bool)> + '_ {
         let clearcoat = self.clearcoat.iter().flat_map(|c| [c.texture, c.roughness_texture, c.normal_texture]);
