@@ -162,6 +162,13 @@ fn transparent_surfaces_need_float32_blending() {
     let error = Renderer::new(ctx, &scene, config(32, 18, LightMethod::Brute)).err().expect("an error without float32 blending");
     let message = error.to_string();
     assert!(message.contains("BLEND") && message.contains("float32-blendable"), "{message}");
+    // Unblended transmissive surfaces replace what they cover: they need no blending.
+    let (mut glass, camera) = ambient_wall();
+    transmissive_pane(&mut glass, 1.0, Vec3::new(0.5, 1.0, 0.25), Transmission::thin(1.0));
+    let ctx = GpuContext::without(wgpu::Features::FLOAT32_BLENDABLE).expect("a GPU adapter");
+    let (_, without) = render_on(ctx, &glass, &camera, config(32, 18, LightMethod::Brute));
+    let (_, with) = render_with(&glass, &camera, config(32, 18, LightMethod::Brute));
+    assert_eq!(max_abs_difference(&without, &with), 0.0, "glass renders differently without float32 blending");
 }
 
 /// A thin pane at `z` letting `transmission` through, of base colour `color`, reflecting nothing
@@ -212,6 +219,19 @@ fn transmissive_panes_pass_the_light_behind_them_through_their_colour_and_medium
         let expected = TINT * lit_wall_radiance;
         assert!(close(centre, expected), "{name}: through the pane {centre}, expected {expected}");
         assert!(close(corner, lit_corner), "{name}: the pane reaches the corner: {corner}");
+
+        // Fully rough at an index of 1.5, a thin pane reads the chain's coarsest levels: over the
+        // nearly uniform wall, nearly the same light (each level is a mean of the one above).
+        let (mut rough, _) = ambient_wall();
+        transmissive_pane(&mut rough, 1.0, TINT, Transmission::thin(1.0));
+        let material = rough.materials.last_mut().unwrap();
+        (material.roughness_factor, material.specular.ior) = (1.0, 1.5);
+        let (centre, _) = centre_and_corner(&rough, &camera, pipeline);
+        let expected = TINT * wall_radiance;
+        assert!(
+            (centre - expected).abs().max_element() <= 0.03 * expected.max_element(),
+            "{name}: rough glass {centre}, expected {expected}"
+        );
 
         // Part: the rest is the diffuse lobe, which the uniform environment lights to the base colour.
         // The factor, then the same through the transmission texture's R.

@@ -143,7 +143,12 @@ pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<Sce
             .any(|p| p.vertices.iter().any(|v| v.color != crate::scene::Vertex::WHITE)),
         occlusion_textures: scene.materials.iter().any(|m| m.occlusion_texture.is_some()),
         second_uv_set: scene.materials.iter().flat_map(|m| m.textures()).any(|(t, _)| t.tex_coord == 1),
-        transmission: scene.materials.iter().any(|m| m.transmission.is_some()),
+        // Only drawn materials: the transparent pass copies the opaque image for them every frame.
+        transmission: scene
+            .instances
+            .iter()
+            .flat_map(|i| &scene.meshes[i.mesh].primitives)
+            .any(|p| scene.materials[p.material].transmission.is_some()),
     })
 }
 

@@ -659,7 +659,6 @@ fn in_view<'a>(commands: &'a [DrawCommand], view: &'a glam::Mat4) -> impl Iterat
 /// Bytes of one `wgpu::util::DrawIndexedIndirectArgs`.
 pub const DRAW_ARGUMENT_BYTES: u64 = 20;
 
-/// `order` of `commands` in runs of one raster state, its arguments from record `first_argument`.
 /// `commands` in view (indices into them) by raster state, each state's front to back from `eye`.
 fn front_to_back(commands: &[DrawCommand], view: &glam::Mat4, eye: glam::Vec3) -> Vec<u32> {
     // Sorted by keys made once per draw (a non-negative float's bits order as the float does); ties
@@ -670,6 +669,7 @@ fn front_to_back(commands: &[DrawCommand], view: &glam::Mat4, eye: glam::Vec3) -
     keyed.into_iter().map(|(_, _, i)| i).collect()
 }
 
+/// `order` of `commands` in runs of one raster state, its arguments from record `first_argument`.
 fn ordered(commands: &[DrawCommand], order: Vec<u32>, first_argument: u32) -> OrderedDraws {
     let mut runs: Vec<(RasterState, u32, u32)> = Vec::new();
     for (position, &c) in order.iter().enumerate() {

@@ -96,7 +96,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                     }
                     shaders.push(super::transparent_shade::shader(methods));
                     // Light through transmissive surfaces changes only the transparent pass.
-                    if particles == ParticleMethod::Off && !reflections && !subgroups {
+                    if !reflections {
                         shaders.push(super::transparent_shade::shader(ShadingMethods { transmission: true, ..methods }));
                     }
                     if decals.works_in(PipelineKind::Visbuffer) {

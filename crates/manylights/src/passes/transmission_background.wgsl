@@ -18,14 +18,17 @@ fn transmission_background_copy(@builtin(global_invocation_id) id: vec3<u32>) {
     textureStore(level, id.xy, vec4<f32>(min(textureLoad(source, id.xy, 0).rgb, vec3<f32>(HALF_MAX)), 1.0));
 }
 
-// The last row or column of an odd-sized level above is left out of the next level.
+// The last row or column of an odd-sized level above is left out of the next level; a level one
+// texel wide or tall reads its edge twice.
 @compute @workgroup_size(8, 8)
 fn transmission_background_downsample(@builtin(global_invocation_id) id: vec3<u32>) {
     if any(id.xy >= textureDimensions(level)) {
         return;
     }
     let corner = id.xy * 2u;
-    let sum = textureLoad(source, corner, 0) + textureLoad(source, corner + vec2<u32>(1u, 0u), 0)
-        + textureLoad(source, corner + vec2<u32>(0u, 1u), 0) + textureLoad(source, corner + vec2<u32>(1u, 1u), 0);
+    let last = textureDimensions(source) - 1u;
+    let far = min(corner + 1u, last);
+    let sum = textureLoad(source, corner, 0) + textureLoad(source, vec2<u32>(far.x, corner.y), 0)
+        + textureLoad(source, vec2<u32>(corner.x, far.y), 0) + textureLoad(source, far, 0);
     textureStore(level, id.xy, sum * 0.25);
 }

@@ -1,6 +1,6 @@
 //! Transparent surfaces (`transparent_shade.wgsl`): the scene's alpha-blended draws (glTF BLEND),
-//! drawn back to front over the shaded HDR image after the opaque surfaces, in every pipeline. Depth
-//! is tested against the opaque surfaces and not written; each fragment is lit and decaled by the
+//! drawn back to front over the shaded HDR image after the opaque surfaces, in every pipeline, depth
+//! tested against the opaque surfaces and not written; each fragment is lit and decaled by the
 //! shading core through the frame's methods, so decals and lights reach transparent surfaces too.
 //! The fragment stage is the only place for them: no G-buffer or visibility buffer holds more than
 //! one surface per pixel. Transmissive surfaces (`KHR_materials_transmission`) are drawn here too,
@@ -54,11 +54,10 @@ impl TransparentShade {
         if scene.transparent_draw_commands.is_empty() && scene.transmissive_draw_commands.is_empty() {
             return Ok(None);
         }
-        if !ctx.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+        if !scene.transparent_draw_commands.is_empty() && !ctx.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
             return Err(Error::InvalidScene(format!(
-                "the scene has alpha-blended (glTF BLEND) or transmissive materials, and {} cannot blend into the renderer's \
-                 32-bit float HDR image (no float32-blendable feature); use a GPU or driver that has it, or make those materials \
-                 OPAQUE or MASK without KHR_materials_transmission",
+                "the scene has alpha-blended (glTF BLEND) materials, and {} cannot blend into the renderer's 32-bit float HDR \
+                 image (no float32-blendable feature); use a GPU or driver that has it, or make those materials OPAQUE or MASK",
                 ctx.info.name
             )));
         }
@@ -104,17 +103,19 @@ impl TransparentShade {
         let states = |commands: &[crate::gpu::scene::DrawCommand]| -> std::collections::BTreeSet<RasterState> {
             commands.iter().flat_map(|c| [c.state, RasterState { mirrored: !c.state.mirrored, ..c.state }]).collect()
         };
-        let targets = [Some(wgpu::ColorTargetState {
+        let blended_targets = [Some(wgpu::ColorTargetState {
             format: HDR_FORMAT,
             blend: Some(wgpu::BlendState { color: over, alpha: keep }),
             write_mask: wgpu::ColorWrites::ALL,
         })];
-        let fragment = |state: RasterState| {
+        // Unblended transmissive surfaces replace what they cover (and need no float32 blending).
+        let covering_targets = [Some(wgpu::ColorTargetState { format: HDR_FORMAT, blend: None, write_mask: wgpu::ColorWrites::COLOR })];
+        let fragment = |state: RasterState, targets| {
             let (module, constants) = match &masked_module {
                 Some(module) if state.alpha_mask => (module, &masked_constants),
                 _ => (&unmasked_module, &unmasked_constants),
             };
-            Some(Fragment { module, entry: "transparent_shade", constants, targets: &targets })
+            Some(Fragment { module, entry: "transparent_shade", constants, targets })
         };
         let raster = |write_depth| Raster {
             label: "transparent_shade",
@@ -125,8 +126,8 @@ impl TransparentShade {
             // front of it blends; written by transmissive ones, whose α of 1 covers what lies behind.
             depth: depth_test(write_depth, wgpu::CompareFunction::Greater),
         };
-        let blended = raster(false).per_state(device, states(&scene.transparent_draw_commands), fragment);
-        let nearest = raster(true).per_state(device, states(&scene.transmissive_draw_commands), fragment);
+        let blended = raster(false).per_state(device, states(&scene.transparent_draw_commands), |s| fragment(s, &blended_targets));
+        let nearest = raster(true).per_state(device, states(&scene.transmissive_draw_commands), |s| fragment(s, &covering_targets));
         let background = methods.transmission.then(|| TransmissionBackground::new(ctx, hdr)).transpose()?;
         let group = match &background {
             Some(background) => {

@@ -1,10 +1,11 @@
-// Transparent surfaces, after the opaque surfaces are shaded, in every pipeline: drawn back to front
-// over the HDR image in the fragment stage, tested against the opaque surfaces' depth without
-// writing it. Each fragment is lit and decaled by the shading core through the frame's light and
-// decal methods, as an opaque surface is — what deferred decals, which exist only in the G-buffer,
-// cannot do — and shadowed by the sun through a ray of their own. Alpha-blended surfaces (glTF BLEND)
-// blend by their alpha; transmissive ones (KHR_materials_transmission) carry the light behind them
-// (`shading/transmission.wgsl`) and cover what they are drawn over, or mask it where alpha-masked.
+// Transparent surfaces, after the opaque surfaces are shaded, in every pipeline, drawn over the HDR
+// image in the fragment stage and tested against the opaque surfaces' depth: first transmissive ones
+// that do not blend (KHR_materials_transmission), front to back, writing depth, each carrying the
+// light behind it (`shading/transmission.wgsl`) and covering what it is drawn over; then alpha-blended
+// ones (glTF BLEND), back to front, blending by their alpha without writing depth. Each fragment is
+// lit and decaled by the shading core through the frame's light and decal methods, as an opaque
+// surface is — what deferred decals, which exist only in the G-buffer, cannot do — and shadowed by
+// the sun through a ray of its own.
 #include "shading/shade.wgsl"
 #include "passes/surface_raster.wgsl"
 #include "shading/sun_shadow.wgsl"

@@ -21,7 +21,11 @@
 //!             denoiser, with restir (`passes/denoise/`) ─▶ denoised light added to hdr
 //!                                   │
 //!                                   ▼
-//!             transparent_shade (BLEND draws, back to front) ─▶ blended over hdr
+//!             transmission_background, with transmissive draws ─▶ mip chain of hdr (Rgba16Float)
+//!                                   │
+//!                                   ▼
+//!             transparent_shade (transmissive draws front to back, then BLEND draws back to
+//!             front, fragments) ─▶ over hdr
 //!                                   │
 //!                                   ▼
 //!             post chain (depth of field, motion blur, exposure, bloom; tonemap) ─▶ ldr (Rgba8Unorm, sRGB-encoded)
@@ -52,7 +56,7 @@ pub struct ForwardPipeline {
     surface_motion: Option<SurfaceMotion>,
     /// Present when `restir`'s lighting is denoised (`plan::FramePlan::denoises`).
     pub(super) denoiser: Option<Denoiser>,
-    /// Present when the scene has transparent draws.
+    /// Present when the scene has blended or transmissive draws.
     transparent: Option<TransparentShade>,
     /// Depth of field, motion blur, exposure, bloom, vignette and tonemapping (`post/`).
     pub post: PostChain,

@@ -15,9 +15,10 @@ fn transmission_path(s: ShadingInput) -> vec3<f32> {
     return direction * s.thickness;
 }
 
-// The medium's transmittance over `distance` (Beer's law): the attenuation colour after its distance.
+// The medium's transmittance over `distance` (Beer's law): the attenuation colour after its distance;
+// none through a thin wall (where a black attenuation colour would make pow(0, 0)).
 fn medium_transmittance(s: ShadingInput, distance: f32) -> vec3<f32> {
-    if s.attenuation.w <= 0.0 {
+    if s.attenuation.w <= 0.0 || distance <= 0.0 {
         return vec3<f32>(1.0);
     }
     return pow(s.attenuation.rgb, vec3<f32>(distance / s.attenuation.w));
