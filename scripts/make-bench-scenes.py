@@ -164,18 +164,27 @@ def sponza_copy(source):
     return document
 
 
-def coated(source, out):
-    document = sponza_copy(source)
-    for material in document.get("materials", []):
-        extensions = material.setdefault("extensions", {})
-        extensions["KHR_materials_clearcoat"] = {"clearcoatFactor": 0.5, "clearcoatRoughnessFactor": 0.1}
-        extensions["KHR_materials_ior"] = {"ior": 1.7}
-        extensions["KHR_materials_specular"] = {"specularFactor": 0.8, "specularColorFactor": [1.0, 0.9, 0.8]}
-    used = set(document.get("extensionsUsed", [])) | {"KHR_materials_clearcoat", "KHR_materials_ior", "KHR_materials_specular"}
-    document["extensionsUsed"] = sorted(used)
+def write_sponza(document, out):
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "Sponza.gltf"), "w") as f:
         json.dump(document, f)
+
+
+def with_material_extensions(source, out, extensions, chosen=lambda material: True):
+    """sponza_lite with `extensions` (name: object) on each material `chosen` accepts."""
+    document = sponza_copy(source)
+    for material in filter(chosen, document.get("materials", [])):
+        material.setdefault("extensions", {}).update(extensions)
+    document["extensionsUsed"] = sorted(set(document.get("extensionsUsed", [])) | set(extensions))
+    write_sponza(document, out)
+
+
+def coated(source, out):
+    with_material_extensions(source, out, {
+        "KHR_materials_clearcoat": {"clearcoatFactor": 0.5, "clearcoatRoughnessFactor": 0.1},
+        "KHR_materials_ior": {"ior": 1.7},
+        "KHR_materials_specular": {"specularFactor": 0.8, "specularColorFactor": [1.0, 0.9, 0.8]},
+    })
 
 
 def colored(source, out):
@@ -193,27 +202,16 @@ def colored(source, out):
             )
             primitive["attributes"]["COLOR_0"] = len(document["accessors"]) - 1
     document["buffers"].append({"byteLength": len(colors), "uri": "colors.bin"})
-    os.makedirs(out, exist_ok=True)
+    write_sponza(document, out)
     with open(os.path.join(out, "colors.bin"), "wb") as f:
         f.write(colors)
-    with open(os.path.join(out, "Sponza.gltf"), "w") as f:
-        json.dump(document, f)
 
 
 def glass(source, out):
-    document = sponza_copy(source)
-    for material in document.get("materials", []):
-        if material.get("name", "").startswith(("Fabric", "Vase")):
-            extensions = material.setdefault("extensions", {})
-            extensions["KHR_materials_transmission"] = {"transmissionFactor": 0.9}
-            extensions["KHR_materials_volume"] = {
-                "thicknessFactor": 0.02, "attenuationDistance": 0.05, "attenuationColor": [0.9, 0.8, 0.6]
-            }
-    used = set(document.get("extensionsUsed", [])) | {"KHR_materials_transmission", "KHR_materials_volume"}
-    document["extensionsUsed"] = sorted(used)
-    os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "Sponza.gltf"), "w") as f:
-        json.dump(document, f)
+    with_material_extensions(source, out, {
+        "KHR_materials_transmission": {"transmissionFactor": 0.9},
+        "KHR_materials_volume": {"thicknessFactor": 0.02, "attenuationDistance": 0.05, "attenuationColor": [0.9, 0.8, 0.6]},
+    }, lambda material: material.get("name", "").startswith(("Fabric", "Vase")))
 
 
 def second_set(source, out):
@@ -233,9 +231,7 @@ def second_set(source, out):
 
     for material in document.get("materials", []):
         reads_second(material)
-    os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "Sponza.gltf"), "w") as f:
-        json.dump(document, f)
+    write_sponza(document, out)
 
 
 if __name__ == "__main__":

@@ -189,6 +189,11 @@ fn transmissive_pane(scene: &mut Scene, z: f32, color: Vec3, transmission: Trans
     scene.instances.push(Instance { mesh: scene.meshes.len() - 1, world_from_local: Mat4::from_translation(Vec3::new(0.0, 0.0, z)) });
 }
 
+/// Whether `a` is `b` within the background's precision (half floats), relative to `b`.
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).abs().max_element() <= 2e-3 * b.max_element().max(0.1)
+}
+
 /// One texel of R = G = 128 (linear data ≈ 0.5).
 fn half_texture() -> Texture {
     Texture { name: "half".into(), width: 1, height: 1, rgba8: vec![128, 128, 0, 255] }
@@ -202,8 +207,6 @@ fn texture(index: usize) -> TextureRef {
 fn transmissive_panes_pass_the_light_behind_them_through_their_colour_and_medium() {
     const TINT: Vec3 = Vec3::new(0.5, 1.0, 0.25);
     let (wall, camera) = ambient_wall();
-    // Relative: the background is stored in half floats.
-    let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() <= 2e-3 * b.max_element().max(0.1);
     for pipeline in PipelineKind::ALL {
         let name = pipeline.name();
         let (wall_radiance, _) = centre_and_corner(&wall, &camera, pipeline);
@@ -359,7 +362,6 @@ fn only_the_nearest_transmissive_surface_shows_blended_ones_in_front_blend_over_
     const NEAR: Vec3 = Vec3::new(1.0, 0.5, 0.5);
     const FAR: Vec3 = Vec3::new(0.5, 1.0, 0.5);
     let (wall, camera) = ambient_wall();
-    let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() <= 2e-3 * b.max_element().max(0.1);
     for pipeline in PipelineKind::ALL {
         let name = pipeline.name();
         let (wall_radiance, _) = centre_and_corner(&wall, &camera, pipeline);
