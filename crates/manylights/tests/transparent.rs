@@ -13,7 +13,7 @@ use manylights::{
     gpu::GpuContext,
     renderer::{Image, Renderer},
     scene::{demo::demo_scene, generators, generators::ScatterLights, AlphaMode, Camera, Decal, Instance, Material, Scene, Vertex},
-    scene::{Specular, Sun, Texture, TextureRef, Transmission, Wrap},
+    scene::{Light, Specular, Sun, Texture, TextureRef, Transmission, Wrap},
     settings::{DecalMethod, LightMethod, PipelineKind},
     settings::{RaySettings, RenderConfig, SunShadows},
 };
@@ -433,4 +433,76 @@ fn transmissive_surfaces_cast_no_traced_shadow() {
         behind_opaque.max_element() < 0.8 * bare.max_element(),
         "the opaque pane casts no shadow there: {behind_opaque} against {bare}"
     );
+}
+
+/// The transmission lobe of `shading/brdf.wgsl` times |n·l|, for a thin transmissive dielectric
+/// reflecting nothing (specular weight 0) with normal `n`, towards `light_dir` below its surface.
+fn transmission_lobe(n: Vec3, view_dir: Vec3, light_dir: Vec3, roughness: f32, ior: f32, color: Vec3) -> Vec3 {
+    let mirrored = light_dir - 2.0 * n.dot(light_dir) * n;
+    let (n_dot_l, n_dot_v) = (n.dot(mirrored), n.dot(view_dir));
+    let h = (mirrored + view_dir).normalize();
+    let alpha = (roughness * (ior * 2.0 - 2.0).clamp(0.0, 1.0)).max(0.045).powi(2);
+    let a2 = alpha * alpha;
+    let d = n.dot(h).powi(2) * (a2 - 1.0) + 1.0;
+    let distribution = a2 / (std::f32::consts::PI * d * d);
+    let visibility =
+        0.5 / (n_dot_l * (n_dot_v * n_dot_v * (1.0 - a2) + a2).sqrt() + n_dot_v * (n_dot_l * n_dot_l * (1.0 - a2) + a2).sqrt());
+    color * distribution * visibility * n_dot_l
+}
+
+#[test]
+fn lights_and_the_sun_behind_a_transmissive_pane_shine_through_its_lobe() {
+    const TINT: Vec3 = Vec3::new(0.5, 1.0, 0.25);
+    let (roughness, ior) = (0.5, 1.5);
+    // A lone pane at z = 1 before the uniform environment, 3 m from the eye; nothing behind it for
+    // the lights to light but the pane itself.
+    let (mut bare, camera) = ambient_wall();
+    bare.instances.clear();
+    transmissive_pane(&mut bare, 1.0, TINT, Transmission::thin(1.0));
+    bare.materials.last_mut().unwrap().roughness_factor = roughness;
+    let light = point_light(Vec3::new(0.3, 0.2, 0.0), 2.0, 6.0);
+    let sun = Sun { direction: Vec3::new(0.1, 0.2, 1.0).normalize(), color: Vec3::new(1.0, 0.8, 0.6), illuminance: 0.5 };
+    let (mut lit, mut sunlit, mut crowd) = (bare.clone(), bare.clone(), bare.clone());
+    lit.lights.push(light);
+    sunlit.sun = Some(sun);
+    // Crowded enough for `bvh` to share its leaves out among a subgroup's lanes (`plan.rs`).
+    let crowd_offsets: Vec<Vec3> = (0..32).map(|i| Vec3::new((i % 4) as f32, (i / 4 % 4) as f32, (i / 16) as f32) * 0.05).collect();
+    crowd.lights.extend(crowd_offsets.iter().map(|&offset| Light { position: light.position - offset, intensity: 0.1, ..light }));
+
+    // The point the centre pixel (32, 18) of a 64×36 image sees on the pane.
+    let world_from_clip = camera.clip_from_world(64, 36).inverse();
+    let ndc = Vec3::new(32.5 / 64.0 * 2.0 - 1.0, 1.0 - 18.5 / 36.0 * 2.0, 0.5);
+    let far = world_from_clip.project_point3(ndc);
+    let eye = camera.position();
+    let point = eye + (far - eye) * ((1.0 - eye.z) / (far.z - eye.z));
+    let view_dir = (eye - point).normalize();
+    let through_pane = |light: &Light| {
+        let to_light = light.position - point;
+        let distance_sq = to_light.length_squared();
+        let window = (1.0 - (distance_sq / (light.range * light.range)).powi(2)).clamp(0.0, 1.0);
+        light.color * light.intensity * window * window / distance_sq
+            * transmission_lobe(Vec3::Z, view_dir, to_light.normalize(), roughness, ior, TINT)
+    };
+    let from_light = through_pane(&light);
+    let from_crowd: Vec3 = crowd.lights.iter().map(through_pane).sum();
+    let from_sun = sun.color * sun.illuminance * transmission_lobe(Vec3::Z, view_dir, -sun.direction, roughness, ior, TINT);
+    assert!(from_light.min_element() > 0.01 && from_sun.min_element() > 0.01, "the test's lobes are too faint to tell");
+
+    for pipeline in PipelineKind::ALL {
+        let name = pipeline.name();
+        let (background, _) = centre_and_corner(&bare, &camera, pipeline);
+        let (with_sun, _) = centre_and_corner(&sunlit, &camera, pipeline);
+        let got = with_sun - background;
+        assert!(close(got, from_sun), "{name}: the sun through the pane adds {got}, expected {from_sun}");
+        // Through every light method, and through crowds, whose loops skip lights below the horizon
+        // of surfaces lit from above only.
+        let runs =
+            [(LightMethod::Brute, &lit, from_light), (LightMethod::Bvh, &lit, from_light), (LightMethod::Clustered, &lit, from_light)];
+        for (method, scene, expected) in runs.into_iter().chain([(LightMethod::Bvh, &crowd, from_crowd)]) {
+            let (_, hdr) = render_with(scene, &camera, configured(pipeline, method, DecalMethod::Brute, (64, 36)));
+            let got = rgb(pixel(&hdr, 32, 18)) - background;
+            let lights = scene.lights.len();
+            assert!(close(got, expected), "{name}, {}: {lights} lights through the pane add {got}, expected {expected}", method.name());
+        }
+    }
 }

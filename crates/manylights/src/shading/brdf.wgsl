@@ -6,7 +6,8 @@
 // specifications compose them: mix(dielectric, metal, metallic) under the coat, where the
 // dielectric is `diffuse · (1 − weight · max(F)) + specular · weight · F`, and the coat mixes in
 // by `clearcoat · F_coat(n_coat · v)`. A transmissive dielectric (KHR_materials_transmission) lets
-// its `transmission` share of the diffuse lobe through instead.
+// its `transmission` share of the diffuse lobe through instead: light from behind reaches the viewer
+// through a specular transmission lobe (`transmission_lobe_times_cosine`).
 
 const PI: f32 = 3.141592653589793;
 // Below this perceptual roughness GGX highlights of point lights become sub-pixel and alias.
@@ -23,6 +24,51 @@ fn v_smith_ggx_correlated(n_dot_v: f32, n_dot_l: f32, alpha: f32) -> f32 {
     let gv = n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2);
     let gl = n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2);
     return 0.5 / max(gv + gl, 1e-7);
+}
+
+// Whether light from below the surface's horizon reaches its viewer: through a transmissive
+// surface's transmission lobe, in the pass that shades them (TRANSMISSION).
+fn lit_from_behind(s: ShadingInput) -> bool {
+    return TRANSMISSION && s.transmission > 0.0;
+}
+
+// The path light takes through the surface's medium (KHR_materials_volume), from the shading point to
+// where it leaves: refracted into it by the index of refraction, as long as the medium is thick (0
+// for thin walls).
+fn transmission_path(s: ShadingInput) -> vec3<f32> {
+    let refracted = refract(-s.view_dir, s.normal, 1.0 / max(s.ior, 1.0));
+    let direction = select(-s.view_dir, normalize(refracted), dot(refracted, refracted) > 0.0);
+    return direction * s.thickness;
+}
+
+// The medium's transmittance over `distance` (Beer's law): the attenuation colour after its distance;
+// none through a thin wall (where a black attenuation colour would make pow(0, 0)).
+fn medium_transmittance(s: ShadingInput, distance: f32) -> vec3<f32> {
+    if s.attenuation.w <= 0.0 || distance <= 0.0 {
+        return vec3<f32>(1.0);
+    }
+    return pow(s.attenuation.rgb, vec3<f32>(distance / s.attenuation.w));
+}
+
+// The transmission lobe towards `light_dir` below the surface, times |n·l|, for a transmissive
+// dielectric of reflectance `dielectric` (`surface_dielectric`): GGX about the light mirrored above
+// the surface, as the glTF specification and the Khronos sample viewer evaluate it for thin and thick
+// surfaces alike, at the roughness refraction blurs with (none at an index of 1, fully from 1.5, as
+// `shading/transmitted_screen.wgsl` blurs the light behind); through the transmission share, the base
+// colour, what the dielectric does not reflect and the medium along the refracted view ray. The
+// light's direction is taken from the shading point, not from where that ray leaves the medium.
+fn transmission_lobe_times_cosine(s: ShadingInput, light_dir: vec3<f32>, dielectric: vec4<f32>) -> vec3<f32> {
+    let mirrored = light_dir - 2.0 * dot(s.normal, light_dir) * s.normal;
+    let n_dot_l = max(dot(s.normal, mirrored), 0.0);
+    let n_dot_v = max(dot(s.normal, s.view_dir), 1e-4);
+    let h = normalize(mirrored + s.view_dir);
+    let roughness = max(s.roughness * saturate(s.ior * 2.0 - 2.0), MIN_ROUGHNESS);
+    let alpha = roughness * roughness;
+    let fresnel = dielectric.xyz + (1.0 - dielectric.xyz) * pow(1.0 - saturate(dot(s.view_dir, h)), 5.0);
+    let unreflected = 1.0 - dielectric.w * max(fresnel.x, max(fresnel.y, fresnel.z));
+    let lobe = d_ggx(saturate(dot(s.normal, h)), alpha) * v_smith_ggx_correlated(n_dot_v, n_dot_l, alpha) * n_dot_l;
+    let share = s.transmission * (1.0 - s.metallic) * unreflected * lobe;
+    return s.base_color * medium_transmittance(s, length(transmission_path(s))) * share;
 }
 
 // The BRDF's two lobes, each times n·l.
@@ -62,7 +108,8 @@ fn clearcoat_fresnel(s: ShadingInput) -> f32 {
 }
 
 // Reflected radiance for unit irradiance from direction `light_dir` (towards the light), already
-// multiplied by n·l, lobe by lobe (the coat in the specular lobe). Zero below the horizon.
+// multiplied by n·l, lobe by lobe (the coat in the specular lobe, the transmission lobe there too).
+// Zero below the horizon, but for light through a transmissive surface.
 fn brdf_lobes_times_cosine(s: ShadingInput, light_dir: vec3<f32>) -> BrdfLobes {
     var lobes = BrdfLobes(vec3<f32>(0.0), vec3<f32>(0.0));
     let n_dot_l = dot(s.normal, light_dir);
@@ -84,6 +131,8 @@ fn brdf_lobes_times_cosine(s: ShadingInput, light_dir: vec3<f32>) -> BrdfLobes {
             // What a transmissive surface lets through it does not scatter (`shading/transmission.wgsl`).
             lobes.diffuse *= 1.0 - s.transmission;
         }
+    } else if lit_from_behind(s) {
+        lobes.specular = transmission_lobe_times_cosine(s, light_dir, surface_dielectric(s));
     }
     if MATERIAL_EXTENSIONS && s.clearcoat > 0.0 {
         let coat = clearcoat_fresnel(s);

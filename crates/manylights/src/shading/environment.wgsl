@@ -69,12 +69,18 @@ fn environment_light(s: ShadingInput) -> vec3<f32> {
     return (diffuse + specular + coat) * s.occlusion;
 }
 
+// Whether the sun's disc is seen in the sky (`sky_radiance`): with the daylight sky, where the scene
+// has a sun of some angular size.
+fn sun_disc_seen() -> bool {
+    return frame.environment.y > 0.0 && frame.sun_direction.w > 0.0 && frame.ray_settings.x > 0.0;
+}
+
 // Radiance seen where no geometry was drawn and where reflected rays leave the scene: the
 // environment, and with the daylight sky the sun's disc (its angular size the soft shadows').
 fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
     var radiance = textureSampleLevel(environment_radiance, environment_sampler, environment_uv(dir), 0.0).rgb;
     let radius = frame.ray_settings.x;
-    if frame.environment.y > 0.0 && frame.sun_direction.w > 0.0 && radius > 0.0 && dot(dir, -frame.sun_direction.xyz) > cos(radius) {
+    if sun_disc_seen() && dot(dir, -frame.sun_direction.xyz) > cos(radius) {
         radiance += frame.sun_radiance.rgb / (PI * radius * radius);
     }
     return radiance;

@@ -2,8 +2,8 @@
 // picks one of a node's two children in proportion to its importance at the shading point, down to a
 // leaf; the probability of the leaf is the product of the choices made (`accel/light_tree.rs` builds
 // the nodes' emitters). The importance is zero only where no light below can light the point — the
-// point outside the node's box, which bounds its lights' spheres, or every light below the surface's
-// horizon — so every light that lights the point can be drawn.
+// point outside the node's box, which bounds its lights' spheres, or every light below the horizon of
+// a surface lit from above only — so every light that lights the point can be drawn.
 #include "shading/light_bindings.wgsl"
 #include "shading/random.wgsl"
 
@@ -12,8 +12,9 @@
 // Estevez & Kulla's clamp, which keeps a box around the point from claiming every draw), times the
 // largest cosine at the surface of a direction into the box (their orientation bound), through the
 // range window (`light_distance_attenuation`'s) of the nearest any of them can be with the largest
-// range: zero only where none reaches.
-fn light_tree_importance(node: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
+// range: zero only where none reaches. A surface lit from both sides (`two_sided`: transmissive ones)
+// takes the cosine as 1.
+fn light_tree_importance(node: u32, p: vec3<f32>, n: vec3<f32>, two_sided: bool) -> f32 {
     let bounds = light_nodes[node];
     if any(p < bounds.min) || any(p > bounds.max) {
         return 0.0;
@@ -28,7 +29,7 @@ fn light_tree_importance(node: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let centre = 0.5 * (emitters.min + emitters.max);
     let half_extent = 0.5 * (emitters.max - emitters.min);
     // The highest any of the box's corners lies above the surface's plane.
-    if dot(n, centre - p) + dot(abs(n), half_extent) <= 0.0 {
+    if !two_sided && dot(n, centre - p) + dot(abs(n), half_extent) <= 0.0 {
         return 0.0;
     }
     let to_centre = centre - p;
@@ -37,7 +38,7 @@ fn light_tree_importance(node: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     // The largest cosine at the surface of a direction to the box: that of the angle to its centre
     // less the angle its bounding sphere subtends (1 where the sphere holds the point).
     var cosine = 1.0;
-    if distance_sq > radius_sq {
+    if !two_sided && distance_sq > radius_sq {
         let cos_centre = dot(n, to_centre) * inverseSqrt(max(distance_sq * dot(n, n), 1e-30));
         let cos_sphere = sqrt(1.0 - radius_sq / distance_sq);
         if cos_centre < cos_sphere {
@@ -57,7 +58,7 @@ struct LightTreeDraw {
     drawn: bool,
 }
 
-fn light_tree_draw_leaf(root: u32, p: vec3<f32>, n: vec3<f32>) -> LightTreeDraw {
+fn light_tree_draw_leaf(root: u32, p: vec3<f32>, n: vec3<f32>, two_sided: bool) -> LightTreeDraw {
     var node = root;
     var probability = 1.0;
     loop {
@@ -66,8 +67,8 @@ fn light_tree_draw_leaf(root: u32, p: vec3<f32>, n: vec3<f32>) -> LightTreeDraw 
             return LightTreeDraw(entry, probability, true);
         }
         let second = light_nodes[entry].skip;
-        let first_weight = light_tree_importance(entry, p, n);
-        let total = first_weight + light_tree_importance(second, p, n);
+        let first_weight = light_tree_importance(entry, p, n, two_sided);
+        let total = first_weight + light_tree_importance(second, p, n, two_sided);
         if !(total > 0.0) {
             return LightTreeDraw(entry, probability, false);
         }

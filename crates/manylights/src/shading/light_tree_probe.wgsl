@@ -18,6 +18,6 @@ fn light_tree_probe(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     random_state = random_hash(id.x + 1u);
-    let draw = light_tree_draw_leaf(light_instances[0].blas_root & ~ENTRY_GRID_FLAG, probe.point.xyz, probe.normal.xyz);
+    let draw = light_tree_draw_leaf(light_instances[0].blas_root & ~ENTRY_GRID_FLAG, probe.point.xyz, probe.normal.xyz, false);
     draws[id.x] = vec4<u32>(0u, u32(draw.drawn), bitcast<u32>(draw.probability), draw.entry & BVH_LEAF_FIRST_MASK);
 }

@@ -35,7 +35,7 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
     // The environment (sky, image or uniform ambient) stands in for indirect light. A clear coat
     // lies over the emission too, which it dims by its Fresnel term (KHR_materials_clearcoat).
     var radiance = s.emissive * (1.0 - clearcoat_fresnel(s)) + environment_light(s);
-    if frame.sun_direction.w > 0.0 && sun_visibility > 0.0 {
+    if frame.sun_direction.w > 0.0 && sun_visibility > 0.0 && !sun_seen_through(s) {
         radiance += frame.sun_radiance.rgb * sun_visibility * brdf_times_cosine(s, -frame.sun_direction.xyz);
     }
     if TRANSMISSION && s.transmission > 0.0 {
@@ -82,6 +82,12 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
             return radiance;
         }
     }
+}
+
+// Whether the sun lies behind a transmissive surface whose light from behind (`transmitted_light`)
+// already shows its disc: then its transmission lobe would count it twice.
+fn sun_seen_through(s: ShadingInput) -> bool {
+    return lit_from_behind(s) && dot(s.normal, -frame.sun_direction.xyz) <= 0.0 && sun_disc_seen();
 }
 
 // `shade` for the opaque surface a pixel shows: what the shading core keeps per pixel from frame to

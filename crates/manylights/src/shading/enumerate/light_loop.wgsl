@@ -20,12 +20,13 @@ fn sphere_reaches(sphere: vec4<f32>, p: vec3<f32>) -> bool {
 }
 
 // Whether a light's sphere can light the surface `local` (group space): within its range, and above
-// the surface's horizon (`brdf_times_cosine` is zero below it). It serves crowds of lights, where
+// the surface's horizon (`brdf_times_cosine` is zero below it, but for light through a transmissive
+// surface, `lit_from_behind`). It serves crowds of lights, where
 // many lights in range of a point are still below its horizon, sparing their contributions. Loops
 // that meet mostly lights out of range test the range alone: there the horizon test costs more than
 // it saves (benchmarks/LOG.md, topic 3).
 fn sphere_may_light(sphere: vec4<f32>, local: ShadingInput) -> bool {
-    return sphere_reaches(sphere, local.position) && dot(local.normal, sphere.xyz - local.position) > 0.0;
+    return sphere_reaches(sphere, local.position) && (dot(local.normal, sphere.xyz - local.position) > 0.0 || lit_from_behind(local));
 }
 
 // Whether a light's sphere reaches some point of the box [low, high] (group space): true for every

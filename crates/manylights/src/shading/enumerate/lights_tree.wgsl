@@ -15,12 +15,13 @@ const LIGHT_TREE_CANDIDATES: u32 = 8u;
 fn light_tree_instance_importance(index: u32, s: ShadingInput) -> f32 {
     let instance = light_instances[index];
     let local = shading_input_in_group(s, instance);
-    return light_tree_importance(instance.blas_root & ~ENTRY_GRID_FLAG, local.position, local.normal) * instance_light_falloff(instance);
+    return light_tree_importance(instance.blas_root & ~ENTRY_GRID_FLAG, local.position, local.normal, lit_from_behind(s)) * instance_light_falloff(instance);
 }
 
 // Light `index`'s importance at the surface `local` (group space): its power through its distance
-// falloff and the cosine at the surface, zero out of range or below the horizon — p̂ without the
-// BRDF's lobes and the spot's cone, which only the light drawn pays for.
+// falloff and the cosine at the surface (its size, for light from behind), zero out of range or
+// below the horizon of a surface not lit from behind — p̂ without the BRDF's lobes and the spot's
+// cone, which only the light drawn pays for.
 fn light_tree_light_importance(index: u32, local: ShadingInput) -> f32 {
     let sphere = light_sphere(index);
     if !sphere_may_light(sphere, local) {
@@ -28,7 +29,7 @@ fn light_tree_light_importance(index: u32, local: ShadingInput) -> f32 {
     }
     let to_light = sphere.xyz - local.position;
     let distance_sq = dot(to_light, to_light);
-    let cosine = dot(local.normal, to_light) * inverseSqrt(max(distance_sq * dot(local.normal, local.normal), 1e-20));
+    let cosine = abs(dot(local.normal, to_light)) * inverseSqrt(max(distance_sq * dot(local.normal, local.normal), 1e-20));
     return dot(lights[index].radiant, RESTIR_LUMINANCE) * light_distance_attenuation(distance_sq, sphere.w) * cosine;
 }
 
@@ -62,7 +63,7 @@ fn shade_local_lights(s: ShadingInput) -> vec3<f32> {
         let instance = light_instances[chosen];
         let local = shading_input_in_group(s, instance);
         let falloff = instance_light_falloff(instance);
-        let leaf = light_tree_draw_leaf(instance.blas_root & ~ENTRY_GRID_FLAG, local.position, local.normal);
+        let leaf = light_tree_draw_leaf(instance.blas_root & ~ENTRY_GRID_FLAG, local.position, local.normal, lit_from_behind(s));
         if !leaf.drawn {
             continue;
         }
