@@ -20,8 +20,9 @@
 #   scripts/bench-device.sh deform       Sponza's curtains waving and a skinned tube posed: GPU deformation and BLAS
 #                                        refit (issues 7, 37)
 #   scripts/bench-device.sh materials    every Sponza material coated, every vertex coloured, every texture on
-#                                        TEXCOORD_1, or fabrics and vases transmissive, against none: material
-#                                        extensions, vertex colours, the second UV set and transmission (issues 37, 33)
+#                                        TEXCOORD_1, fabrics and vases transmissive, or fabrics with a sheen, against
+#                                        none: material extensions, vertex colours, the second UV set, transmission
+#                                        and sheen (issues 37, 33)
 #   scripts/bench-device.sh draws        1,024 to 40,000 draws (scripts/make-bench-scenes.py's cubes), every pipeline,
 #                                        all in view or most outside it: the CPU's frame against the GPU's (issue 33)
 #   scripts/bench-device.sh soak         10,000 frames of everything rebuilt per frame, memory sampled (issue 31)
@@ -235,12 +236,13 @@ deform() {
   fi
 }
 
-# The material extensions' path, vertex colours and the second UV set: Sponza with every material
-# coated, every vertex coloured, or every texture on TEXCOORD_1 (scripts/make-bench-scenes.py),
-# against Sponza as it is; 28k lights, every pipeline.
+# The material extensions' path, vertex colours, the second UV set, transmission and sheen: Sponza
+# with every material coated, every vertex coloured, every texture on TEXCOORD_1, fabrics and vases
+# transmissive, or fabrics with a sheen (scripts/make-bench-scenes.py), against Sponza as it is; 28k
+# lights, every pipeline.
 materials() {
   local s p
-  for s in lite coated colored uv1 glass; do
+  for s in lite coated colored uv1 glass sheen; do
     printf 'gltf = "sponza_%s/Sponza.gltf"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' $s >.bench/sun_$s.toml
     for p in visbuffer deferred forward; do
       run materials_${s}_$p 200 --scene .bench/sun_$s.toml --lights 28000 --seed 1 --light-method bvh --decal-method off --pipeline $p

@@ -13,6 +13,8 @@ the GPU machine; scripts/bench-device.sh reads them):
                               accessor named again), buffers and textures shared (`materials`)
   .bench/sponza_glass/        sponza_lite with its fabrics and vases transmissive: transmission 0.9, ior 1.5, a
                               medium 2 cm deep tinted (0.9, 0.8, 0.6) after 5 cm (`materials`)
+  .bench/sponza_sheen/        sponza_lite with its fabrics given a sheen of (0.8, 0.7, 0.6), roughness 0.5
+                              (`materials`)
   .bench/many/cubes_N.gltf    N = 1,024, 10,000 and 40,000 cubes of 0.4 m, a draw each, on a grid 1 m
                               apart over a floor (EXT_mesh_gpu_instancing) (`draws`)
 """
@@ -214,6 +216,12 @@ def glass(source, out):
     }, lambda material: material.get("name", "").startswith(("Fabric", "Vase")))
 
 
+def sheen(source, out):
+    with_material_extensions(source, out, {
+        "KHR_materials_sheen": {"sheenColorFactor": [0.8, 0.7, 0.6], "sheenRoughnessFactor": 0.5},
+    }, lambda material: material.get("name", "").startswith("Fabric"))
+
+
 def second_set(source, out):
     document = sponza_copy(source)
     for mesh in document["meshes"]:
@@ -240,5 +248,6 @@ if __name__ == "__main__":
     colored(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_colored")
     second_set(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_uv1")
     glass(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_glass")
+    sheen(".bench/sponza_lite/Sponza.gltf", ".bench/sponza_sheen")
     for side in (32, 100, 200):
         cubes(side, ".bench/many")

@@ -310,19 +310,23 @@ pub struct ShadingMethods {
     /// the light behind its surfaces from a mip chain of the opaque image
     /// (`passes/transmission_background.rs`, `shading/transmitted_screen.wgsl`).
     pub transmission: bool,
+    /// Some material has a sheen (`SHEEN` in `shading/shading_input.wgsl`, a pipeline constant:
+    /// [`ShadingMethods::material_constants`]); without, the shading passes leave its layer out.
+    pub sheen: bool,
 }
 
 impl ShadingMethods {
     /// The pipeline constants of every pass that evaluates materials: the extensions' path, vertex
-    /// colours, occlusion textures and the second set of coordinates, each compiled in only where
-    /// the scene has it.
-    pub fn material_constants(&self) -> [(&'static str, f64); 4] {
+    /// colours, occlusion textures, the second set of coordinates and sheen, each compiled in only
+    /// where the scene has it.
+    pub fn material_constants(&self) -> [(&'static str, f64); 5] {
         let flag = |on: bool| f64::from(u8::from(on));
         [
             ("MATERIAL_EXTENSIONS", flag(self.material_extensions)),
             ("VERTEX_COLORS", flag(self.vertex_colors)),
             ("OCCLUSION_TEXTURES", flag(self.occlusion_textures)),
             ("SECOND_UV_SET", flag(self.second_uv_set)),
+            ("SHEEN", flag(self.sheen)),
         ]
     }
 
@@ -537,7 +541,7 @@ pub struct SceneStatistics {
     /// Surfaces move: the scene's animation moves instances of its meshes, or meshes deform.
     pub animated_instances: bool,
     /// Some material uses an extension the shading core evaluates beyond glTF's core material
-    /// (its own index of refraction or specular, a clear coat, transmission, unlit).
+    /// (its own index of refraction or specular, a clear coat, transmission, sheen, unlit).
     pub material_extensions: bool,
     /// Some vertex has a colour other than white.
     pub vertex_colors: bool,
@@ -547,6 +551,8 @@ pub struct SceneStatistics {
     pub second_uv_set: bool,
     /// Some material lets light through.
     pub transmission: bool,
+    /// Some material has a sheen.
+    pub sheen: bool,
 }
 
 /// Which statistics the plan reads for these settings, so that nothing else is measured.
@@ -688,6 +694,7 @@ impl FramePlan {
             occlusion_textures: stats.occlusion_textures,
             second_uv_set: stats.second_uv_set,
             transmission: stats.transmission,
+            sheen: stats.sheen,
         };
         // Lights and decals crowded enough get wide leaves, walked a subgroup at a time, their leaves
         // shared out; decals, as one group placed once, cell lists too. Groups rebuilt every frame get
@@ -987,16 +994,17 @@ mod tests {
         assert_eq!(methods.debug_views_constant(), ("DEBUG_VIEWS", 1.0));
         assert_eq!(
             methods.material_constants(),
-            [("MATERIAL_EXTENSIONS", 0.0), ("VERTEX_COLORS", 0.0), ("OCCLUSION_TEXTURES", 0.0), ("SECOND_UV_SET", 0.0)]
+            [("MATERIAL_EXTENSIONS", 0.0), ("VERTEX_COLORS", 0.0), ("OCCLUSION_TEXTURES", 0.0), ("SECOND_UV_SET", 0.0), ("SHEEN", 0.0)]
         );
         let scenes = [
             SceneStatistics { material_extensions: true, ..Default::default() },
             SceneStatistics { vertex_colors: true, ..Default::default() },
             SceneStatistics { occlusion_textures: true, ..Default::default() },
             SceneStatistics { second_uv_set: true, ..Default::default() },
+            SceneStatistics { sheen: true, ..Default::default() },
         ];
         for (index, (stats, name)) in
-            scenes.iter().zip(["MATERIAL_EXTENSIONS", "VERTEX_COLORS", "OCCLUSION_TEXTURES", "SECOND_UV_SET"]).enumerate()
+            scenes.iter().zip(["MATERIAL_EXTENSIONS", "VERTEX_COLORS", "OCCLUSION_TEXTURES", "SECOND_UV_SET", "SHEEN"]).enumerate()
         {
             let methods = FramePlan::resolve(&bvh, SUBGROUPS, stats).unwrap().shading_methods(true);
             assert_eq!(methods.material_constants()[index], (name, 1.0));

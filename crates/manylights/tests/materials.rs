@@ -13,7 +13,7 @@ use std::f32::consts::PI;
 use common::*;
 use glam::{Vec3, Vec4};
 use manylights::{
-    scene::{AlphaMode, Clearcoat, Light, Material, Scene, Specular, Texture, TextureRef, Transmission, Wrap},
+    scene::{ibl, AlphaMode, Clearcoat, Light, Material, Scene, Sheen, Specular, Texture, TextureRef, Transmission, Wrap},
     settings::{LightMethod, PipelineKind, RenderConfig},
 };
 
@@ -440,4 +440,107 @@ fn the_importer_reads_transmission_and_its_medium() {
         let error = import_gltf_json(&gltf(&format!(r#"{{"extensions": {{{bad}}}}}"#))).unwrap_err().to_string();
         assert!(error.contains(named), "{error}");
     }
+}
+
+/// A sheen whose colour and roughness the deferred G-buffer keeps exactly (√ colour and roughness in
+/// 8 bits): 0.64 = (204/255)², 0.36 = (153/255)², 0.6 = 153/255.
+const SHEEN: Sheen =
+    Sheen { color_factor: Vec3::new(0.64, 0.36, 1.0), color_texture: None, roughness_factor: 0.6, roughness_texture: None };
+
+/// KHR_materials_sheen over `below` (the BRDF times the light's irradiance, and n·l, n·v, n·h at the
+/// point): the Charlie lobe added, the rest scaled by what the sheen leaves.
+fn sheened(below: Vec3, sheen: &Sheen, (n_l, n_v, n_h): (f32, f32, f32), irradiance: f32) -> Vec3 {
+    let r = sheen.roughness_factor;
+    let leaves = 1.0 - sheen.color_factor.max_element() * ibl::sheen_albedo(n_v, r).max(ibl::sheen_albedo(n_l, r));
+    below * leaves + sheen.color_factor * ibl::d_charlie(n_h, r) * ibl::v_sheen(n_v, n_l, r) * n_l * irradiance
+}
+
+#[test]
+fn a_sheen_shades_as_its_specification_says_under_lights_and_the_environment_in_every_pipeline() {
+    // A light low over the wall, where the sheen shows most.
+    let light = point_light(Vec3::new(0.4, -0.2, 0.35), 1.0, 6.0);
+    let plain = Params {
+        base: Vec3::new(0.3, 0.5, 0.2),
+        metallic: 0.0,
+        roughness: 0.7,
+        ior: 1.5,
+        specular: 1.0,
+        specular_color: Vec3::ONE,
+        clearcoat: 0.0,
+        clearcoat_roughness: 0.0,
+    };
+    let coated = Params { clearcoat: 0.6, clearcoat_roughness: 0.2, ..plain };
+    let pixels = [(WIDTH / 2, HEIGHT / 2), (150, 60), (170, 85), (60, 110)];
+    for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+        let name = pipeline.name();
+        // The deferred G-buffer keeps the surface in 8 and 16 bits.
+        let tolerance = if pipeline == PipelineKind::Deferred { 0.02 } else { 0.005 };
+        for params in [&plain, &coated] {
+            let (bare, camera) = wall(params.material(), vec![light]);
+            let (mut scene, _) = wall(Material { sheen: Some(SHEEN), ..params.material() }, vec![light]);
+            // The coat lies over the sheen: its share is taken from the sheen's result.
+            scene.materials[0].clearcoat = bare.materials[0].clearcoat;
+            let (image, bare_image) = (frame(&scene, &camera, pipeline), frame(&bare, &camera, pipeline));
+            for (x, y) in pixels {
+                let point = wall_point(x, y);
+                let (l, v) = ((light.position - point).normalize(), (camera.position() - point).normalize());
+                let cosines = (l.z, v.z, (l + v).normalize().z);
+                let d2 = (light.position - point).length_squared();
+                let irradiance = light.intensity * (1.0 - (d2 / (light.range * light.range)).powi(2)).clamp(0.0, 1.0).powi(2) / d2;
+                let uncoated = Params { clearcoat: 0.0, ..*params };
+                let under_coat = sheened(reference(&uncoated, &light, point, camera.position()), &SHEEN, cosines, irradiance);
+                let coat = params.clearcoat * (0.04 + 0.96 * (1.0 - v.z).powi(5));
+                let coat_lobe = reference(&Params { base: Vec3::ZERO, specular: 0.0, ..*params }, &light, point, camera.position());
+                let expected = under_coat * (1.0 - coat) + coat_lobe;
+                let got = Vec4::from(pixel(&image, x, y)).truncate();
+                let error = (got - expected).abs().max_element() / expected.max_element();
+                let coated = params.clearcoat > 0.0;
+                assert!(error < tolerance, "{name}, coated {coated}, ({x}, {y}): GPU {got}, reference {expected}");
+                let bare = Vec4::from(pixel(&bare_image, x, y)).truncate();
+                assert!((got - bare).abs().max_element() > 0.05 * expected.max_element(), "{name} ({x}, {y}): no sheen to see");
+            }
+        }
+
+        // A uniform white environment alone: the sheen reflects its albedo, the base colour what it leaves.
+        let matte = Material { sheen: Some(SHEEN), specular: Specular { factor: 0.0, ..Default::default() }, ..plain.material() };
+        let (mut scene, camera) = wall(matte, vec![]);
+        scene.ambient = Vec3::ONE;
+        let image = frame(&scene, &camera, pipeline);
+        for (x, y) in pixels {
+            let n_v = (camera.position() - wall_point(x, y)).normalize().z;
+            let albedo = ibl::sheen_albedo(n_v, SHEEN.roughness_factor);
+            let expected = plain.base * (1.0 - SHEEN.color_factor.max_element() * albedo) + SHEEN.color_factor * albedo;
+            let got = Vec4::from(pixel(&image, x, y)).truncate();
+            let error = (got - expected).abs().max_element() / expected.max_element();
+            assert!(error < tolerance, "{name} in the environment at ({x}, {y}): GPU {got}, reference {expected}");
+        }
+    }
+}
+
+#[test]
+fn the_importer_reads_sheen() {
+    let gltf = |materials: &str| {
+        format!(
+            r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_materials_sheen"],
+            "materials": [{materials}], "textures": [{{"source": 0}}],
+            "images": [{{"uri": "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="}}]}}"#
+        )
+    };
+    let scene = import_gltf_json(&gltf(
+        r#"{"extensions": {"KHR_materials_sheen": {"sheenColorFactor": [0.9, 0.5, 0.1], "sheenColorTexture": {"index": 0},
+                                                   "sheenRoughnessFactor": 0.4, "sheenRoughnessTexture": {"index": 0, "texCoord": 1}}}},
+           {"extensions": {"KHR_materials_sheen": {"sheenRoughnessFactor": 0.4}}}"#,
+    ))
+    .unwrap();
+    let sheen = scene.materials[0].sheen.expect("a sheen");
+    assert_eq!((sheen.color_factor, sheen.roughness_factor), (Vec3::new(0.9, 0.5, 0.1), 0.4));
+    assert_eq!((sheen.color_texture.map(|t| t.tex_coord), sheen.roughness_texture.map(|t| t.tex_coord)), (Some(0), Some(1)));
+    // The colour texture is sRGB colour, the roughness texture linear data.
+    let uses: Vec<bool> = scene.materials[0].textures().map(|(_, srgb)| srgb).collect();
+    assert_eq!(uses, [true, false]);
+    // A black sheen (the default colour) is none.
+    assert!(scene.materials[1].sheen.is_none());
+    let error =
+        import_gltf_json(&gltf(r#"{"extensions": {"KHR_materials_sheen": {"sheenColorFactor": [1.5, 0, 0]}}}"#)).unwrap_err().to_string();
+    assert!(error.contains("sheen colour [1.5, 0.0, 0.0]"), "{error}");
 }

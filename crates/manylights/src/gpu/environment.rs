@@ -93,15 +93,15 @@ impl GpuEnvironment {
             half_float,
             &rgba16(&specular_levels),
         );
-        let table: Vec<u16> = ibl::brdf_table().iter().flatten().map(|&c| half::f16::from_f32(c).to_bits()).collect();
-        let brdf_view = texture(
-            "split-sum BRDF table",
-            BRDF_TABLE_SIZE,
-            BRDF_TABLE_SIZE,
-            1,
-            wgpu::TextureFormat::Rg16Float,
-            bytemuck::cast_slice(&table),
-        );
+        // The split sum's scale and bias, then the sheen's albedo.
+        let table: Vec<u16> = ibl::brdf_table()
+            .iter()
+            .zip(ibl::sheen_albedo_table())
+            .flat_map(|(&[scale, bias], &sheen)| [scale, bias, sheen, 0.0])
+            .map(|c| half::f16::from_f32(c).to_bits())
+            .collect();
+        let brdf_view =
+            texture("BRDF table", BRDF_TABLE_SIZE, BRDF_TABLE_SIZE, 1, wgpu::TextureFormat::Rgba16Float, bytemuck::cast_slice(&table));
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("environment sampler"),
             address_mode_u: wgpu::AddressMode::Repeat,

@@ -40,7 +40,7 @@ pub struct GpuMaterial {
     pub metallic_factor: f32,
     pub roughness_factor: f32,
     pub normal_scale: f32,
-    /// MATERIAL_UNLIT, MATERIAL_CLEARCOAT, MATERIAL_TRANSMISSION, MATERIAL_BLENDED.
+    /// MATERIAL_UNLIT, MATERIAL_CLEARCOAT, MATERIAL_TRANSMISSION, MATERIAL_BLENDED, MATERIAL_SHEEN.
     pub flags: u32,
     pub base_color_layer: i32,
     pub emissive_layer: i32,
@@ -72,7 +72,12 @@ pub struct GpuMaterial {
     pub ior: f32,
     pub transmission_layer: i32,
     pub thickness_layer: i32,
-    pub _pad: [u32; 3],
+    pub sheen_color_layer: i32,
+    pub sheen_roughness_layer: i32,
+    pub _pad: u32,
+    /// The sheen's colour (black: none) and roughness (`KHR_materials_sheen`).
+    pub sheen_color: [f32; 3],
+    pub sheen_roughness: f32,
     /// Each texture slot's coordinates from the mesh's (`TextureRef::uv_transform`), in the slots'
     /// order: two vec4s a slot, the 2×2 matrix's columns, then the translation and the set of
     /// coordinates it transforms (`TextureRef::tex_coord`, 0 or 1, in z).
@@ -81,14 +86,15 @@ pub struct GpuMaterial {
 
 /// A material's texture slots, in the order of `shading/material.wgsl`: base colour, emissive,
 /// metallic-roughness, normal, specular, specular colour, clearcoat, clearcoat roughness,
-/// clearcoat normal, occlusion, transmission, thickness.
-pub const TEXTURE_SLOTS: usize = 12;
+/// clearcoat normal, occlusion, transmission, thickness, sheen colour, sheen roughness.
+pub const TEXTURE_SLOTS: usize = 14;
 
 /// `GpuMaterial::flags` (`MATERIAL_*` in `shading/types.wgsl`).
 pub const MATERIAL_UNLIT: u32 = 1;
 pub const MATERIAL_CLEARCOAT: u32 = 2;
 pub const MATERIAL_TRANSMISSION: u32 = 4;
 pub const MATERIAL_BLENDED: u32 = 8;
+pub const MATERIAL_SHEEN: u32 = 16;
 
 const NO_TEXTURE: i32 = -1;
 
@@ -1027,6 +1033,7 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
     let ior_reflectance = ((specular.ior - 1.0) / (specular.ior + 1.0)).powi(2);
     let clearcoat = m.clearcoat.unwrap_or(crate::scene::Clearcoat::untextured(0.0, 0.0));
     let transmission = m.transmission.unwrap_or(crate::scene::Transmission::thin(0.0));
+    let sheen = m.sheen.unwrap_or(crate::scene::Sheen::untextured(glam::Vec3::ZERO, 0.0));
     // Slot order matches the WGSL (`TEXTURE_SLOTS`).
     let slots = [
         m.base_color_texture,
@@ -1041,6 +1048,8 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
         m.occlusion_texture,
         transmission.texture,
         transmission.thickness_texture,
+        sheen.color_texture,
+        sheen.roughness_texture,
     ];
     let mut wrap_modes = [0u32; 2];
     for (k, slot) in slots.iter().enumerate() {
@@ -1050,7 +1059,8 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
     let flags = flag(m.unlit, MATERIAL_UNLIT)
         | flag(m.clearcoat.is_some(), MATERIAL_CLEARCOAT)
         | flag(m.transmission.is_some(), MATERIAL_TRANSMISSION)
-        | flag(m.alpha_mode == AlphaMode::Blend, MATERIAL_BLENDED);
+        | flag(m.alpha_mode == AlphaMode::Blend, MATERIAL_BLENDED)
+        | flag(m.sheen.is_some(), MATERIAL_SHEEN);
     GpuMaterial {
         base_color_factor: m.base_color_factor.to_array(),
         emissive_factor: m.emissive_factor.to_array(),
@@ -1083,7 +1093,11 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
         ior: specular.ior.max(1.0),
         transmission_layer: layer(transmission.texture, data),
         thickness_layer: layer(transmission.thickness_texture, data),
-        _pad: [0; 3],
+        sheen_color_layer: layer(sheen.color_texture, color),
+        sheen_roughness_layer: layer(sheen.roughness_texture, data),
+        _pad: 0,
+        sheen_color: sheen.color_factor.to_array(),
+        sheen_roughness: sheen.roughness_factor,
         uv_transforms: uv_transforms(slots),
     }
 }
@@ -1168,6 +1182,10 @@ mod tests {
                 ior,
                 transmission_layer,
                 thickness_layer,
+                sheen_color_layer,
+                sheen_roughness_layer,
+                sheen_color,
+                sheen_roughness,
                 uv_transforms
             ]
         );

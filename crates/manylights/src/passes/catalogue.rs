@@ -89,6 +89,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         vertex_colors: true,
                         occlusion_textures: true,
                         second_uv_set: true,
+                        sheen: true,
                         transmission: false,
                     };
                     if decals.works_in(PipelineKind::Forward) {

@@ -118,6 +118,91 @@ pub fn brdf_table() -> &'static [[f32; 2]] {
     })
 }
 
+/// The sheen's directional albedo E(n·v, roughness) (`KHR_materials_sheen`): ∫ D V cos over the light
+/// directions for a white sheen, with the Charlie distribution and the Estevez–Kulla visibility of
+/// `shading/brdf.wgsl`, at the BRDF table's texel centres (its blue channel on the GPU). The
+/// material below a sheen keeps 1 − max(sheen colour) × E of the light.
+pub fn sheen_albedo_table() -> &'static [f32] {
+    static TABLE: OnceLock<Vec<f32>> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        let size = BRDF_TABLE_SIZE;
+        (0..size * size)
+            .map(|i| sheen_albedo_at(((i % size) as f32 + 0.5) / size as f32, ((i / size) as f32 + 0.5) / size as f32))
+            .collect()
+    })
+}
+
+/// [`sheen_albedo_table`] read as the GPU's linear sampler reads it, clamped to the texel centres.
+pub fn sheen_albedo(n_dot_v: f32, roughness: f32) -> f32 {
+    let table = sheen_albedo_table();
+    let size = BRDF_TABLE_SIZE as f32;
+    let coordinate = |x: f32| {
+        let texel = (x.clamp(0.5 / size, 1.0 - 0.5 / size) * size - 0.5).max(0.0);
+        let low = (texel as usize).min(BRDF_TABLE_SIZE as usize - 2);
+        (low, texel - low as f32)
+    };
+    let ((i, fx), (j, fy)) = (coordinate(n_dot_v), coordinate(roughness));
+    let at = |i: usize, j: usize| table[j * BRDF_TABLE_SIZE as usize + i];
+    let row = |j: usize| at(i, j) * (1.0 - fx) + at(i + 1, j) * fx;
+    row(j) * (1.0 - fy) + row(j + 1) * fy
+}
+
+/// Below this perceptual roughness the sheen is as at it (`MIN_ROUGHNESS` in `shading/brdf.wgsl`).
+const MIN_SHEEN_ROUGHNESS: f32 = 0.045;
+
+/// The Charlie sheen distribution (Estevez & Kulla 2017) for perceptual roughness `roughness`.
+pub fn d_charlie(n_dot_h: f32, roughness: f32) -> f32 {
+    let inverse_alpha = 1.0 / roughness.max(MIN_SHEEN_ROUGHNESS).powi(2);
+    let sin_sq = (1.0 - n_dot_h * n_dot_h).max(0.0);
+    (2.0 + inverse_alpha) * sin_sq.powf(0.5 * inverse_alpha) / (2.0 * PI)
+}
+
+/// Estevez and Kulla's fit to the sheen's Λ, at the cosine `x` (0 to 1).
+fn sheen_lambda_fit(x: f32, alpha: f32) -> f32 {
+    let t = (1.0 - alpha) * (1.0 - alpha);
+    let mix = |a: f32, b: f32| a + (b - a) * t;
+    let (a, b, c) = (mix(21.5473, 25.3245), mix(3.82987, 3.32435), mix(0.19823, 0.16801));
+    let (d, e) = (mix(-1.97760, -1.27393), mix(-4.32054, -4.85967));
+    a / (1.0 + b * x.powf(c)) + d * x + e
+}
+
+fn sheen_lambda(cosine: f32, alpha: f32) -> f32 {
+    if cosine < 0.5 {
+        sheen_lambda_fit(cosine, alpha).exp()
+    } else {
+        (2.0 * sheen_lambda_fit(0.5, alpha) - sheen_lambda_fit(1.0 - cosine, alpha)).exp()
+    }
+}
+
+/// The sheen's visibility, V = G / (4 n·l n·v), with Estevez and Kulla's Λ.
+pub fn v_sheen(n_dot_v: f32, n_dot_l: f32, roughness: f32) -> f32 {
+    let alpha = roughness.max(MIN_SHEEN_ROUGHNESS).powi(2);
+    (1.0 / ((1.0 + sheen_lambda(n_dot_v, alpha) + sheen_lambda(n_dot_l, alpha)) * (4.0 * n_dot_v * n_dot_l))).clamp(0.0, 1.0)
+}
+
+/// Light directions per side of the midpoint quadrature of [`sheen_albedo_at`]: in cos θ, and in φ
+/// over the half of the hemisphere the other mirrors.
+const SHEEN_STEPS: u32 = 24;
+
+fn sheen_albedo_at(n_dot_v: f32, roughness: f32) -> f32 {
+    let v = Vec3::new((1.0 - n_dot_v * n_dot_v).sqrt(), 0.0, n_dot_v);
+    let step = 1.0 / SHEEN_STEPS as f32;
+    let mut sum = 0.0;
+    for i in 0..SHEEN_STEPS {
+        let n_dot_l = (i as f32 + 0.5) * step;
+        let sin_l = (1.0 - n_dot_l * n_dot_l).sqrt();
+        for j in 0..SHEEN_STEPS {
+            let phi = (j as f32 + 0.5) * step * PI;
+            let l = Vec3::new(sin_l * phi.cos(), sin_l * phi.sin(), n_dot_l);
+            let h = (v + l).normalize();
+            sum += d_charlie(h.z, roughness) * v_sheen(n_dot_v, n_dot_l, roughness) * n_dot_l;
+        }
+    }
+    // dω = d(cos θ) dφ over both halves. At grazing views of smooth sheens the fitted visibility
+    // lets the integral pass 1, where the layer would leave the material below less than nothing.
+    (sum * step * step * PI * 2.0).min(1.0)
+}
+
 fn split_sum_brdf(column: f32, row: f32, size: u32) -> [f32; 2] {
     let n_dot_v = column / size as f32;
     let alpha = (row / size as f32).powi(2);
@@ -312,5 +397,34 @@ mod tests {
                 "{n_dot_v} {roughness}: {scale} {bias} vs {expected_scale} {expected_bias}"
             );
         }
+    }
+
+    #[test]
+    fn the_sheen_albedo_table_matches_a_fine_quadrature_and_stays_within_one() {
+        let fine = |n_dot_v: f32, roughness: f32| {
+            let v = Vec3::new((1.0 - n_dot_v * n_dot_v).sqrt(), 0.0, n_dot_v);
+            let steps = 400;
+            let mut sum = 0.0f64;
+            for i in 0..steps {
+                let theta = (i as f32 + 0.5) / steps as f32 * PI / 2.0;
+                for j in 0..2 * steps {
+                    let phi = (j as f32 + 0.5) / steps as f32 * PI;
+                    let l = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+                    let solid_angle = theta.sin() * (PI / 2.0 / steps as f32) * (PI / steps as f32);
+                    let f = d_charlie((v + l).normalize().z, roughness) * v_sheen(n_dot_v, l.z, roughness) * l.z;
+                    sum += f64::from(f * solid_angle);
+                }
+            }
+            sum as f32
+        };
+        let centre = |x: f32| (((x * BRDF_TABLE_SIZE as f32) as u32) as f32 + 0.5) / BRDF_TABLE_SIZE as f32;
+        for (n_dot_v, roughness) in [(0.5, 0.5), (0.9, 0.25), (0.2, 0.3), (0.7, 0.8), (0.1, 0.1), (0.95, 1.0)] {
+            let (mu, r) = (centre(n_dot_v), centre(roughness));
+            let (table, expected) = (sheen_albedo(mu, r), fine(mu, r));
+            assert!((table - expected).abs() < 0.01, "E({mu}, {r}): table {table}, quadrature {expected}");
+        }
+        let outside: Vec<(usize, f32)> =
+            sheen_albedo_table().iter().copied().enumerate().filter(|(_, e)| !(0.0..=1.0).contains(e)).collect();
+        assert!(outside.is_empty(), "sheen albedos outside [0, 1]: {:?}", &outside[..outside.len().min(8)]);
     }
 }

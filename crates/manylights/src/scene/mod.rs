@@ -193,6 +193,8 @@ pub struct Material {
     pub clearcoat: Option<Clearcoat>,
     /// Light passing through the surface (`KHR_materials_transmission`, `KHR_materials_volume`).
     pub transmission: Option<Transmission>,
+    /// A sheen layer over the material (`KHR_materials_sheen`): cloth's back-scattering fibres.
+    pub sheen: Option<Sheen>,
 }
 
 /// A dielectric's specular reflection, as `KHR_materials_ior` and `KHR_materials_specular` define
@@ -245,6 +247,25 @@ pub struct Transmission {
     pub attenuation_color: Vec3,
 }
 
+/// A sheen (`KHR_materials_sheen`): a layer of fibres over the material scattering back towards
+/// grazing views, in `color_factor` (× the sRGB colour texture) with roughness `roughness_factor`
+/// (× the roughness texture's A), through the Charlie distribution (Estevez & Kulla 2017); the
+/// material below keeps what the layer does not reflect.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sheen {
+    pub color_factor: Vec3,
+    pub color_texture: Option<TextureRef>,
+    pub roughness_factor: f32,
+    pub roughness_texture: Option<TextureRef>,
+}
+
+impl Sheen {
+    /// A sheen of `color` and `roughness` without textures.
+    pub fn untextured(color: Vec3, roughness: f32) -> Self {
+        Self { color_factor: color, color_texture: None, roughness_factor: roughness, roughness_texture: None }
+    }
+}
+
 impl Transmission {
     /// A thin-walled surface letting `factor` through, without textures.
     pub fn thin(factor: f32) -> Self {
@@ -288,6 +309,7 @@ impl Default for Material {
             specular: Specular::default(),
             clearcoat: None,
             transmission: None,
+            sheen: None,
         }
     }
 }
@@ -310,14 +332,16 @@ impl Material {
     pub fn textures(&self) -> impl Iterator<Item = (TextureRef, bool)> + '_ {
         let clearcoat = self.clearcoat.iter().flat_map(|c| [c.texture, c.roughness_texture, c.normal_texture]);
         let transmission = self.transmission.iter().flat_map(|t| [t.texture, t.thickness_texture]);
+        let sheen_color = self.sheen.map(|s| s.color_texture);
         [(self.base_color_texture, true), (self.emissive_texture, true), (self.specular.color_texture, true)]
             .into_iter()
+            .chain(sheen_color.map(|t| (t, true)))
             .chain(
                 [self.metallic_roughness_texture, self.normal_texture, self.specular.texture, self.occlusion_texture]
                     .into_iter()
                     .map(|t| (t, false)),
             )
-            .chain(clearcoat.chain(transmission).map(|t| (t, false)))
+            .chain(clearcoat.chain(transmission).chain(self.sheen.map(|s| s.roughness_texture)).map(|t| (t, false)))
             .filter_map(|(t, srgb)| t.map(|t| (t, srgb)))
     }
 }
@@ -766,6 +790,15 @@ pub fn validate_material(m: &Material) -> Result<(), String> {
                 "attenuation distance {} must be > 0 (infinite: none) and attenuation colour {:?} 0 to 1 in each component",
                 t.attenuation_distance,
                 t.attenuation_color.to_array()
+            ));
+        }
+    }
+    if let Some(sheen) = &m.sheen {
+        if !(sheen.color_factor.to_array().into_iter().all(unit) && unit(sheen.roughness_factor)) {
+            return Err(format!(
+                "sheen colour {:?} and roughness {} must be 0 to 1 in each component",
+                sheen.color_factor.to_array(),
+                sheen.roughness_factor
             ));
         }
     }

@@ -1,3 +1,4 @@
+#include "shading/scene_bindings.wgsl"
 #include "shading/shading_input.wgsl"
 
 // Cook-Torrance specular (GGX distribution, height-correlated Smith visibility, Schlick Fresnel) plus
@@ -7,7 +8,9 @@
 // dielectric is `diffuse · (1 − weight · max(F)) + specular · weight · F`, and the coat mixes in
 // by `clearcoat · F_coat(n_coat · v)`. A transmissive dielectric (KHR_materials_transmission) lets
 // its `transmission` share of the diffuse lobe through instead: light from behind reaches the viewer
-// through a specular transmission lobe (`transmission_lobe_times_cosine`).
+// through a specular transmission lobe (`transmission_lobe_times_cosine`). A sheen
+// (KHR_materials_sheen) lies between them and the coat: its Charlie lobe is added, and what lies
+// below keeps `1 − max(sheen colour) × E` of the light, E the sheen's albedo (`sheen_albedo`).
 
 const PI: f32 = 3.141592653589793;
 // Below this perceptual roughness GGX highlights of point lights become sub-pixel and alias.
@@ -69,6 +72,51 @@ fn transmission_lobe_times_cosine(s: ShadingInput, light_dir: vec3<f32>, dielect
     let lobe = d_ggx(saturate(dot(s.normal, h)), alpha) * v_smith_ggx_correlated(n_dot_v, n_dot_l, alpha) * n_dot_l;
     let share = s.transmission * (1.0 - s.metallic) * unreflected * lobe;
     return s.base_color * medium_transmittance(s, length(transmission_path(s))) * share;
+}
+
+// The sheen's directional albedo at cosine `cosine` (white sheen; `scene::ibl::sheen_albedo_table`).
+fn sheen_albedo(cosine: f32, roughness: f32) -> f32 {
+    let size = vec2<f32>(textureDimensions(environment_brdf_table));
+    // Clamped to the texel centres: the sampler wraps horizontally.
+    let uv = clamp(vec2<f32>(cosine, roughness), 0.5 / size, 1.0 - 0.5 / size);
+    return textureSampleLevel(environment_brdf_table, environment_sampler, uv, 0.0).b;
+}
+
+// The share of light the sheen leaves the material below it, for view and light albedos `e_view`
+// and `e_light` (the specification's min(1 − max(colour) E(v), 1 − max(colour) E(l))).
+fn sheen_leaves(s: ShadingInput, e_view: f32, e_light: f32) -> f32 {
+    return saturate(1.0 - max(s.sheen_color.x, max(s.sheen_color.y, s.sheen_color.z)) * max(e_view, e_light));
+}
+
+// The Charlie distribution (Estevez & Kulla 2017). Keep in sync with `scene::ibl::d_charlie`.
+fn d_charlie(n_dot_h: f32, roughness: f32) -> f32 {
+    let inverse_alpha = 1.0 / (roughness * roughness);
+    let sin_sq = max(1.0 - n_dot_h * n_dot_h, 0.0);
+    return (2.0 + inverse_alpha) * pow(sin_sq, 0.5 * inverse_alpha) / (2.0 * PI);
+}
+
+// Estevez and Kulla's fit to the sheen's Λ at cosine `x`.
+fn sheen_lambda_fit(x: f32, alpha: f32) -> f32 {
+    let t = (1.0 - alpha) * (1.0 - alpha);
+    let a = mix(21.5473, 25.3245, t);
+    let b = mix(3.82987, 3.32435, t);
+    let c = mix(0.19823, 0.16801, t);
+    let d = mix(-1.97760, -1.27393, t);
+    let e = mix(-4.32054, -4.85967, t);
+    return a / (1.0 + b * pow(x, c)) + d * x + e;
+}
+
+fn sheen_lambda(cosine: f32, alpha: f32) -> f32 {
+    if cosine < 0.5 {
+        return exp(sheen_lambda_fit(cosine, alpha));
+    }
+    return exp(2.0 * sheen_lambda_fit(0.5, alpha) - sheen_lambda_fit(1.0 - cosine, alpha));
+}
+
+// The sheen's visibility G / (4 n·l n·v). Keep in sync with `scene::ibl::v_sheen`.
+fn v_sheen(n_dot_v: f32, n_dot_l: f32, roughness: f32) -> f32 {
+    let alpha = roughness * roughness;
+    return saturate(1.0 / ((1.0 + sheen_lambda(n_dot_v, alpha) + sheen_lambda(n_dot_l, alpha)) * (4.0 * n_dot_v * n_dot_l)));
 }
 
 // The BRDF's two lobes, each times n·l.
@@ -133,6 +181,19 @@ fn brdf_lobes_times_cosine(s: ShadingInput, light_dir: vec3<f32>) -> BrdfLobes {
         }
     } else if lit_from_behind(s) {
         lobes.specular = transmission_lobe_times_cosine(s, light_dir, surface_dielectric(s));
+    }
+    if has_sheen(s) {
+        // The sheen's lobe joins the specular one; both lobes below keep what it leaves.
+        let n_dot_v = max(dot(s.normal, s.view_dir), 1e-4);
+        let roughness = max(s.sheen_roughness, MIN_ROUGHNESS);
+        let n_dot_l = abs(dot(s.normal, light_dir));
+        let leaves = sheen_leaves(s, sheen_albedo(n_dot_v, roughness), sheen_albedo(n_dot_l, roughness));
+        lobes.diffuse *= leaves;
+        lobes.specular *= leaves;
+        if dot(s.normal, light_dir) > 0.0 {
+            let n_dot_h = saturate(dot(s.normal, normalize(light_dir + s.view_dir)));
+            lobes.specular += s.sheen_color * (d_charlie(n_dot_h, roughness) * v_sheen(n_dot_v, n_dot_l, roughness) * n_dot_l);
+        }
     }
     if MATERIAL_EXTENSIONS && s.clearcoat > 0.0 {
         let coat = clearcoat_fresnel(s);

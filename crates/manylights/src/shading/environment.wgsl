@@ -52,14 +52,26 @@ fn environment_specular_albedo(s: ShadingInput) -> vec3<f32> {
     return (f0 * scale_bias.x + f90 * scale_bias.y) * (1.0 - clearcoat_fresnel(s));
 }
 
-// Diffuse and specular light from the environment, and the clear coat's reflection of it, as much as
-// the surface's occlusion lets through.
+// The sheen's reflection of the environment: its albedo times the irradiance, as a sheen reflects a
+// uniform environment exactly (no environment is prefiltered for its lobe), below any clear coat.
+fn environment_sheen(s: ShadingInput, albedo: f32) -> vec3<f32> {
+    return s.sheen_color * albedo * environment_irradiance(s.normal) * (1.0 - clearcoat_fresnel(s));
+}
+
+// Diffuse and specular light from the environment, and the sheen's and the clear coat's reflections
+// of it, as much as the surface's occlusion lets through.
 fn environment_light(s: ShadingInput) -> vec3<f32> {
     var diffuse = environment_irradiance(s.normal) * s.base_color * (1.0 - s.metallic) * (1.0 - clearcoat_fresnel(s));
     if TRANSMISSION {
         diffuse *= 1.0 - s.transmission;
     }
-    let specular = environment_specular_albedo(s) * environment_specular_radiance(environment_reflection_direction(s), s.roughness);
+    var specular = environment_specular_albedo(s) * environment_specular_radiance(environment_reflection_direction(s), s.roughness);
+    if has_sheen(s) {
+        let albedo = sheen_albedo(max(dot(s.normal, s.view_dir), 1e-4), max(s.sheen_roughness, MIN_ROUGHNESS));
+        let leaves = sheen_leaves(s, albedo, albedo);
+        diffuse *= leaves;
+        specular = specular * leaves + environment_sheen(s, albedo);
+    }
     var coat = vec3<f32>(0.0);
     if MATERIAL_EXTENSIONS && s.clearcoat > 0.0 {
         let scale_bias = environment_scale_bias(s.clearcoat_normal, s.view_dir, s.clearcoat_roughness);

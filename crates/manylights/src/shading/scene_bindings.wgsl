@@ -38,8 +38,8 @@
 @group(0) @binding(22) var decal_color_textures: texture_2d_array<f32>;
 @group(0) @binding(23) var decal_data_textures: texture_2d_array<f32>;
 // The environment (`gpu/environment.rs`, `shading/environment.wgsl`): its radiance, the same
-// GGX-prefiltered by roughness along the mips, and the split-sum BRDF table; one sampler wrapping
-// around the horizon.
+// GGX-prefiltered by roughness along the mips, and the BRDF table (the split sum's scale and bias,
+// the sheen's albedo: `scene::ibl`); one sampler wrapping around the horizon.
 @group(0) @binding(24) var environment_radiance: texture_2d<f32>;
 @group(0) @binding(25) var environment_prefiltered: texture_2d<f32>;
 @group(0) @binding(26) var environment_brdf_table: texture_2d<f32>;

@@ -11,6 +11,10 @@ override MATERIAL_EXTENSIONS: bool = true;
 // compiled out.
 override TRANSMISSION: bool = false;
 
+// Some material has a sheen (KHR_materials_sheen; `ShadingMethods::sheen`): where none does, its
+// layer is compiled out.
+override SHEEN: bool = true;
+
 struct ShadingInput {
     position: vec3<f32>,
     // Shading normal (after normal mapping), unit, facing the viewer's side.
@@ -43,6 +47,10 @@ struct ShadingInput {
     ior: f32,
     thickness: f32,
     attenuation: vec4<f32>,
+    // A sheen over it all but the clear coat (KHR_materials_sheen): its colour (black: none) and
+    // perceptual roughness.
+    sheen_color: vec3<f32>,
+    sheen_roughness: f32,
     // The share of the environment's light reaching the surface (glTF's occlusion texture, 1
     // without): it darkens the environment standing in for indirect light, not the lights.
     occlusion: f32,
@@ -51,6 +59,11 @@ struct ShadingInput {
     // position rebuilt from depth or interpolated by the raster, 0 at a ray's hit, which is exact.
     ray_normal: vec3<f32>,
     ray_clearance: f32,
+}
+
+// Whether the surface has a sheen, in a pass compiled with them.
+fn has_sheen(s: ShadingInput) -> bool {
+    return SHEEN && MATERIAL_EXTENSIONS && any(s.sheen_color > vec3<f32>(0.0));
 }
 
 // World-space change of the shading position from one pixel to the next in x and y (or, at a ray's

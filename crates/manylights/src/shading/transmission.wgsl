@@ -11,12 +11,16 @@
 // Radiance a transmissive surface passes on towards its viewer: the light behind it times the
 // transmission lobe's weight — its share, the base colour, the medium's transmittance, one minus the
 // dielectric's specular albedo (the BRDF table's, as the environment's reflection uses), below any
-// clear coat and for the non-metallic part only.
+// sheen and clear coat and for the non-metallic part only.
 fn transmitted_radiance(s: ShadingInput) -> vec3<f32> {
     let path = transmission_path(s);
     let scale_bias = environment_scale_bias(s.normal, s.view_dir, s.roughness);
     let dielectric = surface_dielectric(s);
     let reflected = dielectric.w * (dielectric.xyz * scale_bias.x + scale_bias.y);
-    let weight = s.transmission * (1.0 - s.metallic) * (1.0 - clearcoat_fresnel(s));
+    var weight = s.transmission * (1.0 - s.metallic) * (1.0 - clearcoat_fresnel(s));
+    if has_sheen(s) {
+        let albedo = sheen_albedo(max(dot(s.normal, s.view_dir), 1e-4), max(s.sheen_roughness, MIN_ROUGHNESS));
+        weight *= sheen_leaves(s, albedo, albedo);
+    }
     return weight * s.base_color * (1.0 - reflected) * medium_transmittance(s, length(path)) * transmitted_light(s, path);
 }

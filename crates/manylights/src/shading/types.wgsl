@@ -54,12 +54,13 @@ struct Material {
     metallic_factor: f32,
     roughness_factor: f32,
     normal_scale: f32,
-    // MATERIAL_UNLIT, MATERIAL_CLEARCOAT, MATERIAL_TRANSMISSION, MATERIAL_BLENDED.
+    // MATERIAL_UNLIT, MATERIAL_CLEARCOAT, MATERIAL_TRANSMISSION, MATERIAL_BLENDED, MATERIAL_SHEEN.
     flags: u32,
     // Layers in `color_textures` (base colour, emissive, specular colour) and `data_textures` (the
     // others); NO_TEXTURE when absent. Texture slots, in order: base colour 0, emissive 1,
     // metallic-roughness 2, normal 3, specular 4, specular colour 5, clearcoat 6, clearcoat
-    // roughness 7, clearcoat normal 8, occlusion 9, transmission 10, thickness 11.
+    // roughness 7, clearcoat normal 8, occlusion 9, transmission 10, thickness 11, sheen colour 12,
+    // sheen roughness 13.
     base_color_layer: i32,
     emissive_layer: i32,
     metallic_roughness_layer: i32,
@@ -93,10 +94,15 @@ struct Material {
     ior: f32,
     transmission_layer: i32,
     thickness_layer: i32,
+    sheen_color_layer: i32,
+    sheen_roughness_layer: i32,
+    // The sheen's colour (black: none) and roughness (KHR_materials_sheen).
+    sheen_color: vec3<f32>,
+    sheen_roughness: f32,
     // Each slot's texture coordinates from the mesh's (glTF's texCoord and KHR_texture_transform):
     // two vec4s a slot, the 2×2 matrix's columns (xy, zw), then the translation (xy) and the set of
     // coordinates it transforms (z: 0 or 1).
-    uv_transforms: array<vec4<f32>, 24>,
+    uv_transforms: array<vec4<f32>, 28>,
 }
 
 const MATERIAL_UNLIT: u32 = 1u;
@@ -104,6 +110,7 @@ const MATERIAL_CLEARCOAT: u32 = 2u;
 const MATERIAL_TRANSMISSION: u32 = 4u;
 // Alpha-blended (glTF BLEND): the transparent pass blends it by its alpha; others it draws opaque.
 const MATERIAL_BLENDED: u32 = 8u;
+const MATERIAL_SHEEN: u32 = 16u;
 
 const LIGHT_POINT: u32 = 0u;
 const LIGHT_SPOT: u32 = 1u;

@@ -32,7 +32,7 @@ use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::{Error, Result};
 
 /// Extensions a file may require; every other optional extension is ignored.
-const SUPPORTED_EXTENSIONS: [&str; 15] = [
+const SUPPORTED_EXTENSIONS: [&str; 16] = [
     INSTANCING,
     compression::MESHOPT,
     "EXT_texture_webp",
@@ -40,6 +40,7 @@ const SUPPORTED_EXTENSIONS: [&str; 15] = [
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_unlit",
@@ -1153,6 +1154,7 @@ fn material(m: &::gltf::Material, document: &Document) -> Result<Material, Strin
         specular: specular(m, document, &named)?,
         clearcoat: clearcoat(m, document, &named)?,
         transmission: transmission(m, document, &named)?,
+        sheen: sheen(m, document, &named)?,
         name,
     })
 }
@@ -1215,6 +1217,28 @@ fn clearcoat(m: &::gltf::Material, document: &Document, named: &str) -> Result<O
         roughness_texture: extension_texture(ext, "clearcoatRoughnessTexture", document, named)?,
         normal_texture: extension_texture(ext, "clearcoatNormalTexture", document, named)?,
         normal_scale,
+    }))
+}
+
+/// `KHR_materials_sheen`; none where its colour is black (the specification's off switch).
+fn sheen(m: &::gltf::Material, document: &Document, named: &str) -> Result<Option<super::Sheen>, String> {
+    let Some(ext) = m.extension_value("KHR_materials_sheen") else { return Ok(None) };
+    let color_factor = match ext.get("sheenColorFactor").and_then(serde_json::Value::as_array) {
+        Some(color) => {
+            let c: Vec<f32> = color.iter().filter_map(serde_json::Value::as_f64).map(|v| v as f32).collect();
+            let [r, g, b] = c[..] else { return Err(format!("{named}: sheenColorFactor {color:?} must be three numbers")) };
+            Vec3::new(r, g, b)
+        }
+        None => Vec3::ZERO,
+    };
+    if color_factor == Vec3::ZERO {
+        return Ok(None);
+    }
+    Ok(Some(super::Sheen {
+        color_factor,
+        color_texture: extension_texture(ext, "sheenColorTexture", document, named)?,
+        roughness_factor: number(ext, "sheenRoughnessFactor", 0.0),
+        roughness_texture: extension_texture(ext, "sheenRoughnessTexture", document, named)?,
     }))
 }
 
