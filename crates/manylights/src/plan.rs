@@ -541,7 +541,8 @@ pub struct SceneStatistics {
     /// Surfaces move: the scene's animation moves instances of its meshes, or meshes deform.
     pub animated_instances: bool,
     /// Some material uses an extension the shading core evaluates beyond glTF's core material
-    /// (its own index of refraction or specular, a clear coat, transmission, sheen, unlit).
+    /// (its own index of refraction or specular, a clear coat, transmission, unlit; sheen has its
+    /// own constant).
     pub material_extensions: bool,
     /// Some vertex has a colour other than white.
     pub vertex_colors: bool,

@@ -132,13 +132,10 @@ pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<Sce
         placed_decal_groups: instances.iter().filter(|i| !ranges[i.group].is_empty()).count(),
         decal_centre_overlap,
         animated_instances: scene.animation.as_ref().is_some_and(|a| !a.instances.is_empty()) || !scene.deformers.is_empty(),
-        material_extensions: scene.materials.iter().any(|m| {
-            m.unlit
-                || m.clearcoat.is_some()
-                || m.transmission.is_some()
-                || m.sheen.is_some()
-                || m.specular != crate::scene::Specular::default()
-        }),
+        material_extensions: scene
+            .materials
+            .iter()
+            .any(|m| m.unlit || m.clearcoat.is_some() || m.transmission.is_some() || m.specular != crate::scene::Specular::default()),
         vertex_colors: scene
             .meshes
             .iter()

@@ -171,12 +171,15 @@ fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, 
     if MATERIAL_EXTENSIONS {
         material_extensions(material, g, surface, t, b, &s);
     }
+    if SHEEN && (material.flags & MATERIAL_SHEEN) != 0u {
+        material_sheen(material, g, &s);
+    }
     return s;
 }
 
 // The extensions' parameters: KHR_materials_unlit, _ior and _specular (textures 4, 5), _clearcoat
 // (textures 6 to 8), _transmission and _volume (textures 10, 11; the thickness in the mesh's units,
-// which the caller scales to the world's), _sheen (textures 12, 13).
+// which the caller scales to the world's).
 fn material_extensions(material: Material, g: UvGradients, surface: SurfaceFrame, t: vec3<f32>, b: vec3<f32>, s: ptr<function, ShadingInput>) {
     (*s).unlit = (material.flags & MATERIAL_UNLIT) != 0u;
     var f0 = material.specular_color;
@@ -214,14 +217,16 @@ fn material_extensions(material: Material, g: UvGradients, surface: SurfaceFrame
         (*s).ior = material.ior;
         (*s).attenuation = vec4<f32>(material.attenuation_color, material.attenuation_distance);
     }
-    if SHEEN && (material.flags & MATERIAL_SHEEN) != 0u {
-        (*s).sheen_color = material.sheen_color;
-        if material.sheen_color_layer != NO_TEXTURE {
-            (*s).sheen_color *= sample_wrapped(color_textures, material.sheen_color_layer, material, 12u, g).rgb;
-        }
-        (*s).sheen_roughness = material.sheen_roughness;
-        if material.sheen_roughness_layer != NO_TEXTURE {
-            (*s).sheen_roughness *= sample_wrapped(data_textures, material.sheen_roughness_layer, material, 13u, g).a;
-        }
+}
+
+// KHR_materials_sheen's colour and roughness (textures 12, 13).
+fn material_sheen(material: Material, g: UvGradients, s: ptr<function, ShadingInput>) {
+    (*s).sheen_color = material.sheen_color;
+    if material.sheen_color_layer != NO_TEXTURE {
+        (*s).sheen_color *= sample_wrapped(color_textures, material.sheen_color_layer, material, 12u, g).rgb;
+    }
+    (*s).sheen_roughness = material.sheen_roughness;
+    if material.sheen_roughness_layer != NO_TEXTURE {
+        (*s).sheen_roughness *= sample_wrapped(data_textures, material.sheen_roughness_layer, material, 13u, g).a;
     }
 }

@@ -12,7 +12,8 @@ override MATERIAL_EXTENSIONS: bool = true;
 override TRANSMISSION: bool = false;
 
 // Some material has a sheen (KHR_materials_sheen; `ShadingMethods::sheen`): where none does, its
-// layer is compiled out.
+// layer is compiled out. Apart from MATERIAL_EXTENSIONS, so that a scene whose only extension is
+// sheen leaves the others' path out.
 override SHEEN: bool = true;
 
 struct ShadingInput {
@@ -63,7 +64,7 @@ struct ShadingInput {
 
 // Whether the surface has a sheen, in a pass compiled with them.
 fn has_sheen(s: ShadingInput) -> bool {
-    return SHEEN && MATERIAL_EXTENSIONS && any(s.sheen_color > vec3<f32>(0.0));
+    return SHEEN && any(s.sheen_color > vec3<f32>(0.0));
 }
 
 // World-space change of the shading position from one pixel to the next in x and y (or, at a ray's
