@@ -406,10 +406,10 @@ fn the_importer_reads_the_material_extensions() {
 }
 
 #[test]
-fn the_importer_reads_transmission_and_its_medium() {
+fn the_importer_reads_transmission_its_medium_and_dispersion() {
     let gltf = |materials: &str| {
         format!(
-            r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_volume"],
+            r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_volume", "KHR_materials_dispersion"],
             "materials": [{materials}], "textures": [{{"source": 0}}],
             "images": [{{"uri": "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="}}]}}"#
         )
@@ -417,14 +417,15 @@ fn the_importer_reads_transmission_and_its_medium() {
     let scene = import_gltf_json(&gltf(
         r#"{"extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.8, "transmissionTexture": {"index": 0}},
                            "KHR_materials_volume": {"thicknessFactor": 0.2, "thicknessTexture": {"index": 0, "texCoord": 1},
-                                                    "attenuationDistance": 0.5, "attenuationColor": [0.9, 0.6, 0.3]}}},
+                                                    "attenuationDistance": 0.5, "attenuationColor": [0.9, 0.6, 0.3]},
+                           "KHR_materials_dispersion": {"dispersion": 0.4}}},
            {"extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}},
            {"extensions": {"KHR_materials_transmission": {}}}"#,
     ))
     .unwrap();
     let glass = scene.materials[0].transmission.expect("transmission");
     assert_eq!((glass.factor, glass.thickness_factor, glass.attenuation_distance), (0.8, 0.2, 0.5));
-    assert_eq!(glass.attenuation_color, Vec3::new(0.9, 0.6, 0.3));
+    assert_eq!((glass.attenuation_color, glass.dispersion), (Vec3::new(0.9, 0.6, 0.3), 0.4));
     assert_eq!((glass.texture.map(|t| t.tex_coord), glass.thickness_texture.map(|t| t.tex_coord)), (Some(0), Some(1)));
     // Without KHR_materials_volume a surface is thin-walled and clear; a factor of 0 lets nothing through.
     assert_eq!(scene.materials[1].transmission, Some(Transmission::thin(1.0)));
@@ -436,6 +437,7 @@ fn the_importer_reads_transmission_and_its_medium() {
             "attenuation distance 0",
         ),
         (r#""KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_volume": {"thicknessFactor": -1}"#, "thickness -1"),
+        (r#""KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_dispersion": {"dispersion": -2}"#, "dispersion -2"),
     ] {
         let error = import_gltf_json(&gltf(&format!(r#"{{"extensions": {{{bad}}}}}"#))).unwrap_err().to_string();
         assert!(error.contains(named), "{error}");

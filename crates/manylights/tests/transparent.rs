@@ -292,53 +292,64 @@ fn split_wall() -> (Scene, Camera) {
     (scene, camera)
 }
 
+/// The split wall seen through a pane at z = 2 (2 m from the eye at z = 4) bounding a medium 1.5 m
+/// deep of index 1.5 and of `roughness`, spreading its index over the colours by `dispersion`.
+fn refracting(roughness: f32, dispersion: f32) -> (Scene, Camera) {
+    let (mut scene, camera) = split_wall();
+    let medium = Transmission { thickness_factor: MEDIUM_DEPTH, dispersion, ..Transmission::thin(1.0) };
+    transmissive_pane(&mut scene, PANE_Z, Vec3::ONE, medium);
+    let material = scene.materials.last_mut().unwrap();
+    material.specular.ior = 1.5;
+    material.roughness_factor = roughness;
+    scene.instances.last_mut().unwrap().world_from_local = Mat4::from_translation(Vec3::new(0.0, 0.0, PANE_Z));
+    (scene, camera)
+}
+
+const PANE_Z: f32 = 2.0;
+const MEDIUM_DEPTH: f32 = 1.5;
+const EYE_Z: f32 = 4.0;
+/// The refraction tests' image.
+const REFRACTED_WIDTH: u32 = 160;
+const REFRACTED_HEIGHT: u32 = 90;
+
+/// The middle row of `scene` in the visibility buffer.
+fn middle_row(scene: &Scene, camera: &Camera) -> Vec<Vec3> {
+    let (width, height) = (REFRACTED_WIDTH, REFRACTED_HEIGHT);
+    let (_, hdr) = render_with(scene, camera, configured(PipelineKind::Visbuffer, LightMethod::Brute, DecalMethod::Brute, (width, height)));
+    (0..width).map(|x| rgb(pixel(&hdr, x, height / 2))).collect()
+}
+
+/// Where the eye's ray through the centre of column `x` of the middle row, refracted into the medium
+/// at index `ior`, sees the wall (the background image is read at that point's pixel), and where the
+/// straight ray does; `None` off the pane or within a pixel and a half of the wall's edge.
+fn wall_seen(x: u32, ior: f32) -> Option<(f32, f32)> {
+    let (width, height) = (REFRACTED_WIDTH as f32, REFRACTED_HEIGHT as f32);
+    let half_width = (30f32.to_radians().tan() * width / height) * (EYE_Z - PANE_Z);
+    let pane_x = ((x as f32 + 0.5) / width * 2.0 - 1.0) * half_width;
+    if pane_x.abs() > 1.0 {
+        return None;
+    }
+    let view = Vec3::new(pane_x, 0.0, PANE_Z - EYE_Z).normalize();
+    let cos_in = -view.z;
+    let sin_out = (1.0 - cos_in * cos_in).sqrt() / ior;
+    let refracted = Vec3::new(sin_out * pane_x.signum(), 0.0, -(1.0 - sin_out * sin_out).sqrt());
+    let exit = Vec3::new(pane_x, 0.0, PANE_Z) + refracted * MEDIUM_DEPTH;
+    let wall_x = exit.x * EYE_Z / (EYE_Z - exit.z);
+    let straight_x = pane_x * EYE_Z / (EYE_Z - PANE_Z);
+    let pixel_on_wall = 2.0 * 30f32.to_radians().tan() * EYE_Z / height;
+    ((wall_x - EDGE_X).abs() >= 1.5 * pixel_on_wall).then_some((wall_x, straight_x))
+}
+
 #[test]
 fn thick_media_refract_and_rough_ones_blur_the_light_behind_them() {
-    // A pane at z = 2 (2 m from the eye at z = 4) bounding a medium 1.5 m deep of index 1.5: rays
-    // bend towards its normal, so the wall's edge is seen further out than straight through.
-    let (width, height) = (160, 90);
-    let (ior, depth, pane_z, eye_z) = (1.5f32, 1.5f32, 2.0f32, 4.0f32);
-    let refracting = |roughness: f32| {
-        let (mut scene, camera) = split_wall();
-        let medium = Transmission { thickness_factor: depth, ..Transmission::thin(1.0) };
-        transmissive_pane(&mut scene, pane_z, Vec3::ONE, medium);
-        let material = scene.materials.last_mut().unwrap();
-        material.specular.ior = ior;
-        material.roughness_factor = roughness;
-        scene.instances.last_mut().unwrap().world_from_local = Mat4::from_translation(Vec3::new(0.0, 0.0, pane_z));
-        (scene, camera)
-    };
-    let row = |scene: &Scene, camera: &Camera| -> Vec<Vec3> {
-        let (_, hdr) =
-            render_with(scene, camera, configured(PipelineKind::Visbuffer, LightMethod::Brute, DecalMethod::Brute, (width, height)));
-        (0..width).map(|x| rgb(pixel(&hdr, x, height / 2))).collect()
-    };
+    // Rays bend towards the pane's normal, so the wall's edge is seen further out than straight through.
     let (wall, camera) = split_wall();
-    let bare = row(&wall, &camera);
-    let (left, right) = (bare[width as usize / 2], bare[width as usize - 1]);
-    let (sharp, _) = refracting(0.0);
-    let seen = row(&sharp, &camera);
-    // Where the eye's ray through each column's centre leaves the medium, and the wall point the
-    // eye sees there (the background image is read at that point's pixel).
-    let half_width = (30f32.to_radians().tan() * width as f32 / height as f32) * (eye_z - pane_z);
+    let bare = middle_row(&wall, &camera);
+    let (left, right) = (bare[REFRACTED_WIDTH as usize / 2], bare[REFRACTED_WIDTH as usize - 1]);
+    let seen = middle_row(&refracting(0.0, 0.0).0, &camera);
     let mut bent_columns = 0;
-    for x in 0..width {
-        let pane_x = ((x as f32 + 0.5) / width as f32 * 2.0 - 1.0) * half_width;
-        if pane_x.abs() > 1.0 {
-            continue; // off the pane
-        }
-        let view = Vec3::new(pane_x, 0.0, pane_z - eye_z).normalize();
-        let cos_in = -view.z;
-        let sin_out = (1.0 - cos_in * cos_in).sqrt() / ior;
-        let refracted = Vec3::new(sin_out * pane_x.signum(), 0.0, -(1.0 - sin_out * sin_out).sqrt());
-        let exit = Vec3::new(pane_x, 0.0, pane_z) + refracted * depth;
-        let wall_x = exit.x * eye_z / (eye_z - exit.z);
-        let straight_x = pane_x * eye_z / (eye_z - pane_z);
-        // Columns a pixel or more from the edge as the refracted ray sees it.
-        let pixel_on_wall = 2.0 * 30f32.to_radians().tan() * eye_z / height as f32;
-        if (wall_x - EDGE_X).abs() < 1.5 * pixel_on_wall {
-            continue;
-        }
+    for x in 0..REFRACTED_WIDTH {
+        let Some((wall_x, straight_x)) = wall_seen(x, 1.5) else { continue };
         let expected = if wall_x < EDGE_X { left } else { right };
         let got = seen[x as usize];
         assert!(
@@ -350,11 +361,33 @@ fn thick_media_refract_and_rough_ones_blur_the_light_behind_them() {
     assert!(bent_columns >= 3, "only {bent_columns} columns see across the edge through the medium");
 
     // Fully rough: the edge spreads over many columns.
-    let (rough, _) = refracting(1.0);
-    let blurred = row(&rough, &camera);
+    let blurred = middle_row(&refracting(1.0, 0.0).0, &camera);
     let mixed =
         |row: &[Vec3]| row.iter().filter(|c| (**c - left).abs().max_element() > 0.05 && (**c - right).abs().max_element() > 0.05).count();
     assert!(mixed(&seen) <= 3 && mixed(&blurred) >= 8, "edge columns: sharp {}, rough {}", mixed(&seen), mixed(&blurred));
+}
+
+#[test]
+fn dispersion_bends_red_less_and_blue_more_than_green() {
+    // Dispersion 30 spreads the index by (1.5 − 1) × 0.025 × 30 = 0.375 either side of green's 1.5
+    // (far beyond any glass, so that the parting spans pixels here): each channel shows the side of
+    // the edge its own refraction reaches, so the edge's colours part.
+    let (wall, camera) = split_wall();
+    let bare = middle_row(&wall, &camera);
+    let (left, right) = (bare[REFRACTED_WIDTH as usize / 2], bare[REFRACTED_WIDTH as usize - 1]);
+    let seen = middle_row(&refracting(0.0, 30.0).0, &camera);
+    let mut fringe_columns = 0;
+    for x in 0..REFRACTED_WIDTH {
+        let sides = [1.125, 1.5, 1.875].map(|ior| wall_seen(x, ior).map(|(wall_x, _)| wall_x < EDGE_X));
+        for (channel, side) in sides.iter().enumerate() {
+            let Some(on_left) = side else { continue };
+            let expected = if *on_left { left[channel] } else { right[channel] };
+            let got = seen[x as usize][channel];
+            assert!((got - expected).abs() < 0.02 * expected.max(0.1), "column {x}, channel {channel}: {got}, expected {expected}");
+        }
+        fringe_columns += usize::from(matches!(sides, [Some(red), _, Some(blue)] if red != blue));
+    }
+    assert!(fringe_columns >= 2, "only {fringe_columns} columns part red from blue");
 }
 
 #[test]

@@ -74,7 +74,8 @@ pub struct GpuMaterial {
     pub thickness_layer: i32,
     pub sheen_color_layer: i32,
     pub sheen_roughness_layer: i32,
-    pub _pad: u32,
+    /// How far the medium's index of refraction spreads over the colours (`KHR_materials_dispersion`).
+    pub dispersion: f32,
     /// The sheen's colour (black: none) and roughness (`KHR_materials_sheen`).
     pub sheen_color: [f32; 3],
     pub sheen_roughness: f32,
@@ -1095,7 +1096,7 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
         thickness_layer: layer(transmission.thickness_texture, data),
         sheen_color_layer: layer(sheen.color_texture, color),
         sheen_roughness_layer: layer(sheen.roughness_texture, data),
-        _pad: 0,
+        dispersion: transmission.dispersion,
         sheen_color: sheen.color_factor.to_array(),
         sheen_roughness: sheen.roughness_factor,
         uv_transforms: uv_transforms(slots),
@@ -1184,6 +1185,7 @@ mod tests {
                 thickness_layer,
                 sheen_color_layer,
                 sheen_roughness_layer,
+                dispersion,
                 sheen_color,
                 sheen_roughness,
                 uv_transforms

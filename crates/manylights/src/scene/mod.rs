@@ -236,7 +236,8 @@ pub struct Clearcoat {
 /// specular's index of refraction and blurred by its roughness. With `KHR_materials_volume`, the
 /// surface bounds a medium `thickness_factor` deep (× the thickness texture's G, in the mesh's units;
 /// 0: thin-walled) through which light of `attenuation_color` is left after `attenuation_distance`
-/// (Beer's law; infinite: clear).
+/// (Beer's law; infinite: clear). With `KHR_materials_dispersion`, the medium's index of refraction
+/// spreads over the colours by `dispersion` (20 / the Abbe number; 0: none).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transmission {
     pub factor: f32,
@@ -245,6 +246,7 @@ pub struct Transmission {
     pub thickness_texture: Option<TextureRef>,
     pub attenuation_distance: f32,
     pub attenuation_color: Vec3,
+    pub dispersion: f32,
 }
 
 /// A sheen (`KHR_materials_sheen`): a layer of fibres over the material scattering back towards
@@ -276,6 +278,7 @@ impl Transmission {
             thickness_texture: None,
             attenuation_distance: f32::INFINITY,
             attenuation_color: Vec3::ONE,
+            dispersion: 0.0,
         }
     }
 }
@@ -784,6 +787,9 @@ pub fn validate_material(m: &Material) -> Result<(), String> {
     if let Some(t) = &m.transmission {
         if !(unit(t.factor) && t.thickness_factor.is_finite() && t.thickness_factor >= 0.0) {
             return Err(format!("transmission factor {} must be 0 to 1 and thickness {} finite and ≥ 0", t.factor, t.thickness_factor));
+        }
+        if !(t.dispersion.is_finite() && t.dispersion >= 0.0) {
+            return Err(format!("dispersion {} must be finite and ≥ 0", t.dispersion));
         }
         if !(t.attenuation_distance > 0.0 && t.attenuation_color.to_array().into_iter().all(unit)) {
             return Err(format!(

@@ -39,7 +39,12 @@ fn lit_from_behind(s: ShadingInput) -> bool {
 // where it leaves: refracted into it by the index of refraction, as long as the medium is thick (0
 // for thin walls).
 fn transmission_path(s: ShadingInput) -> vec3<f32> {
-    let refracted = refract(-s.view_dir, s.normal, 1.0 / max(s.ior, 1.0));
+    return transmission_path_at(s, s.ior);
+}
+
+// `transmission_path` at index of refraction `ior`.
+fn transmission_path_at(s: ShadingInput, ior: f32) -> vec3<f32> {
+    let refracted = refract(-s.view_dir, s.normal, 1.0 / max(ior, 1.0));
     let direction = select(-s.view_dir, normalize(refracted), dot(refracted, refracted) > 0.0);
     return direction * s.thickness;
 }

@@ -166,6 +166,7 @@ fn evaluate_material(material: Material, surface: SurfaceFrame, g: UvGradients, 
     s.ior = 1.5;
     s.thickness = 0.0;
     s.attenuation = vec4<f32>(1.0, 1.0, 1.0, 0.0);
+    s.dispersion = 0.0;
     s.sheen_color = vec3<f32>(0.0);
     s.sheen_roughness = 0.0;
     if MATERIAL_EXTENSIONS {
@@ -216,6 +217,7 @@ fn material_extensions(material: Material, g: UvGradients, surface: SurfaceFrame
         }
         (*s).ior = material.ior;
         (*s).attenuation = vec4<f32>(material.attenuation_color, material.attenuation_distance);
+        (*s).dispersion = material.dispersion;
     }
 }
 

@@ -43,11 +43,13 @@ struct ShadingInput {
     // Light let through (KHR_materials_transmission): the share of the dielectric's diffuse lobe
     // passed on instead, the index of refraction bending it, and the medium behind
     // (KHR_materials_volume): its thickness in world units (0: thin-walled) and the colour left
-    // after distance w (w = 0: clear) in `attenuation`.
+    // after distance w (w = 0: clear) in `attenuation`, and how far its index of refraction spreads
+    // over the colours (KHR_materials_dispersion).
     transmission: f32,
     ior: f32,
     thickness: f32,
     attenuation: vec4<f32>,
+    dispersion: f32,
     // A sheen over it all but the clear coat (KHR_materials_sheen): its colour (black: none) and
     // perceptual roughness.
     sheen_color: vec3<f32>,

@@ -22,5 +22,15 @@ fn transmitted_radiance(s: ShadingInput) -> vec3<f32> {
         let albedo = sheen_albedo(max(dot(s.normal, s.view_dir), 1e-4), max(s.sheen_roughness, MIN_ROUGHNESS));
         weight *= sheen_leaves(s, albedo, albedo);
     }
-    return weight * s.base_color * (1.0 - reflected) * medium_transmittance(s, length(path)) * transmitted_light(s, path);
+    var light = medium_transmittance(s, length(path)) * transmitted_light(s, path);
+    if s.dispersion > 0.0 && s.thickness > 0.0 {
+        // KHR_materials_dispersion: red and blue are bent by indices half the specification's
+        // spread, (ior − 1) × 0.025 × dispersion, below and above the index green keeps.
+        let half_spread = (s.ior - 1.0) * 0.025 * s.dispersion;
+        let red = transmission_path_at(s, s.ior - half_spread);
+        let blue = transmission_path_at(s, s.ior + half_spread);
+        light.r = (medium_transmittance(s, length(red)) * transmitted_light(s, red)).r;
+        light.b = (medium_transmittance(s, length(blue)) * transmitted_light(s, blue)).b;
+    }
+    return weight * s.base_color * (1.0 - reflected) * light;
 }

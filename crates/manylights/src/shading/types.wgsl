@@ -96,6 +96,8 @@ struct Material {
     thickness_layer: i32,
     sheen_color_layer: i32,
     sheen_roughness_layer: i32,
+    // How far the medium's index of refraction spreads over the colours (KHR_materials_dispersion).
+    dispersion: f32,
     // The sheen's colour (black: none) and roughness (KHR_materials_sheen).
     sheen_color: vec3<f32>,
     sheen_roughness: f32,

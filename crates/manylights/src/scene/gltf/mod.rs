@@ -32,12 +32,13 @@ use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::{Error, Result};
 
 /// Extensions a file may require; every other optional extension is ignored.
-const SUPPORTED_EXTENSIONS: [&str; 16] = [
+const SUPPORTED_EXTENSIONS: [&str; 17] = [
     INSTANCING,
     compression::MESHOPT,
     "EXT_texture_webp",
     "KHR_lights_punctual",
     "KHR_materials_clearcoat",
+    "KHR_materials_dispersion",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_sheen",
@@ -1242,7 +1243,8 @@ fn sheen(m: &::gltf::Material, document: &Document, named: &str) -> Result<Optio
     }))
 }
 
-/// `KHR_materials_transmission` with its medium (`KHR_materials_volume`); none where its factor is 0.
+/// `KHR_materials_transmission` with its medium (`KHR_materials_volume`, `KHR_materials_dispersion`);
+/// none where its factor is 0.
 fn transmission(m: &::gltf::Material, document: &Document, named: &str) -> Result<Option<super::Transmission>, String> {
     let Some(ext) = m.extension_value("KHR_materials_transmission") else { return Ok(None) };
     let factor = number(ext, "transmissionFactor", 0.0);
@@ -1260,6 +1262,9 @@ fn transmission(m: &::gltf::Material, document: &Document, named: &str) -> Resul
             let [r, g, b] = c[..] else { return Err(format!("{named}: attenuationColor {color:?} must be three numbers")) };
             transmission.attenuation_color = Vec3::new(r, g, b);
         }
+    }
+    if let Some(dispersion) = m.extension_value("KHR_materials_dispersion") {
+        transmission.dispersion = number(dispersion, "dispersion", 0.0);
     }
     Ok(Some(transmission))
 }
