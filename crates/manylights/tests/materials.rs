@@ -479,9 +479,7 @@ fn a_sheen_shades_as_its_specification_says_under_lights_and_the_environment_in_
         let tolerance = if pipeline == PipelineKind::Deferred { 0.02 } else { 0.005 };
         for params in [&plain, &coated] {
             let (bare, camera) = wall(params.material(), vec![light]);
-            let (mut scene, _) = wall(Material { sheen: Some(SHEEN), ..params.material() }, vec![light]);
-            // The coat lies over the sheen: its share is taken from the sheen's result.
-            scene.materials[0].clearcoat = bare.materials[0].clearcoat;
+            let (scene, _) = wall(Material { sheen: Some(SHEEN), ..params.material() }, vec![light]);
             let (image, bare_image) = (frame(&scene, &camera, pipeline), frame(&bare, &camera, pipeline));
             for (x, y) in pixels {
                 let point = wall_point(x, y);
@@ -493,6 +491,7 @@ fn a_sheen_shades_as_its_specification_says_under_lights_and_the_environment_in_
                 let under_coat = sheened(reference(&uncoated, &light, point, camera.position()), &SHEEN, cosines, irradiance);
                 let coat = params.clearcoat * (0.04 + 0.96 * (1.0 - v.z).powi(5));
                 let coat_lobe = reference(&Params { base: Vec3::ZERO, specular: 0.0, ..*params }, &light, point, camera.position());
+                // The coat lies over the sheen: its share is taken from the sheen's result.
                 let expected = under_coat * (1.0 - coat) + coat_lobe;
                 let got = Vec4::from(pixel(&image, x, y)).truncate();
                 let error = (got - expected).abs().max_element() / expected.max_element();
@@ -502,6 +501,37 @@ fn a_sheen_shades_as_its_specification_says_under_lights_and_the_environment_in_
                 assert!((got - bare).abs().max_element() > 0.05 * expected.max_element(), "{name} ({x}, {y}): no sheen to see");
             }
         }
+
+        // A glossy sheen in a uniform environment, facing a black panel behind the eye: traced
+        // reflections see black where the prefiltered environment held white, so they take away
+        // exactly the specular albedo below the sheen (F0 × scale + F90 × bias × what it leaves).
+        let glossy = Material { sheen: Some(SHEEN), roughness_factor: 0.2, ..plain.material() };
+        let (mut scene, camera) = wall(glossy, vec![]);
+        scene.ambient = Vec3::ONE;
+        scene.materials.push(Material { base_color_factor: Vec4::new(0.0, 0.0, 0.0, 1.0), unlit: true, ..Default::default() });
+        let mut panel = scene.meshes[0].clone();
+        panel.primitives[0].material = 1;
+        scene.meshes.push(panel);
+        let facing_the_wall = glam::Mat4::from_translation(Vec3::new(0.0, 0.0, 5.0)) * glam::Mat4::from_rotation_y(PI);
+        scene
+            .instances
+            .push(manylights::scene::Instance { mesh: 1, world_from_local: facing_the_wall * glam::Mat4::from_scale(Vec3::splat(20.0)) });
+        let rays = manylights::settings::RaySettings { reflection_bounces: 1, reflection_roughness: 1.0, ..Default::default() };
+        let traced = render_with(&scene, &camera, RenderConfig { pipeline, rays, ..config(WIDTH, HEIGHT, LightMethod::Brute) }).1;
+        let untraced = frame(&scene, &camera, pipeline);
+        let (x, y) = (WIDTH / 2, HEIGHT / 2);
+        let n_v = (camera.position() - wall_point(x, y)).normalize().z;
+        // The split-sum table bilinear at roughness 0.2, in its last column (n·v → 1, where it clamps).
+        let size = ibl::BRDF_TABLE_SIZE as usize;
+        let row = 0.2 * size as f32 - 0.5;
+        let (j, t) = (row.floor() as usize, row.fract());
+        let albedo = |j: usize| 0.04 * ibl::brdf_table()[j * size + size - 1][0] + ibl::brdf_table()[j * size + size - 1][1];
+        let specular = (albedo(j) * (1.0 - t) + albedo(j + 1) * t) * (1.0 - SHEEN.color_factor.max_element() * ibl::sheen_albedo(n_v, 0.6));
+        let taken = Vec4::from(pixel(&untraced, x, y)).truncate() - Vec4::from(pixel(&traced, x, y)).truncate();
+        assert!(
+            (taken - Vec3::splat(specular)).abs().max_element() < 0.03 * specular,
+            "{name}: traced reflections take {taken}, expected {specular}"
+        );
 
         // A uniform white environment alone: the sheen reflects its albedo, the base colour what it leaves.
         let matte = Material { sheen: Some(SHEEN), specular: Specular { factor: 0.0, ..Default::default() }, ..plain.material() };

@@ -527,6 +527,11 @@ fn lights_and_the_sun_behind_a_transmissive_pane_shine_through_its_lobe() {
         let (with_sun, _) = centre_and_corner(&sunlit, &camera, pipeline);
         let got = with_sun - background;
         assert!(close(got, from_sun), "{name}: the sun through the pane adds {got}, expected {from_sun}");
+        // Its shadow ray leaves the pane's far side, towards the sun.
+        let rays = RaySettings { sun_shadows: SunShadows::Hard, ..config(64, 36, LightMethod::Brute).rays };
+        let shadowed = RenderConfig { rays, ..configured(pipeline, LightMethod::Brute, DecalMethod::Brute, (64, 36)) };
+        let got = rgb(pixel(&render_with(&sunlit, &camera, shadowed).1, 32, 18)) - background;
+        assert!(close(got, from_sun), "{name}: with sun shadows the sun through the pane adds {got}, expected {from_sun}");
         // Through every light method, and through crowds, whose loops skip lights below the horizon
         // of surfaces lit from above only.
         let runs =
@@ -538,4 +543,42 @@ fn lights_and_the_sun_behind_a_transmissive_pane_shine_through_its_lobe() {
             assert!(close(got, expected), "{name}, {}: {lights} lights through the pane add {got}, expected {expected}", method.name());
         }
     }
+}
+
+#[test]
+fn the_sun_shines_through_glass_once_under_the_daylight_sky() {
+    // Under the daylight sky the light read behind glass holds the sun's disc where the eye looks at
+    // it through the glass: there the sun's transmission lobe is left out, elsewhere it adds.
+    const TINT: Vec3 = Vec3::new(0.5, 1.0, 0.25);
+    let sunlit = |direction: Vec3, roughness: f32, wall: bool| {
+        let (mut scene, camera) = ambient_wall();
+        if !wall {
+            scene.instances.clear();
+        }
+        // A wall reflecting no specular light is uniform behind the pane, however blurred.
+        scene.materials[0].specular.factor = 0.0;
+        scene.ambient = Vec3::ZERO;
+        scene.sun = Some(Sun { direction: direction.normalize(), color: Vec3::ONE, illuminance: 0.5 });
+        manylights::scene::sky::light_with_sky(&mut scene, manylights::settings::Sky::Daylight);
+        let bare = scene.clone();
+        transmissive_pane(&mut scene, 1.0, TINT, Transmission::thin(1.0));
+        scene.materials.last_mut().unwrap().roughness_factor = roughness;
+        let centre = |scene: &Scene| rgb(pixel(&render_with(scene, &camera, config(64, 36, LightMethod::Brute)).1, 32, 18));
+        (centre(&bare), centre(&scene), camera)
+    };
+    // The sun far off the view behind the wall: its lobe through the rough pane adds as without a sky.
+    let oblique = Vec3::new(0.6, 0.4, 1.0);
+    let (wall, through, camera) = sunlit(oblique, 0.5, true);
+    let world_from_clip = camera.clip_from_world(64, 36).inverse();
+    let far = world_from_clip.project_point3(Vec3::new(32.5 / 64.0 * 2.0 - 1.0, 1.0 - 18.5 / 36.0 * 2.0, 0.5));
+    let eye = camera.position();
+    let point = eye + (far - eye) * ((1.0 - eye.z) / (far.z - eye.z));
+    let lobe = 0.5 * transmission_lobe(Vec3::Z, (eye - point).normalize(), -oblique.normalize(), 0.5, 1.5, TINT);
+    let got = through - TINT * wall;
+    assert!(close(got, lobe), "the sun off the view adds {got} through the pane, expected {lobe}");
+    // The sun straight behind the centre pixel of a smooth pane, the sky around it: the pane shows
+    // the disc behind it, and no lobe on top.
+    let (sky, through, _) = sunlit(eye - point, 0.0, false);
+    assert!(sky.max_element() > 100.0, "the centre pixel misses the disc: {sky}");
+    assert!(close(through, TINT * sky), "through the pane {through}, the disc behind it {}", TINT * sky);
 }

@@ -1,6 +1,6 @@
 //! The scene's environment on the GPU (`shading/environment.wgsl`): the radiance image seen in the
-//! background and by missed reflection rays, its GGX-prefiltered mips and the split-sum BRDF table
-//! for specular image-based lighting, and the irradiance harmonics, which go in the frame uniforms.
+//! background and by missed reflection rays, its GGX-prefiltered mips and the BRDF table (the split
+//! sum's scale and bias for specular image-based lighting, the sheen's albedo), and the irradiance harmonics, which go in the frame uniforms.
 //! All of it is computed on the CPU once, at upload (`scene::ibl`).
 
 use glam::{Vec3, Vec4};

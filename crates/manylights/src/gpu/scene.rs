@@ -641,7 +641,7 @@ impl GpuScene {
         let d2 = wgpu::TextureViewDimension::D2;
         entries.push(bindings::texture(24, all, float, d2)); // environment (background)
         entries.push(bindings::texture(25, all, float, d2)); // prefiltered environment
-        entries.push(bindings::texture(26, all, float, d2)); // split-sum BRDF table
+        entries.push(bindings::texture(26, all, float, d2)); // BRDF table: split sum, sheen albedo
         entries.push(bindings::sampler(27, all)); // environment sampler
                                                   // restir's reservoirs, written by shading, which no vertex stage does
         entries.push(bindings::storage_read_write(28, wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE));

@@ -34,8 +34,10 @@ fn transparent_shade(in: ForwardVertex, @builtin(front_facing) front_facing: boo
     surface.thickness *= draw_scale(draw);
     let s = apply_decals(surface, dp);
     // No shadow mask holds a second surface per pixel: the sun's visibility is traced here, from the
-    // interpolated position.
-    let sun = sun_visibility_traced(s.position, s.ray_normal, s.ray_clearance);
+    // interpolated position, on the side the sun lights (behind a transmissive surface, its far one).
+    let to_sun = -frame.sun_direction.xyz;
+    let lit_side = select(s.ray_normal, -s.ray_normal, lit_from_behind(s) && dot(s.ray_normal, to_sun) < 0.0);
+    let sun = sun_visibility_traced(s.position, lit_side, s.ray_clearance);
     // The pipeline blends "over": radiance α + what lies behind (1 − α).
     let alpha = select(1.0, s.alpha, (material.flags & MATERIAL_BLENDED) != 0u);
     return vec4<f32>(shade(s, sun), alpha);

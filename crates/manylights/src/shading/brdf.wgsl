@@ -93,6 +93,15 @@ fn sheen_leaves(s: ShadingInput, e_view: f32, e_light: f32) -> f32 {
     return saturate(1.0 - max(s.sheen_color.x, max(s.sheen_color.y, s.sheen_color.z)) * max(e_view, e_light));
 }
 
+// What a sheen leaves of the light the material below it sends towards the viewer (1 without one).
+fn sheen_leaves_view(s: ShadingInput) -> f32 {
+    if !has_sheen(s) {
+        return 1.0;
+    }
+    let albedo = sheen_albedo(max(dot(s.normal, s.view_dir), 1e-4), max(s.sheen_roughness, MIN_ROUGHNESS));
+    return sheen_leaves(s, albedo, albedo);
+}
+
 // The Charlie distribution (Estevez & Kulla 2017). Keep in sync with `scene::ibl::d_charlie`.
 fn d_charlie(n_dot_h: f32, roughness: f32) -> f32 {
     let inverse_alpha = 1.0 / (roughness * roughness);
@@ -187,7 +196,7 @@ fn brdf_lobes_times_cosine(s: ShadingInput, light_dir: vec3<f32>) -> BrdfLobes {
     } else if lit_from_behind(s) {
         lobes.specular = transmission_lobe_times_cosine(s, light_dir, surface_dielectric(s));
     }
-    if has_sheen(s) {
+    if has_sheen(s) && (n_dot_l > 0.0 || lit_from_behind(s)) {
         // The sheen's lobe joins the specular one; both lobes below keep what it leaves.
         let n_dot_v = max(dot(s.normal, s.view_dir), 1e-4);
         let roughness = max(s.sheen_roughness, MIN_ROUGHNESS);

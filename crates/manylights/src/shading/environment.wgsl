@@ -41,44 +41,46 @@ fn environment_scale_bias(n: vec3<f32>, view_dir: vec3<f32>, roughness: f32) -> 
     return textureSampleLevel(environment_brdf_table, environment_sampler, uv, 0.0).rg;
 }
 
-// The fraction of the (prefiltered) environment the material below any clear coat reflects towards
-// its viewer: F0 × scale + F90 × bias from the BRDF table, by n·v and roughness; the coat's share
-// removed.
+// The fraction of the (prefiltered) environment the material below any sheen and clear coat
+// reflects towards its viewer: F0 × scale + F90 × bias from the BRDF table, by n·v and roughness;
+// the sheen's and the coat's shares removed.
 fn environment_specular_albedo(s: ShadingInput) -> vec3<f32> {
     let scale_bias = environment_scale_bias(s.normal, s.view_dir, s.roughness);
     let dielectric = surface_dielectric(s);
     let f0 = mix(dielectric.w * dielectric.xyz, s.base_color, s.metallic);
     let f90 = mix(dielectric.w, 1.0, s.metallic);
-    return (f0 * scale_bias.x + f90 * scale_bias.y) * (1.0 - clearcoat_fresnel(s));
+    return (f0 * scale_bias.x + f90 * scale_bias.y) * sheen_leaves_view(s) * (1.0 - clearcoat_fresnel(s));
 }
 
-// The sheen's reflection of the environment: its albedo times the irradiance, as a sheen reflects a
-// uniform environment exactly (no environment is prefiltered for its lobe), below any clear coat.
-fn environment_sheen(s: ShadingInput, albedo: f32) -> vec3<f32> {
-    return s.sheen_color * albedo * environment_irradiance(s.normal) * (1.0 - clearcoat_fresnel(s));
+// The fraction of a uniform environment a sheen reflects towards its viewer, below any clear coat
+// (0 without one): its colour times its albedo.
+fn environment_sheen_albedo(s: ShadingInput) -> vec3<f32> {
+    if !has_sheen(s) {
+        return vec3<f32>(0.0);
+    }
+    let albedo = sheen_albedo(max(dot(s.normal, s.view_dir), 1e-4), max(s.sheen_roughness, MIN_ROUGHNESS));
+    return s.sheen_color * albedo * (1.0 - clearcoat_fresnel(s));
 }
 
 // Diffuse and specular light from the environment, and the sheen's and the clear coat's reflections
 // of it, as much as the surface's occlusion lets through.
 fn environment_light(s: ShadingInput) -> vec3<f32> {
-    var diffuse = environment_irradiance(s.normal) * s.base_color * (1.0 - s.metallic) * (1.0 - clearcoat_fresnel(s));
+    let irradiance = environment_irradiance(s.normal);
+    var diffuse = irradiance * s.base_color * (1.0 - s.metallic) * sheen_leaves_view(s) * (1.0 - clearcoat_fresnel(s));
     if TRANSMISSION {
         diffuse *= 1.0 - s.transmission;
     }
-    var specular = environment_specular_albedo(s) * environment_specular_radiance(environment_reflection_direction(s), s.roughness);
-    if has_sheen(s) {
-        let albedo = sheen_albedo(max(dot(s.normal, s.view_dir), 1e-4), max(s.sheen_roughness, MIN_ROUGHNESS));
-        let leaves = sheen_leaves(s, albedo, albedo);
-        diffuse *= leaves;
-        specular = specular * leaves + environment_sheen(s, albedo);
-    }
+    let specular = environment_specular_albedo(s) * environment_specular_radiance(environment_reflection_direction(s), s.roughness);
+    // The sheen reflects the irradiance times its albedo, as it reflects a uniform environment
+    // exactly (no environment is prefiltered for its lobe).
+    let sheen = environment_sheen_albedo(s) * irradiance;
     var coat = vec3<f32>(0.0);
     if MATERIAL_EXTENSIONS && s.clearcoat > 0.0 {
         let scale_bias = environment_scale_bias(s.clearcoat_normal, s.view_dir, s.clearcoat_roughness);
         let direction = reflect(-s.view_dir, s.clearcoat_normal);
         coat = clearcoat_fresnel(s) * (scale_bias.x + scale_bias.y) * environment_specular_radiance(direction, s.clearcoat_roughness);
     }
-    return (diffuse + specular + coat) * s.occlusion;
+    return (diffuse + specular + sheen + coat) * s.occlusion;
 }
 
 // Whether the sun's disc is seen in the sky (`sky_radiance`): with the daylight sky, where the scene

@@ -50,7 +50,7 @@ fn sample_wrapped(textures: texture_2d_array<f32>, layer: i32, material: Materia
 }
 
 // The functions below read a surface material's textures from `color_textures` (sRGB: base colour,
-// emissive, specular colour) and `data_textures` (linear: the others); decals sample their own
+// emissive, specular colour, sheen colour) and `data_textures` (linear: the others); decals sample their own
 // arrays, clamped, in `decals.wgsl`.
 
 // Whether any mesh has vertex colours: a pipeline constant of the shading passes' compute and

@@ -87,7 +87,7 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
 // Whether the sun lies behind a transmissive surface whose light from behind (`transmitted_light`)
 // already shows its disc: then its transmission lobe would count it twice.
 fn sun_seen_through(s: ShadingInput) -> bool {
-    return lit_from_behind(s) && dot(s.normal, -frame.sun_direction.xyz) <= 0.0 && sun_disc_seen();
+    return lit_from_behind(s) && dot(s.normal, -frame.sun_direction.xyz) <= 0.0 && transmitted_light_shows_sun(s, transmission_path(s));
 }
 
 // `shade` for the opaque surface a pixel shows: what the shading core keeps per pixel from frame to

@@ -49,7 +49,8 @@ fn demodulate(light: vec3<f32>, albedo: vec3<f32>) -> vec3<f32> {
 // surface, with its roughness beside the diffuse albedo. `shows_light` is false where a debug view replaces the radiance: no light then.
 fn keep_denoise_sample(s: ShadingInput, shows_light: bool) {
     let albedo = pack4x8unorm(vec4<f32>(s.base_color * (1.0 - s.metallic), s.roughness));
-    let specular_albedo = pack4x8unorm(vec4<f32>(environment_specular_albedo(s), 0.0));
+    // The sheen's lobe is sampled with the specular one.
+    let specular_albedo = pack4x8unorm(vec4<f32>(environment_specular_albedo(s) + environment_sheen_albedo(s), 0.0));
     let diffuse = demodulate(sampled_diffuse, unpack4x8unorm(albedo).rgb);
     let specular = demodulate(sampled_specular, unpack4x8unorm(specular_albedo).rgb);
     let none = vec3<f32>(0.0);

@@ -5,7 +5,7 @@
 
 // One ray towards the sun's centre from `position`, off the surface along its geometric normal `n`
 // (on the side being lit) by `clearance` metres beyond rounding's reach (for positions known only
-// that well); 0 where the surface faces away from the sun.
+// that well); 0 where `n` faces away from the sun.
 fn sun_visibility_traced(position: vec3<f32>, n: vec3<f32>, clearance: f32) -> f32 {
     if frame.ray_options.x == RAY_SHADOWS_OFF || frame.sun_direction.w == 0.0 {
         return 1.0;

@@ -17,11 +17,7 @@ fn transmitted_radiance(s: ShadingInput) -> vec3<f32> {
     let scale_bias = environment_scale_bias(s.normal, s.view_dir, s.roughness);
     let dielectric = surface_dielectric(s);
     let reflected = dielectric.w * (dielectric.xyz * scale_bias.x + scale_bias.y);
-    var weight = s.transmission * (1.0 - s.metallic) * (1.0 - clearcoat_fresnel(s));
-    if has_sheen(s) {
-        let albedo = sheen_albedo(max(dot(s.normal, s.view_dir), 1e-4), max(s.sheen_roughness, MIN_ROUGHNESS));
-        weight *= sheen_leaves(s, albedo, albedo);
-    }
+    let weight = s.transmission * (1.0 - s.metallic) * sheen_leaves_view(s) * (1.0 - clearcoat_fresnel(s));
     var light = medium_transmittance(s, length(path)) * transmitted_light(s, path);
     if s.dispersion > 0.0 && s.thickness > 0.0 {
         // KHR_materials_dispersion: red and blue are bent by indices half the specification's

@@ -5,3 +5,7 @@
 fn transmitted_light(s: ShadingInput, path: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
+
+fn transmitted_light_shows_sun(s: ShadingInput, path: vec3<f32>) -> bool {
+    return false;
+}

@@ -56,7 +56,7 @@ struct Material {
     normal_scale: f32,
     // MATERIAL_UNLIT, MATERIAL_CLEARCOAT, MATERIAL_TRANSMISSION, MATERIAL_BLENDED, MATERIAL_SHEEN.
     flags: u32,
-    // Layers in `color_textures` (base colour, emissive, specular colour) and `data_textures` (the
+    // Layers in `color_textures` (base colour, emissive, specular and sheen colour) and `data_textures` (the
     // others); NO_TEXTURE when absent. Texture slots, in order: base colour 0, emissive 1,
     // metallic-roughness 2, normal 3, specular 4, specular colour 5, clearcoat 6, clearcoat
     // roughness 7, clearcoat normal 8, occlusion 9, transmission 10, thickness 11, sheen colour 12,

@@ -132,7 +132,8 @@ fn particle_light_at(s: ShadingInput, p: vec3<f32>) -> vec3<f32> {
     let color = max(grid.color, vec3<f32>(0.0)) * frame.particle_texture_unscale.x;
     let length_sq = dot(grid.direction, grid.direction);
     let concentration = saturate(sqrt(length_sq) / luminance);
-    let isotropic = (s.base_color * (1.0 - s.metallic) + environment_specular_albedo(s)) / (4.0 * PI);
+    let isotropic =
+        (s.base_color * (1.0 - s.metallic) * sheen_leaves_view(s) + environment_specular_albedo(s) + environment_sheen_albedo(s)) / (4.0 * PI);
     var directional = vec3<f32>(0.0);
     if length_sq > 0.0 {
         directional = brdf_times_cosine(s, grid.direction * inverseSqrt(length_sq));
