@@ -93,12 +93,17 @@ fn sheen_leaves(s: ShadingInput, e_view: f32, e_light: f32) -> f32 {
     return saturate(1.0 - max(s.sheen_color.x, max(s.sheen_color.y, s.sheen_color.z)) * max(e_view, e_light));
 }
 
+// The sheen's albedo towards the viewer.
+fn sheen_view_albedo(s: ShadingInput) -> f32 {
+    return sheen_albedo(max(dot(s.normal, s.view_dir), 1e-4), max(s.sheen_roughness, MIN_ROUGHNESS));
+}
+
 // What a sheen leaves of the light the material below it sends towards the viewer (1 without one).
 fn sheen_leaves_view(s: ShadingInput) -> f32 {
     if !has_sheen(s) {
         return 1.0;
     }
-    let albedo = sheen_albedo(max(dot(s.normal, s.view_dir), 1e-4), max(s.sheen_roughness, MIN_ROUGHNESS));
+    let albedo = sheen_view_albedo(s);
     return sheen_leaves(s, albedo, albedo);
 }
 

@@ -58,8 +58,7 @@ fn environment_sheen_albedo(s: ShadingInput) -> vec3<f32> {
     if !has_sheen(s) {
         return vec3<f32>(0.0);
     }
-    let albedo = sheen_albedo(max(dot(s.normal, s.view_dir), 1e-4), max(s.sheen_roughness, MIN_ROUGHNESS));
-    return s.sheen_color * albedo * (1.0 - clearcoat_fresnel(s));
+    return s.sheen_color * sheen_view_albedo(s) * (1.0 - clearcoat_fresnel(s));
 }
 
 // Diffuse and specular light from the environment, and the sheen's and the clear coat's reflections

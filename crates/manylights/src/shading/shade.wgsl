@@ -38,7 +38,7 @@ fn shade(s: ShadingInput, sun_visibility: f32) -> vec3<f32> {
     if frame.sun_direction.w > 0.0 && sun_visibility > 0.0 && !sun_seen_through(s) {
         radiance += frame.sun_radiance.rgb * sun_visibility * brdf_times_cosine(s, -frame.sun_direction.xyz);
     }
-    if TRANSMISSION && s.transmission > 0.0 {
+    if lit_from_behind(s) {
         radiance += transmitted_radiance(s);
     }
     radiance += shade_local_lights(s);

@@ -8,6 +8,11 @@
 #include "shading/environment.wgsl"
 #include "$TRANSMITTED_LIGHT"
 
+// The light arriving along `path` through the medium, as much as it lets through.
+fn transmitted_through_medium(s: ShadingInput, path: vec3<f32>) -> vec3<f32> {
+    return medium_transmittance(s, length(path)) * transmitted_light(s, path);
+}
+
 // Radiance a transmissive surface passes on towards its viewer: the light behind it times the
 // transmission lobe's weight — its share, the base colour, the medium's transmittance, one minus the
 // dielectric's specular albedo (the BRDF table's, as the environment's reflection uses), below any
@@ -18,15 +23,13 @@ fn transmitted_radiance(s: ShadingInput) -> vec3<f32> {
     let dielectric = surface_dielectric(s);
     let reflected = dielectric.w * (dielectric.xyz * scale_bias.x + scale_bias.y);
     let weight = s.transmission * (1.0 - s.metallic) * sheen_leaves_view(s) * (1.0 - clearcoat_fresnel(s));
-    var light = medium_transmittance(s, length(path)) * transmitted_light(s, path);
+    var light = transmitted_through_medium(s, path);
     if s.dispersion > 0.0 && s.thickness > 0.0 {
         // KHR_materials_dispersion: red and blue are bent by indices half the specification's
         // spread, (ior − 1) × 0.025 × dispersion, below and above the index green keeps.
         let half_spread = (s.ior - 1.0) * 0.025 * s.dispersion;
-        let red = transmission_path_at(s, s.ior - half_spread);
-        let blue = transmission_path_at(s, s.ior + half_spread);
-        light.r = (medium_transmittance(s, length(red)) * transmitted_light(s, red)).r;
-        light.b = (medium_transmittance(s, length(blue)) * transmitted_light(s, blue)).b;
+        light.r = transmitted_through_medium(s, transmission_path_at(s, s.ior - half_spread)).r;
+        light.b = transmitted_through_medium(s, transmission_path_at(s, s.ior + half_spread)).b;
     }
     return weight * s.base_color * (1.0 - reflected) * light;
 }

@@ -1165,6 +1165,14 @@ fn number(object: &serde_json::Value, name: &str, default: f32) -> f32 {
     object.get(name).and_then(serde_json::Value::as_f64).map_or(default, |v| v as f32)
 }
 
+/// A colour member of an extension object (three numbers), or its default.
+fn color(object: &serde_json::Value, name: &str, default: Vec3, material: &str) -> Result<Vec3, String> {
+    let Some(color) = object.get(name).and_then(serde_json::Value::as_array) else { return Ok(default) };
+    let c: Vec<f32> = color.iter().filter_map(serde_json::Value::as_f64).map(|v| v as f32).collect();
+    let [r, g, b] = c[..] else { return Err(format!("{material}: {name} {color:?} must be three numbers")) };
+    Ok(Vec3::new(r, g, b))
+}
+
 /// A texture info member of an extension object (glTF's `textureInfo`, with its own
 /// `KHR_texture_transform`).
 fn extension_texture(object: &serde_json::Value, name: &str, document: &Document, material: &str) -> Result<Option<TextureRef>, String> {
@@ -1193,11 +1201,7 @@ fn specular(m: &::gltf::Material, document: &Document, named: &str) -> Result<su
     if let Some(ext) = m.extension_value("KHR_materials_specular") {
         specular.factor = number(ext, "specularFactor", 1.0);
         specular.texture = extension_texture(ext, "specularTexture", document, named)?;
-        if let Some(color) = ext.get("specularColorFactor").and_then(serde_json::Value::as_array) {
-            let c: Vec<f32> = color.iter().filter_map(serde_json::Value::as_f64).map(|v| v as f32).collect();
-            let [r, g, b] = c[..] else { return Err(format!("{named}: specularColorFactor {color:?} must be three numbers")) };
-            specular.color_factor = Vec3::new(r, g, b);
-        }
+        specular.color_factor = color(ext, "specularColorFactor", Vec3::ONE, named)?;
         specular.color_texture = extension_texture(ext, "specularColorTexture", document, named)?;
     }
     Ok(specular)
@@ -1224,14 +1228,7 @@ fn clearcoat(m: &::gltf::Material, document: &Document, named: &str) -> Result<O
 /// `KHR_materials_sheen`; none where its colour is black (the specification's off switch).
 fn sheen(m: &::gltf::Material, document: &Document, named: &str) -> Result<Option<super::Sheen>, String> {
     let Some(ext) = m.extension_value("KHR_materials_sheen") else { return Ok(None) };
-    let color_factor = match ext.get("sheenColorFactor").and_then(serde_json::Value::as_array) {
-        Some(color) => {
-            let c: Vec<f32> = color.iter().filter_map(serde_json::Value::as_f64).map(|v| v as f32).collect();
-            let [r, g, b] = c[..] else { return Err(format!("{named}: sheenColorFactor {color:?} must be three numbers")) };
-            Vec3::new(r, g, b)
-        }
-        None => Vec3::ZERO,
-    };
+    let color_factor = color(ext, "sheenColorFactor", Vec3::ZERO, named)?;
     if color_factor == Vec3::ZERO {
         return Ok(None);
     }
@@ -1257,11 +1254,7 @@ fn transmission(m: &::gltf::Material, document: &Document, named: &str) -> Resul
         transmission.thickness_factor = number(volume, "thicknessFactor", 0.0);
         transmission.thickness_texture = extension_texture(volume, "thicknessTexture", document, named)?;
         transmission.attenuation_distance = number(volume, "attenuationDistance", f32::INFINITY);
-        if let Some(color) = volume.get("attenuationColor").and_then(serde_json::Value::as_array) {
-            let c: Vec<f32> = color.iter().filter_map(serde_json::Value::as_f64).map(|v| v as f32).collect();
-            let [r, g, b] = c[..] else { return Err(format!("{named}: attenuationColor {color:?} must be three numbers")) };
-            transmission.attenuation_color = Vec3::new(r, g, b);
-        }
+        transmission.attenuation_color = color(volume, "attenuationColor", Vec3::ONE, named)?;
     }
     if let Some(dispersion) = m.extension_value("KHR_materials_dispersion") {
         transmission.dispersion = number(dispersion, "dispersion", 0.0);
