@@ -93,6 +93,45 @@ fn compressed_quantized_and_webp_files_render_as_their_originals() {
     }
 }
 
+/// A Draco primitive may keep attributes outside its stream, read as usual (here texture
+/// coordinates in an accessor with no data, which holds zeros).
+#[test]
+fn draco_primitives_read_attributes_left_out_of_their_stream() {
+    let bytes = std::fs::read(test_file("duck-draco.glb")).unwrap();
+    let json_length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_length]).unwrap();
+    let position = json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap() as usize;
+    let count = json["accessors"][position]["count"].clone();
+    let accessors = json["accessors"].as_array_mut().unwrap();
+    accessors.push(serde_json::json!({"componentType": 5126, "count": count, "type": "VEC2"}));
+    let zeros = accessors.len() - 1;
+    let primitive = &mut json["meshes"][0]["primitives"][0];
+    let draco = primitive["extensions"]["KHR_draco_mesh_compression"]["attributes"].as_object_mut().unwrap();
+    assert!(draco.remove("TEXCOORD_0").is_some(), "the stream holds texture coordinates");
+    primitive["attributes"]["TEXCOORD_0"] = zeros.into();
+
+    let mut chunk = serde_json::to_vec(&json).unwrap();
+    chunk.resize(chunk.len().next_multiple_of(4), b' ');
+    let binary = &bytes[20 + json_length..];
+    let mut glb = Vec::new();
+    glb.extend_from_slice(&bytes[..8]);
+    glb.extend_from_slice(&((20 + chunk.len() + binary.len()) as u32).to_le_bytes());
+    glb.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&chunk);
+    glb.extend_from_slice(binary);
+    let path = std::env::temp_dir().join(format!("manylights-draco-outside-{}.glb", std::process::id()));
+    std::fs::write(&path, glb).unwrap();
+
+    let (got, original) = (load(&path), load(&test_file("duck-draco.glb")));
+    std::fs::remove_file(&path).ok();
+    assert_eq!(world_corners(&got), world_corners(&original), "the stream's positions and indices");
+    let vertices = || got.meshes.iter().flat_map(|m| &m.primitives).flat_map(|p| &p.vertices);
+    assert!(vertices().all(|v| (v.u, v.v) == (0.0, 0.0)), "texture coordinates from the zero accessor");
+    let original_uv = original.meshes.iter().flat_map(|m| &m.primitives).flat_map(|p| &p.vertices).any(|v| (v.u, v.v) != (0.0, 0.0));
+    assert!(original_uv, "the original's come from the stream");
+}
+
 /// `EXT_mesh_gpu_instancing`'s translations, rotations and scales.
 type Instancing = (Vec<[f32; 3]>, Vec<[f32; 4]>, Vec<[f32; 3]>);
 

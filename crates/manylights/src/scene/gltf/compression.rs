@@ -4,7 +4,10 @@
 //!   (the `meshopt` crate) into the place the view names, usually in a fallback buffer that has no
 //!   data of its own, with the view's filter applied.
 //! - `KHR_draco_mesh_compression`: each compressed primitive is decoded (`draco-core`, a pure-Rust
-//!   Draco decoder) into a buffer of its own, and its accessors are pointed at the decoded data.
+//!   Draco decoder) into a buffer of its own, and its accessors are pointed at the decoded data;
+//!   attributes the extension does not name are read as usual, as its specification says.
+//! - Accessors with neither a buffer view nor sparse values hold zeros (glTF 2.0, 3.6.2.1), which
+//!   the gltf crate would refuse: they are pointed at zeros in the same buffer.
 
 use ::gltf::buffer;
 use ::gltf::json::{self, validation::Checked};
@@ -31,10 +34,48 @@ fn bytes_of(buffers: &[buffer::Data], index: usize, offset: usize, length: usize
     buffers.get(index)?.0.get(offset..offset.checked_add(length)?)
 }
 
-/// Decodes both extensions' data (the file is not validated yet: every index is checked here).
+/// Decodes both extensions' data (the file is not validated yet: every index is checked here), and
+/// gives accessors with no data of their own the zeros the specification says they hold (the gltf
+/// crate refuses them). Decoded data and zeros go to one buffer appended to `buffers`.
 pub fn decode(root: &mut json::Root, buffers: &mut Vec<buffer::Data>, budget: &LoadBudget, path: &std::path::Path) -> Result<(), String> {
     decode_meshopt(root, buffers, budget, path)?;
-    decode_draco(root, buffers, budget, path)
+    let mut appended = Vec::new();
+    let appended_buffer = buffers.len();
+    decode_draco(root, buffers, &mut appended, budget, path)?;
+    fill_zero_accessors(root, &mut appended, appended_buffer, budget, path)?;
+    if !appended.is_empty() {
+        root.buffers.push(json::Buffer {
+            byte_length: appended.len().into(),
+            name: None,
+            uri: None,
+            extensions: None,
+            extras: Default::default(),
+        });
+        buffers.push(buffer::Data(appended));
+    }
+    Ok(())
+}
+
+/// Points every accessor with neither a buffer view nor sparse values at zeros of its size.
+fn fill_zero_accessors(
+    root: &mut json::Root,
+    appended: &mut Vec<u8>,
+    appended_buffer: usize,
+    budget: &LoadBudget,
+    path: &std::path::Path,
+) -> Result<(), String> {
+    for index in 0..root.accessors.len() {
+        let accessor = &root.accessors[index];
+        if accessor.buffer_view.is_some() || accessor.sparse.is_some() {
+            continue;
+        }
+        let (Checked::Valid(kind), Checked::Valid(component)) = (accessor.type_, accessor.component_type) else { continue };
+        let bytes = accessor.count.0.saturating_mul((kind.multiplicity() * component.0.size()) as u64);
+        budget.take_input(bytes, path).map_err(|e| e.to_string())?;
+        let zeros = vec![0; bytes as usize];
+        point_at(&mut root.accessors[index], &mut root.buffer_views, appended, &zeros, appended_buffer);
+    }
+    Ok(())
 }
 
 /// Decodes every meshopt-compressed buffer view into the bytes the view names.
@@ -121,10 +162,15 @@ fn decode_view(source: &[u8], count: usize, stride: usize, mode: &str, filter: &
     }
 }
 
-/// Decodes every Draco-compressed primitive into a buffer appended to `buffers`, pointing its
-/// accessors at the decoded data (indices as 32-bit integers).
-fn decode_draco(root: &mut json::Root, buffers: &mut Vec<buffer::Data>, budget: &LoadBudget, path: &std::path::Path) -> Result<(), String> {
-    let mut decoded = Vec::new();
+/// Decodes every Draco-compressed primitive into `decoded`, the data of the buffer appended after
+/// `buffers`, pointing its accessors at the decoded data (indices as 32-bit integers).
+fn decode_draco(
+    root: &mut json::Root,
+    buffers: &[buffer::Data],
+    decoded: &mut Vec<u8>,
+    budget: &LoadBudget,
+    path: &std::path::Path,
+) -> Result<(), String> {
     let decoded_buffer = buffers.len();
     for m in 0..root.meshes.len() {
         for p in 0..root.meshes[m].primitives.len() {
@@ -158,11 +204,8 @@ fn decode_draco(root: &mut json::Root, buffers: &mut Vec<buffer::Data>, budget: 
                     Checked::Valid(semantic) => semantic.to_string(),
                     Checked::Invalid => return Err(format!("{what}: an attribute has an invalid name")),
                 };
-                let Some(id) = ids.get(&name).and_then(Value::as_u64) else {
-                    return Err(format!(
-                        "{what} does not name {name}, which the primitive has; every attribute must be in the Draco stream"
-                    ));
-                };
+                // The extension's specification has loaders read attributes it does not name as usual.
+                let Some(id) = ids.get(&name).and_then(Value::as_u64) else { continue };
                 let attribute = draco
                     .attribute_by_unique_id(id as u32)
                     .ok_or_else(|| format!("{what}: {name}'s Draco attribute {id} is not in the stream"))?;
@@ -181,19 +224,9 @@ fn decode_draco(root: &mut json::Root, buffers: &mut Vec<buffer::Data>, budget: 
                     accessor.component_type = Checked::Valid(json::accessor::GenericComponentType(component));
                 }
                 accessor.count = count.into();
-                point_at(accessor, &mut root.buffer_views, &mut decoded, &bytes, decoded_buffer);
+                point_at(accessor, &mut root.buffer_views, decoded, &bytes, decoded_buffer);
             }
         }
-    }
-    if !decoded.is_empty() {
-        root.buffers.push(json::Buffer {
-            byte_length: decoded.len().into(),
-            name: None,
-            uri: None,
-            extensions: None,
-            extras: Default::default(),
-        });
-        buffers.push(buffer::Data(decoded));
     }
     Ok(())
 }

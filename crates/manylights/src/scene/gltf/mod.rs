@@ -1929,6 +1929,21 @@ mod tests {
     }
 
     #[test]
+    fn accessors_without_data_read_as_zeros() {
+        let positions = r#"{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}"#;
+        let colors = r#"{"componentType": 5126, "count": 4, "type": "VEC4"}"#;
+        let scene = import_quad(
+            "gltf_zero_accessor",
+            &format!("{positions}, {colors}"),
+            r#"{"attributes": {"POSITION": 0, "COLOR_0": 1}, "mode": 5}"#,
+            "",
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let vertices = &scene.meshes[0].primitives[0].vertices;
+        assert!(!vertices.is_empty() && vertices.iter().all(|v| v.color == [0; 4]), "{:?}", vertices[0].color);
+    }
+
+    #[test]
     fn quantized_attributes_read_as_the_extension_says() {
         // Positions as plain (not normalized) 16-bit integers, negative ones included; texture
         // coordinates as normalized 8-bit ones.
