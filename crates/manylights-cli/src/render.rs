@@ -117,8 +117,9 @@ pub struct RenderArgs {
 pub(crate) struct PostArgs {
     #[arg(long, allow_negative_numbers = true, value_name = "EV100", help = format!("A fixed exposure, in EV100 ({} to {}; 0 maps a luminance of 1.2 to white, each step up halves the image's brightness) instead of measuring each frame's. [default: the scene file's `exposure`, or auto]", EV100_RANGE.0, EV100_RANGE.1))]
     exposure: Option<f32>,
-    /// Measure the exposure from each frame's luminance histogram even where the scene file fixes
-    /// one (without a scene file's `exposure` or --exposure, frames are exposed so anyway).
+    /// Measure the exposure from each frame's luminance histogram (of the surfaces in view, or the
+    /// background where none is) even where the scene file fixes one (without a scene file's
+    /// `exposure` or --exposure, frames are exposed so anyway).
     #[arg(long, conflicts_with = "exposure")]
     auto_exposure: bool,
     #[arg(long, conflicts_with = "exposure", allow_negative_numbers = true, help = format!("Stops brighter (+) or darker (−) than auto exposure's middle grey. [default: {}]", AutoExposure::default().compensation_ev))]

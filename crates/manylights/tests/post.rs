@@ -1,7 +1,8 @@
 //! The post chain (`post/`), effect by effect, on emissive quads over a black sky (no sun, no ambient,
 //! no lights: a surface's radiance is its emission) with the clamping tonemapper, so the 8-bit image
 //! is the post-processed radiance, sRGB-encoded: vignetting follows the cos⁴ law; auto exposure maps
-//! the measured luminance to middle grey, ignores the scene's scale and adapts at its rate; bloom
+//! the measured luminance to middle grey, ignores the scene's scale, meters the surfaces in view
+//! rather than the background and adapts at its rate; bloom
 //! spreads a bright spot's light around it; depth of field blurs what is out of focus by its circle of
 //! confusion and leaves what is in focus exact; motion blur smears along the camera's, animated
 //! instances' and posed (morphed, skinned) meshes' motion and leaves still pixels exact.
@@ -170,6 +171,27 @@ fn auto_exposure_maps_the_image_to_middle_grey_whatever_its_scale_and_adapts_at_
     assert!((red(&second, 100, 50) as f32 - expected).abs() <= 1.0, "adapting: {} vs {expected}", red(&second, 100, 50));
     let settled = ldr_of(bright * to.exp2());
     assert!(red(&second, 100, 50) as f32 > settled + 10.0, "the exposure must not jump to the bright wall's at once");
+}
+
+/// The surfaces in view are metered, not the background around them (here the void of a uniform
+/// ambient, 16 times darker than the quad): a model on an empty background is exposed for the model.
+/// With no surface in view, the background is.
+#[test]
+fn auto_exposure_meters_the_surfaces_in_view_and_the_background_only_without_them() {
+    let (dim, bright) = (1.01 * 2f32.powi(-8), 1.01 * 2f32.powi(-4));
+    let (mut scene, camera) = quads(&[(Vec3::ZERO, (0.5, 0.5), bright)]);
+    scene.ambient = Vec3::splat(dim);
+    let auto = PostSettings { exposure: Exposure::Auto(AutoExposure::default()), ..still_post() };
+    let image = render_ldr(&scene, &camera, auto);
+    let (centre, corner) = (red(&image, WIDTH / 2, HEIGHT / 2), red(&image, 2, 2));
+    let expected = ldr_of(bright * auto_exposure_log2(bright, 0.0).exp2());
+    assert!((centre as f32 - expected).abs() <= 1.0, "the quad: {centre} vs {expected}");
+    assert!(corner < 40, "the background stays darker than the quad: {corner}");
+
+    let away = Camera::look_at("away", Vec3::new(0.0, 0.0, 4.0), Vec3::new(0.0, 0.0, 8.0), 60f32.to_radians(), 0.1);
+    let background = red(&render_ldr(&scene, &away, auto), WIDTH / 2, HEIGHT / 2);
+    let expected = ldr_of(dim * auto_exposure_log2(dim, 0.0).exp2());
+    assert!((background as f32 - expected).abs() <= 1.0, "the background alone: {background} vs {expected}");
 }
 
 #[test]

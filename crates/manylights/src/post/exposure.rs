@@ -4,7 +4,8 @@ use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::passes::builder::ComputeStep;
 use crate::Result;
 
-const HISTOGRAM_BINS: u64 = 128;
+/// Surfaces' bins, then the background's (`exposure.wgsl`).
+const HISTOGRAM_BINS: u64 = 2 * 128;
 
 pub struct AutoExposurePass {
     histogram: ComputeStep,
@@ -13,12 +14,14 @@ pub struct AutoExposurePass {
 }
 
 impl AutoExposurePass {
-    /// Measures `input` into `state` (`post::PostChain::exposure_state`), which the tonemap reads.
+    /// Measures `input` into `state` (`post::PostChain::exposure_state`), which the tonemap reads;
+    /// `depth` tells surfaces from the background.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         uniforms: &wgpu::Buffer,
         input: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
         state: &wgpu::Buffer,
     ) -> Result<Self> {
         let device = &ctx.device;
@@ -32,6 +35,7 @@ impl AutoExposurePass {
                 bindings::texture(1, c, wgpu::TextureSampleType::Float { filterable: false }, wgpu::TextureViewDimension::D2),
                 bindings::storage_read_write(2, c),
                 bindings::storage_read_write(3, c),
+                bindings::texture(4, c, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2),
             ],
         );
         let shader = ShaderDesc::new("post/exposure.wgsl");
@@ -54,6 +58,7 @@ impl AutoExposurePass {
                 wgpu::BindingResource::TextureView(input),
                 histogram_bins.as_entire_binding(),
                 state.as_entire_binding(),
+                wgpu::BindingResource::TextureView(depth),
             ],
         );
         Ok(Self { histogram, average, bind_group })

@@ -269,7 +269,7 @@ impl PostChain {
         let exposure = settings
             .exposure
             .auto()
-            .map(|_| exposure::AutoExposurePass::new(ctx, scene, &uniforms, &current, &exposure_state))
+            .map(|_| exposure::AutoExposurePass::new(ctx, scene, &uniforms, &current, &depth_view, &exposure_state))
             .transpose()?;
         let bloom = settings.bloom.map(|_| bloom::BloomPass::new(ctx, scene, &uniforms, &current, size)).transpose()?;
         let tonemap = tonemap::Tonemap::new(

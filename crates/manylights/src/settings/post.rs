@@ -31,8 +31,9 @@ impl Default for AutoExposure {
 /// How radiance is scaled before tonemapping.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Exposure {
-    /// Measured from every frame's luminance histogram; a first frame takes it at once, so a still
-    /// render is exposed from its own image.
+    /// Measured from every frame's luminance histogram of the surfaces in view (of the background
+    /// where none is); a first frame takes it at once, so a still render is exposed from its own
+    /// image.
     Auto(AutoExposure),
     /// A fixed linear scale ([`Exposure::from_ev100`] gives a camera's).
     Fixed(f32),
