@@ -167,7 +167,7 @@ clipmap() {
 # one and two bounces, and with the paper's 28k small lights, which reflections' hits are lit by.
 rays() {
   local p
-  printf 'gltf = "sponza_lite/Sponza.gltf"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' >.bench/sun.toml
+  printf 'gltf = "sponza_lite/Sponza.gltf"\nsky = "off"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' >.bench/sun.toml
   cp .bench/sun.toml .bench/sun_small_28000.toml
   printf '[[scatter_lights]]\ncount = 28000\nseed = 1\nrange = [0.1, 0.3]\n' >>.bench/sun_small_28000.toml
   local sun=.bench/sun.toml off="--light-method off --decal-method off"
@@ -204,7 +204,7 @@ rays() {
 # a still camera (every pixel's blur is zero: the gather is skipped) and with the camera moving at
 # 1.5 m/s (every pixel gathers).
 post() {
-  printf 'gltf = "sponza_lite/Sponza.gltf"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' >.bench/sun.toml
+  printf 'gltf = "sponza_lite/Sponza.gltf"\nsky = "off"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' >.bench/sun.toml
   local sun=".bench/sun.toml --light-method off --decal-method off --shadows hard"
   run post_none 200 --scene $sun
   run post_auto_exposure 200 --scene $sun --auto-exposure
@@ -221,7 +221,7 @@ post() {
 # Sponza's curtains (6 meshes, 28,416 triangles, their BLASes stored twice) waving: vertices moved and BLASes refitted
 # on the GPU every frame; with hard sun shadows and reflections tracing them.
 deform() {
-  printf 'gltf = "sponza_lite/Sponza.gltf"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' >.bench/sun.toml
+  printf 'gltf = "sponza_lite/Sponza.gltf"\nsky = "off"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' >.bench/sun.toml
   for mesh in Curtain Curtain2; do
     printf '[[deform]]\nmesh = "%s"\namplitude = 0.08\nwavelength = 1.5\nspeed = 0.8\ndirection = [0.0, 1.0, 0.0]\n' $mesh
   done | cat .bench/sun.toml - >.bench/curtains.toml
@@ -243,7 +243,7 @@ deform() {
 materials() {
   local s p
   for s in lite coated colored uv1 glass sheen; do
-    printf 'gltf = "sponza_%s/Sponza.gltf"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' $s >.bench/sun_$s.toml
+    printf 'gltf = "sponza_%s/Sponza.gltf"\nsky = "off"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' $s >.bench/sun_$s.toml
     for p in visbuffer deferred forward; do
       run materials_${s}_$p 200 --scene .bench/sun_$s.toml --lights 28000 --seed 1 --light-method bvh --decal-method off --pipeline $p
     done

@@ -63,8 +63,9 @@ pub struct SceneArgs {
     #[arg(long, default_value_t = DEFAULT_ANIMATION_GROUPS, requires = "animate")]
     pub groups: usize,
     /// The daylight sky and its sun, lighting the scene through image-based lighting: where the scene
-    /// has no sun and no lights of its own (auto), always (daylight) or never (off: the scene's
-    /// uniform ambient only). [default: the scene file's, or auto]
+    /// has no lights of its own, a sun aside, which places and scales the sky (auto), always
+    /// (daylight) or never (off: the scene's uniform ambient only). [default: the scene file's, or
+    /// auto]
     #[arg(long, value_enum)]
     pub sky: Option<Sky>,
     /// Light the scene from an equirectangular HDR image (.hdr or .exr; centre column −Z, top row +Y)

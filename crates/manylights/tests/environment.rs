@@ -1,5 +1,6 @@
 //! The environment (`scene::sky`, `scene::environment`, `shading/environment.wgsl`): a scene with no
-//! lights of its own is lit by the daylight sky and its sun, seen in the background; `Sky::Off` leaves
+//! lights of its own is lit by the daylight sky and its sun, seen in the background, and one with a
+//! sun alone by the sky of that sun, in its units; `Sky::Off` leaves
 //! it dark; an HDR image lights it instead; the sky's sun casts traced shadows; traced reflections
 //! of the sky replace the prefiltered environment rather than adding to it.
 
@@ -12,7 +13,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use manylights::{
     files::LoadBudget,
     renderer::Image,
-    scene::{self, sky::light_with_sky, Camera, Environment, Instance, Material, Scene},
+    scene::{self, sky::light_with_sky, Camera, Environment, Instance, Material, Scene, Sun},
     settings::{LightMethod, RaySettings, RenderConfig, Sky, SunShadows},
 };
 
@@ -63,6 +64,31 @@ fn a_scene_without_lights_is_lit_by_the_sky_by_default_and_dark_without_it() {
     let dark_hdr = render_with(&dark, &camera, config(WIDTH, HEIGHT, LightMethod::Brute)).1;
     let (lit_mean, dark_mean) = (mean_luminance(&hdr), mean_luminance(&dark_hdr));
     assert!(dark_mean < 0.04 && lit_mean > 10.0 * dark_mean, "sky {lit_mean}, off {dark_mean}");
+}
+
+/// A sun alone, as glTF files exported with one have, gets the sky that sun implies in its units: a
+/// sun 1,024 times the project's (in lux, say) lights the scene and fills the background 1,024 times
+/// brighter, so the auto-exposed image is the same.
+#[test]
+fn a_scene_with_only_a_sun_gets_the_sky_it_implies_in_its_units() {
+    let camera = Camera::look_at("box", Vec3::new(2.5, 1.5, 2.5), Vec3::new(0.0, 0.2, 0.0), 50f32.to_radians(), 0.05);
+    let render = |illuminance| {
+        let mut scene = box_on_floor();
+        // Behind the camera: its disc, far brighter than half floats hold at 1,024 times, out of view.
+        let direction = Vec3::new(-0.5, -0.7, -0.5).normalize();
+        scene.sun = Some(Sun { direction, color: Vec3::new(1.0, 0.9, 0.8), illuminance });
+        light_with_sky(&mut scene, Sky::Auto);
+        assert!(scene.environment.is_some(), "the sky");
+        render_with(&scene, &camera, config(WIDTH, HEIGHT, LightMethod::Brute)).1
+    };
+    let (project, lux) = (render(2.0), render(2048.0));
+    let sky = pixel(&project, WIDTH / 2, 2);
+    assert!(sky[2] > sky[0] && sky[2] > 0.01, "a blue sky at the top: {sky:?}");
+    for (a, b) in project.pixels.iter().zip(&lux.pixels) {
+        for c in 0..3 {
+            assert!((b[c] - 1024.0 * a[c]).abs() <= 4e-3 * b[c] + 1e-3, "{a:?} × 1024 against {b:?}");
+        }
+    }
 }
 
 #[test]

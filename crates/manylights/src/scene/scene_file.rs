@@ -7,9 +7,10 @@
 //! ```toml
 //! gltf = "../shared/assets/sponza/Sponza.gltf"   # absent: an empty scene
 //! exposure = 1.0                  # fixed linear scale before tonemapping; absent: exposed automatically
-//! //! ambient = [0.03, 0.03, 0.03]    # uniform ambient radiance, where there is no sky or environment
+//! ambient = [0.03, 0.03, 0.03]    # uniform ambient radiance, where there is no sky or environment
 //! sky = "auto"            # the daylight sky (settings::Sky), unless the command line says: "auto"
-//!                         # (where the scene has no sun and no lights of its own), "daylight" or "off"
+//!                         # (where the scene has no lights of its own but perhaps a sun, which places
+//!                         # the sky and sets its brightness), "daylight" or "off"
 //! environment = "sky.hdr" # an equirectangular Radiance HDR or OpenEXR image lighting the scene
 //!                         # instead of the sky (centre column −Z, top row +Y)
 //!

@@ -55,6 +55,9 @@ pub struct DaylightSky {
     perez: [[f32; 5]; 3],
     /// Zenith luminance (cd/m²) and chromaticity.
     zenith: [f32; 3],
+    /// Scene units per lux of this sky and its sun: [`SCENE_UNITS_PER_LUX`], or what matches a
+    /// scene's own sun (`for_scene`).
+    units_per_lux: f32,
 }
 
 impl DaylightSky {
@@ -75,19 +78,27 @@ impl DaylightSky {
             let row = |r: &[f32; 4]| r.iter().zip(angle).map(|(c, a)| c * a).sum::<f32>();
             t * t * row(&m[0]) + t * row(&m[1]) + row(&m[2])
         };
-        Self { to_sun, turbidity, perez, zenith: [luminance, chromaticity(&ZENITH_X), chromaticity(&ZENITH_Y)] }
+        Self {
+            to_sun,
+            turbidity,
+            perez,
+            zenith: [luminance, chromaticity(&ZENITH_X), chromaticity(&ZENITH_Y)],
+            units_per_lux: SCENE_UNITS_PER_LUX,
+        }
     }
 
-    /// The sky where the scene's own sun is, or at the default position when it has none.
+    /// The sky where the scene's own sun is and as bright as the sky that sun implies (its
+    /// illuminance over the model's sun's there: the scene's units, lux from a glTF file or the
+    /// project's), or at the default position and brightness when it has none.
     pub fn for_scene(scene: &Scene) -> Self {
-        let to_sun = match scene.sun {
-            Some(sun) => -sun.direction,
-            None => {
-                let (elevation, azimuth) = (DEFAULT_SUN_ELEVATION_DEGREES.to_radians(), DEFAULT_SUN_AZIMUTH_DEGREES.to_radians());
-                Vec3::new(elevation.cos() * azimuth.sin(), elevation.sin(), -elevation.cos() * azimuth.cos())
-            }
+        let Some(own) = scene.sun else {
+            let (elevation, azimuth) = (DEFAULT_SUN_ELEVATION_DEGREES.to_radians(), DEFAULT_SUN_AZIMUTH_DEGREES.to_radians());
+            let to_sun = Vec3::new(elevation.cos() * azimuth.sin(), elevation.sin(), -elevation.cos() * azimuth.cos());
+            return Self::new(to_sun, SKY_TURBIDITY);
         };
-        Self::new(to_sun, SKY_TURBIDITY)
+        let mut sky = Self::new(-own.direction, SKY_TURBIDITY);
+        sky.units_per_lux *= own.illuminance / sky.sun().illuminance;
+        sky
     }
 
     /// Sky radiance (linear sRGB, scene units) seen along unit `dir` at or above the horizon,
@@ -104,7 +115,7 @@ impl DaylightSky {
         let [luminance, x, y] = std::array::from_fn(|i| {
             self.zenith[i] * perez(&self.perez[i], cos_theta, gamma, cos_gamma) / perez(&self.perez[i], 1.0, theta_s, self.to_sun.y)
         });
-        xyy_to_linear_srgb(x, y, luminance) * SCENE_UNITS_PER_LUX
+        xyy_to_linear_srgb(x, y, luminance) * self.units_per_lux
     }
 
     /// The directional sun this sky implies: sunlight outside the atmosphere attenuated along the
@@ -123,7 +134,7 @@ impl DaylightSky {
         Sun {
             direction: -self.to_sun,
             color: transmittance / luminance,
-            illuminance: EXTRATERRESTRIAL_SUN_LUX * SCENE_UNITS_PER_LUX * luminance,
+            illuminance: EXTRATERRESTRIAL_SUN_LUX * self.units_per_lux * luminance,
         }
     }
 
@@ -150,9 +161,10 @@ impl DaylightSky {
 }
 
 /// Gives `scene` the lighting `sky` asks for: `Off` removes any environment (the uniform ambient
-/// remains); `Daylight` sets the daylight sky as the environment and, unless the scene has a sun,
-/// the sky's sun; `Auto` does the same only where the scene has no environment, no sun and none of
-/// its own lights (`Scene::authored_lights`).
+/// remains); `Daylight` sets the daylight sky as the environment (placed and scaled by the scene's
+/// own sun, [`DaylightSky::for_scene`]) and, unless the scene has a sun, the sky's sun; `Auto` does
+/// the same only where the scene has no environment and none of its own lights
+/// (`Scene::authored_lights`): a sun alone, as glTF files exported with one have, gets its sky.
 pub fn light_with_sky(scene: &mut Scene, sky: Sky) {
     let daylight = match sky {
         Sky::Off => {
@@ -160,7 +172,7 @@ pub fn light_with_sky(scene: &mut Scene, sky: Sky) {
             return;
         }
         Sky::Daylight => true,
-        Sky::Auto => scene.environment.is_none() && scene.sun.is_none() && scene.authored_lights == 0,
+        Sky::Auto => scene.environment.is_none() && scene.authored_lights == 0,
     };
     if daylight {
         let model = DaylightSky::for_scene(scene);
@@ -214,7 +226,7 @@ mod tests {
     }
 
     #[test]
-    fn auto_lights_only_scenes_without_sun_or_lights_of_their_own() {
+    fn auto_lights_scenes_without_lights_of_their_own() {
         let mut bare = Scene::default();
         light_with_sky(&mut bare, Sky::Auto);
         assert!(bare.environment.is_some() && bare.sun.is_some());
@@ -226,5 +238,24 @@ mod tests {
         assert!(lit.environment.is_some() && lit.sun == own_sun);
         light_with_sky(&mut lit, Sky::Off);
         assert!(lit.environment.is_none());
+    }
+
+    /// A sun alone (a glTF file's directional light, in lux) gets the sky it implies, as much
+    /// brighter as it is.
+    #[test]
+    fn a_scene_with_only_a_sun_gets_the_sky_of_that_sun() {
+        let with_sun = |illuminance| {
+            let mut scene = Scene::default();
+            let direction = Vec3::new(-0.3, -0.6, 0.2).normalize();
+            scene.sun = Some(Sun { direction, color: Vec3::ONE, illuminance });
+            light_with_sky(&mut scene, Sky::Auto);
+            assert_eq!(scene.sun.map(|s| (s.direction, s.illuminance)), Some((direction, illuminance)), "the scene's own sun stays");
+            scene.environment.expect("the sky").radiance
+        };
+        let (project, lux) = (with_sun(2.0), with_sun(2049.0));
+        for (a, b) in project.iter().zip(&lux) {
+            let (a, b) = (Vec3::from(*a), Vec3::from(*b));
+            assert!((b - a * 2049.0 / 2.0).abs().max_element() <= 1e-3 * b.max_element() + 1e-9, "{a} against {b}");
+        }
     }
 }

@@ -5,11 +5,12 @@ named_enum! {
     /// reflections, lighting surfaces through image-based lighting, with a sun to match. An
     /// environment image (`--environment`, a scene file's `environment`) takes its place.
     pub enum Sky {
-        /// The daylight sky where the scene has no sun and no lights of its own (glTF punctual
-        /// lights, scene-file `[[lights]]`); scattered lights and particles do not count.
+        /// The daylight sky where the scene has no lights of its own (glTF point and spot lights,
+        /// scene-file `[[lights]]`; scattered lights and particles do not count). A sun of its own
+        /// places the sky's sun and sets the sky's brightness, in whatever units the sun is in.
         #[default]
         Auto = "auto",
-        /// The daylight sky always; a scene's own sun keeps its light and sets the sky's sun position.
+        /// The daylight sky always; a scene's own sun keeps its light and places and scales the sky.
         Daylight = "daylight",
         /// No sky or environment image: the scene's uniform `ambient` light only.
         Off = "off",
