@@ -501,7 +501,7 @@ fn decode_image(gltf: &Path, image: &::gltf::Image, base: &Path, buffers: &[buff
         },
     };
     if media_type == Some("image/ktx2") || bytes.starts_with(&KTX2_MAGIC) {
-        let (width, height, rgba8) = decode_basis(&bytes, budget).map_err(invalid)?;
+        let (width, height, rgba8) = decode_ktx2(&bytes, budget).map_err(invalid)?;
         return Ok(Texture { name, width, height, rgba8 });
     }
     let format = image_format(media_type, uri, &bytes)
@@ -510,8 +510,82 @@ fn decode_image(gltf: &Path, image: &::gltf::Image, base: &Path, buffers: &[buff
     Ok(Texture { name, width: decoded.width, height: decoded.height, rgba8: to_rgba8(decoded) })
 }
 
+/// A KTX2 texture's base level as RGBA8, as stored (sRGB-encoded colour stays encoded, as PNG's
+/// does): Basis Universal (`KHR_texture_basisu`) transcoded, or a plain 8-bit format, within the
+/// load's budget.
+fn decode_ktx2(bytes: &[u8], budget: &LoadBudget) -> Result<(u32, u32, Vec<u8>), String> {
+    let reader = ktx2::Reader::new(bytes).map_err(|e| format!("the KTX2 file does not parse ({e}); re-export it, or give a PNG"))?;
+    match reader.header().format {
+        None => decode_basis(bytes, budget),
+        Some(format) => decode_plain_ktx2(&reader, format, budget),
+    }
+}
+
+/// A 2D KTX2 texture in an 8-bit format of one to four channels (UNORM or sRGB), uncompressed or
+/// in Zstandard, expanded to RGBA8 (missing colour channels 0, missing alpha opaque, as PNG's).
+fn decode_plain_ktx2(reader: &ktx2::Reader<&[u8]>, format: ktx2::Format, budget: &LoadBudget) -> Result<(u32, u32, Vec<u8>), String> {
+    use ktx2::{Format, SupercompressionScheme};
+    let header = reader.header();
+    let unreadable = || {
+        format!("the KTX2 image's format {format:?} is not one manylights reads (8-bit R, RG, RGB or RGBA, or Basis Universal); give a PNG")
+    };
+    let channels = match format {
+        Format::R8_UNORM | Format::R8_SRGB => 1,
+        Format::R8G8_UNORM | Format::R8G8_SRGB => 2,
+        Format::R8G8B8_UNORM | Format::R8G8B8_SRGB => 3,
+        Format::R8G8B8A8_UNORM | Format::R8G8B8A8_SRGB => 4,
+        _ => return Err(unreadable()),
+    };
+    if header.pixel_depth > 1 || header.layer_count > 1 || header.face_count != 1 {
+        return Err("the KTX2 image is not a single 2D image (it is 3D, an array or a cube map); give a 2D texture".into());
+    }
+    let (width, height) = (header.pixel_width, header.pixel_height.max(1));
+    let size = u64::from(width) * u64::from(height) * 4;
+    if size > super::IMAGE_DECODE_LIMIT_MIB * 1024 * 1024 {
+        return Err(format!(
+            "the image is too large to decode ({width}×{height}; the decoder allows {} MiB); give a smaller one",
+            super::IMAGE_DECODE_LIMIT_MIB
+        ));
+    }
+    budget.take_decoded(size * 2).map_err(|e| e.to_string())?;
+    let level = reader.levels().next().ok_or("the KTX2 image has no levels; re-export it")?;
+    let stored = size / 4 * channels;
+    let texels = match header.supercompression_scheme {
+        None => std::borrow::Cow::Borrowed(level.data),
+        Some(SupercompressionScheme::Zstandard) => {
+            use std::io::Read;
+            let mut decoder = ruzstd::streaming_decoder::StreamingDecoder::new(level.data)
+                .map_err(|e| format!("the KTX2 image's Zstandard data does not decode ({e})"))?;
+            let mut texels = Vec::with_capacity(stored as usize);
+            (&mut decoder)
+                .take(stored + 1)
+                .read_to_end(&mut texels)
+                .map_err(|e| format!("the KTX2 image's Zstandard data does not decode ({e})"))?;
+            std::borrow::Cow::Owned(texels)
+        }
+        Some(scheme) => {
+            return Err(format!("the KTX2 image's supercompression {scheme:?} is not one manylights reads (none or Zstandard); give a PNG"))
+        }
+    };
+    if texels.len() as u64 != stored {
+        return Err(format!(
+            "the KTX2 image's base level holds {} bytes where {width}×{height} {format:?} takes {stored}; re-export it",
+            texels.len()
+        ));
+    }
+    let rgba8 = texels
+        .chunks_exact(channels as usize)
+        .flat_map(|texel| {
+            let mut rgba = [0, 0, 0, 255];
+            rgba[..texel.len()].copy_from_slice(texel);
+            rgba
+        })
+        .collect();
+    Ok((width, height, rgba8))
+}
+
 /// A KTX2 texture in Basis Universal (`KHR_texture_basisu`): its base level transcoded to RGBA8 on
-/// the CPU, as stored (sRGB-encoded colour stays encoded, as PNG's does), within the load's budget.
+/// the CPU.
 fn decode_basis(bytes: &[u8], budget: &LoadBudget) -> Result<(u32, u32, Vec<u8>), String> {
     let not_basis = |e: basisu::Error| {
         format!("the KTX2 image is not a Basis Universal texture manylights can transcode ({e:?}); encode it with ETC1S or UASTC, or give a PNG")
@@ -1926,6 +2000,51 @@ mod tests {
         );
         std::fs::write(dir.join("quad.gltf"), json).unwrap();
         import(&dir.join("quad.gltf"))
+    }
+
+    /// A single-level 2D KTX2 file of `vk_format` holding `level` (supercompressed by `scheme`).
+    fn ktx2_file(vk_format: u32, (width, height): (u32, u32), scheme: u32, level: &[u8], uncompressed: usize) -> Vec<u8> {
+        let mut file = KTX2_MAGIC.to_vec();
+        for word in [vk_format, 1, width, height, 0, 0, 1, 1, scheme] {
+            file.extend(word.to_le_bytes());
+        }
+        // The data format descriptor (only its length word) at 104, no key-value or global data.
+        for word in [104u32, 4, 0, 0] {
+            file.extend(word.to_le_bytes());
+        }
+        file.extend([0u8; 16]);
+        for word in [108u64, level.len() as u64, uncompressed as u64] {
+            file.extend(word.to_le_bytes());
+        }
+        file.extend(4u32.to_le_bytes());
+        file.extend(level);
+        file
+    }
+
+    #[test]
+    fn plain_ktx2_textures_expand_to_rgba8_stored_or_in_zstandard() {
+        const R8G8B8_SRGB: u32 = 29;
+        let texels: Vec<u8> = (0..12).map(|i| i * 20).collect();
+        let expected: Vec<u8> = texels.chunks(3).flat_map(|t| [t[0], t[1], t[2], 255]).collect();
+        let budget = LoadBudget::new();
+        let stored = ktx2_file(R8G8B8_SRGB, (2, 2), 0, &texels, texels.len());
+        assert_eq!(decode_ktx2(&stored, &budget), Ok((2, 2, expected.clone())));
+        // A Zstandard frame of one raw block: magic, a single-segment header with a one-byte
+        // content size, the last block's header (raw, 12 bytes).
+        let mut zstd = vec![0x28, 0xB5, 0x2F, 0xFD, 0x20, texels.len() as u8];
+        zstd.extend(&(1u32 | (texels.len() as u32) << 3).to_le_bytes()[..3]);
+        zstd.extend(&texels);
+        let compressed = ktx2_file(R8G8B8_SRGB, (2, 2), 2, &zstd, texels.len());
+        assert_eq!(decode_ktx2(&compressed, &budget), Ok((2, 2, expected)));
+        // One channel: red, as a sampler reads it.
+        let red = ktx2_file(9, (2, 1), 0, &[7, 9], 2);
+        assert_eq!(decode_ktx2(&red, &budget), Ok((2, 1, vec![7, 0, 0, 255, 9, 0, 0, 255])));
+
+        let half_floats = ktx2_file(97, (1, 1), 0, &[0; 8], 8);
+        let error = decode_ktx2(&half_floats, &budget).unwrap_err();
+        assert!(error.contains("R16G16B16A16_SFLOAT") && error.contains("give a PNG"), "{error}");
+        let short = ktx2_file(R8G8B8_SRGB, (2, 2), 0, &texels[..9], 9);
+        assert!(decode_ktx2(&short, &budget).unwrap_err().contains("holds 9 bytes where 2×2"));
     }
 
     #[test]
