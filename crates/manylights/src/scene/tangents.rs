@@ -20,10 +20,14 @@ use super::Vertex;
 /// else is stored per vertex (skin weights, morph targets). Normals must be unit length.
 pub(crate) fn generate(vertices: &mut Vec<Vertex>, indices: &mut [u32], uv_set: u32) -> Vec<u32> {
     let mut sources: Vec<u32> = (0..vertices.len() as u32).collect();
+    // The mikktspace crate panics where every corner lies at one point; a mesh without a triangle of
+    // any area has no tangent frame to find anyway.
+    let position = |i: u32| Vec3::from(vertices[i as usize].position);
+    let has_area = indices.chunks_exact(3).any(|t| (position(t[1]) - position(t[0])).cross(position(t[2]) - position(t[0])) != Vec3::ZERO);
     let mut corners = Corners { vertices, indices, uv_set, tangents: vec![[0.0; 4]; indices.len()] };
     // On failure (no usable triangles) the tangents stay zero and orthonormalize() substitutes
     // arbitrary ones, which is all a mesh without a usable UV layout can have.
-    if mikktspace::generate_tangents(&mut corners) {
+    if has_area && mikktspace::generate_tangents(&mut corners) {
         let tangents = corners.tangents;
         weld(vertices, indices, &tangents, &mut sources);
     }
@@ -174,6 +178,16 @@ mod tests {
         let signs: Vec<f32> = indices.iter().map(|&i| vertices[i as usize].tangent[3]).collect();
         assert!(signs[..6].iter().all(|&w| w == 1.0), "{signs:?}");
         assert!(signs[6..].iter().all(|&w| w == -1.0), "{signs:?}");
+    }
+
+    /// Triangles without area (here every index 0, as a glTF accessor without data gives) get the
+    /// fallback tangents, never MikkTSpace's panic.
+    #[test]
+    fn meshes_without_area_get_fallback_tangents() {
+        let (mut vertices, _) = upright_quad();
+        let mut indices = vec![0; 6];
+        generate(&mut vertices, &mut indices, 0);
+        assert!(vertices.iter().all(|v| Vec4::from(v.tangent).truncate().length() > 0.99), "{vertices:?}");
     }
 
     #[test]
