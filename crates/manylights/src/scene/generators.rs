@@ -8,7 +8,7 @@ use glam::{Affine3A, Mat3, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
-use super::{decal_textures, Aabb, Decal, GroupInstance, Groups, Light, LightKind, Scene, Spin, DECAL_LAYERS};
+use super::{decal_textures, sky::DaylightSky, Aabb, Decal, GroupInstance, Groups, Light, LightKind, Scene, Spin, DECAL_LAYERS};
 use crate::{Error, Result};
 
 /// Most lights one generator call may create (2²⁴): far beyond real-time use, and a guard against
@@ -27,7 +27,7 @@ pub struct ScatterLights {
     /// [`DEFAULT_LIGHT_OVERLAP`] lights reach each surface point ([`typical_light_range`]).
     pub range: Option<(f32, f32)>,
     /// Intensity in candela, uniform in [min, max]. `None`: (range / 2)² for each light, so that the
-    /// illuminance at half its range is about 1.
+    /// illuminance at half its range is about 1, times the scene's [`light_level`].
     pub intensity: Option<(f32, f32)>,
 }
 
@@ -35,6 +35,15 @@ impl Default for ScatterLights {
     fn default() -> Self {
         Self { count: 256, seed: 1, offset: None, range: None, intensity: None }
     }
+}
+
+/// How bright the scene's daylight is against the default sky's: its sun's illuminance over the
+/// default daylight sky's sun's, or 1 without a sun. Generated lights and particles are as much
+/// brighter, so they show as much against a glTF sun in lux (2,049 to 100,000) as under the default
+/// sky, whether they are generated before the sky is given (scene files) or after (the CLI).
+pub fn light_level(scene: &Scene) -> f32 {
+    let default_sun = DaylightSky::for_scene(&Scene::default()).sun().illuminance;
+    scene.sun.map(|sun| sun.illuminance).filter(|&e| e > 0.0 && e.is_finite()).map_or(1.0, |e| e / default_sun)
 }
 
 /// How many scattered lights of the default range reach a surface point, on average, at most: a few
@@ -70,6 +79,7 @@ pub fn scatter_lights(scene: &Scene, params: &ScatterLights) -> Result<Vec<Light
     });
     let offset = params.offset.unwrap_or((range.0 + range.1) * 0.05);
 
+    let level = light_level(scene);
     let mut rng = Pcg64::seed_from_u64(params.seed);
     let lights = (0..params.count)
         .map(|_| {
@@ -77,7 +87,7 @@ pub fn scatter_lights(scene: &Scene, params: &ScatterLights) -> Result<Vec<Light
             let light_range = uniform(&mut rng, range);
             let intensity = match params.intensity {
                 Some(interval) => uniform(&mut rng, interval),
-                None => (light_range * 0.5).powi(2),
+                None => (light_range * 0.5).powi(2) * level,
             };
             Light {
                 kind: LightKind::Point,
@@ -410,8 +420,8 @@ pub struct ScatterParticles {
     pub radius: Option<(f32, f32)>,
     /// Candela of a particle's brightest channel. `None`: [`DEFAULT_PARTICLE_INTENSITY`] for a
     /// radius of 1 m, scaled by the square of the mean radius (so the light they shed does not
-    /// depend on the scene's units), and shared out beyond [`BRIGHT_PARTICLES`] particles (so a
-    /// million light a room as brightly as that many do).
+    /// depend on the scene's units) and by the scene's [`light_level`], and shared out beyond
+    /// [`BRIGHT_PARTICLES`] particles (so a million light a room as brightly as that many do).
     pub intensity: Option<f32>,
 }
 
@@ -442,7 +452,7 @@ pub fn add_particles(scene: &mut Scene, params: &ScatterParticles) -> Result<()>
     }
     let mean_radius = (low + high) * 0.5;
     let shared_out = (BRIGHT_PARTICLES as f32 / params.count.max(1) as f32).min(1.0);
-    let intensity = params.intensity.unwrap_or(DEFAULT_PARTICLE_INTENSITY * mean_radius * mean_radius * shared_out);
+    let intensity = params.intensity.unwrap_or(DEFAULT_PARTICLE_INTENSITY * mean_radius * mean_radius * shared_out * light_level(scene));
     let surfaces = Surfaces::new(scene);
     let area = surfaces.total_area();
     if !(area.is_finite() && area > 0.0) {
@@ -684,7 +694,7 @@ fn saturated_color(hue: f32) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Instance, Material, Mesh, Primitive, Vertex};
+    use crate::scene::{Instance, Material, Mesh, Primitive, Sun, Vertex};
     use glam::Mat4;
 
     /// A 4 × 4 floor at y = 0 facing up, placed twice: as is and flipped upside down at y = 2.
@@ -745,6 +755,32 @@ mod tests {
             assert!(l.range >= diagonal * 0.02 - 1e-6 && l.range <= diagonal * 0.06 + 1e-6, "{}", l.range);
             assert!((l.intensity - (l.range * 0.5).powi(2)).abs() < 1e-5);
             assert!((l.color.max_element() - 1.0).abs() < 1e-6, "saturated: {}", l.color);
+        }
+    }
+
+    /// Under a sun in lux (a glTF file's) generated lights and particles are as much brighter than
+    /// under the default sky's sun, and as bright without a sun as under it.
+    #[test]
+    fn default_intensities_follow_the_scenes_sun() {
+        let default_sun = DaylightSky::for_scene(&Scene::default()).sun();
+        let with_sun = |illuminance| {
+            let mut scene = two_floors();
+            scene.sun = Some(Sun { illuminance, ..default_sun });
+            scene
+        };
+        let intensities = |scene: &Scene| {
+            let lights = scatter_lights(scene, &ScatterLights::default()).unwrap();
+            let mut with_particles = scene.clone();
+            add_particles(&mut with_particles, &ScatterParticles::new(1000, 1, 4)).unwrap();
+            (lights.iter().map(|l| l.intensity).collect::<Vec<_>>(), with_particles.particles.unwrap().intensity)
+        };
+        let (sky, lux, none) =
+            (intensities(&with_sun(default_sun.illuminance)), intensities(&with_sun(68_300.0)), intensities(&two_floors()));
+        assert_eq!(sky, none, "the default sky's sun and no sun alike");
+        let ratio = 68_300.0 / default_sun.illuminance;
+        assert!((lux.1 / sky.1 / ratio - 1.0).abs() < 1e-4, "particles: {} against {}", lux.1, sky.1);
+        for (a, b) in sky.0.iter().zip(&lux.0) {
+            assert!((b / a / ratio - 1.0).abs() < 1e-4, "lights: {b} against {a}");
         }
     }
 

@@ -47,7 +47,8 @@
 //! offset = 0.2            # distance along the surface normal; default a tenth of the mean range
 //! range = [0.5, 2.0]      # uniform in [min, max]; default [0.5, 1.5] × 4 % of the scene's diagonal, less
 //!                         # where many would crowd (about 2 lights reaching each surface point)
-//! intensity = [0.5, 3.0]  # uniform in [min, max]; default (range / 2)² per light
+//! intensity = [0.5, 3.0]  # uniform in [min, max]; default (range / 2)² per light × the light level
+//!                         # (the sun's illuminance over the default sky's sun's, 1 without a sun)
 //!
 //! [[decals]]              # explicit decals: a box centred on `position` projecting an image
 //! position = [0.0, 0.0, -4.99]    # required
@@ -80,7 +81,7 @@
 //! seed = 1                # default 1
 //! emitters = 16           # default 16: on seeded upward-facing surface points
 //! radius = [0.5, 1.5]     # light range in metres, uniform per launch; default [0.5, 1.5] × 2.7 % of the scene's diagonal
-//! intensity = 0.2         # candela of the brightest channel; default 0.2 × (mean radius in m)²,
+//! intensity = 0.2         # candela of the brightest channel; default 0.2 × (mean radius in m)² × the light level,
 //!                         # × 65536 / count beyond 65536 particles
 //! lifetime = [2.0, 4.0]   # seconds between launches; default [2, 4]
 //! method = "grid"         # how to render them, unless the command line says: "off", "grid" or "bvh"
