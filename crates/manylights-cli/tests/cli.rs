@@ -115,11 +115,11 @@ fn required_unsupported_extension() {
     let path = dir.join("required.gltf");
     std::fs::write(
         &path,
-        r#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_materials_pbrSpecularGlossiness"],"extensionsRequired":["KHR_materials_pbrSpecularGlossiness"],"scenes":[{"nodes":[]}],"scene":0}"#,
+        r#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_materials_diffuse_transmission"],"extensionsRequired":["KHR_materials_diffuse_transmission"],"scenes":[{"nodes":[]}],"scene":0}"#,
     )
     .unwrap();
     let err = failure(&["render", "--scene", path.to_str().unwrap()]);
-    assert!(err.contains("KHR_materials_pbrSpecularGlossiness") && err.contains("does not support"), "{err}");
+    assert!(err.contains("KHR_materials_diffuse_transmission") && err.contains("does not support"), "{err}");
 }
 
 #[test]

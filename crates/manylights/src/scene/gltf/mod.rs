@@ -32,7 +32,7 @@ use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::{Error, Result};
 
 /// Extensions a file may require; every other optional extension is ignored.
-const SUPPORTED_EXTENSIONS: [&str; 17] = [
+const SUPPORTED_EXTENSIONS: [&str; 19] = [
     INSTANCING,
     compression::MESHOPT,
     "EXT_texture_webp",
@@ -41,6 +41,7 @@ const SUPPORTED_EXTENSIONS: [&str; 17] = [
     "KHR_materials_dispersion",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    SPECULAR_GLOSSINESS,
     "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
@@ -50,9 +51,14 @@ const SUPPORTED_EXTENSIONS: [&str; 17] = [
     "KHR_mesh_quantization",
     "KHR_texture_basisu",
     "KHR_texture_transform",
+    // Metadata: nothing to render.
+    "KHR_xmp_json_ld",
 ];
 
 const INSTANCING: &str = "EXT_mesh_gpu_instancing";
+/// The archived specular-glossiness workflow, read as metallic-roughness with `KHR_materials_specular`
+/// (`specular_glossiness`).
+const SPECULAR_GLOSSINESS: &str = "KHR_materials_pbrSpecularGlossiness";
 
 /// Loads a glTF 2.0 file and everything it references (buffers and images next to it).
 pub fn import(path: &Path) -> Result<Scene> {
@@ -682,6 +688,8 @@ fn build_scene(document: &Document, buffers: &[buffer::Data], textures: Vec<Text
     if meshes.iter().flat_map(|m| &m.primitives).any(|p| p.material == default_material) {
         materials.push(Material::default());
     }
+    let mut textures = textures;
+    roughness_from_glossiness(document, &mut materials, &mut textures);
     let mut scene = Scene { meshes, materials, textures, ..Scene::default() };
     match document.default_scene().or_else(|| document.scenes().next()) {
         Some(root) => {
@@ -1207,7 +1215,7 @@ fn material(m: &::gltf::Material, document: &Document) -> Result<Material, Strin
     if !(0.0..=1.0).contains(&occlusion_strength) {
         return Err(format!("{named}: occlusion strength {occlusion_strength} must be 0 to 1; give a strength in 0 to 1"));
     }
-    Ok(Material {
+    let material = Material {
         base_color_factor: Vec4::from(pbr.base_color_factor()),
         base_color_texture: texture(pbr.base_color_texture())?,
         metallic_factor: pbr.metallic_factor(),
@@ -1231,7 +1239,69 @@ fn material(m: &::gltf::Material, document: &Document) -> Result<Material, Strin
         transmission: transmission(m, document, &named)?,
         sheen: sheen(m, document, &named)?,
         name,
+    };
+    match m.extension_value(SPECULAR_GLOSSINESS) {
+        Some(ext) => specular_glossiness(material, ext, document, &named),
+        None => Ok(material),
+    }
+}
+
+/// `KHR_materials_pbrSpecularGlossiness` as glTF Transform's `metalRough` converts it: the diffuse
+/// colour as the base colour, no metal, roughness 1 − glossiness, and the specular colour as F0
+/// through `KHR_materials_specular` with an index of refraction of 0 (a reflectance of 1 scaled by
+/// the colour). The texture's glossiness (alpha) is turned into roughness by
+/// [`roughness_from_glossiness`], which the roughness texture here still names.
+fn specular_glossiness(material: Material, ext: &serde_json::Value, document: &Document, named: &str) -> Result<Material, String> {
+    let diffuse = match ext.get("diffuseFactor").and_then(serde_json::Value::as_array) {
+        Some(values) => {
+            let c: Vec<f32> = values.iter().filter_map(serde_json::Value::as_f64).map(|v| v as f32).collect();
+            let [r, g, b, a] = c[..] else { return Err(format!("{named}: diffuseFactor {values:?} must be four numbers")) };
+            Vec4::new(r, g, b, a)
+        }
+        None => Vec4::ONE,
+    };
+    let glossiness = number(ext, "glossinessFactor", 1.0);
+    if !(0.0..=1.0).contains(&glossiness) {
+        return Err(format!("{named}: glossinessFactor {glossiness} must be 0 to 1"));
+    }
+    let specular_glossiness_texture = extension_texture(ext, "specularGlossinessTexture", document, named)?;
+    Ok(Material {
+        base_color_factor: diffuse,
+        base_color_texture: extension_texture(ext, "diffuseTexture", document, named)?,
+        metallic_factor: 0.0,
+        roughness_factor: if specular_glossiness_texture.is_some() { 1.0 } else { 1.0 - glossiness },
+        metallic_roughness_texture: specular_glossiness_texture,
+        specular: super::Specular {
+            ior: 0.0,
+            factor: 1.0,
+            texture: None,
+            color_factor: color(ext, "specularFactor", Vec3::ONE, named)?,
+            color_texture: specular_glossiness_texture,
+        },
+        ..material
     })
+}
+
+/// Gives each specular-glossiness material with a texture a roughness image of its own (G = 1 −
+/// glossiness factor × the texture's alpha; metallic B = 0), made once per image and factor.
+fn roughness_from_glossiness(document: &Document, materials: &mut [Material], textures: &mut Vec<Texture>) {
+    let mut made = std::collections::HashMap::new();
+    for (m, material) in document.materials().zip(materials) {
+        let Some(ext) = m.extension_value(SPECULAR_GLOSSINESS) else { continue };
+        let Some(reference) = material.metallic_roughness_texture.as_mut() else { continue };
+        let (image, glossiness) = (reference.texture, number(ext, "glossinessFactor", 1.0));
+        reference.texture = *made.entry((image, glossiness.to_bits())).or_insert_with(|| {
+            let source = &textures[image];
+            let rgba8 = source
+                .rgba8
+                .chunks_exact(4)
+                .flat_map(|texel| [0, (255.0 - glossiness * f32::from(texel[3])).round() as u8, 0, 255])
+                .collect();
+            let roughness = Texture { name: format!("{} (roughness)", source.name), width: source.width, height: source.height, rgba8 };
+            textures.push(roughness);
+            textures.len() - 1
+        });
+    }
 }
 
 /// A number member of an extension object, or its default.
@@ -1871,6 +1941,41 @@ mod tests {
             assert!(t.transform_point2(Vec2::Y).abs_diff_eq(Vec2::new(-0.5, 0.0), 1e-6), "{t:?}");
         }
         assert_eq!(material.metallic_roughness_texture.unwrap().uv_transform, Affine2::IDENTITY);
+    }
+
+    /// `KHR_materials_pbrSpecularGlossiness` reads as metallic-roughness with the specular colour as
+    /// F0: a textured material gets a roughness image of 1 − glossiness, an untextured one the factor.
+    #[test]
+    fn specular_glossiness_materials_read_as_metallic_roughness() {
+        let mut png = Vec::new();
+        image::RgbaImage::from_raw(2, 1, vec![200, 100, 50, 0, 10, 20, 30, 255])
+            .unwrap()
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        let dir = temp_dir("gltf_specular_glossiness");
+        let path = dir.join("specular_glossiness.gltf");
+        let textured = r#"{"diffuseFactor": [0.5, 0.6, 0.7, 0.8], "diffuseTexture": {"index": 0}, "specularFactor": [0.2, 0.3, 0.4],
+            "glossinessFactor": 0.5, "specularGlossinessTexture": {"index": 0}}"#;
+        let json = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["{SPECULAR_GLOSSINESS}"],
+            "images": [{{"uri": "data:image/png;base64,{}"}}], "textures": [{{"source": 0}}],
+            "materials": [{{"extensions": {{"{SPECULAR_GLOSSINESS}": {textured}}}}},
+                          {{"extensions": {{"{SPECULAR_GLOSSINESS}": {{"glossinessFactor": 0.25}}}}}}]}}"#,
+            ::base64::encode(&png)
+        );
+        std::fs::write(&path, json).unwrap();
+        let scene = import(&path).unwrap();
+        let [textured, plain] = &scene.materials[..] else { panic!("two materials") };
+        assert_eq!((textured.base_color_factor, textured.base_color_texture.map(|t| t.texture)), (Vec4::new(0.5, 0.6, 0.7, 0.8), Some(0)));
+        assert_eq!((textured.metallic_factor, textured.roughness_factor), (0.0, 1.0));
+        let specular = textured.specular;
+        assert_eq!((specular.ior, specular.factor, specular.color_factor), (0.0, 1.0, Vec3::new(0.2, 0.3, 0.4)));
+        assert_eq!(specular.color_texture.map(|t| t.texture), Some(0), "the specular colour is the texture's RGB");
+        let roughness = &scene.textures[textured.metallic_roughness_texture.unwrap().texture];
+        // G = 1 − 0.5 × alpha: 1 where the texel is matt (alpha 0), 0.5 where it is glossy.
+        assert_eq!(roughness.rgba8, vec![0, 255, 0, 255, 0, 128, 0, 255]);
+        assert_eq!((plain.base_color_factor, plain.roughness_factor, plain.metallic_roughness_texture), (Vec4::ONE, 0.75, None));
+        assert_eq!(scene.textures.len(), 2, "one roughness image made");
     }
 
     #[test]
