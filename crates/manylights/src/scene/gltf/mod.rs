@@ -32,7 +32,7 @@ use crate::files::{self, guard, InputKind, LoadBudget};
 use crate::{Error, Result};
 
 /// Extensions a file may require; every other optional extension is ignored.
-const SUPPORTED_EXTENSIONS: [&str; 19] = [
+const SUPPORTED_EXTENSIONS: [&str; 20] = [
     INSTANCING,
     compression::MESHOPT,
     "EXT_texture_webp",
@@ -51,6 +51,9 @@ const SUPPORTED_EXTENSIONS: [&str; 19] = [
     "KHR_mesh_quantization",
     "KHR_texture_basisu",
     "KHR_texture_transform",
+    // Variants choose other materials; with none chosen the default ones render, as the
+    // specification has it.
+    "KHR_materials_variants",
     // Metadata: nothing to render.
     "KHR_xmp_json_ld",
 ];
@@ -98,7 +101,7 @@ fn import_bytes(path: &Path, bytes: Vec<u8>, budget: &LoadBudget) -> Result<Scen
     }
     // Parsed without validation first: the gltf crate reports an unsupported required extension as
     // a generic validation failure, and this check names it.
-    let ::gltf::Gltf { document, blob } = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(parse_reason(e)))?;
+    let ::gltf::Gltf { document, blob } = parse(&bytes).map_err(|e| invalid(parse_reason(e)))?;
     drop(bytes);
     check_extensions(path, &document)?;
     let version = &document.as_json().asset.version;
@@ -233,6 +236,65 @@ fn validation_reason(error: ::gltf::Error) -> String {
 }
 
 /// The parser's reason, with the detail its GLB messages leave out.
+/// The file parsed (not validated), retried once, where the gltf crate's JSON types refuse it, with
+/// what glTF leaves optional and they require taken care of (`optional_members_filled`); the first
+/// error stands if that does not help.
+fn parse(bytes: &[u8]) -> std::result::Result<::gltf::Gltf, ::gltf::Error> {
+    let error = match ::gltf::Gltf::from_slice_without_validation(bytes) {
+        Ok(gltf) => return Ok(gltf),
+        Err(error) => error,
+    };
+    match optional_members_filled(bytes) {
+        Some(filled) => ::gltf::Gltf::from_slice_without_validation(&filled).map_err(|_| error),
+        None => Err(error),
+    }
+}
+
+/// The file (a .gltf's JSON, or a GLB with its JSON chunk rewritten) with a scene's absent `nodes`
+/// made empty, and animation channels that target no node (`KHR_animation_pointer`'s, which are not
+/// played) left out, with a warning; `None` where neither applies.
+fn optional_members_filled(bytes: &[u8]) -> Option<Vec<u8>> {
+    let glb = bytes.starts_with(b"glTF");
+    let json_range = if glb { 20..20 + u32::from_le_bytes(bytes.get(12..16)?.try_into().ok()?) as usize } else { 0..bytes.len() };
+    let mut root: serde_json::Value = serde_json::from_slice(bytes.get(json_range.clone())?).ok()?;
+    let mut changed = false;
+    for scene in root.get_mut("scenes").and_then(serde_json::Value::as_array_mut).into_iter().flatten() {
+        if let Some(scene) = scene.as_object_mut().filter(|s| !s.contains_key("nodes")) {
+            scene.insert("nodes".into(), serde_json::Value::Array(Vec::new()));
+            changed = true;
+        }
+    }
+    let mut dropped = 0;
+    for animation in root.get_mut("animations").and_then(serde_json::Value::as_array_mut).into_iter().flatten() {
+        if let Some(channels) = animation.get_mut("channels").and_then(serde_json::Value::as_array_mut) {
+            let before = channels.len();
+            channels.retain(|c| c.get("target").is_none_or(|t| t.get("node").is_some()));
+            dropped += before - channels.len();
+        }
+    }
+    if dropped > 0 {
+        log::warn!("{dropped} animation channel(s) target no node (KHR_animation_pointer): they are not played");
+        changed = true;
+    }
+    if !changed {
+        return None;
+    }
+    let mut json = serde_json::to_vec(&root).ok()?;
+    if !glb {
+        return Some(json);
+    }
+    json.resize(json.len().next_multiple_of(4), b' ');
+    let rest = bytes.get(json_range.end..)?;
+    let mut filled = Vec::with_capacity(20 + json.len() + rest.len());
+    filled.extend_from_slice(&bytes[..8]);
+    filled.extend_from_slice(&((20 + json.len() + rest.len()) as u32).to_le_bytes());
+    filled.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    filled.extend_from_slice(b"JSON");
+    filled.extend_from_slice(&json);
+    filled.extend_from_slice(rest);
+    Some(filled)
+}
+
 fn parse_reason(error: ::gltf::Error) -> String {
     use ::gltf::binary::Error as Glb;
     match error {
@@ -1854,17 +1916,60 @@ mod tests {
         }
     }
 
+    /// A scene without `nodes` and animation channels that target no node (`KHR_animation_pointer`)
+    /// are valid glTF the gltf crate's types refuse: the file loads, in a .gltf and in a GLB.
+    #[test]
+    fn scenes_without_nodes_and_pointer_channels_load() {
+        let dir = temp_dir("gltf_optional_members");
+        write_quad_buffer(&dir);
+        let quad = std::fs::read(dir.join("quad.bin")).unwrap();
+        let json = |uri: &str| {
+            format!(
+                r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_animation_pointer"],
+                "buffers": [{{{uri}"byteLength": 56}}],
+                "bufferViews": [{{"buffer": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 8}}],
+                "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+                              {{"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [1]}}],
+                "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "mode": 5}}]}}],
+                "nodes": [{{"mesh": 0}}],
+                "animations": [{{"samplers": [{{"input": 1, "output": 1}}],
+                    "channels": [{{"sampler": 0, "target": {{"path": "pointer",
+                        "extensions": {{"KHR_animation_pointer": {{"pointer": "/materials/0/alphaCutoff"}}}}}}}}]}}],
+                "scenes": [{{"name": "empty"}}, {{"nodes": [0]}}], "scene": 1}}"#
+            )
+        };
+        let gltf = dir.join("optional.gltf");
+        std::fs::write(&gltf, json(r#""uri": "quad.bin", "#)).unwrap();
+        let mut chunk = json("").into_bytes();
+        chunk.resize(chunk.len().next_multiple_of(4), b' ');
+        let mut glb = b"glTF".to_vec();
+        glb.extend(2u32.to_le_bytes());
+        glb.extend(((28 + chunk.len() + quad.len()) as u32).to_le_bytes());
+        glb.extend((chunk.len() as u32).to_le_bytes());
+        glb.extend(b"JSON");
+        glb.extend(&chunk);
+        glb.extend((quad.len() as u32).to_le_bytes());
+        glb.extend(b"BIN\0");
+        glb.extend(&quad);
+        let glb_path = dir.join("optional.glb");
+        std::fs::write(&glb_path, glb).unwrap();
+        for path in [gltf, glb_path] {
+            let scene = import(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!((scene.instances.len(), scene.drawn_triangle_count()), (1, 2), "{}", path.display());
+        }
+    }
+
     #[test]
     fn unsupported_required_extension_is_named() {
         let dir = temp_dir("gltf_required");
         let path = dir.join("required.gltf");
         let json = r#"{"asset": {"version": "2.0"},
-            "extensionsUsed": ["KHR_materials_pbrSpecularGlossiness"],
-            "extensionsRequired": ["KHR_materials_pbrSpecularGlossiness"]}"#;
+            "extensionsUsed": ["KHR_materials_diffuse_transmission"],
+            "extensionsRequired": ["KHR_materials_diffuse_transmission"]}"#;
         std::fs::write(&path, json).unwrap();
         match import(&path) {
             Err(Error::UnsupportedGltfExtension { extension, .. }) => {
-                assert_eq!(extension, "KHR_materials_pbrSpecularGlossiness")
+                assert_eq!(extension, "KHR_materials_diffuse_transmission")
             }
             other => panic!("{other:?}"),
         }
