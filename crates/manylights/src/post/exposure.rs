@@ -6,6 +6,8 @@ use crate::Result;
 
 /// Surfaces' bins, then the background's (`exposure.wgsl`).
 const HISTOGRAM_BINS: u64 = 2 * 128;
+/// `exposure_histogram`'s workgroup: 16 × 16 pixels, a lane per bin.
+const HISTOGRAM_TILE: u32 = 16;
 
 pub struct AutoExposurePass {
     histogram: ComputeStep,
@@ -72,7 +74,7 @@ impl AutoExposurePass {
         (width, height): (u32, u32),
     ) {
         let groups = [&scene.bind_group, &self.bind_group];
-        self.histogram.record(encoder, timer.as_deref_mut(), &groups, crate::passes::dispatch_size(width, height));
+        self.histogram.record(encoder, timer.as_deref_mut(), &groups, (width.div_ceil(HISTOGRAM_TILE), height.div_ceil(HISTOGRAM_TILE)));
         self.average.record(encoder, timer, &groups, (1, 1));
     }
 }

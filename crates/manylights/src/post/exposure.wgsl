@@ -26,11 +26,11 @@ const HIGH_PERCENTILE: f32 = 0.9;
 
 var<workgroup> local_bins: array<atomic<u32>, 256>;
 
-@compute @workgroup_size(8, 8)
+// Tiles of 16 × 16 pixels, a lane per bin: a quarter of the flushes to the global histogram that
+// 8 × 8 tiles make.
+@compute @workgroup_size(16, 16)
 fn exposure_histogram(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) local: u32) {
-    for (var b = local; b < 2u * HISTOGRAM_BINS; b += 64u) {
-        atomicStore(&local_bins[b], 0u);
-    }
+    atomicStore(&local_bins[local], 0u);
     workgroupBarrier();
     if all(id.xy < vec2<u32>(frame.viewport.xy)) {
         let luminance = dot(textureLoad(color_input, id.xy, 0).rgb, vec3<f32>(0.2126, 0.7152, 0.0722));
@@ -41,40 +41,56 @@ fn exposure_histogram(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loc
         }
     }
     workgroupBarrier();
-    for (var b = local; b < 2u * HISTOGRAM_BINS; b += 64u) {
-        let count = atomicLoad(&local_bins[b]);
-        if count > 0u {
-            atomicAdd(&histogram[b], count);
-        }
+    let count = atomicLoad(&local_bins[local]);
+    if count > 0u {
+        atomicAdd(&histogram[local], count);
     }
 }
 
-@compute @workgroup_size(1)
-fn exposure_average() {
-    var surfaces = 0.0;
-    var background = 0.0;
-    for (var b = 0u; b < HISTOGRAM_BINS; b += 1u) {
-        surfaces += f32(atomicLoad(&histogram[b]));
-        background += f32(atomicLoad(&histogram[HISTOGRAM_BINS + b]));
+// Counts below each bin (surfaces, background), then each bin's share of the metered pixels and of
+// their log luminance, summed.
+var<workgroup> counts_below: array<vec2<u32>, 128>;
+var<workgroup> shares: array<vec2<f32>, 128>;
+
+// A lane per bin: prefix sums and a sum over the workgroup instead of one lane's walk.
+@compute @workgroup_size(128)
+fn exposure_average(@builtin(local_invocation_index) b: u32) {
+    let count = vec2<u32>(atomicLoad(&histogram[b]), atomicLoad(&histogram[HISTOGRAM_BINS + b]));
+    atomicStore(&histogram[b], 0u);
+    atomicStore(&histogram[HISTOGRAM_BINS + b], 0u);
+    // Inclusive prefix sums of both halves (Hillis–Steele).
+    counts_below[b] = count;
+    for (var step = 1u; step < HISTOGRAM_BINS; step *= 2u) {
+        workgroupBarrier();
+        var earlier = vec2<u32>(0u);
+        if b >= step {
+            earlier = counts_below[b - step];
+        }
+        workgroupBarrier();
+        counts_below[b] += earlier;
     }
-    let first = select(0u, HISTOGRAM_BINS, surfaces == 0.0);
-    let total = select(surfaces, background, surfaces == 0.0);
+    workgroupBarrier();
+    let totals = counts_below[HISTOGRAM_BINS - 1u];
+    let metered = select(0u, 1u, totals.x == 0u);
+    let total = f32(totals[metered]);
     // The pixels from rank `low` to rank `high`, each bin's share of them at its centre.
     let low = total * LOW_PERCENTILE;
     let high = total * HIGH_PERCENTILE;
-    var below = 0.0;
-    var log_sum = 0.0;
-    var counted = 0.0;
-    for (var b = 0u; b < HISTOGRAM_BINS; b += 1u) {
-        let count = f32(atomicLoad(&histogram[first + b]));
-        let inside = max(0.0, min(below + count, high) - max(below, low));
-        log_sum += inside * (MIN_LOG2_LUMINANCE + (f32(b) + 0.5) / BINS_PER_STOP);
-        counted += inside;
-        below += count;
+    let above = f32(counts_below[b][metered]);
+    let below = above - f32(count[metered]);
+    let inside = max(0.0, min(above, high) - max(below, low));
+    shares[b] = vec2<f32>(inside * (MIN_LOG2_LUMINANCE + (f32(b) + 0.5) / BINS_PER_STOP), inside);
+    for (var half = HISTOGRAM_BINS / 2u; half > 0u; half /= 2u) {
+        workgroupBarrier();
+        if b < half {
+            shares[b] += shares[b + half];
+        }
     }
-    for (var b = 0u; b < 2u * HISTOGRAM_BINS; b += 1u) {
-        atomicStore(&histogram[b], 0u);
+    if b != 0u {
+        return;
     }
+    let log_sum = shares[0].x;
+    let counted = shares[0].y;
     let measured = exposure_state.y != 0.0;
     // A black image gives nothing to measure: keep the exposure (1 if none was measured yet).
     var target_log = select(0.0, exposure_state.x, measured);
