@@ -99,6 +99,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                     // Light through transmissive surfaces changes only the transparent pass.
                     if !reflections {
                         shaders.push(super::transparent_shade::shader(ShadingMethods { transmission: true, ..methods }));
+                        shaders.push(super::transmissive_shade::shader(ShadingMethods { transmission: true, ..methods }));
                     }
                     if decals.works_in(PipelineKind::Visbuffer) {
                         shaders.push(super::visbuffer_shade::shader(methods));
@@ -156,10 +157,11 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
 }
 
 /// The shaders of every pass that calls the shading core, composed with `methods`.
-fn every_shading_pass(methods: ShadingMethods) -> [ShaderDesc; 4] {
+fn every_shading_pass(methods: ShadingMethods) -> [ShaderDesc; 5] {
     [
         super::forward_shade::shader(methods),
         super::transparent_shade::shader(methods),
+        super::transmissive_shade::shader(methods),
         super::visbuffer_shade::shader(methods),
         super::deferred_shade::shader(methods),
     ]

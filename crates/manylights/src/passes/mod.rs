@@ -26,6 +26,7 @@ pub mod ray_shadows;
 pub mod shadow_filter;
 pub mod surface_motion;
 pub mod transmission_background;
+pub mod transmissive_shade;
 pub mod transparent_shade;
 pub mod visbuffer_raster;
 pub mod visbuffer_shade;
@@ -33,7 +34,7 @@ pub mod visbuffer_shade;
 /// A pass's shader that calls the shading core, composed with the WGSL modules of its methods
 /// (`shading/shade.wgsl` includes `$LIGHT_ENUMERATION`, `$DECAL_ENUMERATION` and `$PARTICLE_LIGHTING`,
 /// the light modules `$DIRECT_LIGHTING`, rays `$RAY_TRACE`, and `shading/transmission.wgsl`
-/// `$TRANSMITTED_LIGHT`, which only the transparent pass gives a source; the opaque surfaces' shading
+/// `$TRANSMITTED_LIGHT`, which only the transmissive and transparent passes give a source; the opaque surfaces' shading
 /// passes include `$REFLECTIONS`)
 /// and of its point queries' walks ([`query_walks`]: `$LIGHT_QUERY`, `$DECAL_QUERY`, `$DECAL_LEAVES`).
 pub fn shading_core_shader(entry: &'static str, methods: ShadingMethods, stage: ShadingStage) -> ShaderDesc {

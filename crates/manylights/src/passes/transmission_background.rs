@@ -1,7 +1,7 @@
 //! The image of the opaque surfaces that transmissive surfaces see through
 //! (`transmission_background.wgsl`): the shaded HDR image copied into a half-float mip chain, each
-//! level the 2×2 mean of the one above, which the transparent pass samples where refracted rays
-//! leave (`shading/transmitted_screen.wgsl`).
+//! level the 2×2 mean of the one above, which the transmissive and transparent passes sample where
+//! refracted rays leave (`shading/transmitted_screen.wgsl`).
 
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuTimer};
 use crate::Result;
@@ -14,8 +14,10 @@ pub struct TransmissionBackground {
     downsample: wgpu::ComputePipeline,
     /// One a level, from the HDR image into level 0 on.
     steps: Vec<(wgpu::BindGroup, (u32, u32))>,
-    /// Every level, for the transparent pass to sample.
+    /// Every level, for the transmissive and transparent passes to sample, and their sampler:
+    /// trilinear, so rough surfaces blend between the chain's levels.
     pub view: wgpu::TextureView,
+    pub sampler: wgpu::Sampler,
 }
 
 impl TransmissionBackground {
@@ -64,7 +66,14 @@ impl TransmissionBackground {
                 (bind_group, ((width >> level).max(1), (height >> level).max(1)))
             })
             .collect();
-        Ok(Self { copy, downsample, steps, view: texture.create_view(&Default::default()) })
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("transmission background"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            ..Default::default()
+        });
+        Ok(Self { copy, downsample, steps, view: texture.create_view(&Default::default()), sampler })
     }
 
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {

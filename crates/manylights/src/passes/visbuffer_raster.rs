@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 
 use super::builder::{nearest_depth, Fragment, Raster};
-use crate::gpu::scene::RasterState;
+use crate::gpu::scene::{DrawCommand, OrderedDraws, RasterState};
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::Result;
 
@@ -45,45 +45,69 @@ impl VisbufferRaster {
         Ok(Self { pipelines, indexed })
     }
 
-    pub fn record(
+    /// The opaque draws: depth cleared, ids left as they were where nothing is drawn.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>, scene: &GpuScene, images: VisbufferImages) {
+        // Ids are not cleared: shading reads them only where depth says a triangle was drawn, and a
+        // clear costs a sizeable share of this output-bound pass.
+        let loads = (wgpu::LoadOp::Load, wgpu::LoadOp::Clear(0.0));
+        let mut pass = begin(encoder, timer, "visbuffer_raster", images, loads);
+        self.draw(&mut pass, scene, &scene.frame_draws.opaque, &scene.draw_commands);
+    }
+
+    /// The transmissive draws that do not blend (`transmissive_shade`), nearest first, over the
+    /// opaque surfaces' depth: ids cleared to `u32::MAX` where none is in front.
+    pub fn record_transmissive(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&mut GpuTimer>,
         scene: &GpuScene,
-        VisbufferImages { visibility, depth }: VisbufferImages,
+        images: VisbufferImages,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("visbuffer_raster"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: visibility,
-                depth_slice: None,
-                resolve_target: None,
-                // Not cleared: shading reads ids only where depth says a triangle was drawn, and a
-                // clear costs a sizeable share of this output-bound pass.
-                ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timer.map(|t| t.render_pass("visbuffer_raster")),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let loads = (wgpu::LoadOp::Clear(wgpu::Color { r: f64::from(u32::MAX), g: 0.0, b: 0.0, a: 0.0 }), wgpu::LoadOp::Load);
+        let mut pass = begin(encoder, timer, "transmissive_raster", images, loads);
+        self.draw(&mut pass, scene, &scene.frame_draws.transmissive, &scene.transmissive_draw_commands);
+    }
+
+    fn draw(&self, pass: &mut wgpu::RenderPass, scene: &GpuScene, draws: &OrderedDraws, commands: &[DrawCommand]) {
         if self.indexed {
-            super::draw_scene(&mut pass, scene, &self.pipelines);
+            super::draw_ordered(pass, scene, draws, commands, &self.pipelines);
             return;
         }
         // Pulled vertices: a call per draw, each vertex_index a corner of its range of the indices.
         pass.set_bind_group(0, &scene.bind_group, &[]);
-        let draws = &scene.frame_draws.opaque;
         for &(state, first, count) in &draws.runs {
             pass.set_pipeline(&self.pipelines[&state]);
             for &c in &draws.commands[first as usize..(first + count) as usize] {
-                let command = &scene.draw_commands[c as usize];
+                let command = &commands[c as usize];
                 pass.draw(0..command.index_count, command.draw_index..command.draw_index + 1);
             }
         }
     }
+}
+
+/// The raster's render pass over `images`, loading the ids and the depth as `loads` says.
+fn begin<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    timer: Option<&mut GpuTimer>,
+    label: &'static str,
+    VisbufferImages { visibility, depth }: VisbufferImages,
+    (ids, depth_load): (wgpu::LoadOp<wgpu::Color>, wgpu::LoadOp<f32>),
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: visibility,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: ids, store: wgpu::StoreOp::Store },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: timer.map(|t| t.render_pass(label)),
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }

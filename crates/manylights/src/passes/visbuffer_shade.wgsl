@@ -8,6 +8,7 @@
 // position's derivatives.
 #include "shading/shade.wgsl"
 #include "shading/triangle_surface.wgsl"
+#include "shading/draws.wgsl"
 #include "shading/sun_shadow_mask.wgsl"
 #include "$REFLECTIONS"
 
@@ -17,21 +18,6 @@
 @group(1) @binding(2) var depth: texture_depth_2d;
 // The sun's visibility per pixel (`passes/ray_shadows.rs`), read when SUN_SHADOW_MASK is set.
 @group(1) @binding(3) var sun_shadow_mask: texture_2d<f32>;
-
-// The draw whose visibility ids contain `id`: the last one starting at or before it.
-fn find_draw(id: u32) -> u32 {
-    var low = 0u;
-    var high = arrayLength(&draws) - 1u;
-    while low < high {
-        let mid = (low + high + 1u) / 2u;
-        if draws[mid].first_visibility_id <= id {
-            low = mid;
-        } else {
-            high = mid - 1u;
-        }
-    }
-    return low;
-}
 
 @compute @workgroup_size(8, 8)
 fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {

@@ -24,8 +24,8 @@
 //!             transmission_background, with transmissive draws ─▶ mip chain of hdr (Rgba16Float)
 //!                                   │
 //!                                   ▼
-//!             transparent_shade (transmissive draws front to back, then BLEND draws back to
-//!             front, fragments) ─▶ over hdr
+//!             transmissive_shade (transmissive draws' nearest ids rasterized, then shaded in
+//!             compute) ─▶ over hdr; transparent_shade (BLEND draws back to front, fragments) ─▶ over hdr
 //!                                   │
 //!                                   ▼
 //!             post chain (depth of field, motion blur, exposure, bloom; tonemap) ─▶ ldr (Rgba8Unorm, sRGB-encoded)

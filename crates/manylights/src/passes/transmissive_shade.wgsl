@@ -1,0 +1,49 @@
+// Transmissive surfaces that do not blend (KHR_materials_transmission), shaded in compute after the
+// opaque ones: `transmissive_raster` (the visibility-buffer raster over the transmissive draws,
+// tested against and writing the opaque surfaces' depth) leaves each pixel the id of its nearest
+// transmissive triangle, or none; here each such pixel rebuilds that surface as the visibility
+// buffer's resolve does, lights and decals it through the shading core, carries the light behind it
+// from the opaque image's mip chain (`shading/transmitted_screen.wgsl`, group 1 bindings 0 and 1)
+// and covers the pixel with it. The sun's visibility is traced from the surface: no mask holds a
+// second surface per pixel.
+#include "shading/shade.wgsl"
+#include "shading/triangle_surface.wgsl"
+#include "shading/sun_shadow.wgsl"
+#include "shading/draws.wgsl"
+
+@group(1) @binding(2) var transmissive_ids: texture_2d<u32>;
+@group(1) @binding(3) var hdr_output: texture_storage_2d<rgba32float, write>;
+
+// The id `transmissive_raster` clears to: no transmissive surface in front of the opaque one.
+const NO_TRANSMISSIVE_SURFACE: u32 = 0xffffffffu;
+
+@compute @workgroup_size(8, 8)
+fn transmissive_shade(@builtin(global_invocation_id) id: vec3<u32>) {
+    if any(id.xy >= vec2<u32>(frame.viewport.xy)) {
+        return;
+    }
+    let visibility_id = textureLoad(transmissive_ids, id.xy, 0).x;
+    if visibility_id == NO_TRANSMISSIVE_SURFACE {
+        return;
+    }
+    let pixel = vec2<f32>(id.xy) + 0.5;
+    let ray = camera_ray(pixel);
+    let draw = draws[find_draw(visibility_id)];
+    let eye = frame.world_from_view[3].xyz;
+    let surface = triangle_surface(
+        draw,
+        visibility_id - draw.first_visibility_id,
+        eye,
+        ray,
+        camera_ray(pixel + vec2<f32>(1.0, 0.0)),
+        camera_ray(pixel + vec2<f32>(0.0, 1.0)),
+    );
+    let position = surface.relative_position + eye;
+    var material_surface = evaluate_material(materials[draw.material], surface.frame, surface.g, surface.vertex_color, position, -ray.dir);
+    material_surface.ray_normal = surface.geometric_normal;
+    material_surface.ray_clearance = surface_clearance(surface.relative_position);
+    // The medium's thickness is given in the mesh's units.
+    material_surface.thickness *= draw_scale(draw);
+    let s = apply_decals(material_surface, surface.dp);
+    textureStore(hdr_output, id.xy, vec4<f32>(shade(s, sun_visibility_of_transparent(s)), 1.0));
+}
