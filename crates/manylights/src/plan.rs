@@ -306,8 +306,8 @@ pub struct ShadingMethods {
     /// `shading/material.wgsl`, a pipeline constant: [`ShadingMethods::material_constants`]);
     /// without, the shading passes never choose it.
     pub second_uv_set: bool,
-    /// Some material lets light through (`KHR_materials_transmission`): the transparent pass reads
-    /// the light behind its surfaces from a mip chain of the opaque image
+    /// Some material lets light through (`KHR_materials_transmission`): the transmissive and
+    /// transparent passes read the light behind its surfaces from a mip chain of the opaque image
     /// (`passes/transmission_background.rs`, `shading/transmitted_screen.wgsl`).
     pub transmission: bool,
     /// Some material has a sheen (`SHEEN` in `shading/shading_input.wgsl`, a pipeline constant:

@@ -40,7 +40,7 @@ pub struct GpuMaterial {
     pub metallic_factor: f32,
     pub roughness_factor: f32,
     pub normal_scale: f32,
-    /// MATERIAL_UNLIT, MATERIAL_CLEARCOAT, MATERIAL_TRANSMISSION, MATERIAL_BLENDED, MATERIAL_SHEEN.
+    /// MATERIAL_UNLIT, MATERIAL_CLEARCOAT, MATERIAL_TRANSMISSION, MATERIAL_SHEEN.
     pub flags: u32,
     pub base_color_layer: i32,
     pub emissive_layer: i32,
@@ -90,11 +90,15 @@ pub struct GpuMaterial {
 /// clearcoat normal, occlusion, transmission, thickness, sheen colour, sheen roughness.
 pub const TEXTURE_SLOTS: usize = 14;
 
+/// The visibility id no triangle has (`NO_VISIBILITY_ID` in `shading/types.wgsl`): what the
+/// transmissive raster clears its ids to. Below u32's largest so that every backend's clear, some
+/// through an f32, writes it exactly.
+pub const NO_VISIBILITY_ID: u32 = 0xFFFF_FF00;
+
 /// `GpuMaterial::flags` (`MATERIAL_*` in `shading/types.wgsl`).
 pub const MATERIAL_UNLIT: u32 = 1;
 pub const MATERIAL_CLEARCOAT: u32 = 2;
 pub const MATERIAL_TRANSMISSION: u32 = 4;
-pub const MATERIAL_BLENDED: u32 = 8;
 pub const MATERIAL_SHEEN: u32 = 16;
 
 const NO_TEXTURE: i32 = -1;
@@ -288,8 +292,8 @@ pub struct GpuScene {
     /// Alpha-blended draws, transmissive or not: blended after shading by
     /// `passes::transparent_shade`.
     pub transparent_draw_commands: Vec<DrawCommand>,
-    /// Transmissive draws that do not blend (`Material::transmissive_unblended`): drawn after
-    /// shading by `passes::transparent_shade`, before the blended ones, writing depth.
+    /// Transmissive draws that do not blend (`Material::transmissive_unblended`): shaded after the
+    /// opaque ones by `passes::transmissive_shade`, before the blended ones, writing depth.
     pub transmissive_draw_commands: Vec<DrawCommand>,
     /// This frame's orders of the draws, written by [`order_draws`](Self::order_draws).
     pub(crate) frame_draws: FrameDraws,
@@ -821,9 +825,9 @@ impl DrawList {
                 next_visibility_id += u64::from(index_count / 3);
             }
         }
-        if next_visibility_id > 1 << 32 {
+        if next_visibility_id > u64::from(NO_VISIBILITY_ID) {
             return Err(Error::InvalidScene(format!(
-                "the scene draws {next_visibility_id} triangles; the visibility buffer numbers at most 2³²"
+                "the scene draws {next_visibility_id} triangles; the visibility buffer numbers at most {NO_VISIBILITY_ID}"
             )));
         }
         Ok(list)
@@ -1060,7 +1064,6 @@ fn gpu_material(m: &Material, color: &TextureArray, data: &TextureArray) -> GpuM
     let flags = flag(m.unlit, MATERIAL_UNLIT)
         | flag(m.clearcoat.is_some(), MATERIAL_CLEARCOAT)
         | flag(m.transmission.is_some(), MATERIAL_TRANSMISSION)
-        | flag(m.alpha_mode == AlphaMode::Blend, MATERIAL_BLENDED)
         | flag(m.sheen.is_some(), MATERIAL_SHEEN);
     GpuMaterial {
         base_color_factor: m.base_color_factor.to_array(),

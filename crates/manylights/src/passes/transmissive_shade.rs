@@ -21,7 +21,7 @@ pub fn shader(methods: ShadingMethods) -> ShaderDesc {
 
 pub struct TransmissiveShade {
     raster: VisbufferRaster,
-    /// The nearest transmissive triangle's visibility id per pixel, or `u32::MAX`.
+    /// The nearest transmissive triangle's visibility id per pixel, or `NO_VISIBILITY_ID`.
     ids: wgpu::TextureView,
     step: ComputeStep,
     bind_group: wgpu::BindGroup,

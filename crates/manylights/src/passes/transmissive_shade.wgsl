@@ -14,16 +14,14 @@
 @group(1) @binding(2) var transmissive_ids: texture_2d<u32>;
 @group(1) @binding(3) var hdr_output: texture_storage_2d<rgba32float, write>;
 
-// The id `transmissive_raster` clears to: no transmissive surface in front of the opaque one.
-const NO_TRANSMISSIVE_SURFACE: u32 = 0xffffffffu;
-
 @compute @workgroup_size(8, 8)
 fn transmissive_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     if any(id.xy >= vec2<u32>(frame.viewport.xy)) {
         return;
     }
     let visibility_id = textureLoad(transmissive_ids, id.xy, 0).x;
-    if visibility_id == NO_TRANSMISSIVE_SURFACE {
+    // No transmissive surface in front of the opaque one.
+    if visibility_id == NO_VISIBILITY_ID {
         return;
     }
     let pixel = vec2<f32>(id.xy) + 0.5;

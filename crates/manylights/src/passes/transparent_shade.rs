@@ -63,58 +63,21 @@ impl TransparentShade {
             )));
         }
         let device = &ctx.device;
-        let desc = shader(methods);
-        let vertex_module = shaders::create_module(device, &desc)?;
         let fragment_stage = wgpu::ShaderStages::FRAGMENT;
         let background_entries = [
             bindings::texture(0, fragment_stage, wgpu::TextureSampleType::Float { filterable: true }, wgpu::TextureViewDimension::D2),
             bindings::sampler(1, fragment_stage),
         ];
-        let entries: &[wgpu::BindGroupLayoutEntry] = if methods.transmission { &background_entries } else { &[] };
+        let sees_through = methods.transmission || !scene.transmissive_draw_commands.is_empty();
+        let entries: &[wgpu::BindGroupLayoutEntry] = if sees_through { &background_entries } else { &[] };
         let group_layout = bindings::layout(device, "transparent_shade background", entries);
         let layout = bindings::pipeline_layout(
             device,
             "transparent_shade",
             &[&scene.bind_group_layout, &group_layout, &structures.lights.bind_group_layout, &structures.decals.bind_group_layout],
         );
-        let over = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::SrcAlpha,
-            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-            operation: wgpu::BlendOperation::Add,
-        };
-        // The HDR image's alpha stays 1.
-        let keep = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::Zero,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let flag = |on: bool| f64::from(u8::from(on));
-        let constants =
-            [&[methods.debug_views_constant(), ("TRANSMISSION", flag(methods.transmission))][..], &methods.material_constants()].concat();
-        let module = shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, "transparent_shade", &constants)?;
-        // The states present, each also mirrored: an animated instance may turn mirrored.
-        let states: std::collections::BTreeSet<RasterState> = scene
-            .transparent_draw_commands
-            .iter()
-            .flat_map(|c| [c.state, RasterState { mirrored: !c.state.mirrored, ..c.state }])
-            .collect();
-        let targets = [Some(wgpu::ColorTargetState {
-            format: HDR_FORMAT,
-            blend: Some(wgpu::BlendState { color: over, alpha: keep }),
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
-        let raster = Raster {
-            label: "transparent_shade",
-            layout: &layout,
-            vertex_module: &vertex_module,
-            vertex_entry: "forward_vertex",
-            // In front of the surfaces shaded so far, which are not written, so every layer blends.
-            depth: depth_test(false, wgpu::CompareFunction::Greater),
-        };
-        let blended = raster.per_state(device, states, |_| {
-            Some(Fragment { module: &module, entry: "transparent_shade", constants: &constants, targets: &targets })
-        });
-        let sees_through = methods.transmission || !scene.transmissive_draw_commands.is_empty();
+        let blended =
+            if scene.transparent_draw_commands.is_empty() { HashMap::new() } else { blended_pipelines(device, scene, methods, &layout)? };
         let background = sees_through.then(|| TransmissionBackground::new(ctx, hdr)).transpose()?;
         let group = match &background {
             Some(background) => bindings::bind_group(
@@ -169,4 +132,49 @@ impl TransparentShade {
         let scene = inputs.scene;
         super::draw_ordered(&mut pass, scene, &scene.frame_draws.transparent, &scene.transparent_draw_commands, &self.blended);
     }
+}
+
+/// A pipeline for each raster state of the blended draws (and its mirror: an animated instance may
+/// turn mirrored), blending "over" into the HDR image.
+fn blended_pipelines(
+    device: &wgpu::Device,
+    scene: &GpuScene,
+    methods: ShadingMethods,
+    layout: &wgpu::PipelineLayout,
+) -> Result<HashMap<RasterState, wgpu::RenderPipeline>> {
+    let desc = shader(methods);
+    let vertex_module = shaders::create_module(device, &desc)?;
+    let flag = |on: bool| f64::from(u8::from(on));
+    let constants =
+        [&[methods.debug_views_constant(), ("TRANSMISSION", flag(methods.transmission))][..], &methods.material_constants()].concat();
+    let module = shaders::create_stage_module(device, &desc, naga::ShaderStage::Fragment, "transparent_shade", &constants)?;
+    let states: std::collections::BTreeSet<RasterState> =
+        scene.transparent_draw_commands.iter().flat_map(|c| [c.state, RasterState { mirrored: !c.state.mirrored, ..c.state }]).collect();
+    let over = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::SrcAlpha,
+        dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+        operation: wgpu::BlendOperation::Add,
+    };
+    // The HDR image's alpha stays 1.
+    let keep = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::Zero,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    };
+    let targets = [Some(wgpu::ColorTargetState {
+        format: HDR_FORMAT,
+        blend: Some(wgpu::BlendState { color: over, alpha: keep }),
+        write_mask: wgpu::ColorWrites::ALL,
+    })];
+    let raster = Raster {
+        label: "transparent_shade",
+        layout,
+        vertex_module: &vertex_module,
+        vertex_entry: "forward_vertex",
+        // In front of the surfaces shaded so far, which are not written, so every layer blends.
+        depth: depth_test(false, wgpu::CompareFunction::Greater),
+    };
+    Ok(raster.per_state(device, states, |_| {
+        Some(Fragment { module: &module, entry: "transparent_shade", constants: &constants, targets: &targets })
+    }))
 }

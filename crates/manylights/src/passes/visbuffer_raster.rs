@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 
 use super::builder::{nearest_depth, Fragment, Raster};
-use crate::gpu::scene::{DrawCommand, OrderedDraws, RasterState};
+use crate::gpu::scene::{DrawCommand, OrderedDraws, RasterState, NO_VISIBILITY_ID};
 use crate::gpu::{bindings, shaders, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::Result;
 
@@ -55,7 +55,7 @@ impl VisbufferRaster {
     }
 
     /// The transmissive draws that do not blend (`transmissive_shade`), nearest first, over the
-    /// opaque surfaces' depth: ids cleared to `u32::MAX` where none is in front.
+    /// opaque surfaces' depth: ids cleared to `NO_VISIBILITY_ID` where none is in front.
     pub fn record_transmissive(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -63,7 +63,8 @@ impl VisbufferRaster {
         scene: &GpuScene,
         images: VisbufferImages,
     ) {
-        let loads = (wgpu::LoadOp::Clear(wgpu::Color { r: f64::from(u32::MAX), g: 0.0, b: 0.0, a: 0.0 }), wgpu::LoadOp::Load);
+        let none = wgpu::Color { r: f64::from(NO_VISIBILITY_ID), g: 0.0, b: 0.0, a: 0.0 };
+        let loads = (wgpu::LoadOp::Clear(none), wgpu::LoadOp::Load);
         let mut pass = begin(encoder, timer, "transmissive_raster", images, loads);
         self.draw(&mut pass, scene, &scene.frame_draws.transmissive, &scene.transmissive_draw_commands);
     }

@@ -1,8 +1,10 @@
 // Visibility-buffer raster: depth plus one u32 visibility id per pixel (the draw's
 // `first_visibility_id` + the triangle's number within the draw). Alpha-masked materials discard here;
 // nothing else is shaded. Raster is bound by fragment output on GPUs with few graphics units, so this
-// pass writes 4 bytes a pixel, not 8, and never clears the ids: shading tells the background by its
-// depth (benchmarks/LOG.md, topic 5).
+// pass writes 4 bytes a pixel, not 8, and over the opaque draws never clears the ids: shading tells
+// the background by its depth (benchmarks/LOG.md, topic 5). Over the transmissive draws
+// (`transmissive_shade`), whose depth starts at the opaque surfaces', ids are cleared to a value no
+// triangle has.
 //
 // Shared by two entry files that differ in how a fragment learns its triangle:
 // `visbuffer_raster_indexed.wgsl` draws indexed (the vertex cache reuses shared vertices) and reads

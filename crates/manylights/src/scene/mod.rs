@@ -319,8 +319,9 @@ impl Default for Material {
 
 impl Material {
     /// Drawn after the opaque surfaces, over the image of them: blended (glTF BLEND) or letting
-    /// light through. Such surfaces hold no single pixel of a G-buffer or visibility buffer and are
-    /// left out of the ray structures: they cast no traced shadow and reflections see past them.
+    /// light through. Such surfaces hold no pixel of the opaque surfaces' G-buffer or visibility
+    /// buffer and are left out of the ray structures: they cast no traced shadow and reflections see
+    /// past them.
     pub fn drawn_over_opaque(&self) -> bool {
         self.alpha_mode == AlphaMode::Blend || self.transmission.is_some()
     }

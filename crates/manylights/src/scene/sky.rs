@@ -89,9 +89,9 @@ impl DaylightSky {
 
     /// The sky where the scene's own sun is and as bright as the sky that sun implies (its
     /// illuminance over the model's sun's there: the scene's units, lux from a glTF file or the
-    /// project's), or at the default position and brightness when it has none.
+    /// project's), or at the default position and brightness when it has none (or a dark one).
     pub fn for_scene(scene: &Scene) -> Self {
-        let Some(own) = scene.sun else {
+        let Some(own) = scene.sun.filter(|sun| sun.illuminance > 0.0 && sun.illuminance.is_finite()) else {
             let (elevation, azimuth) = (DEFAULT_SUN_ELEVATION_DEGREES.to_radians(), DEFAULT_SUN_AZIMUTH_DEGREES.to_radians());
             let to_sun = Vec3::new(elevation.cos() * azimuth.sin(), elevation.sin(), -elevation.cos() * azimuth.cos());
             return Self::new(to_sun, SKY_TURBIDITY);

@@ -6,8 +6,8 @@
 // formulas at the parameters' default values.
 override MATERIAL_EXTENSIONS: bool = true;
 
-// The pass shades transmissive surfaces (KHR_materials_transmission): only the transparent pass, and
-// only where some material is (`ShadingMethods::transmission`). Elsewhere the transmission terms are
+// The pass shades transmissive surfaces (KHR_materials_transmission): only the transmissive and
+// transparent passes, and only where some material is (`ShadingMethods::transmission`). Elsewhere the transmission terms are
 // compiled out.
 override TRANSMISSION: bool = false;
 

@@ -1,4 +1,4 @@
-// `$TRANSMITTED_LIGHT` for the transparent pass: the light behind a transmissive surface is read from
+// `$TRANSMITTED_LIGHT` for the transmissive and transparent passes: the light behind a transmissive surface is read from
 // the image of the opaque surfaces (`passes/transmission_background.rs`), where the refracted ray
 // leaves the medium, from the mip level its roughness blurs it to (the Khronos sample viewer's
 // screen-space transmission). Transparent surfaces behind it are not seen through it.

@@ -54,7 +54,7 @@ struct Material {
     metallic_factor: f32,
     roughness_factor: f32,
     normal_scale: f32,
-    // MATERIAL_UNLIT, MATERIAL_CLEARCOAT, MATERIAL_TRANSMISSION, MATERIAL_BLENDED, MATERIAL_SHEEN.
+    // MATERIAL_UNLIT, MATERIAL_CLEARCOAT, MATERIAL_TRANSMISSION, MATERIAL_SHEEN.
     flags: u32,
     // Layers in `color_textures` (base colour, emissive, specular and sheen colour) and `data_textures` (the
     // others); NO_TEXTURE when absent. Texture slots, in order: base colour 0, emissive 1,
@@ -107,11 +107,13 @@ struct Material {
     uv_transforms: array<vec4<f32>, 28>,
 }
 
+// The visibility id no triangle has (`gpu::scene::NO_VISIBILITY_ID`): where the transmissive raster
+// drew nothing.
+const NO_VISIBILITY_ID: u32 = 0xffffff00u;
+
 const MATERIAL_UNLIT: u32 = 1u;
 const MATERIAL_CLEARCOAT: u32 = 2u;
 const MATERIAL_TRANSMISSION: u32 = 4u;
-// Alpha-blended (glTF BLEND): the transparent pass blends it by its alpha; others it draws opaque.
-const MATERIAL_BLENDED: u32 = 8u;
 const MATERIAL_SHEEN: u32 = 16u;
 
 const LIGHT_POINT: u32 = 0u;

@@ -70,12 +70,26 @@ fn fill_zero_accessors(
             continue;
         }
         let (Checked::Valid(kind), Checked::Valid(component)) = (accessor.type_, accessor.component_type) else { continue };
-        let bytes = accessor.count.0.saturating_mul((kind.multiplicity() * component.0.size()) as u64);
+        let bytes = accessor.count.0.saturating_mul(element_size(kind, component.0) as u64);
         budget.take_input(bytes, path).map_err(|e| e.to_string())?;
-        let zeros = vec![0; bytes as usize];
-        point_at(&mut root.accessors[index], &mut root.buffer_views, appended, &zeros, appended_buffer);
+        let offset = appended.len();
+        appended.resize(offset + bytes as usize, 0);
+        view_over(&mut root.accessors[index], &mut root.buffer_views, appended, offset, appended_buffer);
     }
     Ok(())
+}
+
+/// Bytes an element of `kind` takes in a buffer: matrices' columns start 4-byte aligned (glTF 2.0,
+/// 3.6.2.4).
+fn element_size(kind: json::accessor::Type, component: json::accessor::ComponentType) -> usize {
+    use json::accessor::Type;
+    let column = |rows: usize| (rows * component.size()).next_multiple_of(4);
+    match kind {
+        Type::Mat2 => 2 * column(2),
+        Type::Mat3 => 3 * column(3),
+        Type::Mat4 => 4 * column(4),
+        _ => kind.multiplicity() * component.size(),
+    }
 }
 
 /// Decodes every meshopt-compressed buffer view into the bytes the view names.
@@ -231,15 +245,22 @@ fn decode_draco(
     Ok(())
 }
 
-/// Appends `bytes` (4-byte aligned) to the decoded buffer, `buffer`, and points the accessor at them
-/// through a new buffer view.
+/// Appends `bytes` to the decoded buffer, `buffer`, and points the accessor at them through a new
+/// buffer view.
 fn point_at(accessor: &mut json::Accessor, views: &mut Vec<json::buffer::View>, decoded: &mut Vec<u8>, bytes: &[u8], buffer: usize) {
     let offset = decoded.len();
     decoded.extend_from_slice(bytes);
+    view_over(accessor, views, decoded, offset, buffer);
+}
+
+/// Points the accessor through a new buffer view at the decoded buffer's bytes from `offset` to its
+/// end, and pads the buffer to 4 bytes for the next.
+fn view_over(accessor: &mut json::Accessor, views: &mut Vec<json::buffer::View>, decoded: &mut Vec<u8>, offset: usize, buffer: usize) {
+    let length = decoded.len() - offset;
     decoded.resize(decoded.len().next_multiple_of(4), 0);
     views.push(json::buffer::View {
         buffer: json::Index::new(buffer as u32),
-        byte_length: bytes.len().into(),
+        byte_length: length.into(),
         byte_offset: Some(offset.into()),
         byte_stride: None,
         name: None,

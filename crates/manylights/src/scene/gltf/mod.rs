@@ -235,7 +235,6 @@ fn validation_reason(error: ::gltf::Error) -> String {
     }
 }
 
-/// The parser's reason, with the detail its GLB messages leave out.
 /// The file parsed (not validated), retried once, where the gltf crate's JSON types refuse it, with
 /// what glTF leaves optional and they require taken care of (`optional_members_filled`); the first
 /// error stands if that does not help.
@@ -255,6 +254,9 @@ fn parse(bytes: &[u8]) -> std::result::Result<::gltf::Gltf, ::gltf::Error> {
 /// played) left out, with a warning; `None` where neither applies.
 fn optional_members_filled(bytes: &[u8]) -> Option<Vec<u8>> {
     let glb = bytes.starts_with(b"glTF");
+    if glb && bytes.get(16..20) != Some(b"JSON") {
+        return None;
+    }
     let json_range = if glb { 20..20 + u32::from_le_bytes(bytes.get(12..16)?.try_into().ok()?) as usize } else { 0..bytes.len() };
     let mut root: serde_json::Value = serde_json::from_slice(bytes.get(json_range.clone())?).ok()?;
     let mut changed = false;
@@ -295,6 +297,7 @@ fn optional_members_filled(bytes: &[u8]) -> Option<Vec<u8>> {
     Some(filled)
 }
 
+/// The parser's reason, with the detail its GLB messages leave out.
 fn parse_reason(error: ::gltf::Error) -> String {
     use ::gltf::binary::Error as Glb;
     match error {
@@ -590,7 +593,8 @@ fn decode_ktx2(bytes: &[u8], budget: &LoadBudget) -> Result<(u32, u32, Vec<u8>),
 }
 
 /// A 2D KTX2 texture in an 8-bit format of one to four channels (UNORM or sRGB), uncompressed or
-/// in Zstandard, expanded to RGBA8 (missing colour channels 0, missing alpha opaque, as PNG's).
+/// in Zstandard, expanded to RGBA8 as a sampler reads the format (missing colour channels 0, missing
+/// alpha opaque).
 fn decode_plain_ktx2(reader: &ktx2::Reader<&[u8]>, format: ktx2::Format, budget: &LoadBudget) -> Result<(u32, u32, Vec<u8>), String> {
     use ktx2::{Format, SupercompressionScheme};
     let header = reader.header();
@@ -641,6 +645,7 @@ fn decode_plain_ktx2(reader: &ktx2::Reader<&[u8]>, format: ktx2::Format, budget:
             texels.len()
         ));
     }
+    // Missing channels as a sampler reads the format: red alone is (r, 0, 0, 1), not grey.
     let rgba8 = texels
         .chunks_exact(channels as usize)
         .flat_map(|texel| {
