@@ -316,8 +316,8 @@ impl Renderer {
     /// only when the timer's slots are full and at the end; each frame advances `time` by
     /// [`FRAME_INTERVAL`]. Returns each frame's timings.
     ///
-    /// When the clustered lists were too short for a frame, they grow and the frames are rendered
-    /// again from the same time, so every returned frame is complete.
+    /// When the clustered lists or the blended surfaces' layers were too short for a frame, they
+    /// grow and the frames are rendered again from the same time, so every returned frame is complete.
     pub fn render_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<FrameTiming>> {
         let start = self.time;
         if !start.is_finite() {
@@ -334,7 +334,8 @@ impl Renderer {
             // Both are asked: each grows its own lists.
             let lights_fitted = self.lights.clusters_fitted(&self.ctx)?;
             let decals_fitted = self.decals.clusters_fitted(&self.ctx)?;
-            if lights_fitted && decals_fitted {
+            let layers_fitted = self.pipeline.blended_layers_fitted(&self.ctx)?;
+            if lights_fitted && decals_fitted && layers_fitted {
                 return Ok(timings);
             }
             self.time = start;

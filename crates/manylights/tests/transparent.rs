@@ -1,5 +1,5 @@
-//! Transparent surfaces (glTF BLEND materials): drawn after the opaque surfaces in every pipeline,
-//! blended back to front over what lies behind them, hidden behind opaque surfaces, and lit and
+//! Transparent surfaces (glTF BLEND materials): shaded after the opaque surfaces in every pipeline,
+//! each pixel's layers blended far to near over what lies behind them, hidden behind opaque surfaces, and lit and
 //! decaled by the shading core through the frame's methods — which deferred decals, living in the
 //! G-buffer, cannot do. Transmissive surfaces (KHR_materials_transmission, KHR_materials_volume):
 //! the light behind them through their colour and medium, refracted and blurred by roughness, and
@@ -10,9 +10,11 @@ mod common;
 use common::*;
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use manylights::{
-    gpu::GpuContext,
-    renderer::{Image, Renderer},
-    scene::{demo::demo_scene, generators, generators::ScatterLights, AlphaMode, Camera, Decal, Instance, Material, Scene, Vertex},
+    renderer::Image,
+    scene::{
+        demo::demo_scene, generators, generators::ScatterLights, AlphaMode, Camera, Decal, Instance, Material, Mesh, Primitive, Scene,
+        Vertex,
+    },
     scene::{Light, Specular, Sun, Texture, TextureRef, Transmission, Wrap},
     settings::{DecalMethod, LightMethod, PipelineKind},
     settings::{RaySettings, RenderConfig, SunShadows},
@@ -155,20 +157,81 @@ fn panes_are_lit_and_decaled_through_every_method_in_every_pipeline() {
 }
 
 #[test]
-fn transparent_surfaces_need_float32_blending() {
-    let (mut scene, _) = ambient_wall();
-    add_pane(&mut scene, 1.0, Vec3::ONE, 0.5);
-    let ctx = GpuContext::without(wgpu::Features::FLOAT32_BLENDABLE).expect("a GPU adapter");
-    let error = Renderer::new(ctx, &scene, config(32, 18, LightMethod::Brute)).err().expect("an error without float32 blending");
-    let message = error.to_string();
-    assert!(message.contains("BLEND") && message.contains("float32-blendable"), "{message}");
-    // Unblended transmissive surfaces replace what they cover: they need no blending.
-    let (mut glass, camera) = ambient_wall();
-    transmissive_pane(&mut glass, 1.0, Vec3::new(0.5, 1.0, 0.25), Transmission::thin(1.0));
-    let ctx = GpuContext::without(wgpu::Features::FLOAT32_BLENDABLE).expect("a GPU adapter");
-    let (_, without) = render_on(ctx, &glass, &camera, config(32, 18, LightMethod::Brute));
-    let (_, with) = render_with(&glass, &camera, config(32, 18, LightMethod::Brute));
-    assert_eq!(max_abs_difference(&without, &with), 0.0, "glass renders differently without float32 blending");
+fn a_pixel_blends_its_nearest_layers_in_order_however_many_lie_behind() {
+    // Twenty panes, red and green in turn, each letting half through: a pixel keeps its nearest
+    // sixteen, which leave the farther four less than 2e-5 of the radiance. The panes of each colour
+    // are one draw, listed out of depth order, so the order fragments arrive in is not the panes'.
+    let (wall, camera) = ambient_wall();
+    let (wall_radiance, _) = centre_and_corner(&wall, &camera, PipelineKind::Visbuffer);
+    let reflection = wall_radiance - WALL_COLOR;
+    let colors = [Vec3::new(0.9, 0.1, 0.1), Vec3::new(0.1, 0.8, 0.2)];
+    let mut stacked = wall;
+    for (k, color) in colors.into_iter().enumerate() {
+        stacked.materials.push(glass(color, 0.5));
+        let quad = &quad_mesh().primitives[0];
+        let mut panes = Primitive { vertices: Vec::new(), indices: Vec::new(), material: stacked.materials.len() - 1 };
+        for pane in [3, 8, 0, 6, 9, 1, 5, 2, 7, 4] {
+            let z = 0.1 * (2 * pane + k + 1) as f32;
+            let first = panes.vertices.len() as u32;
+            panes.vertices.extend(quad.vertices.iter().map(|v| Vertex { position: [v.position[0], v.position[1], z], ..*v }));
+            panes.indices.extend(quad.indices.iter().map(|i| first + i));
+        }
+        stacked.meshes.push(Mesh { name: "panes".into(), primitives: vec![panes] });
+        stacked.instances.push(Instance { mesh: stacked.meshes.len() - 1, world_from_local: Mat4::IDENTITY });
+    }
+    let mut expected = wall_radiance;
+    for i in 0..20 {
+        expected = (colors[i % 2] + reflection) * 0.5 + expected * 0.5;
+    }
+    let (centre, _) = centre_and_corner(&stacked, &camera, PipelineKind::Visbuffer);
+    assert!((centre - expected).abs().max_element() <= 1e-4, "twenty panes: {centre}, expected {expected}");
+}
+
+#[test]
+fn crossing_panes_blend_in_the_order_each_pixel_sees_them() {
+    // A pane turned about the vertical crosses an upright one at the centre: its left half lies in
+    // front of it, its right half behind. No order of the two draws blends both halves right.
+    const RED: Vec3 = Vec3::new(0.9, 0.1, 0.1);
+    const GREEN: Vec3 = Vec3::new(0.1, 0.8, 0.2);
+    let (wall, camera) = ambient_wall();
+    let turned = |scene: &mut Scene| {
+        scene.materials.push(glass(GREEN, 0.5));
+        scene.meshes.push(quad_mesh());
+        scene.meshes.last_mut().unwrap().primitives[0].material = scene.materials.len() - 1;
+        let world_from_local = Mat4::from_translation(Vec3::new(0.0, 0.0, 1.0)) * Mat4::from_rotation_y(30f32.to_radians());
+        scene.instances.push(Instance { mesh: scene.meshes.len() - 1, world_from_local });
+    };
+    let columns = [27, 37];
+    let at = |scene: &Scene| {
+        let (_, hdr) = render_with(scene, &camera, configured(PipelineKind::Visbuffer, LightMethod::Brute, DecalMethod::Brute, (64, 36)));
+        columns.map(|x| rgb(pixel(&hdr, x, 18)))
+    };
+    let behind = at(&wall);
+    // Each pane's own radiance, from it alone over the wall.
+    let mut upright = wall.clone();
+    add_pane(&mut upright, 1.0, RED, 0.5);
+    let mut crossing = wall.clone();
+    turned(&mut crossing);
+    let (upright_alone, crossing_alone) = (at(&upright), at(&crossing));
+    let own = |alone: Vec3, behind: Vec3| (alone - behind * 0.5) / 0.5;
+    let over = |radiance: Vec3, behind: Vec3| radiance * 0.5 + behind * 0.5;
+    for order in ["upright pane listed first", "crossing pane listed first"] {
+        let mut both = wall.clone();
+        if order.starts_with("upright") {
+            add_pane(&mut both, 1.0, RED, 0.5);
+            turned(&mut both);
+        } else {
+            turned(&mut both);
+            add_pane(&mut both, 1.0, RED, 0.5);
+        }
+        let got = at(&both);
+        for (i, side) in ["left", "right"].into_iter().enumerate() {
+            let (red, green) = (own(upright_alone[i], behind[i]), own(crossing_alone[i], behind[i]));
+            assert!(red.x > 0.5 && green.y > 0.5, "{side}: column {} misses a pane ({red}, {green})", columns[i]);
+            let expected = if i == 0 { over(green, over(red, behind[i])) } else { over(red, over(green, behind[i])) };
+            assert!((got[i] - expected).abs().max_element() <= 1e-4, "{order}, {side}: {}, expected {expected}", got[i]);
+        }
+    }
 }
 
 /// A thin pane at `z` letting `transmission` through, of base colour `color`, reflecting nothing

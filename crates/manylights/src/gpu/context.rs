@@ -14,12 +14,10 @@ use crate::{Error, Result};
 /// motions), the lights' seven (their light tree too) and the decals' six (`shading/*_bindings.wgsl`).
 const REQUIRED_STORAGE_BUFFERS: u32 = 23;
 /// Features the renderer uses when the adapter has them; none is required by every scene.
-/// `primitive_index` lets the visibility raster draw indexed; `float32_blendable` lets transparent
-/// surfaces blend into the f32 HDR image (scenes with them need it); `subgroups` let passes walk BVHs
-/// a subgroup at a time where that is faster (`plan::query_walks`).
+/// `primitive_index` lets the visibility raster draw indexed; `subgroups` let passes walk BVHs a
+/// subgroup at a time where that is faster (`plan::query_walks`).
 const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::PRIMITIVE_INDEX)
-    .union(wgpu::Features::FLOAT32_BLENDABLE)
     .union(wgpu::Features::SUBGROUP)
     // Our SPIR-V for shaders whose variables need no zeroing (`gpu/spirv.rs`).
     .union(wgpu::Features::PASSTHROUGH_SHADERS)

@@ -277,7 +277,7 @@ pub struct FrameDraws {
     pub opaque: OrderedDraws,
     /// Those of them that move: animated instances', deformed meshes'.
     pub moving: OrderedDraws,
-    /// Alpha-blended draws, back to front.
+    /// Alpha-blended draws, nearest first.
     pub transparent: OrderedDraws,
     /// Transmissive draws that do not blend, front to back.
     pub transmissive: OrderedDraws,
@@ -289,8 +289,8 @@ pub struct GpuScene {
     pub frame_uniforms: wgpu::Buffer,
     /// Opaque and alpha-masked draws: the raster passes' and the visibility buffer's.
     pub draw_commands: Vec<DrawCommand>,
-    /// Alpha-blended draws, transmissive or not: blended after shading by
-    /// `passes::transparent_shade`.
+    /// Alpha-blended draws, transmissive or not: layered and shaded after the opaque and
+    /// transmissive ones by `passes::blended_shade`.
     pub transparent_draw_commands: Vec<DrawCommand>,
     /// Transmissive draws that do not blend (`Material::transmissive_unblended`): shaded after the
     /// opaque ones by `passes::transmissive_shade`, before the blended ones, writing depth.
@@ -347,17 +347,6 @@ impl GpuScene {
         front_to_back(&self.draw_commands, view, eye)
     }
 
-    /// The transparent draws in view (indices into `transparent_draw_commands`) back to front
-    /// from `eye` (by the centres of their bounds), so each blends over what lies behind it.
-    /// Triangles within a draw keep their order.
-    fn transparent_order(&self, view: &glam::Mat4, eye: glam::Vec3) -> Vec<u32> {
-        let mut keyed: Vec<(std::cmp::Reverse<u32>, u32, u32)> = in_view(&self.transparent_draw_commands, view)
-            .map(|(i, c)| (std::cmp::Reverse(c.center.distance_squared(eye).to_bits()), c.draw_index, i))
-            .collect();
-        keyed.sort_unstable();
-        keyed.into_iter().map(|(_, _, i)| i).collect()
-    }
-
     /// How many of the scene's draws (opaque, blended and transmissive) the last frame drew: those
     /// in its view.
     pub fn drawn_count(&self) -> usize {
@@ -377,8 +366,9 @@ impl GpuScene {
         let opaque = self.draw_order(&view, eye);
         let moving: Vec<u32> =
             opaque.iter().copied().filter(|&c| self.moving_draws[self.draw_commands[c as usize].draw_index as usize]).collect();
-        let transparent = self.transparent_order(&view, eye);
-        // Nearest first, so that early depth tests skip what a nearer one hides.
+        // Nearest first: early depth tests skip what a nearer transmissive one hides. Blended layers
+        // are sorted per pixel, so their draws' order only matters as it does for the others.
+        let transparent = front_to_back(&self.transparent_draw_commands, &view, eye);
         let transmissive = front_to_back(&self.transmissive_draw_commands, &view, eye);
         let opaque_count = self.draw_commands.len() as u32;
         let transparent_end = 2 * opaque_count + self.transparent_draw_commands.len() as u32;

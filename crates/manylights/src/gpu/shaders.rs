@@ -86,7 +86,8 @@ const SOURCES: &[(&str, &str)] = &[
     ("passes/deferred_shade.wgsl", include_str!("../passes/deferred_shade.wgsl")),
     ("passes/gbuffer_surface.wgsl", include_str!("../passes/gbuffer_surface.wgsl")),
     ("passes/deferred_decals.wgsl", include_str!("../passes/deferred_decals.wgsl")),
-    ("passes/transparent_shade.wgsl", include_str!("../passes/transparent_shade.wgsl")),
+    ("passes/blended_layers.wgsl", include_str!("../passes/blended_layers.wgsl")),
+    ("passes/blended_shade.wgsl", include_str!("../passes/blended_shade.wgsl")),
     ("passes/transmissive_shade.wgsl", include_str!("../passes/transmissive_shade.wgsl")),
     ("particles/types.wgsl", include_str!("../particles/types.wgsl")),
     ("particles/motion.wgsl", include_str!("../particles/motion.wgsl")),
@@ -96,6 +97,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/enumerate/particles_grid.wgsl", include_str!("../shading/enumerate/particles_grid.wgsl")),
     ("shading/triangle_surface.wgsl", include_str!("../shading/triangle_surface.wgsl")),
     ("shading/draws.wgsl", include_str!("../shading/draws.wgsl")),
+    ("shading/pixel_surface.wgsl", include_str!("../shading/pixel_surface.wgsl")),
     ("shading/depth_normal.wgsl", include_str!("../shading/depth_normal.wgsl")),
     ("shading/sun_shadow.wgsl", include_str!("../shading/sun_shadow.wgsl")),
     ("shading/sun_shadow_mask.wgsl", include_str!("../shading/sun_shadow_mask.wgsl")),
@@ -388,7 +390,7 @@ mod tests {
     /// every stage, decals in fragments, dense decals in compute too; none without subgroup operations.
     #[test]
     fn passes_walk_a_subgroup_at_a_time_where_it_pays() {
-        use crate::passes::{deferred_shade, forward_shade, transparent_shade, visbuffer_shade};
+        use crate::passes::{blended_shade, deferred_shade, forward_shade, visbuffer_shade};
         use crate::plan::ShadingMethods;
         use crate::settings::{DecalMethod, LightMethod, ParticleMethod};
         let sparse = ShadingMethods { lights: LightMethod::Bvh, decals: DecalMethod::Bvh, subgroups: true, ..Default::default() };
@@ -398,7 +400,7 @@ mod tests {
         assert_eq!(walks(deferred_shade::shader(dense)), 1, "compute: the dense lights' walk only");
         assert_eq!(walks(visbuffer_shade::shader(dense)), 1);
         assert_eq!(walks(forward_shade::shader(sparse)), 1, "fragments: the decals' walk");
-        assert_eq!(walks(transparent_shade::shader(dense)), 2, "fragments: both walks");
+        assert_eq!(walks(blended_shade::shader(dense)), 1, "blended surfaces in compute: the dense lights' walk only");
         assert_eq!(walks(forward_shade::shader(ShadingMethods { subgroups: false, ..dense })), 0);
         assert_eq!(walks(visbuffer_shade::shader(ShadingMethods { subgroups: false, ..dense })), 0);
         // Dense decals walk as a subgroup in compute too, and share their leaves out in every stage.
@@ -406,7 +408,7 @@ mod tests {
         let shares_out = |desc: ShaderDesc| desc.compose().unwrap().contains("fn decal_box_meets_box(");
         assert_eq!(walks(visbuffer_shade::shader(crowded)), 1, "compute: the dense decals' walk");
         assert_eq!(walks(deferred_shade::shader(crowded)), 1);
-        for shader in [visbuffer_shade::shader, deferred_shade::shader, forward_shade::shader, transparent_shade::shader] {
+        for shader in [visbuffer_shade::shader, deferred_shade::shader, forward_shade::shader, blended_shade::shader] {
             assert!(shares_out(shader(crowded)), "dense decals share their leaves out in every shading pass");
         }
         assert!(!shares_out(forward_shade::shader(sparse)), "fragments: sparse decals' leaves go to every lane whole");
@@ -414,7 +416,7 @@ mod tests {
         assert!(!shares_out(visbuffer_shade::shader(ShadingMethods { subgroups: false, ..crowded })));
         // Crowded decals with cell lists are read from them in every stage, never walked.
         let listed = ShadingMethods { decal_cell_lists: true, ..crowded };
-        for shader in [visbuffer_shade::shader, deferred_shade::shader, forward_shade::shader, transparent_shade::shader] {
+        for shader in [visbuffer_shade::shader, deferred_shade::shader, forward_shade::shader, blended_shade::shader] {
             let source = shader(listed).compose().unwrap();
             assert!(source.contains("fn decal_box_meets_box(") && !source.contains("fn decal_query_next_leaf("));
         }

@@ -95,10 +95,10 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                     if decals.works_in(PipelineKind::Forward) {
                         shaders.push(super::forward_shade::shader(methods));
                     }
-                    shaders.push(super::transparent_shade::shader(methods));
-                    // Light through transmissive surfaces changes only the transparent pass.
+                    shaders.push(super::blended_shade::shader(methods));
+                    // Light through transmissive surfaces changes only the transparent passes.
                     if !reflections {
-                        shaders.push(super::transparent_shade::shader(ShadingMethods { transmission: true, ..methods }));
+                        shaders.push(super::blended_shade::shader(ShadingMethods { transmission: true, ..methods }));
                         shaders.push(super::transmissive_shade::shader(ShadingMethods { transmission: true, ..methods }));
                     }
                     if decals.works_in(PipelineKind::Visbuffer) {
@@ -160,7 +160,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
 fn every_shading_pass(methods: ShadingMethods) -> [ShaderDesc; 5] {
     [
         super::forward_shade::shader(methods),
-        super::transparent_shade::shader(methods),
+        super::blended_shade::shader(methods),
         super::transmissive_shade::shader(methods),
         super::visbuffer_shade::shader(methods),
         super::deferred_shade::shader(methods),

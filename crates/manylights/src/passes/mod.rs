@@ -12,6 +12,7 @@ use crate::gpu::{
 };
 use crate::plan::{query_walks, volume_query_module, ShadingMethods, ShadingStage};
 
+pub mod blended_shade;
 pub mod builder;
 #[cfg(test)]
 pub mod catalogue;

@@ -6,10 +6,8 @@
 // from the opaque image's mip chain (`shading/transmitted_screen.wgsl`, group 1 bindings 0 and 1)
 // and covers the pixel with it. The sun's visibility is traced from the surface: no mask holds a
 // second surface per pixel.
-#include "shading/shade.wgsl"
-#include "shading/triangle_surface.wgsl"
+#include "shading/pixel_surface.wgsl"
 #include "shading/sun_shadow.wgsl"
-#include "shading/draws.wgsl"
 
 @group(1) @binding(2) var transmissive_ids: texture_2d<u32>;
 @group(1) @binding(3) var hdr_output: texture_storage_2d<rgba32float, write>;
@@ -24,24 +22,6 @@ fn transmissive_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     if visibility_id == NO_VISIBILITY_ID {
         return;
     }
-    let pixel = vec2<f32>(id.xy) + 0.5;
-    let ray = camera_ray(pixel);
-    let draw = draws[find_draw(visibility_id)];
-    let eye = frame.world_from_view[3].xyz;
-    let surface = triangle_surface(
-        draw,
-        visibility_id - draw.first_visibility_id,
-        eye,
-        ray,
-        camera_ray(pixel + vec2<f32>(1.0, 0.0)),
-        camera_ray(pixel + vec2<f32>(0.0, 1.0)),
-    );
-    let position = surface.relative_position + eye;
-    var material_surface = evaluate_material(materials[draw.material], surface.frame, surface.g, surface.vertex_color, position, -ray.dir);
-    material_surface.ray_normal = surface.geometric_normal;
-    material_surface.ray_clearance = surface_clearance(surface.relative_position);
-    // The medium's thickness is given in the mesh's units.
-    material_surface.thickness *= draw_scale(draw);
-    let s = apply_decals(material_surface, surface.dp);
+    let s = pixel_surface(visibility_id, vec2<f32>(id.xy) + 0.5).shading;
     textureStore(hdr_output, id.xy, vec4<f32>(shade(s, sun_visibility_of_transparent(s)), 1.0));
 }

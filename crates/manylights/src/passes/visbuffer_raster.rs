@@ -25,10 +25,7 @@ pub struct VisbufferImages<'a> {
 
 impl VisbufferRaster {
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Result<Self> {
-        // Indexed draws transform shared vertices once, a faster raster (benchmarks/LOG.md, topic 5).
-        let indexed = ctx.features.contains(wgpu::Features::PRIMITIVE_INDEX);
-        let entry = if indexed { "passes/visbuffer_raster_indexed.wgsl" } else { "passes/visbuffer_raster_pulled.wgsl" };
-        let module = shaders::create_module(&ctx.device, &ShaderDesc::new(entry))?;
+        let (module, indexed) = raster_module(ctx)?;
         let layout = bindings::pipeline_layout(&ctx.device, "visbuffer_raster", &[&scene.bind_group_layout]);
         let raster = Raster {
             label: "visbuffer_raster",
@@ -70,18 +67,39 @@ impl VisbufferRaster {
     }
 
     fn draw(&self, pass: &mut wgpu::RenderPass, scene: &GpuScene, draws: &OrderedDraws, commands: &[DrawCommand]) {
-        if self.indexed {
-            super::draw_ordered(pass, scene, draws, commands, &self.pipelines);
-            return;
-        }
-        // Pulled vertices: a call per draw, each vertex_index a corner of its range of the indices.
-        pass.set_bind_group(0, &scene.bind_group, &[]);
-        for &(state, first, count) in &draws.runs {
-            pass.set_pipeline(&self.pipelines[&state]);
-            for &c in &draws.commands[first as usize..(first + count) as usize] {
-                let command = &commands[c as usize];
-                pass.draw(0..command.index_count, command.draw_index..command.draw_index + 1);
-            }
+        draw_visibility(pass, scene, draws, commands, &self.pipelines, self.indexed);
+    }
+}
+
+/// The raster's shader module, and whether it draws indexed: indexed draws transform shared
+/// vertices once, a faster raster (benchmarks/LOG.md, topic 5), where the device has
+/// `primitive_index`; pulled vertices otherwise.
+pub fn raster_module(ctx: &GpuContext) -> Result<(wgpu::ShaderModule, bool)> {
+    let indexed = ctx.features.contains(wgpu::Features::PRIMITIVE_INDEX);
+    let entry = if indexed { "passes/visbuffer_raster_indexed.wgsl" } else { "passes/visbuffer_raster_pulled.wgsl" };
+    Ok((shaders::create_module(&ctx.device, &ShaderDesc::new(entry))?, indexed))
+}
+
+/// Draws `draws` with `pipelines` built from [`raster_module`], `indexed` as it says.
+pub fn draw_visibility(
+    pass: &mut wgpu::RenderPass,
+    scene: &GpuScene,
+    draws: &OrderedDraws,
+    commands: &[DrawCommand],
+    pipelines: &HashMap<RasterState, wgpu::RenderPipeline>,
+    indexed: bool,
+) {
+    if indexed {
+        super::draw_ordered(pass, scene, draws, commands, pipelines);
+        return;
+    }
+    // Pulled vertices: a call per draw, each vertex_index a corner of its range of the indices.
+    pass.set_bind_group(0, &scene.bind_group, &[]);
+    for &(state, first, count) in &draws.runs {
+        pass.set_pipeline(&pipelines[&state]);
+        for &c in &draws.commands[first as usize..(first + count) as usize] {
+            let command = &commands[c as usize];
+            pass.draw(0..command.index_count, command.draw_index..command.draw_index + 1);
         }
     }
 }

@@ -21,3 +21,8 @@ fn visbuffer_masked(in: VertexOutput, @builtin(primitive_index) triangle: u32) -
     }
     return in.visibility_id + triangle;
 }
+
+@fragment
+fn visbuffer_blended(in: VertexOutput, @builtin(primitive_index) triangle: u32) {
+    append_blended_layer(in, in.visibility_id + triangle);
+}

@@ -21,3 +21,8 @@ fn visbuffer_masked(in: VertexOutput) -> @location(0) u32 {
     }
     return in.visibility_id;
 }
+
+@fragment
+fn visbuffer_blended(in: VertexOutput) {
+    append_blended_layer(in, in.visibility_id);
+}

@@ -6,9 +6,7 @@
 // through the neighbouring pixels give their screen-space derivatives analytically, which select
 // texture mips (no helper lanes or quad derivatives exist in compute); decals get the same from the
 // position's derivatives.
-#include "shading/shade.wgsl"
-#include "shading/triangle_surface.wgsl"
-#include "shading/draws.wgsl"
+#include "shading/pixel_surface.wgsl"
 #include "shading/sun_shadow_mask.wgsl"
 #include "$REFLECTIONS"
 
@@ -31,24 +29,9 @@ fn visbuffer_shade(@builtin(global_invocation_id) id: vec3<u32>) {
         textureStore(hdr_output, id.xy, vec4<f32>(sky_radiance(ray.dir), 1.0));
         return;
     }
-    let visibility_id = textureLoad(visibility, id.xy, 0).x;
-
-    let draw = draws[find_draw(visibility_id)];
-    let eye = frame.world_from_view[3].xyz;
-    let surface = triangle_surface(
-        draw,
-        visibility_id - draw.first_visibility_id,
-        eye,
-        ray,
-        camera_ray(pixel + vec2<f32>(1.0, 0.0)),
-        camera_ray(pixel + vec2<f32>(0.0, 1.0)),
-    );
-    let position = surface.relative_position + eye;
-    var material_surface = evaluate_material(materials[draw.material], surface.frame, surface.g, surface.vertex_color, position, -ray.dir);
-    material_surface.ray_normal = surface.geometric_normal;
-    material_surface.ray_clearance = surface_clearance(surface.relative_position);
-    let s = apply_decals(material_surface, surface.dp);
+    let surface = pixel_surface(textureLoad(visibility, id.xy, 0).x, pixel);
+    let s = surface.shading;
     var radiance = shade_pixel(s, sun_visibility(id.xy), id.xy);
-    radiance += reflected_radiance(s, surface.geometric_normal, pixel_footprint(surface.relative_position));
+    radiance += reflected_radiance(s, surface.triangle.geometric_normal, pixel_footprint(surface.triangle.relative_position));
     textureStore(hdr_output, id.xy, vec4<f32>(radiance, 1.0));
 }

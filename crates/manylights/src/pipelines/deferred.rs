@@ -22,7 +22,8 @@
 //!                                   │
 //!                                   ▼
 //!             transmissive_shade (transmissive draws' nearest ids rasterized, then shaded in
-//!             compute) ─▶ over hdr; transparent_shade (BLEND draws back to front, fragments) ─▶ over hdr
+//!             compute) ─▶ over hdr; blended_shade (BLEND draws' layers linked per pixel, sorted and
+//!             shaded in compute) ─▶ over hdr
 //!                                   │
 //!                                   ▼
 //!             post chain (depth of field, motion blur, exposure, bloom; tonemap) ─▶ ldr (Rgba8Unorm, sRGB-encoded)
@@ -62,7 +63,7 @@ pub struct DeferredPipeline {
     /// Present when `restir`'s lighting is denoised (`plan::FramePlan::denoises`).
     pub(super) denoiser: Option<Denoiser>,
     /// Present when the scene has blended or transmissive draws.
-    transparent: Option<TransparentShade>,
+    pub(super) transparent: Option<TransparentShade>,
     /// Depth of field, motion blur, exposure, bloom, vignette and tonemapping (`post/`).
     pub post: PostChain,
 }
@@ -112,7 +113,7 @@ impl DeferredPipeline {
             shadows,
             surface_motion: setup.surface_motion.then(|| SurfaceMotion::new(ctx, scene, &depth_view)).transpose()?,
             denoiser: methods.denoised.then(|| Denoiser::new(ctx, scene, &depth_view, &targets.hdr, (width, height))).transpose()?,
-            transparent: TransparentShade::new(ctx, scene, methods, structures, &targets.hdr)?,
+            transparent: TransparentShade::new(ctx, scene, methods, structures, (&targets.hdr, &targets.depth))?,
             post: PostChain::new(ctx, scene, post, PostImages { depth: &targets.depth, hdr: &targets.hdr, ldr: &targets.ldr })?,
             targets,
             gbuffer,

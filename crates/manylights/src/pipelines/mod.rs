@@ -66,6 +66,17 @@ impl FramePipeline {
         }
     }
 
+    /// Whether the blended surfaces' layers held every fragment of the frames since the last call;
+    /// if not, they grow and the frames must be rendered again.
+    pub fn blended_layers_fitted(&mut self, ctx: &GpuContext) -> Result<bool> {
+        let transparent = match self {
+            Self::Visbuffer(p) => p.transparent.as_mut(),
+            Self::Deferred(p) => p.transparent.as_mut(),
+            Self::Forward(p) => p.transparent.as_mut(),
+        };
+        transparent.map_or(Ok(true), |t| t.fitted(ctx))
+    }
+
     /// The post chain every pipeline ends with.
     pub fn post(&self) -> &PostChain {
         match self {
