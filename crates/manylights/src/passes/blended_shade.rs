@@ -22,15 +22,12 @@ const LAYER_BYTES: u64 = 12;
 /// Layers the list first holds per pixel of the image; a frame that needs more grows it.
 const FIRST_LAYERS_PER_PIXEL: u64 = 2;
 
-/// The shader for a set of shading methods: with `transmission`, light behind transmissive
-/// surfaces comes from the background's mip chain.
+/// The shader for a set of shading methods. Light behind transmissive surfaces comes from the
+/// background's mip chain; its bindings are declared even where the `TRANSMISSION` constant leaves
+/// them unread, so group 1's bindings run 0, 1, 2, … as the layout's entries do (`gpu/spirv.rs`).
 pub fn shader(methods: ShadingMethods) -> ShaderDesc {
-    let desc = super::shading_core_shader("passes/blended_shade.wgsl", methods, crate::plan::ShadingStage::Compute);
-    if methods.transmission {
-        desc.with("TRANSMITTED_LIGHT", "shading/transmitted_screen.wgsl")
-    } else {
-        desc
-    }
+    super::shading_core_shader("passes/blended_shade.wgsl", methods, crate::plan::ShadingStage::Compute)
+        .with("TRANSMITTED_LIGHT", "shading/transmitted_screen.wgsl")
 }
 
 pub struct BlendedShade {
@@ -58,8 +55,7 @@ pub struct BlendedShade {
     /// The HDR image before the blended surfaces: what lies behind them.
     behind: wgpu::Texture,
     /// Bound at group 1's bindings 0 and 1: the transmission background, or a texel standing in
-    /// where nothing is transmissive (the SPIR-V passed through for the shading core numbers its
-    /// bindings as the layout lists them, so the layout has no gaps).
+    /// where nothing is transmissive.
     background: (wgpu::TextureView, wgpu::Sampler),
 }
 

@@ -96,9 +96,8 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         shaders.push(super::forward_shade::shader(methods));
                     }
                     shaders.push(super::blended_shade::shader(methods));
-                    // Light through transmissive surfaces changes only the transparent passes.
+                    // Reflections leave the transmissive pass as it is: one shader for both.
                     if !reflections {
-                        shaders.push(super::blended_shade::shader(ShadingMethods { transmission: true, ..methods }));
                         shaders.push(super::transmissive_shade::shader(ShadingMethods { transmission: true, ..methods }));
                     }
                     if decals.works_in(PipelineKind::Visbuffer) {
