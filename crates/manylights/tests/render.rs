@@ -245,21 +245,25 @@ fn a_scene_far_from_the_origin_renders_like_one_at_the_origin() {
 
 #[test]
 fn raster_without_primitive_index_draws_the_same_image() {
-    let scene = demo_scene();
-    let frame = |ctx: GpuContext| {
-        let mut r = manylights::renderer::Renderer::new(ctx, &scene, config(WIDTH, HEIGHT, LightMethod::Brute)).expect("renderer");
-        r.render(&scene.cameras[0]).expect("frame");
-        r.read_hdr().expect("hdr")
-    };
-    let indexed = GpuContext::new().expect("a GPU adapter");
-    assert!(
-        indexed.features.contains(wgpu::Features::PRIMITIVE_INDEX),
-        "this test compares the indexed raster with the pulled one, and needs an adapter with primitive_index (lavapipe has it)"
-    );
-    let pulled = GpuContext::without(wgpu::Features::PRIMITIVE_INDEX).expect("a GPU adapter");
-    assert!(!pulled.features.contains(wgpu::Features::PRIMITIVE_INDEX));
-    let (a, b) = (frame(indexed), frame(pulled));
-    assert_eq!(max_abs_difference(&a, &b), 0.0, "indexed and pulled rasters draw different images");
+    // The demo, and draws of every kind (blended ones link their layers through the same raster).
+    let demo = demo_scene();
+    let every_kind = draws_of_every_kind();
+    for (scene, camera) in [(&demo, &demo.cameras[0]), (&every_kind.0, &every_kind.1)] {
+        let frame = |ctx: GpuContext| {
+            let mut r = manylights::renderer::Renderer::new(ctx, scene, config(WIDTH, HEIGHT, LightMethod::Brute)).expect("renderer");
+            r.render(camera).expect("frame");
+            r.read_hdr().expect("hdr")
+        };
+        let indexed = GpuContext::new().expect("a GPU adapter");
+        assert!(
+            indexed.features.contains(wgpu::Features::PRIMITIVE_INDEX),
+            "this test compares the indexed raster with the pulled one, and needs an adapter with primitive_index (lavapipe has it)"
+        );
+        let pulled = GpuContext::without(wgpu::Features::PRIMITIVE_INDEX).expect("a GPU adapter");
+        assert!(!pulled.features.contains(wgpu::Features::PRIMITIVE_INDEX));
+        let (a, b) = (frame(indexed), frame(pulled));
+        assert_eq!(max_abs_difference(&a, &b), 0.0, "indexed and pulled rasters draw different images");
+    }
 }
 
 /// Draws of every kind a raster pass orders: opaque, alpha-masked, double-sided, mirrored, blended

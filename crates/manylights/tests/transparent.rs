@@ -179,12 +179,34 @@ fn a_pixel_blends_its_nearest_layers_in_order_however_many_lie_behind() {
         stacked.meshes.push(Mesh { name: "panes".into(), primitives: vec![panes] });
         stacked.instances.push(Instance { mesh: stacked.meshes.len() - 1, world_from_local: Mat4::IDENTITY });
     }
-    let mut expected = wall_radiance;
-    for i in 0..20 {
-        expected = (colors[i % 2] + reflection) * 0.5 + expected * 0.5;
+    for pipeline in PipelineKind::ALL {
+        let (wall_radiance, _) = centre_and_corner(&ambient_wall().0, &camera, pipeline);
+        let mut expected = wall_radiance;
+        for i in 0..20 {
+            expected = (colors[i % 2] + reflection) * 0.5 + expected * 0.5;
+        }
+        let (centre, _) = centre_and_corner(&stacked, &camera, pipeline);
+        assert!((centre - expected).abs().max_element() <= 1e-4, "{}: twenty panes: {centre}, expected {expected}", pipeline.name());
     }
-    let (centre, _) = centre_and_corner(&stacked, &camera, PipelineKind::Visbuffer);
-    assert!((centre - expected).abs().max_element() <= 1e-4, "twenty panes: {centre}, expected {expected}");
+}
+
+#[test]
+fn wholly_transparent_fragments_take_none_of_a_pixels_layers() {
+    // Sixteen panes of alpha 0 in front of a red one: linked, they would be the sixteen layers the
+    // pixel keeps, and the red pane would not show.
+    const RED: Vec3 = Vec3::new(0.9, 0.1, 0.1);
+    let (wall, camera) = ambient_wall();
+    let mut one = wall.clone();
+    add_pane(&mut one, 0.5, RED, 0.5);
+    let (expected, _) = centre_and_corner(&one, &camera, PipelineKind::Visbuffer);
+    let mut veiled = one;
+    for i in 0..16 {
+        add_pane(&mut veiled, 1.0 + 0.05 * i as f32, Vec3::ONE, 0.0);
+    }
+    let (centre, _) = centre_and_corner(&veiled, &camera, PipelineKind::Visbuffer);
+    let (bare, _) = centre_and_corner(&wall, &camera, PipelineKind::Visbuffer);
+    assert!((expected - bare).abs().max_element() > 0.1, "the red pane does not show on its own");
+    assert!((centre - expected).abs().max_element() <= 1e-4, "behind sixteen clear panes: {centre}, expected {expected}");
 }
 
 #[test]

@@ -11,8 +11,9 @@ use crate::{Error, Result};
 
 /// Storage buffers the shading passes bind at once: the scene's ten (four for geometry and
 /// materials, three for the ray hierarchy, restir's reservoirs, the denoiser's samples, the surface
-/// motions), the lights' seven (their light tree too) and the decals' six (`shading/*_bindings.wgsl`).
-const REQUIRED_STORAGE_BUFFERS: u32 = 23;
+/// motions), the lights' seven (their light tree too), the decals' six (`shading/*_bindings.wgsl`)
+/// and the blended surfaces' layer heads and layers (`passes/blended_shade.wgsl`).
+const REQUIRED_STORAGE_BUFFERS: u32 = 25;
 /// Features the renderer uses when the adapter has them; none is required by every scene.
 /// `primitive_index` lets the visibility raster draw indexed; `subgroups` let passes walk BVHs a
 /// subgroup at a time where that is faster (`plan::query_walks`).

@@ -367,7 +367,7 @@ impl GpuScene {
         let moving: Vec<u32> =
             opaque.iter().copied().filter(|&c| self.moving_draws[self.draw_commands[c as usize].draw_index as usize]).collect();
         // Nearest first: early depth tests skip what a nearer transmissive one hides. Blended layers
-        // are sorted per pixel, so their draws' order only matters as it does for the others.
+        // are sorted per pixel: their draws need only their runs of one raster state.
         let transparent = front_to_back(&self.transparent_draw_commands, &view, eye);
         let transmissive = front_to_back(&self.transmissive_draw_commands, &view, eye);
         let opaque_count = self.draw_commands.len() as u32;

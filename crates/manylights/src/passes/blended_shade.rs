@@ -20,7 +20,7 @@ use crate::{Error, Result};
 /// Bytes of a layer (`BlendedLayer`: id, depth, link).
 const LAYER_BYTES: u64 = 12;
 /// Layers the list first holds per pixel of the image; a frame that needs more grows it.
-const FIRST_LAYERS_PER_PIXEL: u64 = 2;
+const FIRST_LAYERS_PER_PIXEL: u64 = 1;
 
 /// The shader for a set of shading methods. Light behind transmissive surfaces comes from the
 /// background's mip chain; its bindings are declared even where the `TRANSMISSION` constant leaves
@@ -189,6 +189,10 @@ impl BlendedShade {
         inputs: &FrameInputs,
         depth: &wgpu::TextureView,
     ) {
+        let scene = inputs.scene;
+        if scene.frame_draws.transparent.commands.is_empty() {
+            return;
+        }
         encoder.clear_buffer(&self.heads, 0, None);
         // The count of this frame's layers; the most needed stays until the renderer reads it.
         encoder.clear_buffer(&self.status, 0, Some(4));
@@ -202,11 +206,10 @@ impl BlendedShade {
                 multiview_mask: None,
             });
             pass.set_bind_group(1, &self.raster_group, &[]);
-            let scene = inputs.scene;
             draw_visibility(&mut pass, scene, &scene.frame_draws.transparent, &scene.transparent_draw_commands, &self.raster, self.indexed);
         }
         encoder.copy_texture_to_texture(self.hdr.as_image_copy(), self.behind.as_image_copy(), self.hdr.size());
-        let groups = [&inputs.scene.bind_group, &self.shade_group, &inputs.lights.bind_group, &inputs.decals.bind_group];
+        let groups = [&scene.bind_group, &self.shade_group, &inputs.lights.bind_group, &inputs.decals.bind_group];
         self.step.record(encoder, timer, &groups, super::dispatch_size(self.hdr.width(), self.hdr.height()));
     }
 
@@ -223,10 +226,10 @@ impl BlendedShade {
         }
         if needed > self.max_capacity {
             return Err(Error::InvalidScene(format!(
-                "the blended (glTF BLEND) surfaces in this view need {needed} layers ({} MiB), over this GPU's storage binding \
-                 limit of {} MiB; render a smaller image, or make some of those materials OPAQUE or MASK",
+                "the blended (glTF BLEND) surfaces in this view need {needed} layers ({} MiB), over the {} MiB this GPU's \
+                 storage bindings hold; render a smaller image, or make some of those materials OPAQUE or MASK",
                 (needed * LAYER_BYTES) >> 20,
-                ctx.limits.max_storage_buffer_binding_size >> 20,
+                (self.max_capacity * LAYER_BYTES) >> 20,
             )));
         }
         self.capacity = (needed * 5 / 4).min(self.max_capacity);
@@ -279,4 +282,26 @@ fn bind_groups(
         ],
     );
     (raster, shade)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The layers' and the status's sizes as both the raster and the compute pass read them.
+    #[test]
+    fn layer_records_match_their_wgsl_layout() {
+        for entry in ["passes/visbuffer_raster_indexed.wgsl", "passes/blended_shade.wgsl"] {
+            let source = if entry.contains("blended_shade") { shader(ShadingMethods::default()) } else { ShaderDesc::new(entry) };
+            let module = naga::front::wgsl::parse_str(&source.compose().unwrap()).unwrap();
+            let mut layouter = naga::proc::Layouter::default();
+            layouter.update(module.to_ctx()).unwrap();
+            let span = |name: &str| {
+                let (handle, _) = module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)).unwrap();
+                u64::from(layouter[handle].size)
+            };
+            assert_eq!(span("BlendedLayer"), LAYER_BYTES, "{entry}");
+            assert_eq!(span("BlendedLayerStatus"), 8, "{entry}: the status buffer's size");
+        }
+    }
 }

@@ -47,7 +47,7 @@ impl TransparentShade {
     }
 
     /// Copies the opaque image that transmissive surfaces see through, shades the transmissive, then
-    /// the blended surfaces over `image`.
+    /// the blended surfaces, over the HDR image given to `new`, tested against `image.depth`.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs, image: ShadedImage) {
         if let Some(background) = &self.background {
             background.record(encoder, timer.as_deref_mut());

@@ -48,13 +48,18 @@ fn raster_alpha_covers(in: VertexOutput) -> bool {
 @group(1) @binding(2) var<storage, read_write> layers: array<BlendedLayer>;
 @group(1) @binding(3) var<storage, read_write> layer_status: BlendedLayerStatus;
 
-// Links a blended fragment into its pixel's layers if it lies in front of the shaded surfaces. The
-// test is the shader's own: a fragment's stores happen even where a late depth test rejects it. A
-// fragment past the layers' capacity is dropped, and the count it needed recorded: the renderer
-// grows the layers and renders the frame again.
+// Links a blended fragment into its pixel's layers if it lies in front of the shaded surfaces and
+// is not wholly transparent (it would blend to nothing, and take one of the 16 layers a pixel
+// keeps). The depth test is the shader's own: a fragment's stores happen even where a late depth
+// test rejects it. A fragment past the layers' capacity is dropped, and the count it needed
+// recorded: the renderer grows the layers and renders the frame again.
 fn append_blended_layer(in: VertexOutput, visibility_id: u32) {
+    // Before any branch: the texture's derivatives need the whole quad.
+    let material = materials[draws[in.draw_index].material];
+    let g = UvGradients(in.uv, dpdx(in.uv), dpdy(in.uv));
+    let alpha = material_base_color(material, g, vec4<f32>(1.0, 1.0, 1.0, in.alpha)).a;
     let pixel = vec2<u32>(in.clip_position.xy);
-    if in.clip_position.z <= textureLoad(shaded_depth, pixel, 0) {
+    if alpha <= 0.0 || in.clip_position.z <= textureLoad(shaded_depth, pixel, 0) {
         return;
     }
     let layer = atomicAdd(&layer_status.count, 1u);

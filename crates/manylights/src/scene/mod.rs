@@ -133,8 +133,8 @@ pub enum AlphaMode {
     Mask {
         cutoff: f32,
     },
-    /// Blended over what lies behind it by its base colour's alpha, in the transparent pass after
-    /// the opaque surfaces are shaded (`passes/transparent_shade.rs`).
+    /// Blended over what lies behind it by its base colour's alpha, after the opaque surfaces are
+    /// shaded, each pixel's layers sorted far to near (`passes/blended_shade.rs`).
     Blend,
 }
 
