@@ -239,13 +239,21 @@ deform() {
 # The material extensions' path, vertex colours, the second UV set, transmission and sheen: Sponza
 # with every material coated, every vertex coloured, every texture on TEXCOORD_1, fabrics and vases
 # transmissive, or fabrics with a sheen (scripts/make-bench-scenes.py), against Sponza as it is; 28k
-# lights, every pipeline.
+# lights, every pipeline. Then GasStation's blended surfaces (from .bench/assets, as for `assets`).
 materials() {
   local s p
   for s in lite coated colored uv1 glass sheen; do
     printf 'gltf = "sponza_%s/Sponza.gltf"\nsky = "off"\n[camera]\nindex = 0\n[sun]\ndirection = [0.25, -1.0, 0.15]\nilluminance = 2.5\n' $s >.bench/sun_$s.toml
     for p in visbuffer deferred forward; do
       run materials_${s}_$p 200 --scene .bench/sun_$s.toml --lights 28000 --seed 1 --light-method bvh --decal-method off --pipeline $p
+    done
+  done
+  # With no flags, 28k lights and 100k decals.
+  for p in visbuffer deferred forward; do
+    for s in own "lights 28000" "decals 100000"; do
+      set -- $s
+      FIX_EXPOSURE= WARMUP=10 run materials_blended_${1}_$p 50 --scene .bench/assets/gas_station/GasStation.gltf --pipeline $p \
+        ${2:+--$1 $2 --seed 1}
     done
   done
 }
