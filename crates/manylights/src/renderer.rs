@@ -392,16 +392,18 @@ impl Renderer {
             uniforms.previous_clip_from_world = previous.clip_from_world(self.config.width, self.config.height).to_cols_array_2d();
             self.scene.write_frame(&self.ctx.queue, &uniforms);
             self.move_instances(self.time, parity)?;
-            self.scene.order_draws(&self.ctx.queue, camera.clip_from_world(self.config.width, self.config.height), camera.position());
-            // Deformed meshes first: every pass after draws or traces them.
+            // Deformed meshes first: every pass after draws or traces them, and the draws are
+            // ordered and culled by their boxes at this time.
             if let Some(deform) = &mut self.deform {
                 let animation = self.motion.as_ref().and_then(|m| m.animation.as_ref());
                 // As for moving instances: across the loop's restart, no motion.
                 let before = self.time - FRAME_INTERVAL;
                 let before = if animation.is_some_and(|a| a.loops_between(before, self.time)) { self.time } else { before };
-                deform.write_time(&self.ctx.queue, self.time, before, animation);
+                let boxes = deform.write_time(&self.ctx.queue, self.time, before, animation);
+                self.scene.place_deformed(&boxes);
                 deform.record(&mut encoder, self.timer.as_mut());
             }
+            self.scene.order_draws(&self.ctx.queue, camera.clip_from_world(self.config.width, self.config.height), camera.position());
             if let Some(refit) = &self.refit {
                 refit.record(&mut encoder, self.timer.as_mut(), parity);
             }

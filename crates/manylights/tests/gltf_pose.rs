@@ -236,3 +236,33 @@ fn every_frame_traces_the_bar_posed_at_its_own_time() {
     let stale = renderer.check_ray_hierarchy(1, last - 10.0 * FRAME_INTERVAL).unwrap_err().to_string();
     assert!(stale.contains("off its deformation"), "{stale}");
 }
+
+#[test]
+fn the_raster_culls_the_bar_by_its_posed_box() {
+    let (scene, side) = bar_scene();
+    // Looking away from the bar over the floor's far corner: only the floor is drawn.
+    let away = Camera::look_at("away", Vec3::new(4.0, 1.0, 4.0), Vec3::new(6.0, 0.0, 6.0), 50f32.to_radians(), 0.1);
+    // A narrow view of where the bent bar's top reaches at the end of its bend, left of the
+    // straight bar's box: the bar is drawn there only when bent.
+    let bent_top = Camera::look_at("bent top", Vec3::new(-0.8, 1.7, -3.0), Vec3::new(-0.8, 1.7, 0.0), 8f32.to_radians(), 0.1);
+    let mut gpu = renderer(&scene, config(PipelineKind::Visbuffer));
+    for (camera, time, drawn) in [(&side, 0.5, 2), (&away, 0.5, 1), (&bent_top, 0.0, 0), (&bent_top, 0.95, 1)] {
+        gpu.time = time;
+        gpu.render(camera).unwrap();
+        assert_eq!(gpu.scene.drawn_count(), drawn, "{} at {time}", camera.name);
+    }
+    // The bent top fills the middle of that view, as the bar posed on the CPU does.
+    let reference = render_with(&posed_on_the_cpu(&scene, 0.95), &bent_top, config(PipelineKind::Visbuffer)).1;
+    gpu.time = 0.95;
+    gpu.render(&bent_top).unwrap();
+    let posed = gpu.read_hdr().unwrap();
+    let centre = |image: &manylights::renderer::Image<[f32; 4]>| pixel(image, WIDTH / 2, HEIGHT / 2);
+    let sky = pixel(&posed, 0, 0);
+    assert!((0..3).any(|c| (centre(&posed)[c] - sky[c]).abs() > 0.05), "the bar does not fill the view's centre");
+    assert!(
+        (0..3).all(|c| (centre(&posed)[c] - centre(&reference)[c]).abs() < 1e-3),
+        "{:?} against {:?}",
+        centre(&posed),
+        centre(&reference)
+    );
+}

@@ -254,7 +254,8 @@ pub struct DrawCommand {
     pub center: glam::Vec3,
     pub local_center: glam::Vec3,
     /// The primitive's bounds in world space, which raster passes skip the draw outside the view
-    /// by, and in the mesh's space; `None` for deformed meshes, whose vertices move on the GPU.
+    /// by, and in the mesh's space; a deformed mesh's box as the frame deforms it (`place_deformed`),
+    /// `None` until its first frame.
     pub bounds: Option<crate::scene::Aabb>,
     pub local_bounds: Option<crate::scene::Aabb>,
 }
@@ -314,6 +315,8 @@ pub struct GpuScene {
     /// follow): moving instances rewrites their draws (`move_instances`).
     draws: Vec<GpuDraw>,
     instance_first_draw: Vec<usize>,
+    /// The mesh each draw draws: deformed meshes' draws are boxed anew each frame (`place_deformed`).
+    draw_meshes: Vec<usize>,
     draw_buffer: wgpu::Buffer,
     /// Every primitive's vertices, and the scene's ray hierarchy (`rays::RayStructure`): nodes,
     /// triangles, instances. Deformed meshes rewrite the first two on the GPU.
@@ -345,6 +348,30 @@ impl GpuScene {
     /// rejects what nearer draws hide.
     fn draw_order(&self, view: &glam::Mat4, eye: glam::Vec3) -> Vec<u32> {
         front_to_back(&self.draw_commands, view, eye)
+    }
+
+    /// Boxes the deformed meshes' draws as this frame deforms them (`boxes`: a mesh and its box in
+    /// its own space, from `passes::deform::Deform::write_time`), so raster passes skip those outside
+    /// the view as they skip other draws. Call after `move_instances`, before `order_draws`.
+    pub fn place_deformed(&mut self, boxes: &[(usize, crate::scene::Aabb)]) {
+        let boxes: std::collections::HashMap<usize, crate::scene::Aabb> = boxes.iter().copied().collect();
+        let mut placed = false;
+        for command in self.draw_commands.iter_mut().chain(&mut self.transparent_draw_commands).chain(&mut self.transmissive_draw_commands)
+        {
+            let Some(&local) = boxes.get(&self.draw_meshes[command.draw_index as usize]) else { continue };
+            if command.local_bounds == Some(local) {
+                continue;
+            }
+            let world_from_local = glam::Mat4::from_cols_array_2d(&self.draws[command.draw_index as usize].world_from_local);
+            command.local_center = local.center();
+            command.center = world_from_local.transform_point3(command.local_center);
+            command.local_bounds = Some(local);
+            command.bounds = Some(local.transformed(&glam::Affine3A::from_mat4(world_from_local)));
+            placed = true;
+        }
+        if placed {
+            self.ordered_for = None;
+        }
     }
 
     /// How many of the scene's draws (opaque, blended and transmissive) the last frame drew: those
@@ -431,6 +458,8 @@ impl GpuScene {
         let transforms: Vec<[[f32; 4]; 4]> = draws.iter().map(|d| d.world_from_local).collect();
         let previous_transforms = storage_buffer(device, "previous draw transforms", &transforms, limit, wgpu::BufferUsages::COPY_DST)?;
         let moving_draws = moving_draws(scene, &instance_first_draw, draws.len());
+        // One draw per instance and primitive, in order.
+        let draw_meshes = scene.instances.iter().flat_map(|i| std::iter::repeat_n(i.mesh, scene.meshes[i.mesh].primitives.len())).collect();
         let deformed_vertices = if scene.deformers.is_empty() { 0 } else { vertices.len() };
         let previous_positions =
             storage_buffer(device, "previous positions", &vec![[0f32; 4]; deformed_vertices], limit, wgpu::BufferUsages::empty())?;
@@ -531,6 +560,7 @@ impl GpuScene {
             index_buffer,
             draws,
             instance_first_draw,
+            draw_meshes,
             draw_buffer,
             previous_transforms,
             previous_positions,

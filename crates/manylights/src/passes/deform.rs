@@ -1,12 +1,13 @@
 //! Deformed meshes' vertices, every frame, before anything draws or traces them (`deform.wgsl`): one
 //! dispatch per deformed mesh, from a copy of its vertices at rest, by a wave or by its pose (morph
 //! targets and skin, whose weights and joint matrices the CPU evaluates from the animation). It also
-//! writes where each deformed vertex was a frame earlier, for the velocities of motion blur.
+//! writes where each deformed vertex was a frame earlier, for the velocities of motion blur. On the
+//! CPU it boxes each deformed mesh as the frame deforms it, which the raster passes cull it by.
 
 use crate::gpu::{bindings, shaders::ShaderDesc, GpuContext, GpuScene, GpuTimer};
 use crate::scene::animation::Animation;
-use crate::scene::deform::{pose_state, Deformation, Deformer, PoseClock};
-use crate::scene::{Scene, Vertex};
+use crate::scene::deform::{pose_state, Deformation, DeformedReach, Deformer, PoseClock};
+use crate::scene::{Aabb, Scene, Vertex};
 use crate::Result;
 
 /// Keep in sync with `DeformJob` in `deform.wgsl`.
@@ -41,6 +42,7 @@ const JOB_STRIDE: u64 = 256;
 struct Job {
     gpu: DeformJob,
     deformer: Deformer,
+    reach: DeformedReach,
 }
 
 pub struct Deform {
@@ -85,6 +87,7 @@ impl Deform {
             for primitive in &scene.meshes[deformer.mesh].primitives {
                 rest.extend_from_slice(&primitive.vertices);
             }
+            let reach = deformer.reach(&rest[rest_first as usize..]);
             let mut gpu = DeformJob { first_vertex, vertex_count: rest.len() as u32 - rest_first, rest_first, ..Default::default() };
             match &deformer.deformation {
                 Deformation::Wave(wave) => {
@@ -115,7 +118,7 @@ impl Deform {
                     state_len_total += state_len(gpu.joint_count as usize, pose.targets.len());
                 }
             }
-            jobs.push(Job { gpu, deformer: deformer.clone() });
+            jobs.push(Job { gpu, deformer: deformer.clone(), reach });
         }
         let max_invocations = u64::from(ctx.limits.max_compute_workgroups_per_dimension) * 64;
         if let Some(job) = jobs.iter().find(|job| u64::from(job.gpu.vertex_count) > max_invocations) {
@@ -183,7 +186,11 @@ impl Deform {
 
     /// Writes the frame's time, and the time a frame before (for the velocities), for the next frame
     /// submitted; poses take their joints and weights from `animation` at those times.
-    pub fn write_time(&mut self, queue: &wgpu::Queue, time: f32, previous_time: f32, animation: Option<&Animation>) {
+    /// Writes the jobs' times (and a pose's state) for a frame at `time` after one at
+    /// `previous_time`; returns each deformed mesh's box at `time`, in its own space.
+    pub fn write_time(&mut self, queue: &wgpu::Queue, time: f32, previous_time: f32, animation: Option<&Animation>) -> Vec<(usize, Aabb)> {
+        let clock = PoseClock::at(time, animation);
+        let bounds = self.jobs.iter().map(|job| (job.deformer.mesh, job.reach.bounds(&job.deformer, &clock))).collect();
         let posed = self.jobs.iter().any(|job| matches!(job.deformer.deformation, Deformation::Pose(_)));
         let clocks = posed.then(|| [time, previous_time].map(|t| PoseClock::at(t, animation)));
         for (i, job) in self.jobs.iter_mut().enumerate() {
@@ -203,6 +210,7 @@ impl Deform {
                 queue.write_buffer(&self.state_buffer, u64::from(job.gpu.state_first) * 16, bytemuck::cast_slice(&state));
             }
         }
+        bounds
     }
 
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {

@@ -121,8 +121,8 @@ pub struct DeformedBlas {
     /// level can be built on the CPU before the GPU refits: a wave's rest box grown by its amplitude,
     /// a pose's box at the frame's time (`set_time`).
     pub bounds: Aabb,
-    /// A pose's measures for its boxes.
-    pose_bounds: Option<crate::scene::pose::PoseBounds>,
+    /// What its boxes are made from.
+    reach: crate::scene::deform::DeformedReach,
     /// The mesh's vertices at rest, primitive after primitive, and each stored triangle's corners
     /// among them, in the copies' order: the CPU reference the refit is checked against
     /// (`deformed_triangles`).
@@ -145,14 +145,12 @@ impl DeformedBlas {
 
     /// Whether a pose deforms it (whose box moves with the animation).
     pub fn is_posed(&self) -> bool {
-        self.pose_bounds.is_some()
+        self.reach.is_posed()
     }
 
     /// Moves a pose's box to the clock's time; a wave's holds every time.
     pub fn set_time(&mut self, clock: &crate::scene::deform::PoseClock) {
-        if let (crate::scene::deform::Deformation::Pose(pose), Some(measures)) = (&self.deformer.deformation, &self.pose_bounds) {
-            self.bounds = pose.bounds(measures, &crate::scene::deform::pose_state(pose, clock));
-        }
+        self.bounds = self.reach.bounds(&self.deformer, clock);
     }
 }
 
@@ -313,22 +311,15 @@ impl RayStructure {
                     })
                     .collect();
                 let rest: Vec<crate::scene::Vertex> = mesh.primitives.iter().flat_map(|p| p.vertices.iter().copied()).collect();
-                let rest_box = blases[b].bvh.nodes[0].bounds();
-                let (bounds, pose_bounds) = match &deformer.deformation {
-                    crate::scene::deform::Deformation::Wave(wave) => {
-                        let grow = Vec3::splat(wave.amplitude);
-                        (Aabb::new(rest_box.min - grow, rest_box.max + grow), None)
-                    }
-                    crate::scene::deform::Deformation::Pose(pose) => (rest_box, Some(crate::scene::pose::PoseBounds::of(pose, &rest))),
-                };
+                let reach = deformer.reach(&rest);
                 let mut deformed = DeformedBlas {
                     mesh: deformer.mesh,
                     deformer: deformer.clone(),
                     roots,
                     triangles: [blas_triangles[b].clone(), blas_triangles[second].clone()],
                     refit_order: [order.clone(), order.iter().map(|n| n + shift).collect()],
-                    bounds,
-                    pose_bounds,
+                    bounds: Aabb::EMPTY,
+                    reach,
                     rest,
                     corners,
                 };

@@ -4,7 +4,7 @@
 //! deformed mesh is refitted on the GPU every frame (`rays/refit.rs`). This CPU twin is the tests'
 //! reference.
 
-use super::{animation::Animation, pose::Pose, Vertex};
+use super::{animation::Animation, pose::Pose, pose::PoseBounds, Aabb, Vertex};
 use glam::Vec3;
 
 /// A sine wave travelling along `direction` (mesh space): each vertex moves along its normal by
@@ -28,6 +28,30 @@ pub enum Deformation {
     Pose(Box<Pose>),
 }
 
+/// What bounds a deformed mesh (`Deformer::reach`): a wave stays within its rest box grown by its
+/// amplitude; a pose's box follows its joints and weights.
+#[derive(Clone, Debug, PartialEq)]
+pub enum DeformedReach {
+    Fixed(Aabb),
+    Posed(PoseBounds),
+}
+
+impl DeformedReach {
+    /// A box, in the mesh's space, holding the mesh `deformer` deforms as at `clock`.
+    pub fn bounds(&self, deformer: &Deformer, clock: &PoseClock) -> Aabb {
+        match (self, &deformer.deformation) {
+            (Self::Posed(measures), Deformation::Pose(pose)) => pose.bounds(measures, &pose_state(pose, clock)),
+            (Self::Fixed(bounds), _) => *bounds,
+            (Self::Posed(measures), _) => measures.rest,
+        }
+    }
+
+    /// Whether the box moves with the animation.
+    pub fn is_posed(&self) -> bool {
+        matches!(self, Self::Posed(_))
+    }
+}
+
 /// A mesh (index into `Scene::meshes`) and what deforms it: every instance of it deforms alike.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Deformer {
@@ -38,6 +62,21 @@ pub struct Deformer {
 impl Deformer {
     pub fn wave(mesh: usize, wave: Wave) -> Self {
         Self { mesh, deformation: Deformation::Wave(wave) }
+    }
+
+    /// What bounds the mesh however it deforms, measured from its vertices at rest (`rest`).
+    pub fn reach(&self, rest: &[Vertex]) -> DeformedReach {
+        match &self.deformation {
+            Deformation::Wave(wave) => {
+                let mut bounds = Aabb::EMPTY;
+                for v in rest {
+                    bounds.grow_point(Vec3::from(v.position));
+                }
+                let grow = Vec3::splat(wave.amplitude.abs());
+                DeformedReach::Fixed(Aabb::new(bounds.min - grow, bounds.max + grow))
+            }
+            Deformation::Pose(pose) => DeformedReach::Posed(PoseBounds::of(pose, rest)),
+        }
     }
 
     /// The mesh's vertices (`rest`, primitive after primitive) deformed to `time` (seconds of scene
