@@ -254,8 +254,8 @@ pub struct DrawCommand {
     pub center: glam::Vec3,
     pub local_center: glam::Vec3,
     /// The primitive's bounds in world space, which raster passes skip the draw outside the view
-    /// by, and in the mesh's space; a deformed mesh's box as the frame deforms it (`place_deformed`),
-    /// `None` until its first frame.
+    /// by, and in the mesh's space; for a deformed mesh, the whole mesh's box as the frame deforms
+    /// it (`place_deformed`), `None` until its first frame.
     pub bounds: Option<crate::scene::Aabb>,
     pub local_bounds: Option<crate::scene::Aabb>,
 }
@@ -315,8 +315,10 @@ pub struct GpuScene {
     /// follow): moving instances rewrites their draws (`move_instances`).
     draws: Vec<GpuDraw>,
     instance_first_draw: Vec<usize>,
-    /// The mesh each draw draws: deformed meshes' draws are boxed anew each frame (`place_deformed`).
+    /// The mesh each draw draws, and the deformed meshes' commands (opaque, blended, transmissive),
+    /// boxed anew each frame (`place_deformed`).
     draw_meshes: Vec<usize>,
+    deformed_commands: [Vec<u32>; 3],
     draw_buffer: wgpu::Buffer,
     /// Every primitive's vertices, and the scene's ray hierarchy (`rays::RayStructure`): nodes,
     /// triangles, instances. Deformed meshes rewrite the first two on the GPU.
@@ -352,24 +354,31 @@ impl GpuScene {
 
     /// Boxes the deformed meshes' draws as this frame deforms them (`boxes`: a mesh and its box in
     /// its own space, from `passes::deform::Deform::write_time`), so raster passes skip those outside
-    /// the view as they skip other draws. Call after `move_instances`, before `order_draws`.
+    /// the view as they skip other draws. Call after `move_instances`, before `order_draws`; the
+    /// last order is kept while no deformed draw crosses the view's edge.
     pub fn place_deformed(&mut self, boxes: &[(usize, crate::scene::Aabb)]) {
-        let boxes: std::collections::HashMap<usize, crate::scene::Aabb> = boxes.iter().copied().collect();
-        let mut placed = false;
-        for command in self.draw_commands.iter_mut().chain(&mut self.transparent_draw_commands).chain(&mut self.transmissive_draw_commands)
-        {
-            let Some(&local) = boxes.get(&self.draw_meshes[command.draw_index as usize]) else { continue };
-            if command.local_bounds == Some(local) {
-                continue;
+        let view = self.ordered_for.map(|(view, _)| view);
+        let seen = |command: &DrawCommand, view: &glam::Mat4| !command.bounds.is_some_and(|b| b.outside_view(view));
+        let mut reorder = false;
+        let lists = [&mut self.draw_commands, &mut self.transparent_draw_commands, &mut self.transmissive_draw_commands];
+        for (commands, deformed) in lists.into_iter().zip(&self.deformed_commands) {
+            for &c in deformed {
+                let command = &mut commands[c as usize];
+                let mesh = self.draw_meshes[command.draw_index as usize];
+                let Some(&(_, local)) = boxes.iter().find(|(m, _)| *m == mesh) else { continue };
+                if command.local_bounds == Some(local) {
+                    continue;
+                }
+                let seen_before = view.map(|v| seen(command, &v));
+                let world_from_local = glam::Mat4::from_cols_array_2d(&self.draws[command.draw_index as usize].world_from_local);
+                command.local_center = local.center();
+                command.center = world_from_local.transform_point3(command.local_center);
+                command.local_bounds = Some(local);
+                command.bounds = Some(local.transformed(&glam::Affine3A::from_mat4(world_from_local)));
+                reorder |= view.is_some_and(|v| seen_before != Some(seen(command, &v)));
             }
-            let world_from_local = glam::Mat4::from_cols_array_2d(&self.draws[command.draw_index as usize].world_from_local);
-            command.local_center = local.center();
-            command.center = world_from_local.transform_point3(command.local_center);
-            command.local_bounds = Some(local);
-            command.bounds = Some(local.transformed(&glam::Affine3A::from_mat4(world_from_local)));
-            placed = true;
         }
-        if placed {
+        if reorder {
             self.ordered_for = None;
         }
     }
@@ -447,7 +456,7 @@ impl GpuScene {
         let textures = SceneTextures::upload(ctx, scene, max_texture_size)?;
         let materials = textures.materials(scene);
         let Geometry { vertices, indices, primitive_ranges } = concatenate_primitives(scene);
-        let DrawList { draws, instance_first_draw, draw_commands, transparent_draw_commands, transmissive_draw_commands } =
+        let DrawList { draws, draw_meshes, instance_first_draw, draw_commands, transparent_draw_commands, transmissive_draw_commands } =
             DrawList::new(scene, &primitive_ranges)?;
 
         let limit = ctx.limits.max_storage_buffer_binding_size;
@@ -458,8 +467,10 @@ impl GpuScene {
         let transforms: Vec<[[f32; 4]; 4]> = draws.iter().map(|d| d.world_from_local).collect();
         let previous_transforms = storage_buffer(device, "previous draw transforms", &transforms, limit, wgpu::BufferUsages::COPY_DST)?;
         let moving_draws = moving_draws(scene, &instance_first_draw, draws.len());
-        // One draw per instance and primitive, in order.
-        let draw_meshes = scene.instances.iter().flat_map(|i| std::iter::repeat_n(i.mesh, scene.meshes[i.mesh].primitives.len())).collect();
+        let deformed: BTreeSet<usize> = scene.deformers.iter().map(|d| d.mesh).collect();
+        let deformed_commands = [&draw_commands, &transparent_draw_commands, &transmissive_draw_commands].map(|commands| {
+            (0..commands.len() as u32).filter(|&c| deformed.contains(&draw_meshes[commands[c as usize].draw_index as usize])).collect()
+        });
         let deformed_vertices = if scene.deformers.is_empty() { 0 } else { vertices.len() };
         let previous_positions =
             storage_buffer(device, "previous positions", &vec![[0f32; 4]; deformed_vertices], limit, wgpu::BufferUsages::empty())?;
@@ -561,6 +572,7 @@ impl GpuScene {
             draws,
             instance_first_draw,
             draw_meshes,
+            deformed_commands,
             draw_buffer,
             previous_transforms,
             previous_positions,
@@ -786,6 +798,8 @@ fn concatenate_primitives(scene: &Scene) -> Geometry {
 /// transmissive.
 struct DrawList {
     draws: Vec<GpuDraw>,
+    /// The mesh each draw draws.
+    draw_meshes: Vec<usize>,
     instance_first_draw: Vec<usize>,
     draw_commands: Vec<DrawCommand>,
     transparent_draw_commands: Vec<DrawCommand>,
@@ -796,6 +810,7 @@ impl DrawList {
     fn new(scene: &Scene, primitive_ranges: &[Vec<(u32, u32, u32)>]) -> Result<Self> {
         let mut list = Self {
             draws: Vec::new(),
+            draw_meshes: Vec::new(),
             instance_first_draw: Vec::with_capacity(scene.instances.len()),
             draw_commands: Vec::new(),
             transparent_draw_commands: Vec::new(),
@@ -834,6 +849,7 @@ impl DrawList {
                         mirrored: handedness < 0.0,
                     },
                 });
+                list.draw_meshes.push(instance.mesh);
                 list.draws.push(GpuDraw {
                     world_from_local,
                     normal_from_local,

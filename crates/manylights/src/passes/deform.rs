@@ -185,14 +185,21 @@ impl Deform {
     }
 
     /// Writes the frame's time, and the time a frame before (for the velocities), for the next frame
-    /// submitted; poses take their joints and weights from `animation` at those times.
-    /// Writes the jobs' times (and a pose's state) for a frame at `time` after one at
-    /// `previous_time`; returns each deformed mesh's box at `time`, in its own space.
+    /// submitted; poses take their joints and weights from `animation` at those times. Returns each
+    /// deformed mesh's box at `time`, in its own space.
     pub fn write_time(&mut self, queue: &wgpu::Queue, time: f32, previous_time: f32, animation: Option<&Animation>) -> Vec<(usize, Aabb)> {
-        let clock = PoseClock::at(time, animation);
-        let bounds = self.jobs.iter().map(|job| (job.deformer.mesh, job.reach.bounds(&job.deformer, &clock))).collect();
         let posed = self.jobs.iter().any(|job| matches!(job.deformer.deformation, Deformation::Pose(_)));
         let clocks = posed.then(|| [time, previous_time].map(|t| PoseClock::at(t, animation)));
+        // Waves' boxes hold at every time; poses' follow the clock, evaluated once for both.
+        let unposed;
+        let now = match &clocks {
+            Some([now, _]) => now,
+            None => {
+                unposed = PoseClock::at(time, None);
+                &unposed
+            }
+        };
+        let bounds = self.jobs.iter().map(|job| (job.deformer.mesh, job.reach.bounds(&job.deformer, now))).collect();
         for (i, job) in self.jobs.iter_mut().enumerate() {
             job.gpu.time = time;
             job.gpu.previous_time = previous_time;

@@ -68,12 +68,16 @@ impl Deformer {
     pub fn reach(&self, rest: &[Vertex]) -> DeformedReach {
         match &self.deformation {
             Deformation::Wave(wave) => {
+                // Each vertex moves along its normal, as given, by at most the amplitude.
                 let mut bounds = Aabb::EMPTY;
                 for v in rest {
-                    bounds.grow_point(Vec3::from(v.position));
+                    let (p, reach) = (Vec3::from(v.position), Vec3::from(v.normal).abs() * wave.amplitude.abs());
+                    bounds.grow_point(p - reach);
+                    bounds.grow_point(p + reach);
                 }
-                let grow = Vec3::splat(wave.amplitude.abs());
-                DeformedReach::Fixed(Aabb::new(bounds.min - grow, bounds.max + grow))
+                // Room for the GPU's rounding of the sine.
+                let pad = Vec3::splat(1e-5 * bounds.min.abs().max(bounds.max.abs()).max_element());
+                DeformedReach::Fixed(Aabb::new(bounds.min - pad, bounds.max + pad))
             }
             Deformation::Pose(pose) => DeformedReach::Posed(PoseBounds::of(pose, rest)),
         }
