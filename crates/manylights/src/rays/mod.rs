@@ -618,10 +618,21 @@ mod tests {
             }
             assert_eq!(seen.len(), node_count);
         }
-        // The top level's box for it holds the mesh however the wave moves it.
+        // The top level's box for it holds the mesh however the wave moves it, and lies within the
+        // rest box grown by the amplitude (padded for rounding).
         let rest = structure.blas_of(0).0.nodes[0].bounds();
-        assert_eq!(deformed.bounds.min, rest.min - Vec3::splat(3.0));
-        assert_eq!(deformed.deformed_triangles(0.7, None).len(), (t0.end - t0.start) as usize);
+        let pad = Vec3::splat(3.0 + 1e-3 * rest.diagonal());
+        assert!(Aabb::new(rest.min - pad, rest.max + pad).contains_box(&deformed.bounds));
+        for time in [0.0, 0.7, 13.0, 31.4] {
+            let triangles = deformed.deformed_triangles(time, None);
+            assert_eq!(triangles.len(), (t0.end - t0.start) as usize);
+            for t in triangles {
+                let v0 = Vec3::from(t.v0);
+                for p in [v0, v0 + Vec3::from(t.e1), v0 + Vec3::from(t.e2)] {
+                    assert!(deformed.bounds.contains(p), "{p} at {time} s outside {:?}", deformed.bounds);
+                }
+            }
+        }
     }
 
     #[test]
