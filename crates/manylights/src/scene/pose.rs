@@ -204,8 +204,14 @@ impl Pose {
             if let Some(&bad) = skin.joint_indices.iter().flatten().find(|&&j| j as usize >= skin.joints.len()) {
                 return Err(format!("a vertex names joint {bad} of a skin with {}", skin.joints.len()));
             }
-            if !skin.weights.iter().flatten().all(|w| w.is_finite()) {
-                return Err("a skin weight is NaN or infinite".into());
+            if !skin.weights.iter().flatten().all(|w| w.is_finite() && *w >= 0.0) {
+                return Err("a skin weight is negative, NaN or infinite".into());
+            }
+            // A vertex is a weighted mean of its joints' images, inside their boxes (`bounds`), only
+            // where its weights sum to 1 (within the rounding `bounds` pads for).
+            let sums = skin.weights.chunks(skin.sets).map(|vertex| vertex.iter().flatten().sum::<f32>());
+            if let Some((v, sum)) = sums.enumerate().find(|(_, sum)| *sum != 0.0 && (sum - 1.0).abs() > 1e-6) {
+                return Err(format!("vertex {v}'s skin weights sum to {sum}; normalise them to sum to 1 (or make them all 0)"));
             }
         }
         Ok(())
@@ -300,6 +306,14 @@ mod tests {
         }
         let bad = Pose { rest_weights: vec![], ..pose.clone() };
         assert!(bad.validate(2, 2).unwrap_err().contains("morph weights"));
+        let reweighted = |weights: [f32; 4]| {
+            let mut skin = pose.skin.clone().unwrap();
+            skin.weights[1] = weights;
+            Pose { skin: Some(skin), ..pose.clone() }.validate(2, 2)
+        };
+        assert!(reweighted([1.5, -0.5, 0.0, 0.0]).unwrap_err().contains("negative"));
+        assert!(reweighted([0.5, 0.25, 0.0, 0.0]).unwrap_err().contains("sum to 0.75"));
+        assert!(reweighted([0.0; 4]).is_ok() && reweighted([0.25, 0.75, 0.0, 0.0]).is_ok());
         assert!(pose.validate(2, 1).unwrap_err().contains("joint node 1"));
     }
 
