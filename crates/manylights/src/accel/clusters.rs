@@ -320,20 +320,10 @@ impl ClusterLists {
         }
     }
 
-    /// Entries the frames since the last call needed at most; resets the count.
-    fn take_needed(&self, ctx: &GpuContext) -> Result<u32> {
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&self.status, 0, &self.status_readback, 0, 8);
-        encoder.clear_buffer(&self.status, 4, None);
-        ctx.queue.submit([encoder.finish()]);
-        let status: Vec<u32> = crate::gpu::readback::map_buffer(ctx, &self.status_readback, 0, 8)?;
-        Ok(status[1])
-    }
-
     /// Whether the lists held every entry the frames since the last call needed; if not, grows them
     /// (the caller renders those frames again, and rebinds `entries`).
     pub fn fitted(&mut self, ctx: &GpuContext) -> Result<bool> {
-        let needed = self.take_needed(ctx)?;
+        let needed = crate::gpu::readback::take_most_needed(ctx, &self.status, &self.status_readback)?;
         if needed <= self.capacity {
             return Ok(true);
         }

@@ -21,6 +21,17 @@ pub fn map_buffer<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffer, off
     Ok(data)
 }
 
+/// The second word of an 8-byte `status` buffer (STORAGE | COPY_SRC | COPY_DST), where passes
+/// keep the most entries a frame needed, through `readback` (MAP_READ | COPY_DST); the word is
+/// reset, so the next call sees only the frames after this one.
+pub fn take_most_needed(ctx: &GpuContext, status: &wgpu::Buffer, readback: &wgpu::Buffer) -> Result<u32> {
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(status, 0, readback, 0, 8);
+    encoder.clear_buffer(status, 4, None);
+    ctx.queue.submit([encoder.finish()]);
+    Ok(map_buffer::<u32>(ctx, readback, 0, 8)?[1])
+}
+
 /// Copies a whole COPY_SRC buffer into a staging buffer and returns it as `T`s.
 pub fn read_buffer<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<T>> {
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {

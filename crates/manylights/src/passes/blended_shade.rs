@@ -50,13 +50,22 @@ pub struct BlendedShade {
     /// `BlendedLayerStatus`, and where the renderer reads it.
     status: wgpu::Buffer,
     status_readback: wgpu::Buffer,
-    depth: wgpu::TextureView,
     hdr: wgpu::Texture,
     /// The HDR image before the blended surfaces: what lies behind them.
     behind: wgpu::Texture,
+    views: Views,
+}
+
+/// The images the bind groups hold, kept to bind them again when the layers grow.
+struct Views {
+    /// The shaded surfaces' depth: tested against, and the raster's read-only attachment.
+    depth: wgpu::TextureView,
+    behind: wgpu::TextureView,
+    hdr: wgpu::TextureView,
     /// Bound at group 1's bindings 0 and 1: the transmission background, or a texel standing in
     /// where nothing is transmissive.
-    background: (wgpu::TextureView, wgpu::Sampler),
+    background: wgpu::TextureView,
+    sampler: wgpu::Sampler,
 }
 
 impl BlendedShade {
@@ -90,7 +99,7 @@ impl BlendedShade {
             HDR_FORMAT,
             wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING,
         );
-        let background = match background {
+        let (background, sampler) = match background {
             Some(background) => (background.view.clone(), background.sampler.clone()),
             None => {
                 let texel = crate::gpu::textures::target(
@@ -104,6 +113,8 @@ impl BlendedShade {
                 (texel.create_view(&Default::default()), device.create_sampler(&Default::default()))
             }
         };
+        let view = |texture: &wgpu::Texture| texture.create_view(&Default::default());
+        let views = Views { depth: view(depth), behind: view(&behind), hdr: view(hdr), background, sampler };
 
         let fragment = wgpu::ShaderStages::FRAGMENT;
         let raster_layout = bindings::layout(
@@ -152,14 +163,7 @@ impl BlendedShade {
         let constants =
             [&[methods.debug_views_constant(), ("TRANSMISSION", flag(methods.transmission))][..], &methods.material_constants()].concat();
         let step = ComputeStep::new(device, &shader(methods), "blended_shade", &layouts, &constants)?;
-        let (raster_group, shade_group) = bind_groups(
-            device,
-            (&raster_layout, &shade_layout),
-            &depth.create_view(&Default::default()),
-            [&heads, &layers, &status],
-            (&behind.create_view(&Default::default()), &hdr.create_view(&Default::default())),
-            (&background.0, &background.1),
-        );
+        let (raster_group, shade_group) = bind_groups(device, (&raster_layout, &shade_layout), &views, [&heads, &layers, &status]);
         Ok(Self {
             raster,
             indexed,
@@ -174,21 +178,15 @@ impl BlendedShade {
             max_capacity,
             status,
             status_readback,
-            depth: depth.create_view(&Default::default()),
             hdr: hdr.clone(),
             behind,
-            background,
+            views,
         })
     }
 
-    /// Links the blended draws' layers in front of `depth`, then shades them over the HDR image.
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        mut timer: Option<&mut GpuTimer>,
-        inputs: &FrameInputs,
-        depth: &wgpu::TextureView,
-    ) {
+    /// Links the blended draws' layers in front of the shaded surfaces, then shades them over the
+    /// HDR image.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs) {
         let scene = inputs.scene;
         if scene.frame_draws.transparent.commands.is_empty() {
             return;
@@ -200,7 +198,11 @@ impl BlendedShade {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("blended_raster"),
                 color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: depth, depth_ops: None, stencil_ops: None }),
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.views.depth,
+                    depth_ops: None,
+                    stencil_ops: None,
+                }),
                 timestamp_writes: timer.as_deref_mut().map(|t| t.render_pass("blended_raster")),
                 occlusion_query_set: None,
                 multiview_mask: None,
@@ -216,11 +218,7 @@ impl BlendedShade {
     /// Whether the layers held every blended fragment the frames since the last call linked; if
     /// not, grows them (the caller renders those frames again).
     pub fn fitted(&mut self, ctx: &GpuContext) -> Result<bool> {
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&self.status, 0, &self.status_readback, 0, 8);
-        encoder.clear_buffer(&self.status, 4, None);
-        ctx.queue.submit([encoder.finish()]);
-        let needed = u64::from(crate::gpu::readback::map_buffer::<u32>(ctx, &self.status_readback, 0, 8)?[1]);
+        let needed = u64::from(crate::gpu::readback::take_most_needed(ctx, &self.status, &self.status_readback)?);
         if needed <= self.capacity {
             return Ok(true);
         }
@@ -240,14 +238,8 @@ impl BlendedShade {
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
-        (self.raster_group, self.shade_group) = bind_groups(
-            device,
-            (&self.raster_layout, &self.shade_layout),
-            &self.depth,
-            [&self.heads, &self.layers, &self.status],
-            (&self.behind.create_view(&Default::default()), &self.hdr.create_view(&Default::default())),
-            (&self.background.0, &self.background.1),
-        );
+        (self.raster_group, self.shade_group) =
+            bind_groups(device, (&self.raster_layout, &self.shade_layout), &self.views, [&self.heads, &self.layers, &self.status]);
         Ok(false)
     }
 }
@@ -256,29 +248,27 @@ impl BlendedShade {
 fn bind_groups(
     device: &wgpu::Device,
     (raster_layout, shade_layout): (&wgpu::BindGroupLayout, &wgpu::BindGroupLayout),
-    depth: &wgpu::TextureView,
+    views: &Views,
     [heads, layers, status]: [&wgpu::Buffer; 3],
-    (behind, hdr): (&wgpu::TextureView, &wgpu::TextureView),
-    (background, sampler): (&wgpu::TextureView, &wgpu::Sampler),
 ) -> (wgpu::BindGroup, wgpu::BindGroup) {
     use wgpu::BindingResource as R;
     let raster = bindings::bind_group(
         device,
         "blended_raster",
         raster_layout,
-        vec![R::TextureView(depth), heads.as_entire_binding(), layers.as_entire_binding(), status.as_entire_binding()],
+        vec![R::TextureView(&views.depth), heads.as_entire_binding(), layers.as_entire_binding(), status.as_entire_binding()],
     );
     let shade = bindings::bind_group(
         device,
         "blended_shade",
         shade_layout,
         vec![
-            R::TextureView(background),
-            R::Sampler(sampler),
+            R::TextureView(&views.background),
+            R::Sampler(&views.sampler),
             heads.as_entire_binding(),
             layers.as_entire_binding(),
-            R::TextureView(behind),
-            R::TextureView(hdr),
+            R::TextureView(&views.behind),
+            R::TextureView(&views.hdr),
         ],
     );
     (raster, shade)

@@ -46,8 +46,8 @@ impl TransparentShade {
         Ok(Some(Self { background, transmissive, blended }))
     }
 
-    /// Copies the opaque image that transmissive surfaces see through, shades the transmissive, then
-    /// the blended surfaces, over the HDR image given to `new`, tested against `image.depth`.
+    /// Copies the opaque image that transmissive surfaces see through, shades the transmissive
+    /// (their raster writing `image.depth`), then the blended surfaces, over the HDR image.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>, inputs: &FrameInputs, image: ShadedImage) {
         if let Some(background) = &self.background {
             background.record(encoder, timer.as_deref_mut());
@@ -56,7 +56,7 @@ impl TransparentShade {
             transmissive.record(encoder, timer.as_deref_mut(), inputs, image.depth);
         }
         if let Some(blended) = &self.blended {
-            blended.record(encoder, timer, inputs, image.depth);
+            blended.record(encoder, timer, inputs);
         }
     }
 
