@@ -16,17 +16,31 @@ use crate::{Error, Result};
 /// decals).
 pub const BRUTE_FORCE_MAX: usize = 8;
 
-/// Whether lights in a BVH rebuilt on the GPU every frame are faster than clustered lists rebuilt
-/// every frame (BENCHMARKS.md, "Dense lights" and "Scaling"): from overlap [`DENSE_LIGHT_OVERLAP`]
-/// where subgroups share their leaves out, in every pipeline (forward lights shared out from overlap
-/// 10 still lose there, 1.15×), and in compute from overlap [`REBUILT_BVH_OVERLAP`] (28k lights at
-/// 10, a million at 9.8). Sparser, the LBVH's build and its coarser start cost more than its walk
-/// saves; in fragments, lights walked alone diverge too much.
-pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, overlap: f32) -> bool {
-    (caps.subgroups && overlap >= DENSE_LIGHT_OVERLAP) || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP)
+/// Whether `bvh` lights rebuilt on the GPU every frame are faster than clustered lists rebuilt every
+/// frame (BENCHMARKS.md, "Dense lights" and "Scaling"). As the one group placed (`placed_groups`)
+/// they are in every pipeline at every overlap measured: as cell lists rebuilt in place of their BVH
+/// below the overlap where subgroups share crowded lights out ([`FramePlan::resolve`]), as an LBVH
+/// whose leaves subgroups share out above it. Lights of several placed groups each get an LBVH walked
+/// from a rebuilt entry grid, which wins from overlap [`DENSE_LIGHT_OVERLAP`] where subgroups share
+/// their leaves out, and in compute from overlap [`REBUILT_BVH_OVERLAP`]; sparser, the LBVH's build and
+/// its coarser start cost more than its walk saves, and in fragments lights walked alone diverge too
+/// much.
+pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, overlap: f32, placed_groups: usize) -> bool {
+    placed_groups == 1
+        || (caps.subgroups && overlap >= DENSE_LIGHT_OVERLAP)
+        || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP)
 }
 
 pub const REBUILT_BVH_OVERLAP: f32 = 4.0;
+
+/// Whether `bvh` lights rebuilt on the GPU every frame are read from cell lists rebuilt in place of
+/// their BVH (`accel/rebuilt_cell_lists.rs`): as the one group placed (`placed_groups`), in every
+/// pipeline, below the overlap from which subgroups sharing an LBVH's leaves out in compute is faster
+/// (BENCHMARKS.md, "Dense lights": forward lights at overlap 10 take 0.79× clustered lists' time read
+/// from cell lists, 1.12× shared out).
+pub fn rebuilt_lights_listed(caps: Capabilities, overlap: f32, placed_groups: usize) -> bool {
+    placed_groups == 1 && !lights_shared_out(caps, PipelineKind::Visbuffer, overlap)
+}
 
 /// Why `auto` chose a method, or that it was asked for: one line for `info`, `--timings` and the
 /// timings JSON.
@@ -43,9 +57,12 @@ pub enum Why {
     /// Reflections shade points outside the view, which clustered lists do not cover.
     Reflections,
     /// The BVH would be rebuilt on the GPU every frame where clustered lists, rebuilt every frame too,
-    /// are faster: lights as [`rebuilt_bvh_wins`] says, decals unless subgroups share them out
-    /// (BENCHMARKS.md, "Scaling").
+    /// are faster: sparse lights of several placed groups ([`rebuilt_bvh_wins`]), decals unless
+    /// subgroups share them out (BENCHMARKS.md, "Scaling").
     RebuiltEveryFrame,
+    /// Lights rebuilt every frame as one placed group, below the overlap where subgroups share them
+    /// out: read from cell lists rebuilt in place of their BVH ([`rebuilt_lights_listed`]).
+    Listed { count: usize, overlap: f32 },
     /// The mean overlap at surface points, where a BVH is faster: built once at every overlap
     /// measured (up to 100), or rebuilt every frame over lights dense enough that subgroups share
     /// their leaves out (`shared_out`: lights walked so, [`ShadingMethods::dense_lights`]).
@@ -61,6 +78,10 @@ impl fmt::Display for Why {
             Why::ParticleLights => f.write_str("particles are lights in the lights' BVH, which only bvh reads"),
             Why::Reflections => f.write_str("reflections shade points outside the view, where clustered lists do not reach"),
             Why::RebuiltEveryFrame => f.write_str("rebuilt every frame over sparse volumes, where clustered lists are faster than a BVH"),
+            Why::Listed { count, overlap } => write!(
+                f,
+                "{count} reaching {overlap:.2} a surface point on average, rebuilt every frame as one group: cell lists in place of its BVH are faster"
+            ),
             Why::Overlap { count, overlap, shared_out: true } => {
                 write!(f, "{count} reaching {overlap:.2} a surface point on average: a BVH walk, its leaves shared out, is faster")
             }
@@ -103,7 +124,7 @@ impl MethodChoice {
             LightMethod::Auto => {
                 let particle_lights = stats.particles > 0 && config.particle_method == ParticleMethod::Bvh;
                 let overlap = stats.light_overlap.unwrap_or(0.0);
-                let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, overlap);
+                let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, overlap, stats.placed_light_groups);
                 let shared_out = lights_shared_out(caps, config.pipeline, overlap);
                 let (method, why) = match (particle_lights, stats.placed_lights, stats.light_overlap) {
                     (true, _, _) => (LightMethod::Bvh, Why::ParticleLights),
@@ -112,6 +133,12 @@ impl MethodChoice {
                     _ if reflections => (LightMethod::Bvh, Why::Reflections),
                     _ if config.light_bvh_build == BvhBuild::GpuEveryFrame && !rebuilt_bvh_wins => {
                         (LightMethod::Clustered, Why::RebuiltEveryFrame)
+                    }
+                    (false, count, _)
+                        if config.light_bvh_build == BvhBuild::GpuEveryFrame
+                            && rebuilt_lights_listed(caps, overlap, stats.placed_light_groups) =>
+                    {
+                        (LightMethod::Bvh, Why::Listed { count, overlap })
                     }
                     (false, count, _) => (LightMethod::Bvh, Why::Overlap { count, overlap, shared_out }),
                 };
@@ -277,6 +304,9 @@ pub struct ShadingMethods {
     /// The decals' structure is one crowded group placed once, with cell lists: `bvh` decals are read
     /// from the list of a point's cell instead of walked (`shading/enumerate/decals_bvh_cells.wgsl`).
     pub decal_cell_lists: bool,
+    /// The lights' structure is one sparse group placed once and rebuilt every frame as cell lists:
+    /// `bvh` lights are read from the list of a point's cell (`shading/enumerate/lights_cells.wgsl`).
+    pub light_cell_lists: bool,
     /// `restir` draws its candidates through the light tree instead of enumerating the lights
     /// reaching a point (`shading/enumerate/lights_tree.wgsl`, [`restir_light_tree`]).
     pub light_tree: bool,
@@ -347,6 +377,7 @@ impl ShadingMethods {
             LightMethod::Brute => "shading/enumerate/lights_brute.wgsl",
             LightMethod::Bvh if self.light_tree => "shading/enumerate/lights_tree.wgsl",
             LightMethod::Bvh if self.hardware_lights => "shading/enumerate/lights_ray_query.wgsl",
+            LightMethod::Bvh if self.light_cell_lists => "shading/enumerate/lights_cells.wgsl",
             // `auto` is resolved before a plan is made (`MethodChoice`).
             LightMethod::Bvh | LightMethod::Auto => "shading/enumerate/lights_bvh.wgsl",
             LightMethod::Clustered => "shading/enumerate/lights_clustered.wgsl",
@@ -532,7 +563,8 @@ pub struct SceneStatistics {
     /// of both (`accel::overlap::sampled_overlap`), where [`Measurements`] asks: `None` where not.
     pub light_overlap: Option<f32>,
     pub decal_overlap: Option<f32>,
-    /// Instances of non-empty decal groups: the structure's placed groups.
+    /// Instances of non-empty light and decal groups: the structures' placed groups.
+    pub placed_light_groups: usize,
     pub placed_decal_groups: usize,
     /// How many decal boxes of its group hold a decal's centre, on average over a sample of them
     /// (`accel::overlap::centre_overlap`), measured where [`Measurements::decal_centre_overlap`]
@@ -593,8 +625,10 @@ pub struct StructurePlan {
     /// them: where the opaque surfaces' queries walk alone, the only walks that start at a grid's
     /// cells in an LBVH.
     pub rebuilt_grids: bool,
-    /// The one placed group gets cell lists where they fit its budget (`accel/cell_lists.rs`); shading
-    /// then reads them instead of walking ([`FramePlan::shading_methods`]).
+    /// The one placed group gets cell lists where they fit their budget, and shading then reads them
+    /// instead of walking ([`FramePlan::shading_methods`]): built on the CPU with the group's BVH
+    /// (`accel/cell_lists.rs`) where it is built once, or on the GPU every frame in place of its
+    /// LBVH (`accel/rebuilt_cell_lists.rs`) where it is rebuilt ([`lights_listed`]).
     pub cell_lists: bool,
     /// The light groups get their light tree (`accel/light_tree.rs`), with their CPU builds or
     /// alongside their GPU rebuilds: `restir` draws its candidates through it
@@ -689,6 +723,7 @@ impl FramePlan {
             dense_decals: false,
             dense_lights: false,
             decal_cell_lists: false,
+            light_cell_lists: false,
             debug_views: config.debug_view != DebugView::Off,
             material_extensions: stats.material_extensions,
             vertex_colors: stats.vertex_colors,
@@ -710,17 +745,20 @@ impl FramePlan {
             && decals_shared_out(caps, stats.decal_centre_overlap);
         let opaque_stage = if config.pipeline == PipelineKind::Forward { ShadingStage::Fragment } else { ShadingStage::Compute };
         let walks = query_walks(ShadingMethods { dense_lights, dense_decals, ..unlisted }, opaque_stage);
+        let light_build =
+            group_build(config.light_method == LightMethod::Bvh, config.light_method == LightMethod::Clustered, config.light_bvh_build);
+        let lights_listed = light_build == GroupBuild::GpuEveryFrame
+            && rebuilt_lights_listed(caps, stats.light_overlap.unwrap_or(0.0), stats.placed_light_groups)
+            && !light_tree
+            && !hardware_lights
+            && !particle_lights;
         let lights = StructurePlan {
-            build: group_build(
-                config.light_method == LightMethod::Bvh,
-                config.light_method == LightMethod::Clustered,
-                config.light_bvh_build,
-            ),
+            build: light_build,
             clustered: config.light_method == LightMethod::Clustered,
             wide_leaves: dense_lights,
             rebuilt_leaves: rebuilt_leaves(dense_lights),
             rebuilt_grids: !walks.lights && !hardware_lights,
-            cell_lists: false,
+            cell_lists: lights_listed,
             light_tree,
             hardware: hardware_lights,
         };
@@ -758,14 +796,25 @@ impl FramePlan {
             denoises,
             tracks_surface_motion: (keeps_reservoirs || denoises) && stats.animated_instances,
             methods,
-            planned_methods: ShadingMethods { dense_decals, dense_lights, decal_cell_lists: decals.cell_lists, ..unlisted },
+            planned_methods: ShadingMethods {
+                dense_decals,
+                dense_lights,
+                decal_cell_lists: decals.cell_lists,
+                light_cell_lists: lights.cell_lists,
+                ..unlisted
+            },
         })
     }
 
-    /// The shading core's variant, once the decals' structure is built: cell lists are read where
-    /// they were planned and fitted their budget (`lists_built`); otherwise the wide leaves are walked.
-    pub fn shading_methods(&self, lists_built: bool) -> ShadingMethods {
-        ShadingMethods { decal_cell_lists: self.planned_methods.decal_cell_lists && lists_built, ..self.planned_methods }
+    /// The shading core's variant, once the structures are built: cell lists are read where they were
+    /// planned and fitted their budget (`decal_lists_built`, `light_lists_built`); otherwise the
+    /// groups' BVHs are walked.
+    pub fn shading_methods(&self, decal_lists_built: bool, light_lists_built: bool) -> ShadingMethods {
+        ShadingMethods {
+            decal_cell_lists: self.planned_methods.decal_cell_lists && decal_lists_built,
+            light_cell_lists: self.planned_methods.light_cell_lists && light_lists_built,
+            ..self.planned_methods
+        }
     }
 }
 
@@ -843,7 +892,7 @@ mod tests {
         let plan = FramePlan::resolve(&bvh, with, &SceneStatistics::default()).unwrap();
         assert_eq!(plan.ray_tracer, RayTracer::Hardware);
         assert!(plan.lights.hardware && plan.decals.hardware && !plan.lights.rebuilt_grids && !plan.decals.rebuilt_grids);
-        let methods = plan.shading_methods(false);
+        let methods = plan.shading_methods(false, false);
         assert_eq!(methods.light_enumeration_module(), "shading/enumerate/lights_ray_query.wgsl");
         assert_eq!(methods.decal_enumeration_module(), "shading/enumerate/decals_ray_query.wgsl");
         let clustered = FramePlan::resolve(&config(LightMethod::Clustered, DecalMethod::Brute), with, &SceneStatistics::default()).unwrap();
@@ -856,7 +905,7 @@ mod tests {
             ..bvh.clone()
         };
         let plan = FramePlan::resolve(&tree, with, &SceneStatistics::default()).unwrap();
-        assert!(!plan.lights.hardware && plan.decals.hardware && plan.shading_methods(false).light_tree);
+        assert!(!plan.lights.hardware && plan.decals.hardware && plan.shading_methods(false, false).light_tree);
     }
 
     #[test]
@@ -886,19 +935,19 @@ mod tests {
         let stats =
             |overlap, placed| SceneStatistics { decal_centre_overlap: Some(overlap), placed_decal_groups: placed, ..Default::default() };
         let sparse = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 0.5, 1)).unwrap();
-        assert!(!sparse.decals.wide_leaves && !sparse.decals.cell_lists && !sparse.shading_methods(true).dense_decals);
+        assert!(!sparse.decals.wide_leaves && !sparse.decals.cell_lists && !sparse.shading_methods(true, true).dense_decals);
         let dense = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP, 1)).unwrap();
         assert!(dense.decals.wide_leaves && dense.decals.cell_lists);
-        let methods = dense.shading_methods(true);
+        let methods = dense.shading_methods(true, true);
         assert!(methods.dense_decals && methods.decal_cell_lists);
         assert_eq!(methods.decal_enumeration_module(), "shading/enumerate/decals_bvh_cells.wgsl");
         // Lists over their budget leave the wide leaves walked.
-        assert!(!dense.shading_methods(false).decal_cell_lists && dense.shading_methods(false).dense_decals);
+        assert!(!dense.shading_methods(false, false).decal_cell_lists && dense.shading_methods(false, false).dense_decals);
         let instanced = FramePlan::resolve(&bvh, SUBGROUPS, &stats(40.0, 3)).unwrap();
         assert!(instanced.decals.wide_leaves && !instanced.decals.cell_lists);
         // Rebuilt every frame, dense decals are shared out from leaves of 32, with no grid.
         let rebuilt = FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP, 1)).unwrap();
-        assert!(rebuilt.shading_methods(true).dense_decals && !rebuilt.decals.rebuilt_grids && !rebuilt.decals.cell_lists);
+        assert!(rebuilt.shading_methods(true, true).dense_decals && !rebuilt.decals.rebuilt_grids && !rebuilt.decals.cell_lists);
         assert_eq!(rebuilt.decals.rebuilt_leaves, DynamicLeaves::AtMost(32));
         // And `auto` walks them rather than listing them in clusters.
         let auto_rebuilt = RenderConfig { decal_method: DecalMethod::Auto, ..gpu_built.clone() };
@@ -913,7 +962,7 @@ mod tests {
             &stats(40.0, 1),
         )
         .unwrap();
-        assert!(!alone.decals.wide_leaves && !alone.shading_methods(true).dense_decals);
+        assert!(!alone.decals.wide_leaves && !alone.shading_methods(true, true).dense_decals);
     }
 
     #[test]
@@ -943,14 +992,14 @@ mod tests {
         let bvh = config(LightMethod::Bvh, DecalMethod::Off);
         let stats = |overlap| SceneStatistics { placed_lights: 28_000, light_overlap: Some(overlap), ..Default::default() };
         let sparse = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_LIGHT_OVERLAP - 1.0)).unwrap();
-        assert!(!sparse.lights.wide_leaves && !sparse.shading_methods(true).dense_lights);
+        assert!(!sparse.lights.wide_leaves && !sparse.shading_methods(true, true).dense_lights);
         assert_eq!(sparse.lights.rebuilt_leaves, DynamicLeaves::AtMost(8));
-        assert!(!query_walks(sparse.shading_methods(true), ShadingStage::Fragment).lights);
+        assert!(!query_walks(sparse.shading_methods(true, true), ShadingStage::Fragment).lights);
         let dense = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_LIGHT_OVERLAP)).unwrap();
-        assert!(dense.lights.wide_leaves && dense.shading_methods(true).dense_lights);
+        assert!(dense.lights.wide_leaves && dense.shading_methods(true, true).dense_lights);
         assert_eq!(dense.lights.rebuilt_leaves, DynamicLeaves::AtMost(32));
         for stage in [ShadingStage::Compute, ShadingStage::Fragment] {
-            assert!(query_walks(dense.shading_methods(true), stage).lights);
+            assert!(query_walks(dense.shading_methods(true, true), stage).lights);
         }
         // Without subgroups, nothing is shared out: narrow leaves, walked alone.
         let alone = FramePlan::resolve(
@@ -959,15 +1008,53 @@ mod tests {
             &stats(100.0),
         )
         .unwrap();
-        assert!(!alone.lights.wide_leaves && !alone.shading_methods(true).dense_lights);
+        assert!(!alone.lights.wide_leaves && !alone.shading_methods(true, true).dense_lights);
         // Rebuilt groups get entry grids exactly where their queries walk alone.
         assert!(sparse.lights.rebuilt_grids && alone.lights.rebuilt_grids && !dense.lights.rebuilt_grids);
         // Forward lanes diverge more: lights are shared out from a lower overlap.
         let forward = RenderConfig { pipeline: PipelineKind::Forward, ..bvh.clone() };
         let shared = FramePlan::resolve(&forward, SUBGROUPS, &stats(DENSE_FRAGMENT_LIGHT_OVERLAP)).unwrap();
-        assert!(shared.lights.wide_leaves && shared.shading_methods(true).dense_lights && !shared.lights.rebuilt_grids);
+        assert!(shared.lights.wide_leaves && shared.shading_methods(true, true).dense_lights && !shared.lights.rebuilt_grids);
         let walked_alone = FramePlan::resolve(&forward, SUBGROUPS, &stats(DENSE_FRAGMENT_LIGHT_OVERLAP - 1.0)).unwrap();
-        assert!(!walked_alone.shading_methods(true).dense_lights);
+        assert!(!walked_alone.shading_methods(true, true).dense_lights);
+    }
+
+    #[test]
+    fn sparse_lights_rebuilt_every_frame_as_one_placed_group_are_listed() {
+        let rebuilt =
+            |pipeline| RenderConfig { pipeline, light_bvh_build: BvhBuild::GpuEveryFrame, ..config(LightMethod::Bvh, DecalMethod::Off) };
+        let stats = |overlap, groups| SceneStatistics {
+            placed_lights: 28_000,
+            light_overlap: Some(overlap),
+            placed_light_groups: groups,
+            ..Default::default()
+        };
+        let listed = |config: &RenderConfig, stats: &SceneStatistics| {
+            let plan = FramePlan::resolve(config, SUBGROUPS, stats).unwrap();
+            assert_eq!(plan.lights.cell_lists, plan.shading_methods(false, true).light_cell_lists);
+            assert!(!plan.shading_methods(true, false).light_cell_lists, "lists that were not built are not read");
+            plan.lights.cell_lists
+        };
+        for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+            assert!(listed(&rebuilt(pipeline), &stats(0.5, 1)), "{pipeline:?}");
+            // Dense lights are walked, their leaves shared out; several placed groups, or lights
+            // built once, keep their BVHs.
+            assert!(!listed(&rebuilt(pipeline), &stats(DENSE_LIGHT_OVERLAP, 1)), "{pipeline:?}");
+            assert!(!listed(&rebuilt(pipeline), &stats(0.5, 2)), "{pipeline:?}");
+            assert!(!listed(&RenderConfig { light_bvh_build: BvhBuild::CpuOnce, ..rebuilt(pipeline) }, &stats(0.5, 1)));
+            let auto = RenderConfig { light_method: LightMethod::Auto, ..rebuilt(pipeline) };
+            assert_eq!(MethodChoice::resolve(&auto, SUBGROUPS, &stats(0.5, 1)).lights.why, Why::Listed { count: 28_000, overlap: 0.5 });
+            assert!(listed(&auto, &stats(0.5, 1)));
+        }
+        // Forward fragments share lights out from a lower overlap when walking; listed, they are not.
+        assert!(listed(&rebuilt(PipelineKind::Forward), &stats(DENSE_FRAGMENT_LIGHT_OVERLAP, 1)));
+        let no_subgroups = Capabilities { subgroups: false, early_depth_test: true, ray_queries: RayQueries::None };
+        assert!(FramePlan::resolve(&rebuilt(PipelineKind::Visbuffer), no_subgroups, &stats(100.0, 1)).unwrap().lights.cell_lists);
+        let methods = FramePlan::resolve(&rebuilt(PipelineKind::Visbuffer), SUBGROUPS, &stats(0.5, 1)).unwrap().shading_methods(true, true);
+        assert_eq!(methods.light_enumeration_module(), "shading/enumerate/lights_cells.wgsl");
+        // Particle lights join the lights' structure as a group of their own, rebuilt every frame.
+        let particles = SceneStatistics { particles: 1000, ..stats(0.5, 1) };
+        assert!(!listed(&RenderConfig { particle_method: ParticleMethod::Bvh, ..rebuilt(PipelineKind::Visbuffer) }, &particles));
     }
 
     #[test]
@@ -989,7 +1076,7 @@ mod tests {
         bvh.rays.reflection_bounces = 2;
         bvh.rays.light_shadow_rays = 1;
         bvh.debug_view = DebugView::LightWork;
-        let methods = FramePlan::resolve(&bvh, SUBGROUPS, &SceneStatistics::default()).unwrap().shading_methods(true);
+        let methods = FramePlan::resolve(&bvh, SUBGROUPS, &SceneStatistics::default()).unwrap().shading_methods(true, true);
         assert!(methods.reflections && methods.direct == DirectShading::Budget && methods.debug_views && methods.subgroups);
         assert_eq!(methods.light_enumeration_module(), "shading/enumerate/lights_bvh.wgsl");
         assert_eq!(methods.debug_views_constant(), ("DEBUG_VIEWS", 1.0));
@@ -1007,7 +1094,7 @@ mod tests {
         for (index, (stats, name)) in
             scenes.iter().zip(["MATERIAL_EXTENSIONS", "VERTEX_COLORS", "OCCLUSION_TEXTURES", "SECOND_UV_SET", "SHEEN"]).enumerate()
         {
-            let methods = FramePlan::resolve(&bvh, SUBGROUPS, stats).unwrap().shading_methods(true);
+            let methods = FramePlan::resolve(&bvh, SUBGROUPS, stats).unwrap().shading_methods(true, true);
             assert_eq!(methods.material_constants()[index], (name, 1.0));
         }
     }
@@ -1019,7 +1106,7 @@ mod tests {
             config.rays.direct_lighting = direct_lighting;
             config.rays.light_shadow_rays = light_shadow_rays;
             let plan = FramePlan::resolve(&config, SUBGROUPS, &SceneStatistics::default()).unwrap();
-            (plan.shading_methods(true).direct, plan.traces_rays)
+            (plan.shading_methods(true, true).direct, plan.traces_rays)
         };
         assert_eq!(plan(DirectLighting::Exact, 0), (DirectShading::Unshadowed, false));
         assert_eq!(plan(DirectLighting::Exact, 2), (DirectShading::Budget, true));
@@ -1036,7 +1123,7 @@ mod tests {
             config.rays.restir_reuse = reuse;
             config.rays.denoise = Denoise::Off;
             let plan = FramePlan::resolve(&config, caps, &SceneStatistics::default()).unwrap();
-            assert_eq!(plan.keeps_reservoirs, plan.shading_methods(true).keeps_pixel_state);
+            assert_eq!(plan.keeps_reservoirs, plan.shading_methods(true, true).keeps_pixel_state);
             plan.keeps_reservoirs
         };
         let late = Capabilities { subgroups: true, early_depth_test: false, ray_queries: RayQueries::None };
@@ -1054,7 +1141,7 @@ mod tests {
             config.rays.restir_reuse = RestirReuse::Off;
             config.rays.denoise = denoise;
             let plan = FramePlan::resolve(&config, caps, &SceneStatistics::default()).unwrap();
-            let methods = plan.shading_methods(true);
+            let methods = plan.shading_methods(true, true);
             assert_eq!((plan.denoises, plan.denoises), (methods.denoised, methods.keeps_pixel_state));
             assert_eq!(methods.denoised_constant(), ("DENOISED_LIGHTING", f64::from(u8::from(plan.denoises))));
             plan.denoises
@@ -1100,7 +1187,7 @@ mod tests {
         let stats = SceneStatistics { placed_lights: 65_536, light_overlap: Some(100.0), ..Default::default() };
         let plan = FramePlan::resolve(&crowded, SUBGROUPS, &stats).unwrap();
         assert!(plan.lights.light_tree && !plan.lights.wide_leaves);
-        assert_eq!(plan.shading_methods(true).light_enumeration_module(), "shading/enumerate/lights_tree.wgsl");
+        assert_eq!(plan.shading_methods(true, true).light_enumeration_module(), "shading/enumerate/lights_tree.wgsl");
     }
 
     #[test]
@@ -1122,6 +1209,8 @@ mod tests {
         SceneStatistics {
             placed_lights: lights,
             placed_decals: decals,
+            placed_light_groups: usize::from(lights > 0),
+            placed_decal_groups: usize::from(decals > 0),
             light_overlap: Some(light_overlap),
             decal_overlap: Some(decal_overlap),
             ..Default::default()
@@ -1147,24 +1236,30 @@ mod tests {
             assert_eq!(chosen(&config, scene(28_000, 0.45, 100_000, 22.8)), (LightMethod::Bvh, DecalMethod::Bvh));
             assert_eq!(chosen(&config, scene(28_000, 100.0, 100_000, 200.0)), (LightMethod::Bvh, DecalMethod::Bvh));
         }
-        // Rebuilt every frame, clustered lists win over sparse volumes, not over lights whose leaves
-        // subgroups share out; reflections need what lies outside the view.
+        // Rebuilt every frame, lights of one placed group take a BVH (read as cell lists where sparse)
+        // in every pipeline; clustered lists win over sparse decals, and over sparse lights of several
+        // groups, not over lights whose leaves subgroups share out; reflections need what lies
+        // outside the view.
         let rebuilt = RenderConfig { light_bvh_build: BvhBuild::GpuEveryFrame, decal_bvh_build: BvhBuild::GpuEveryFrame, ..auto() };
-        assert_eq!(chosen(&rebuilt, scene(1000, 0.1, 1000, 0.1)), (LightMethod::Clustered, DecalMethod::Clustered));
-        assert_eq!(chosen(&rebuilt, scene(1000, DENSE_LIGHT_OVERLAP, 1000, 50.0)), (LightMethod::Bvh, DecalMethod::Clustered));
-        assert_eq!(chosen(&rebuilt, scene(28_000, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
-        assert_eq!(chosen(&rebuilt, scene(1 << 20, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
-        assert_eq!(chosen(&rebuilt, scene(1 << 18, REBUILT_BVH_OVERLAP - 1.5, 0, 0.0)).0, LightMethod::Clustered);
         let forward = RenderConfig { pipeline: PipelineKind::Forward, ..rebuilt.clone() };
-        assert_eq!(chosen(&forward, scene(28_000, REBUILT_BVH_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
-        assert_eq!(chosen(&forward, scene(28_000, DENSE_FRAGMENT_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Clustered);
-        assert_eq!(chosen(&forward, scene(28_000, DENSE_LIGHT_OVERLAP, 0, 0.0)).0, LightMethod::Bvh);
-        let alone = MethodChoice::resolve(
-            &forward,
-            Capabilities { subgroups: false, early_depth_test: true, ray_queries: RayQueries::None },
-            &scene(1000, 50.0, 0, 0.0),
-        );
-        assert_eq!(alone.lights.method, LightMethod::Clustered);
+        let no_subgroups = Capabilities { subgroups: false, early_depth_test: true, ray_queries: RayQueries::None };
+        for overlap in [0.03, 0.45, 10.0, 100.0] {
+            for config in [&rebuilt, &forward] {
+                assert_eq!(chosen(config, scene(28_000, overlap, 0, 0.0)).0, LightMethod::Bvh, "{overlap}");
+                assert_eq!(MethodChoice::resolve(config, no_subgroups, &scene(28_000, overlap, 0, 0.0)).lights.method, LightMethod::Bvh);
+            }
+        }
+        assert_eq!(chosen(&rebuilt, scene(1000, 0.1, 1000, 0.1)), (LightMethod::Bvh, DecalMethod::Clustered));
+        let grouped = |lights, overlap| SceneStatistics { placed_light_groups: 2, ..scene(lights, overlap, 0, 0.0) };
+        assert_eq!(chosen(&rebuilt, grouped(1000, 0.1)).0, LightMethod::Clustered);
+        assert_eq!(chosen(&rebuilt, grouped(1000, DENSE_LIGHT_OVERLAP)).0, LightMethod::Bvh);
+        assert_eq!(chosen(&rebuilt, scene(1000, 0.1, 1000, 50.0)).1, DecalMethod::Clustered);
+        assert_eq!(chosen(&rebuilt, grouped(28_000, REBUILT_BVH_OVERLAP)).0, LightMethod::Bvh);
+        assert_eq!(chosen(&rebuilt, grouped(1 << 18, REBUILT_BVH_OVERLAP - 1.5)).0, LightMethod::Clustered);
+        assert_eq!(chosen(&forward, grouped(28_000, REBUILT_BVH_OVERLAP)).0, LightMethod::Clustered);
+        assert_eq!(chosen(&forward, grouped(28_000, DENSE_FRAGMENT_LIGHT_OVERLAP)).0, LightMethod::Clustered);
+        assert_eq!(chosen(&forward, grouped(28_000, DENSE_LIGHT_OVERLAP)).0, LightMethod::Bvh);
+        assert_eq!(MethodChoice::resolve(&forward, no_subgroups, &grouped(1000, 50.0)).lights.method, LightMethod::Clustered);
         let mut reflecting = rebuilt.clone();
         reflecting.rays.reflection_bounces = 1;
         assert_eq!(chosen(&reflecting, scene(1000, 50.0, 1000, 0.1)), (LightMethod::Bvh, DecalMethod::Bvh));
@@ -1181,7 +1276,7 @@ mod tests {
     #[test]
     fn auto_is_resolved_before_anything_is_planned_and_says_why() {
         let plan = FramePlan::resolve(&auto(), SUBGROUPS, &scene(28_000, 0.45, 3, 1.0)).unwrap();
-        let methods = plan.shading_methods(true);
+        let methods = plan.shading_methods(true, true);
         assert_eq!((methods.lights, methods.decals), (LightMethod::Bvh, DecalMethod::Brute));
         assert_eq!(plan.lights.build, GroupBuild::CpuOnce);
         let why = plan.methods.lights.to_string();

@@ -189,7 +189,7 @@ impl Renderer {
             clusters(&plan.decals),
             gpu_scene.decal_material_base,
         )?;
-        let methods = plan.shading_methods(decals.cell_lists());
+        let methods = plan.shading_methods(decals.cell_lists(), lights.cell_lists());
         let setup = FrameSetup {
             methods,
             shadows: config.rays.sun_shadows,
@@ -332,8 +332,8 @@ impl Renderer {
         loop {
             let timings = self.submit_frames(camera, count)?;
             // Both are asked: each grows its own lists.
-            let lights_fitted = self.lights.clusters_fitted(&self.ctx)?;
-            let decals_fitted = self.decals.clusters_fitted(&self.ctx)?;
+            let lights_fitted = self.lights.lists_fitted(&self.ctx)?;
+            let decals_fitted = self.decals.lists_fitted(&self.ctx)?;
             let layers_fitted = self.pipeline.blended_layers_fitted(&self.ctx)?;
             if lights_fitted && decals_fitted && layers_fitted {
                 return Ok(timings);

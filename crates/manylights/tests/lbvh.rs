@@ -1,7 +1,8 @@
 //! The GPU LBVH builder produces valid BVHs (every node box holds its children, every volume in
-//! exactly one leaf) whose point queries equal brute force, for degenerate and large inputs.
+//! exactly one leaf) whose point queries equal brute force, for degenerate and large inputs; the GPU's
+//! rebuilt cell lists list every volume reaching each point's cell, and grow when they must.
 
-use glam::Vec3;
+use glam::{UVec3, Vec3};
 use manylights::{
     accel::{lbvh::GpuLbvh, Aabb, MAX_LEAF_SIZE},
     gpu::GpuContext,
@@ -201,4 +202,103 @@ fn gpu_builds_give_every_node_the_emitters_below_it() {
     let mut lbvh = GpuLbvh::with_light_tree(&ctx, 4).unwrap();
     lbvh.set_boxes(&ctx.queue, &[unit; 2]).unwrap();
     assert!(lbvh.set_emitters(&ctx.queue, &[LightTreeNode::default(); 3]).is_err());
+}
+
+/// Spheres of every size over a room, the largest visiting hundreds of cells, some of them later
+/// moved outside the grid placed for them: each frame's lists name, for a point anywhere, every sphere
+/// holding it (exactness), each once, and only spheres reaching its cell. Lists that start with room
+/// for a few entries grow, and a frame rendered again then holds them all; the counts the fill passes
+/// leave behind start the next frame at zero, so later frames list the same.
+#[test]
+fn rebuilt_cell_lists_list_every_volume_reaching_each_cell() {
+    use manylights::accel::rebuilt_cell_lists::{ListBounds, ListPlacement, RebuiltCellLists};
+    use manylights::gpu::readback::read_buffer;
+    let ctx = GpuContext::new().expect("a GPU adapter");
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(41);
+    let spheres: Vec<(Vec3, f32)> = (0..3000)
+        .map(|i| {
+            let centre = Vec3::new(rng.random_range(-15.0..15.0), rng.random_range(0.0..12.0), rng.random_range(-7.0..7.0));
+            let radius = if i % 500 == 0 { rng.random_range(2.0..3.0) } else { rng.random_range(0.1..0.3) };
+            (centre, radius)
+        })
+        .collect();
+    let aabb = |(c, r): (Vec3, f32)| Aabb::new(c - r, c + r);
+    let placement = ListPlacement::for_boxes(&spheres.iter().copied().map(aabb).collect::<Vec<_>>()).unwrap();
+    // Moved after placing: some out past the grid's faces, where points outside it still find them.
+    let moved: Vec<(Vec3, f32)> =
+        spheres.iter().enumerate().map(|(i, &(c, r))| if i % 7 == 0 { (c * Vec3::new(1.3, 1.0, 1.6), r) } else { (c, r) }).collect();
+    let bounds: Vec<ListBounds> = moved.iter().map(|&s| ListBounds::of_light(s.0, s.1, aabb(s))).collect();
+    let first_item = 5;
+    let mut lists = RebuiltCellLists::new(&ctx, "light", "cell_lists_build", placement, &bounds, first_item, 64).unwrap();
+    let record = |lists: &RebuiltCellLists| {
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        lists.record(&mut encoder, None);
+        ctx.queue.submit([encoder.finish()]);
+    };
+    record(&lists);
+    assert!(!lists.fitted(&ctx).unwrap(), "64 entries cannot hold the lists");
+    assert!(u64::from(lists.capacity()) >= placement.visits / 4, "the lists grew to what the frame needed");
+    let mut previous: Option<Vec<Vec<u32>>> = None;
+    for frame in 0..2 {
+        record(&lists);
+        assert!(lists.fitted(&ctx).unwrap(), "frame {frame}: the grown lists held every entry");
+        let ranges: Vec<[u32; 2]> = read_buffer(&ctx, &lists.ranges).unwrap();
+        let entries: Vec<[u32; 2]> = read_buffer(&ctx, &lists.entries).unwrap();
+        assert_eq!(ranges.len() as u32, placement.cells());
+        let mut total = 0;
+        let listed: Vec<Vec<u32>> = ranges
+            .iter()
+            .map(|&[start, len]| {
+                assert_eq!(start, total, "frame {frame}: lists follow each other");
+                total += len;
+                let mut items: Vec<u32> = entries[start as usize..(start + len) as usize]
+                    .iter()
+                    .map(|&[instance, item]| {
+                        assert_eq!(instance, 0);
+                        item - first_item
+                    })
+                    .collect();
+                items.sort_unstable();
+                items
+            })
+            .collect();
+        for (cell, items) in listed.iter().enumerate() {
+            assert!(items.windows(2).all(|w| w[0] < w[1]), "frame {frame}: cell {cell} lists a volume twice");
+            let at = UVec3::new(
+                cell as u32 % placement.dims.x,
+                (cell as u32 / placement.dims.x) % placement.dims.y,
+                cell as u32 / (placement.dims.x * placement.dims.y),
+            );
+            let corner = placement.min + at.as_vec3() * placement.cell_size;
+            // Cells on the grid's faces reach out to infinity; the margin is a thousandth of a cell.
+            let low = Vec3::select(at.cmpeq(UVec3::ZERO), Vec3::splat(f32::NEG_INFINITY), corner - placement.cell_size * 2e-3);
+            let far = placement.dims - UVec3::ONE;
+            let high = Vec3::select(at.cmpeq(far), Vec3::splat(f32::INFINITY), corner + placement.cell_size * 1.002);
+            for &item in items {
+                let (c, r) = moved[item as usize];
+                let gap = (low - c).max(c - high).max(Vec3::ZERO);
+                assert!(gap.length() <= r * 1.001, "frame {frame}: cell {cell} lists volume {item}, which does not reach it");
+            }
+        }
+        for k in 0..5000 {
+            // Half the points anywhere, half inside a volume (every seventh one moved).
+            let p = if k % 2 == 0 {
+                Vec3::new(rng.random_range(-25.0..25.0), rng.random_range(-2.0..14.0), rng.random_range(-13.0..13.0))
+            } else {
+                let (c, r) = moved[7 * rng.random_range(0..moved.len() / 7) + rng.random_range(0..2) * 3];
+                c + Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)) * r * 0.57
+            };
+            let c = placement.cell_of(p);
+            let cell = ((c.z * placement.dims.y + c.y) * placement.dims.x + c.x) as usize;
+            for (item, &(centre, radius)) in moved.iter().enumerate() {
+                if centre.distance(p) < radius {
+                    assert!(listed[cell].binary_search(&(item as u32)).is_ok(), "frame {frame}: point {p} misses volume {item}");
+                }
+            }
+        }
+        if let Some(previous) = &previous {
+            assert_eq!(previous, &listed, "the second frame lists the same");
+        }
+        previous = Some(listed);
+    }
 }

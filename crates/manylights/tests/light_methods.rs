@@ -8,9 +8,7 @@ use common::*;
 use glam::{Affine3A, Quat, Vec3};
 use manylights::{
     scene::{self, demo::demo_scene, generators::ScatterLights, GroupInstance, Groups, Light, LightKind, Scene, Spin},
-    settings::BvhBuild,
-    settings::LightMethod,
-    settings::RenderConfig,
+    settings::{BvhBuild, LightMethod, PipelineKind, RaySettings, RenderConfig},
 };
 use rand::{Rng, SeedableRng};
 
@@ -182,6 +180,34 @@ fn grouped_demo() -> Scene {
         ],
     };
     scene
+}
+
+/// Sparse lights rebuilt every frame as one group placed once (here turned, and spinning) are read
+/// from cell lists rebuilt on the GPU in place of their LBVH, and light every pipeline as brute force
+/// does, reflections' hits too.
+#[test]
+fn sparse_lights_rebuilt_every_frame_are_read_from_cell_lists() {
+    let mut scene = with_scattered_lights(demo_scene(), 1500, 23);
+    scene.lights.extend(random_spots(200, 29));
+    scene.light_groups = Groups {
+        sizes: vec![scene.lights.len()],
+        instances: vec![GroupInstance {
+            group: 0,
+            world_from_group: Affine3A::from_rotation_translation(Quat::from_rotation_y(0.4), Vec3::new(0.3, 0.0, -0.2)),
+            spin: Some(Spin { pivot: Vec3::new(0.5, 0.0, 0.5), radians_per_second: 0.5 }),
+        }],
+    };
+    for pipeline in PipelineKind::ALL {
+        let reflections = RaySettings { reflection_bounces: u32::from(pipeline == PipelineKind::Visbuffer), ..Default::default() };
+        let at = |method| RenderConfig { pipeline, rays: reflections, ..config(96, 54, method) };
+        let brute = render_at(&scene, at(LightMethod::Brute), 0.6);
+        let mut rebuilt = renderer(&scene, RenderConfig { light_bvh_build: BvhBuild::GpuEveryFrame, ..at(LightMethod::Bvh) });
+        assert!(rebuilt.shading_methods().light_cell_lists, "{}: the rebuilt lights are not listed", pipeline.name());
+        rebuilt.time = 0.6;
+        rebuilt.render(&scene.cameras[0]).expect("frame");
+        let difference = max_abs_difference(&brute, &rebuilt.read_hdr().unwrap());
+        assert!(difference <= TOLERANCE, "{}: max abs difference {difference} from brute force", pipeline.name());
+    }
 }
 
 #[test]

@@ -86,9 +86,17 @@ fn entry_grid_dims(header: BvhNode) -> vec3<u32> {
 // per unit length (max) and cells per axis, 10 bits each (skip). A cell is two words: the node to
 // start at and the node the query stops at, or, with ENTRY_CELL_COVER, where its cover's pairs are.
 fn entry_grid_cell(header: BvhNode, p: vec3<f32>) -> u32 {
+    return header.entry + 2u * cell_list_index(header, p);
+}
+
+// The index of the grid cell holding the group-space point `p`, clamped into the grid, x fastest: the
+// cell of an entry grid or of cell lists (`entry_grid_cell`), or of lists rebuilt on the GPU every
+// frame (`accel/rebuilt_cell_lists.rs`, whose header has no first cell; the CPU's twin is
+// `ListPlacement::cell_of`).
+fn cell_list_index(header: BvhNode, p: vec3<f32>) -> u32 {
     let dims = entry_grid_dims(header);
     let cell = vec3<u32>(clamp(floor((p - header.min) * header.max), vec3<f32>(0.0), vec3<f32>(dims - 1u)));
-    return header.entry + 2u * ((cell.z * dims.y + cell.y) * dims.x + cell.x);
+    return (cell.z * dims.y + cell.y) * dims.x + cell.x;
 }
 
 fn instance_point_to_group(instance: VolumeInstance, p: vec3<f32>) -> vec3<f32> {

@@ -26,6 +26,7 @@ pub mod leaf_order;
 pub mod light_tree;
 pub mod overlap;
 pub mod radix_sort;
+pub mod rebuilt_cell_lists;
 pub mod rebuilt_grid;
 pub mod structure;
 pub mod volumes;

@@ -107,6 +107,7 @@ pub fn sampled_overlap<T>(
 /// `measurements` asks.
 pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<SceneStatistics> {
     let (ranges, instances) = scene.decal_groups.resolve(scene.decals.len());
+    let (light_ranges, light_instances) = scene.light_groups.resolve(scene.lights.len());
     let decal_centre_overlap = if measurements.decal_centre_overlap {
         let boxes: Vec<Aabb> = scene.decals.iter().map(decal_aabb).collect();
         let builds =
@@ -129,6 +130,7 @@ pub fn scene_statistics(scene: &Scene, measurements: Measurements) -> Result<Sce
         placed_decals,
         light_overlap,
         decal_overlap,
+        placed_light_groups: light_instances.iter().filter(|i| !light_ranges[i.group].is_empty()).count(),
         placed_decal_groups: instances.iter().filter(|i| !ranges[i.group].is_empty()).count(),
         decal_centre_overlap,
         animated_instances: scene.animation.as_ref().is_some_and(|a| !a.instances.is_empty()) || !scene.deformers.is_empty(),

@@ -33,6 +33,7 @@ use super::{
     leaf_order::{LeafOrder, LeafOrderTarget},
     light_aabb,
     light_tree::{light_tree_nodes, LightTreeNode},
+    rebuilt_cell_lists::{ListBounds, ListPlacement, RebuiltCellLists},
     rebuilt_grid::{GridPlacement, RebuiltGrids, RebuiltGroup},
     Aabb, Bvh, BvhNode,
 };
@@ -218,6 +219,7 @@ impl VolumeKind {
                 groups: "light_blas_build",
                 leaf_order: "light_leaf_order",
                 rebuilt_grids: "light_entry_grid_build",
+                rebuilt_lists: "light_cell_lists_build",
                 clusters: "light_cluster_build",
                 hardware_pack: "light_hardware_boxes_build",
             },
@@ -226,6 +228,7 @@ impl VolumeKind {
                 groups: "decal_blas_build",
                 leaf_order: "decal_leaf_order",
                 rebuilt_grids: "decal_entry_grid_build",
+                rebuilt_lists: "decal_cell_lists_build",
                 clusters: "decal_cluster_build",
                 hardware_pack: "decal_hardware_boxes_build",
             },
@@ -263,12 +266,13 @@ impl VolumeKind {
 }
 
 /// A structure's timer scopes: the top-level build, the groups' rebuilds, putting rebuilt groups'
-/// items in leaf order, and the clustered lists.
+/// items in leaf order, their entry grids or cell lists, and the clustered lists.
 struct Scopes {
     top_level: &'static str,
     groups: &'static str,
     leaf_order: &'static str,
     rebuilt_grids: &'static str,
+    rebuilt_lists: &'static str,
     clusters: &'static str,
     /// Packing the dynamic group's boxes for the hardware back end's bottom level.
     hardware_pack: &'static str,
@@ -287,7 +291,8 @@ pub struct Volumes<'a> {
     pub rebuilt_leaves: DynamicLeaves,
     /// Groups rebuilt on the GPU every frame get entry grids (`plan::StructurePlan::rebuilt_grids`).
     pub rebuilt_grids: bool,
-    /// The one placed group gets cell lists where they fit (`plan::StructurePlan::cell_lists`).
+    /// The one placed group gets cell lists where they fit (`plan::StructurePlan::cell_lists`): built
+    /// with its BVH on the CPU (decals), or on the GPU every frame in place of its BVH (lights).
     pub cell_lists: bool,
     /// Light groups get their light tree (`light_tree.rs`, `plan::StructurePlan::light_tree`): built
     /// with the CPU's BVHs, or alongside each GPU rebuild (the dynamic group's too).
@@ -342,6 +347,8 @@ pub struct VolumeStructure {
     wide_leaves: bool,
     /// The structure's one placed group has cell lists ([`Self::cell_lists`]).
     cell_lists: bool,
+    /// Rebuilds the cell lists of the one placed group every frame, in place of its BVH.
+    rebuilt_lists: Option<RebuiltCellLists>,
     /// Puts the items in leaf order after GPU rebuilds (none when every group is built on the CPU).
     leaf_order: Option<LeafOrder>,
     /// Rebuilds the entry grids of groups rebuilt on the GPU, after their builds.
@@ -389,7 +396,7 @@ impl VolumeStructure {
             wide_leaves: plan.wide_leaves,
             rebuilt_leaves: plan.rebuilt_leaves,
             rebuilt_grids: plan.rebuilt_grids,
-            cell_lists: false,
+            cell_lists: plan.cell_lists,
             light_tree: plan.light_tree,
             hardware: plan.hardware,
             groups,
@@ -545,16 +552,22 @@ impl VolumeStructure {
         let cpu_groups = cpu_builds(volumes, &layout, build)?;
         let wide_leaves = volumes.wide_leaves && cpu_groups.iter().any(Option::is_some);
         let scene_indices = stored_order(&layout.ranges, &cpu_groups);
-        let rebuilt_on_gpu = build == GroupBuild::GpuEveryFrame && layout.ranges.iter().any(|range| !range.is_empty());
+        let listed = rebuilt_list_placement(volumes, &layout, build);
+        let rebuilt_on_gpu = build == GroupBuild::GpuEveryFrame
+            && layout.ranges.iter().enumerate().any(|(g, range)| !range.is_empty() && listed.is_none_or(|(listed, _)| listed != g));
         if rebuilt_on_gpu && clustering.is_some() {
             return Err(Error::InvalidConfig(format!(
                 "clustered lists bin the {label}s in the order the CPU stores them, which GPU rebuilds change every frame; build the {label}s' BVH once on the CPU"
             )));
         }
-        let rebuilt_grids = rebuilt_grid_placements(volumes, &layout, build);
+        let rebuilds = rebuilds(volumes, &layout, build, listed);
+        let rebuilt_grid_cells = rebuilds.iter().filter_map(|r| match r {
+            Rebuild::Lbvh(Some(grid)) => Some(2 * u64::from(grid.cells())),
+            _ => None,
+        });
         let cell_words: u64 = cpu_groups.iter().flatten().filter_map(|g| g.grid.as_ref()).map(|g| g.gpu_len() as u64).sum::<u64>()
-            + rebuilt_grids.iter().flatten().map(|p| 2 * u64::from(p.cells())).sum::<u64>();
-        let cell_lists = cpu_groups.iter().flatten().any(|g| matches!(g.grid, Some(GroupGrid::Lists(_))));
+            + rebuilt_grid_cells.sum::<u64>();
+        let cell_lists = listed.is_some() || cpu_groups.iter().flatten().any(|g| matches!(g.grid, Some(GroupGrid::Lists(_))));
         let primitive_count = layout.primitive_count();
         if primitive_count + cell_words > u64::from(entry_grid::CELL_COVER_OFFSET_MASK) {
             return Err(Error::InvalidScene(format!(
@@ -580,7 +593,20 @@ impl VolumeStructure {
         if !scene_indices.is_empty() {
             ctx.queue.write_buffer(&buffers.primitives, u64::from(layout.instance_slots) * 4, bytemuck::cast_slice(&scene_indices));
         }
-        let (mut groups, rebuilt) = place_groups(ctx, volumes, &layout, &buffers, build, cpu_groups, rebuilt_grids)?;
+        let (mut groups, rebuilt) = place_groups(ctx, volumes, &layout, &buffers, build, cpu_groups, rebuilds)?;
+        let rebuilt_lists = listed
+            .map(|(group, placement)| {
+                let range = &layout.ranges[group];
+                let lights: &[GpuLight] = bytemuck::cast_slice(&volumes.items[group_bytes(volumes, range)]);
+                let bounds: Vec<ListBounds> = lights
+                    .iter()
+                    .zip(&volumes.boxes[range.clone()])
+                    .map(|(light, aabb)| ListBounds::of_light(light.position.into(), light.range, *aabb))
+                    .collect();
+                let capacity = u32::try_from(placement.visits).unwrap_or(u32::MAX);
+                RebuiltCellLists::new(ctx, label, volumes.kind.scopes().rebuilt_lists, placement, &bounds, range.start as u32, capacity)
+            })
+            .transpose()?;
         let rebuilt_grids = (!rebuilt.is_empty())
             .then(|| RebuiltGrids::new(ctx, volumes.kind.scopes().rebuilt_grids, &buffers.nodes, &buffers.primitives, &rebuilt))
             .transpose()?;
@@ -616,7 +642,8 @@ impl VolumeStructure {
             None
         };
         let bind_group_layout = shading_bind_group_layout(&ctx.device, label, hardware.is_some());
-        let bind_group = shading_bind_group(ctx, label, &bind_group_layout, buffers.bound(), clusters.as_ref(), hardware.as_ref());
+        let lists = list_buffers(clusters.as_ref(), rebuilt_lists.as_ref());
+        let bind_group = shading_bind_group(ctx, label, &bind_group_layout, buffers.bound(), lists, hardware.as_ref());
         Ok(Self {
             bind_group_layout,
             bind_group,
@@ -626,6 +653,7 @@ impl VolumeStructure {
             scene_indices,
             wide_leaves,
             cell_lists,
+            rebuilt_lists,
             leaf_order,
             rebuilt_grids,
             clusters,
@@ -646,10 +674,12 @@ impl VolumeStructure {
         &self.scene_indices
     }
 
-    /// Whether the structure is one group, placed once, with cell lists (`cell_lists.rs`): its items
-    /// crowd and its queries share them out (`wide_leaves`), so shading reads the list of a point's
-    /// cell (`shading/enumerate/decals_bvh_cells.wgsl`) instead of walking. The group's BVH stays, for
-    /// its items' order and for walks of other passes, which start at its root.
+    /// Whether the structure is one group, placed once, with cell lists, so shading reads the list of
+    /// a point's cell instead of walking: decals that crowd and whose queries share them out
+    /// (`wide_leaves`), built on the CPU (`cell_lists.rs`, `shading/enumerate/decals_bvh_cells.wgsl`),
+    /// whose BVH stays, for its items' order and for walks of other passes, which start at its root;
+    /// or sparse lights rebuilt every frame (`rebuilt_cell_lists.rs`,
+    /// `shading/enumerate/lights_cells.wgsl`), whose lists replace their BVH.
     pub fn cell_lists(&self) -> bool {
         self.cell_lists
     }
@@ -679,21 +709,20 @@ impl VolumeStructure {
         self.clusters.as_ref().map(ClusterLists::capacity)
     }
 
-    /// Whether the clustered lists held everything the frames since the last call needed (always
-    /// true without them). If not, they have grown, and those frames must be rendered again.
-    pub fn clusters_fitted(&mut self, ctx: &GpuContext) -> Result<bool> {
-        let Some(clusters) = &mut self.clusters else { return Ok(true) };
-        if clusters.fitted(ctx)? {
+    /// Whether the clustered lists or the rebuilt cell lists held everything the frames since the
+    /// last call needed (always true without them). If not, they have grown, and those frames must be
+    /// rendered again.
+    pub fn lists_fitted(&mut self, ctx: &GpuContext) -> Result<bool> {
+        let fitted = match (&mut self.clusters, &mut self.rebuilt_lists) {
+            (Some(clusters), _) => clusters.fitted(ctx)?,
+            (None, Some(lists)) => lists.fitted(ctx)?,
+            (None, None) => true,
+        };
+        if fitted {
             return Ok(true);
         }
-        self.bind_group = shading_bind_group(
-            ctx,
-            self.label,
-            &self.bind_group_layout,
-            self.buffers.bound(),
-            self.clusters.as_ref(),
-            self.hardware.as_ref(),
-        );
+        let lists = list_buffers(self.clusters.as_ref(), self.rebuilt_lists.as_ref());
+        self.bind_group = shading_bind_group(ctx, self.label, &self.bind_group_layout, self.buffers.bound(), lists, self.hardware.as_ref());
         Ok(false)
     }
 
@@ -710,6 +739,9 @@ impl VolumeStructure {
         for (k, &g) in rebuilding.iter().enumerate() {
             let span = TimerSpan { name: self.blas_scope, starts: k == 0, ends: k + 1 == rebuilding.len() };
             self.groups[g].builder.as_mut().expect("filtered on builders").record(encoder, timer.as_deref_mut(), span)?;
+        }
+        if let Some(lists) = &self.rebuilt_lists {
+            lists.record(encoder, timer.as_deref_mut());
         }
         if let Some(leaf_order) = &self.leaf_order {
             leaf_order.record(encoder, timer.as_deref_mut());
@@ -995,13 +1027,13 @@ fn place_groups(
     buffers: &Buffers,
     build: GroupBuild,
     cpu_groups: Vec<Option<CpuGroup>>,
-    rebuilt_grids: Vec<Option<GridPlacement>>,
+    rebuilds: Vec<Rebuild>,
 ) -> Result<(Vec<Group>, Vec<RebuiltGroup>)> {
     let node_offset = |node: u32| u64::from(node) * std::mem::size_of::<BvhNode>() as u64;
     let mut next_cell = layout.primitive_count() as u32;
     let mut groups = Vec::with_capacity(layout.ranges.len() + 1);
     let mut rebuilt = Vec::new();
-    for (((range, &blas_root), cpu_group), placement) in layout.ranges.iter().zip(&layout.group_roots).zip(cpu_groups).zip(rebuilt_grids) {
+    for (((range, &blas_root), cpu_group), rebuild) in layout.ranges.iter().zip(&layout.group_roots).zip(cpu_groups).zip(rebuilds) {
         let items = range.start as u32..range.end as u32;
         let boxes = &volumes.boxes[range.clone()];
         let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
@@ -1026,6 +1058,13 @@ fn place_groups(
             }
             None if boxes.is_empty() || build == GroupBuild::None => None,
             None => {
+                if let Rebuild::Lists(placement) = rebuild {
+                    // Rebuilt as cell lists (`RebuiltCellLists`), whose grid its queries read from
+                    // its header.
+                    grid = Some(GridHeader { node: placement.header(), flag: 0 });
+                    groups.push(Group { items, blas_root, grid, dynamic: false, bounds, builder: None, boxes: None });
+                    continue;
+                }
                 let target = buffers.target(blas_root, layout.instance_slots + items.start, items.start, true);
                 let leaves = max_leaf_size(volumes.rebuilt_leaves);
                 let mut builder = GpuLbvh::with_target(ctx, boxes.len() as u32, target)?.with_max_leaf_size(leaves);
@@ -1034,7 +1073,7 @@ fn place_groups(
                     let lights: &[GpuLight] = bytemuck::cast_slice(&volumes.items[group_bytes(volumes, range)]);
                     builder.set_emitters(&ctx.queue, &lights.iter().map(LightTreeNode::of_light).collect::<Vec<_>>())?;
                 }
-                if let Some(placement) = placement {
+                if let Rebuild::Lbvh(Some(placement)) = rebuild {
                     let node = placement.header(next_cell);
                     ctx.queue.write_buffer(&buffers.nodes, node_offset(blas_root - 1), bytemuck::bytes_of(&node));
                     grid = Some(GridHeader { node, flag: ENTRY_GRID_FLAG });
@@ -1060,17 +1099,45 @@ fn group_bytes(volumes: &Volumes, range: &Range<usize>) -> Range<usize> {
     range.start * bytes..range.end * bytes
 }
 
-/// Each group's entry grid where it is rebuilt on the GPU and `volumes.rebuilt_grids` asks for one.
-fn rebuilt_grid_placements(volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Vec<Option<GridPlacement>> {
+/// How a group is rebuilt on the GPU every frame, where it is.
+#[derive(Clone, Copy, Debug)]
+enum Rebuild {
+    /// As an LBVH, with the entry grid placed here where `volumes.rebuilt_grids` asks for one.
+    Lbvh(Option<GridPlacement>),
+    /// As cell lists on this grid, in place of its BVH (`listed`).
+    Lists(ListPlacement),
+}
+
+/// How each group is rebuilt where `build` rebuilds it: the `listed` group as cell lists, the others
+/// as LBVHs.
+fn rebuilds(volumes: &Volumes, layout: &Layout, build: GroupBuild, listed: Option<(usize, ListPlacement)>) -> Vec<Rebuild> {
     let gridded = build == GroupBuild::GpuEveryFrame && volumes.rebuilt_grids;
     layout
         .ranges
         .iter()
-        .map(|range| {
-            let boxes = &volumes.boxes[range.clone()];
-            gridded.then(|| GridPlacement::for_group(&boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x)), boxes.len())).flatten()
+        .enumerate()
+        .map(|(group, range)| match listed {
+            Some((listed, placement)) if listed == group => Rebuild::Lists(placement),
+            _ => {
+                let boxes = &volumes.boxes[range.clone()];
+                let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
+                Rebuild::Lbvh(gridded.then(|| GridPlacement::for_group(&bounds, boxes.len())).flatten())
+            }
         })
         .collect()
+}
+
+/// The group rebuilt on the GPU every frame as cell lists in place of its BVH, and their grid: the
+/// lights' one placed group, where `volumes.cell_lists` asks for them and a grid fits its volumes
+/// (`ListPlacement::for_boxes`); the others keep their LBVHs.
+fn rebuilt_list_placement(volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Option<(usize, ListPlacement)> {
+    let lone = (build == GroupBuild::GpuEveryFrame
+        && volumes.cell_lists
+        && volumes.kind == VolumeKind::Lights
+        && layout.instances.len() == 1
+        && layout.dynamic.is_none())
+    .then(|| layout.instances[0].group)?;
+    ListPlacement::for_boxes(&volumes.boxes[layout.ranges[lone].clone()]).map(|placement| (lone, placement))
 }
 
 /// The most boxes a leaf of a GPU build holds, as the plan's `leaves` say.
@@ -1141,19 +1208,25 @@ fn layout_has_light_tree(label: &str) -> bool {
     label == VolumeKind::Lights.label()
 }
 
+/// The lists' ranges and entries shading binds: the clustered lists', or the rebuilt cell lists'.
+fn list_buffers<'a>(clusters: Option<&'a ClusterLists>, rebuilt: Option<&'a RebuiltCellLists>) -> Option<[&'a wgpu::Buffer; 2]> {
+    clusters.map(|c| [&c.ranges, &c.entries]).or(rebuilt.map(|l| [&l.ranges, &l.entries]))
+}
+
 /// The bind group shading reads (`shading/*_bindings.wgsl`): items, nodes, primitives, instances,
-/// the clustered lists' ranges and entries (or placeholders without them), and the first instance.
+/// the lists' ranges and entries (`list_buffers`, or placeholders without them), and the first
+/// instance.
 fn shading_bind_group(
     ctx: &GpuContext,
     label: &str,
     layout: &wgpu::BindGroupLayout,
     [items, nodes, primitives, instances, first_instance, light_tree]: [&wgpu::Buffer; 6],
-    clusters: Option<&ClusterLists>,
+    lists: Option<[&wgpu::Buffer; 2]>,
     hardware: Option<&HardwareVolumes>,
 ) -> wgpu::BindGroup {
     let placeholder;
-    let (ranges, entries) = match clusters {
-        Some(c) => (&c.ranges, &c.entries),
+    let [ranges, entries] = match lists {
+        Some(lists) => lists,
         None => {
             placeholder = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("no cluster lists"),
@@ -1161,7 +1234,7 @@ fn shading_bind_group(
                 usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
             });
-            (&placeholder, &placeholder)
+            [&placeholder, &placeholder]
         }
     };
     let mut resources = [items, nodes, primitives, instances, ranges, entries, first_instance].map(|b| b.as_entire_binding()).to_vec();

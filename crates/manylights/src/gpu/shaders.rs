@@ -45,6 +45,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/enumerate/lights_off.wgsl", include_str!("../shading/enumerate/lights_off.wgsl")),
     ("shading/enumerate/decals_off.wgsl", include_str!("../shading/enumerate/decals_off.wgsl")),
     ("shading/enumerate/lights_clustered.wgsl", include_str!("../shading/enumerate/lights_clustered.wgsl")),
+    ("shading/enumerate/lights_cells.wgsl", include_str!("../shading/enumerate/lights_cells.wgsl")),
     ("shading/enumerate/decals_clustered.wgsl", include_str!("../shading/enumerate/decals_clustered.wgsl")),
     ("accel/cluster_grid.wgsl", include_str!("../accel/cluster_grid.wgsl")),
     ("accel/cluster_build.wgsl", include_str!("../accel/cluster_build.wgsl")),
@@ -57,6 +58,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("accel/lbvh.wgsl", include_str!("../accel/lbvh.wgsl")),
     ("accel/hardware_boxes.wgsl", include_str!("../accel/hardware_boxes.wgsl")),
     ("accel/rebuilt_grid.wgsl", include_str!("../accel/rebuilt_grid.wgsl")),
+    ("accel/rebuilt_cell_lists.wgsl", include_str!("../accel/rebuilt_cell_lists.wgsl")),
     ("accel/leaf_order.wgsl", include_str!("../accel/leaf_order.wgsl")),
     ("accel/radix_sort.wgsl", include_str!("../accel/radix_sort.wgsl")),
     ("passes/visbuffer_raster_indexed.wgsl", include_str!("../passes/visbuffer_raster_indexed.wgsl")),
@@ -419,6 +421,12 @@ mod tests {
         for shader in [visbuffer_shade::shader, deferred_shade::shader, forward_shade::shader, blended_shade::shader] {
             let source = shader(listed).compose().unwrap();
             assert!(source.contains("fn decal_box_meets_box(") && !source.contains("fn decal_query_next_leaf("));
+        }
+        // Sparse lights with rebuilt cell lists are read from them in every stage, never walked.
+        let lights_listed = ShadingMethods { light_cell_lists: true, subgroups: false, ..sparse };
+        for shader in [visbuffer_shade::shader, deferred_shade::shader, forward_shade::shader, blended_shade::shader] {
+            let source = shader(lights_listed).compose().unwrap();
+            assert!(source.contains("cell_list_index(light_first_instance") && !source.contains("fn light_query_next_leaf("));
         }
     }
 

@@ -23,6 +23,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
         ShaderDesc::new("accel/lbvh.wgsl"),
         ShaderDesc::new("accel/leaf_order.wgsl"),
         ShaderDesc::new("accel/rebuilt_grid.wgsl"),
+        ShaderDesc::new("accel/rebuilt_cell_lists.wgsl"),
         ShaderDesc::new("accel/radix_sort.wgsl"),
         ShaderDesc::new("accel/cluster_build.wgsl"),
         ShaderDesc::new("passes/deferred_decals.wgsl"),
@@ -58,12 +59,17 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                 .collect();
             for (particles, reflections, direct) in variants {
                 // Dense decals, and their cell lists, change only the BVH's shader.
-                let densities: &[(bool, bool, bool)] = if decals == DecalMethod::Bvh {
-                    &[(false, false, false), (true, false, false), (true, true, false), (true, true, true)]
+                let mut densities: Vec<(bool, bool, bool, bool)> = if decals == DecalMethod::Bvh {
+                    vec![(false, false, false, false), (true, false, false, false), (true, true, false, false), (true, true, true, false)]
                 } else {
-                    &[(false, false, false), (true, false, false)]
+                    vec![(false, false, false, false), (true, false, false, false)]
                 };
-                for &(subgroups, dense_decals, decal_cell_lists) in densities {
+                // Sparse lights read from rebuilt cell lists, which particle lights never join; the
+                // lights' module meets the decals' only through the core, so two decal methods do.
+                if lights == LightMethod::Bvh && particles != ParticleMethod::Bvh && matches!(decals, DecalMethod::Off | DecalMethod::Bvh) {
+                    densities.push((false, false, false, true));
+                }
+                for (subgroups, dense_decals, decal_cell_lists, light_cell_lists) in densities {
                     let methods = ShadingMethods {
                         lights,
                         decals,
@@ -79,6 +85,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         // Dense lights walk as a subgroup, as subgroup-walked decals do.
                         dense_lights: subgroups && lights == LightMethod::Bvh,
                         decal_cell_lists,
+                        light_cell_lists,
                         light_tree: false,
                         hardware_lights: false,
                         hardware_decals: false,
