@@ -33,6 +33,12 @@ pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, overlap: f32
 
 pub const REBUILT_BVH_OVERLAP: f32 = 4.0;
 
+/// From this mean overlap at surface points, decals rebuilt every frame as one placed group and read
+/// from cell lists shade faster in fragments than clustered lists (the forward pipeline's decal
+/// sweep: 0.97× at overlap 0.25, 1.11× at 1.0, 0.84× at 3.8); in compute they are faster at every
+/// overlap below the dense decals' (BENCHMARKS.md, "Scaling").
+pub const REBUILT_FRAGMENT_DECAL_OVERLAP: f32 = 2.0;
+
 /// Whether `bvh` lights rebuilt on the GPU every frame are read from cell lists rebuilt in place of
 /// their BVH (`accel/rebuilt_cell_lists.rs`): as the one group placed (`placed_groups`), in every
 /// pipeline, below the overlap from which subgroups sharing an LBVH's leaves out in compute is faster
@@ -57,11 +63,11 @@ pub enum Why {
     /// Reflections shade points outside the view, which clustered lists do not cover.
     Reflections,
     /// The BVH would be rebuilt on the GPU every frame where clustered lists, rebuilt every frame too,
-    /// are faster: sparse lights of several placed groups ([`rebuilt_bvh_wins`]), decals unless
-    /// subgroups share them out (BENCHMARKS.md, "Scaling").
+    /// are faster: sparse lights ([`rebuilt_bvh_wins`]) and decals of several placed groups, and
+    /// sparse decals in fragments ([`REBUILT_FRAGMENT_DECAL_OVERLAP`]) (BENCHMARKS.md, "Scaling").
     RebuiltEveryFrame,
-    /// Lights rebuilt every frame as one placed group, below the overlap where subgroups share them
-    /// out: read from cell lists rebuilt in place of their BVH ([`rebuilt_lights_listed`]).
+    /// Lights or decals rebuilt every frame as one placed group, below the overlap where subgroups
+    /// share them out: read from cell lists rebuilt in place of their BVH ([`rebuilt_lights_listed`]).
     Listed { count: usize, overlap: f32 },
     /// The mean overlap at surface points, where a BVH is faster: built once at every overlap
     /// measured (up to 100), or rebuilt every frame over lights dense enough that subgroups share
@@ -148,16 +154,21 @@ impl MethodChoice {
         };
         let decals = match config.decal_method {
             DecalMethod::Auto => {
-                // Dense decals rebuilt every frame, shared out, beat clustered lists from 262k in the
-                // sweeps (0.90×); sparser ones lose (1.09–1.12×) or come level.
+                // Rebuilt every frame, dense decals shared out beat clustered lists from 262k in the
+                // sweeps, and sparser ones as one placed group read from rebuilt cell lists, but in
+                // fragments below [`REBUILT_FRAGMENT_DECAL_OVERLAP`]; sparser decals of several
+                // groups, each an LBVH walked alone, lose or come level.
                 let shared_out = decals_shared_out(caps, stats.decal_centre_overlap);
+                let rebuilt = config.decal_bvh_build == BvhBuild::GpuEveryFrame && !shared_out;
+                let listed = stats.placed_decal_groups == 1
+                    && (config.pipeline != PipelineKind::Forward
+                        || stats.decal_overlap.is_some_and(|overlap| overlap >= REBUILT_FRAGMENT_DECAL_OVERLAP));
                 let (method, why) = match (stats.placed_decals, stats.decal_overlap) {
                     (0, _) => (DecalMethod::Off, Why::NoVolumes),
                     (n, _) if n <= BRUTE_FORCE_MAX => (DecalMethod::Brute, Why::Few(n)),
                     _ if reflections => (DecalMethod::Bvh, Why::Reflections),
-                    _ if config.decal_bvh_build == BvhBuild::GpuEveryFrame && !shared_out => {
-                        (DecalMethod::Clustered, Why::RebuiltEveryFrame)
-                    }
+                    _ if rebuilt && !listed => (DecalMethod::Clustered, Why::RebuiltEveryFrame),
+                    (count, overlap) if rebuilt => (DecalMethod::Bvh, Why::Listed { count, overlap: overlap.unwrap_or(0.0) }),
                     (count, overlap) => (DecalMethod::Bvh, Why::Overlap { count, overlap: overlap.unwrap_or(0.0), shared_out }),
                 };
                 Chosen { method, why }
@@ -304,9 +315,11 @@ pub struct ShadingMethods {
     /// The decals' structure is one crowded group placed once, with cell lists: `bvh` decals are read
     /// from the list of a point's cell instead of walked (`shading/enumerate/decals_bvh_cells.wgsl`).
     pub decal_cell_lists: bool,
-    /// The lights' structure is one sparse group placed once and rebuilt every frame as cell lists:
-    /// `bvh` lights are read from the list of a point's cell (`shading/enumerate/lights_cells.wgsl`).
-    pub light_cell_lists: bool,
+    /// The lights' or the decals' structure is one sparse group placed once and rebuilt every frame as
+    /// cell lists: `bvh` lights or decals are read from the list of a point's cell
+    /// (`shading/enumerate/lights_cells.wgsl`, `decals_cells.wgsl`).
+    pub rebuilt_light_lists: bool,
+    pub rebuilt_decal_lists: bool,
     /// `restir` draws its candidates through the light tree instead of enumerating the lights
     /// reaching a point (`shading/enumerate/lights_tree.wgsl`, [`restir_light_tree`]).
     pub light_tree: bool,
@@ -377,7 +390,7 @@ impl ShadingMethods {
             LightMethod::Brute => "shading/enumerate/lights_brute.wgsl",
             LightMethod::Bvh if self.light_tree => "shading/enumerate/lights_tree.wgsl",
             LightMethod::Bvh if self.hardware_lights => "shading/enumerate/lights_ray_query.wgsl",
-            LightMethod::Bvh if self.light_cell_lists => "shading/enumerate/lights_cells.wgsl",
+            LightMethod::Bvh if self.rebuilt_light_lists => "shading/enumerate/lights_cells.wgsl",
             // `auto` is resolved before a plan is made (`MethodChoice`).
             LightMethod::Bvh | LightMethod::Auto => "shading/enumerate/lights_bvh.wgsl",
             LightMethod::Clustered => "shading/enumerate/lights_clustered.wgsl",
@@ -389,6 +402,7 @@ impl ShadingMethods {
     pub fn decal_enumeration_module(&self) -> &'static str {
         match self.decals {
             DecalMethod::Bvh if self.hardware_decals => "shading/enumerate/decals_ray_query.wgsl",
+            DecalMethod::Bvh if self.rebuilt_decal_lists => "shading/enumerate/decals_cells.wgsl",
             DecalMethod::Bvh if self.decal_cell_lists && self.subgroups => "shading/enumerate/decals_bvh_cells.wgsl",
             DecalMethod::Off => "shading/enumerate/decals_off.wgsl",
             DecalMethod::Brute => "shading/enumerate/decals_brute.wgsl",
@@ -723,7 +737,8 @@ impl FramePlan {
             dense_decals: false,
             dense_lights: false,
             decal_cell_lists: false,
-            light_cell_lists: false,
+            rebuilt_light_lists: false,
+            rebuilt_decal_lists: false,
             debug_views: config.debug_view != DebugView::Off,
             material_extensions: stats.material_extensions,
             vertex_colors: stats.vertex_colors,
@@ -767,13 +782,17 @@ impl FramePlan {
             matches!(config.decal_method, DecalMethod::Clustered | DecalMethod::DeferredDecals),
             config.decal_bvh_build,
         );
+        // Decals as one group placed once: crowded ones built once get cell lists with their BVH,
+        // sparse ones rebuilt every frame cell lists in its place.
+        let decals_listed = decal_build == GroupBuild::GpuEveryFrame && !dense_decals && !hardware_decals;
+        let decal_lists = stats.placed_decal_groups == 1 && (decals_listed || (dense_decals && decal_build == GroupBuild::CpuOnce));
         let decals = StructurePlan {
             build: decal_build,
             clustered: config.decal_method == DecalMethod::Clustered,
             wide_leaves: dense_decals,
             rebuilt_leaves: rebuilt_leaves(dense_decals),
             rebuilt_grids: !walks.decals && !hardware_decals,
-            cell_lists: dense_decals && stats.placed_decal_groups == 1 && decal_build == GroupBuild::CpuOnce,
+            cell_lists: decal_lists,
             light_tree: false,
             hardware: hardware_decals,
         };
@@ -799,8 +818,9 @@ impl FramePlan {
             planned_methods: ShadingMethods {
                 dense_decals,
                 dense_lights,
-                decal_cell_lists: decals.cell_lists,
-                light_cell_lists: lights.cell_lists,
+                decal_cell_lists: decal_lists && !decals_listed,
+                rebuilt_light_lists: lights.cell_lists,
+                rebuilt_decal_lists: decal_lists && decals_listed,
                 ..unlisted
             },
         })
@@ -812,7 +832,8 @@ impl FramePlan {
     pub fn shading_methods(&self, decal_lists_built: bool, light_lists_built: bool) -> ShadingMethods {
         ShadingMethods {
             decal_cell_lists: self.planned_methods.decal_cell_lists && decal_lists_built,
-            light_cell_lists: self.planned_methods.light_cell_lists && light_lists_built,
+            rebuilt_light_lists: self.planned_methods.rebuilt_light_lists && light_lists_built,
+            rebuilt_decal_lists: self.planned_methods.rebuilt_decal_lists && decal_lists_built,
             ..self.planned_methods
         }
     }
@@ -949,12 +970,23 @@ mod tests {
         let rebuilt = FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP, 1)).unwrap();
         assert!(rebuilt.shading_methods(true, true).dense_decals && !rebuilt.decals.rebuilt_grids && !rebuilt.decals.cell_lists);
         assert_eq!(rebuilt.decals.rebuilt_leaves, DynamicLeaves::AtMost(32));
+        // Sparser, as one placed group, they are read from cell lists rebuilt in place of their BVH.
+        let listed = FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 1.0, 1)).unwrap();
+        let methods = listed.shading_methods(true, true);
+        assert!(listed.decals.cell_lists && methods.rebuilt_decal_lists && !methods.decal_cell_lists);
+        assert_eq!(methods.decal_enumeration_module(), "shading/enumerate/decals_cells.wgsl");
+        assert!(!listed.shading_methods(false, true).rebuilt_decal_lists, "lists that were not built are not read");
+        assert!(!FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 1.0, 2)).unwrap().decals.cell_lists);
         // And `auto` walks them rather than listing them in clusters.
         let auto_rebuilt = RenderConfig { decal_method: DecalMethod::Auto, ..gpu_built.clone() };
         let placed = |centre| SceneStatistics { placed_decals: 262_144, ..stats(centre, 1) };
         assert_eq!(MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP)).decals.method, DecalMethod::Bvh);
+        // Sparser, as one placed group, it reads them from rebuilt cell lists; of several groups, it
+        // takes clustered lists.
         let sparse_rebuilt = MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP - 1.0));
-        assert_eq!(sparse_rebuilt.decals.method, DecalMethod::Clustered);
+        assert_eq!(sparse_rebuilt.decals.why, Why::Listed { count: 262_144, overlap: 0.0 });
+        let grouped = SceneStatistics { placed_decal_groups: 2, ..placed(DENSE_DECAL_OVERLAP - 1.0) };
+        assert_eq!(MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &grouped).decals.method, DecalMethod::Clustered);
         // An overlap measured for other settings decides nothing.
         let alone = FramePlan::resolve(
             &bvh,
@@ -1031,8 +1063,8 @@ mod tests {
         };
         let listed = |config: &RenderConfig, stats: &SceneStatistics| {
             let plan = FramePlan::resolve(config, SUBGROUPS, stats).unwrap();
-            assert_eq!(plan.lights.cell_lists, plan.shading_methods(false, true).light_cell_lists);
-            assert!(!plan.shading_methods(true, false).light_cell_lists, "lists that were not built are not read");
+            assert_eq!(plan.lights.cell_lists, plan.shading_methods(false, true).rebuilt_light_lists);
+            assert!(!plan.shading_methods(true, false).rebuilt_light_lists, "lists that were not built are not read");
             plan.lights.cell_lists
         };
         for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
@@ -1249,11 +1281,20 @@ mod tests {
                 assert_eq!(MethodChoice::resolve(config, no_subgroups, &scene(28_000, overlap, 0, 0.0)).lights.method, LightMethod::Bvh);
             }
         }
-        assert_eq!(chosen(&rebuilt, scene(1000, 0.1, 1000, 0.1)), (LightMethod::Bvh, DecalMethod::Clustered));
+        assert_eq!(chosen(&rebuilt, scene(1000, 0.1, 1000, 0.1)), (LightMethod::Bvh, DecalMethod::Bvh));
+        let listed = MethodChoice::resolve(&rebuilt, SUBGROUPS, &scene(1000, 0.1, 1000, 0.1));
+        assert_eq!(listed.decals.why, Why::Listed { count: 1000, overlap: 0.1 });
         let grouped = |lights, overlap| SceneStatistics { placed_light_groups: 2, ..scene(lights, overlap, 0, 0.0) };
         assert_eq!(chosen(&rebuilt, grouped(1000, 0.1)).0, LightMethod::Clustered);
         assert_eq!(chosen(&rebuilt, grouped(1000, DENSE_LIGHT_OVERLAP)).0, LightMethod::Bvh);
-        assert_eq!(chosen(&rebuilt, scene(1000, 0.1, 1000, 50.0)).1, DecalMethod::Clustered);
+        let grouped_decals = SceneStatistics { placed_decal_groups: 3, ..scene(0, 0.0, 1000, 0.1) };
+        assert_eq!(chosen(&rebuilt, grouped_decals).1, DecalMethod::Clustered);
+        let crowded =
+            SceneStatistics { placed_decal_groups: 3, decal_centre_overlap: Some(DENSE_DECAL_OVERLAP), ..scene(0, 0.0, 1000, 50.0) };
+        assert_eq!(chosen(&rebuilt, crowded).1, DecalMethod::Bvh);
+        // In fragments, listed decals win from a higher overlap.
+        assert_eq!(chosen(&forward, scene(0, 0.0, 4096, REBUILT_FRAGMENT_DECAL_OVERLAP - 1.0)).1, DecalMethod::Clustered);
+        assert_eq!(chosen(&forward, scene(0, 0.0, 16_384, REBUILT_FRAGMENT_DECAL_OVERLAP)).1, DecalMethod::Bvh);
         assert_eq!(chosen(&rebuilt, grouped(28_000, REBUILT_BVH_OVERLAP)).0, LightMethod::Bvh);
         assert_eq!(chosen(&rebuilt, grouped(1 << 18, REBUILT_BVH_OVERLAP - 1.5)).0, LightMethod::Clustered);
         assert_eq!(chosen(&forward, grouped(28_000, REBUILT_BVH_OVERLAP)).0, LightMethod::Clustered);

@@ -23,7 +23,7 @@ use manylights::{
     },
     settings::BvhBuild,
     settings::RenderConfig,
-    settings::{DecalMethod, LightMethod, PipelineKind},
+    settings::{DecalMethod, LightMethod, PipelineKind, RaySettings},
 };
 
 const TOLERANCE: f32 = 1e-3;
@@ -71,6 +71,37 @@ fn demo_with_thousands_of_decals() {
     let scene = with_decals_and_lights(demo_scene(), 2000, 500, 21);
     assert!(decal_effect(&scene, 96, 54) > 1e-3, "the decals barely change the image");
     assert_decal_methods_agree(&scene, 128, 72, 0.0);
+}
+
+/// Sparse decals rebuilt every frame as one group placed once (here turned, and spinning) are read
+/// from cell lists rebuilt on the GPU in place of their LBVH, and blend in every pipeline as brute
+/// force does, reflections' hits too.
+#[test]
+fn sparse_decals_rebuilt_every_frame_are_read_from_cell_lists() {
+    let mut scene = with_decals_and_lights(demo_scene(), 1500, 200, 31);
+    for (i, decal) in scene.decals.iter_mut().enumerate() {
+        decal.layer = (i % 3) as u32;
+    }
+    scene.decal_groups = Groups {
+        sizes: vec![scene.decals.len()],
+        instances: vec![GroupInstance {
+            group: 0,
+            world_from_group: Affine3A::from_rotation_translation(Quat::from_rotation_y(-0.3), Vec3::new(-0.2, 0.0, 0.3)),
+            spin: Some(scene::Spin { pivot: Vec3::new(0.4, 0.0, -0.4), radians_per_second: 0.4 }),
+        }],
+    };
+    assert!(decal_effect(&scene, 64, 36) > 1e-3, "the decals barely change the image");
+    for pipeline in PipelineKind::ALL {
+        let reflections = RaySettings { reflection_bounces: u32::from(pipeline == PipelineKind::Visbuffer), ..Default::default() };
+        let at = |method, build| RenderConfig { pipeline, rays: reflections, ..decal_config(96, 54, method, build) };
+        let brute = render_at(&scene, at(DecalMethod::Brute, BvhBuild::CpuOnce), 0.7);
+        let mut rebuilt = renderer(&scene, at(DecalMethod::Bvh, BvhBuild::GpuEveryFrame));
+        assert!(rebuilt.shading_methods().rebuilt_decal_lists, "{}: the rebuilt decals are not listed", pipeline.name());
+        rebuilt.time = 0.7;
+        rebuilt.render(&scene.cameras[0]).expect("frame");
+        let difference = max_abs_difference(&brute, &rebuilt.read_hdr().unwrap());
+        assert!(difference <= TOLERANCE, "{}: max abs difference {difference} from brute force", pipeline.name());
+    }
 }
 
 /// Renders `scene`'s crowded decals by brute force and through their structure in every pipeline, and

@@ -302,3 +302,59 @@ fn rebuilt_cell_lists_list_every_volume_reaching_each_cell() {
         previous = Some(listed);
     }
 }
+
+/// Oriented boxes (decals) of every size and turn: each frame's lists name, for points inside a box,
+/// that box in the points' cell, their oriented test never dropping one.
+#[test]
+fn rebuilt_cell_lists_list_every_oriented_box_reaching_each_cell() {
+    use glam::{Affine3A, Quat};
+    use manylights::accel::rebuilt_cell_lists::{ListBounds, ListPlacement, RebuiltCellLists};
+    use manylights::gpu::readback::read_buffer;
+    let ctx = GpuContext::new().expect("a GPU adapter");
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(43);
+    let boxes: Vec<Affine3A> = (0..2000)
+        .map(|i| {
+            let size = if i % 400 == 0 {
+                Vec3::new(3.0, 2.0, 0.05)
+            } else {
+                Vec3::new(rng.random_range(0.2..1.0), rng.random_range(0.2..1.0), 0.1)
+            };
+            let turn =
+                Quat::from_euler(glam::EulerRot::XYZ, rng.random_range(0.0..6.3), rng.random_range(0.0..6.3), rng.random_range(0.0..6.3));
+            let centre = Vec3::new(rng.random_range(-15.0..15.0), rng.random_range(0.0..12.0), rng.random_range(-7.0..7.0));
+            Affine3A::from_scale_rotation_translation(size, turn, centre)
+        })
+        .collect();
+    let aabb = |world_from_unit: &Affine3A| {
+        (0..8).fold(Aabb::EMPTY, |b, k| {
+            let corner = Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32) - 0.5;
+            b.union(Aabb::new(world_from_unit.transform_point3(corner), world_from_unit.transform_point3(corner)))
+        })
+    };
+    let aabbs: Vec<Aabb> = boxes.iter().map(aabb).collect();
+    let rows = |world_from_unit: &Affine3A| {
+        let unit_from_world = world_from_unit.inverse();
+        let m = glam::Mat3::from(unit_from_world.matrix3);
+        [0, 1, 2].map(|r| m.row(r).extend(unit_from_world.translation[r]).to_array())
+    };
+    let bounds: Vec<ListBounds> = boxes.iter().zip(&aabbs).map(|(b, a)| ListBounds::of_decal(a, rows(b))).collect();
+    let placement = ListPlacement::for_boxes(&aabbs).unwrap();
+    let mut lists = RebuiltCellLists::new(&ctx, "decal", "cell_lists_build", placement, &bounds, 0, placement.visits as u32).unwrap();
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    lists.record(&mut encoder, None);
+    ctx.queue.submit([encoder.finish()]);
+    assert!(lists.fitted(&ctx).unwrap());
+    let ranges: Vec<[u32; 2]> = read_buffer(&ctx, &lists.ranges).unwrap();
+    let entries: Vec<[u32; 2]> = read_buffer(&ctx, &lists.entries).unwrap();
+    let total: u64 = ranges.iter().map(|r| u64::from(r[1])).sum();
+    assert!(total < placement.visits, "the oriented test drops no cell: {total} of {} entries", placement.visits);
+    for _ in 0..20_000 {
+        let item = rng.random_range(0..boxes.len());
+        let unit = Vec3::new(rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5));
+        let p = boxes[item].transform_point3(unit);
+        let c = placement.cell_of(p);
+        let [start, len] = ranges[((c.z * placement.dims.y + c.y) * placement.dims.x + c.x) as usize];
+        let listed = entries[start as usize..(start + len) as usize].iter().any(|&[_, e]| e == item as u32);
+        assert!(listed, "point {p} in box {item} misses it");
+    }
+}

@@ -1,8 +1,8 @@
 //! Cell lists rebuilt on the GPU every frame (`rebuilt_cell_lists.wgsl`): for the one placed group of
-//! sparse lights rebuilt every frame, what `cell_lists.rs` gives crowded decals built once — a uniform
-//! grid over the group whose cells list every volume that may reach them — built anew each frame in
-//! place of the group's LBVH, entry grid and leaf-order copy. A point query reads its cell's list
-//! (`shading/enumerate/lights_cells.wgsl`) instead of walking. Sparse volumes rebuilt every frame are
+//! sparse lights or decals rebuilt every frame, what `cell_lists.rs` gives crowded decals built once —
+//! a uniform grid over the group whose cells list every volume that may reach them — built anew each
+//! frame in place of the group's LBVH, entry grid and leaf-order copy. A point query reads its cell's
+//! list (`shading/enumerate/lights_cells.wgsl`, `decals_cells.wgsl`) instead of walking. Sparse volumes rebuilt every frame are
 //! where a walk loses most: the LBVH takes more dependent passes than the lists' four, and its entry
 //! grid, rebuilt every frame too, is coarser than a CPU-built one (benchmarks/LOG.md, topic 1).
 //!
@@ -47,8 +47,8 @@ const BLOCK_CELLS: u32 = 1024;
 const ENTRY_BYTES: u64 = 8;
 const PASSES: [&str; 4] = ["cell_lists_count", "cell_lists_scan_blocks", "cell_lists_scan_offsets", "cell_lists_fill"];
 
-/// A volume's bounds in its group's space: a sphere and a box, each containing it. Keep in sync with
-/// `ListBounds` in `rebuilt_cell_lists.wgsl`.
+/// A volume's bounds in its group's space, each containing it: a sphere, a box, and an oriented box.
+/// Keep in sync with `ListBounds` in `rebuilt_cell_lists.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ListBounds {
@@ -56,13 +56,34 @@ pub struct ListBounds {
     pub sphere: [f32; 4],
     pub low: [f32; 4],
     pub high: [f32; 4],
+    /// Rows of the affine map from group space into the oriented box's unit cube [-0.5, 0.5]³; zero
+    /// rows where the sphere and box are bound enough (lights).
+    pub unit_from_group: [[f32; 4]; 3],
 }
 
 impl ListBounds {
     /// A light's: its range sphere, widened by a few ulps as `light_aabb` widens its box, and its box.
     pub fn of_light(position: Vec3, range: f32, aabb: Aabb) -> Self {
         let pad = 4.0 * f32::EPSILON * (position.abs().max_element() + range);
-        Self { sphere: position.extend(range + pad).into(), low: aabb.min.extend(0.0).into(), high: aabb.max.extend(0.0).into() }
+        Self {
+            sphere: position.extend(range + pad).into(),
+            low: aabb.min.extend(0.0).into(),
+            high: aabb.max.extend(0.0).into(),
+            unit_from_group: [[0.0; 4]; 3],
+        }
+    }
+
+    /// A decal's, from its box's AABB and the rows of its map into its unit cube (`GpuDecal`): the
+    /// sphere through the AABB's corners, widened by a few ulps, the AABB and the oriented box.
+    pub fn of_decal(aabb: &Aabb, decal_from_group: [[f32; 4]; 3]) -> Self {
+        let (centre, half) = ((aabb.min + aabb.max) * 0.5, (aabb.max - aabb.min) * 0.5);
+        let radius = half.length() * (1.0 + 4.0 * f32::EPSILON) + 4.0 * f32::EPSILON * centre.abs().max_element();
+        Self {
+            sphere: centre.extend(radius).into(),
+            low: aabb.min.extend(0.0).into(),
+            high: aabb.max.extend(0.0).into(),
+            unit_from_group: decal_from_group,
+        }
     }
 }
 

@@ -3,7 +3,7 @@
 // lists' format, built in four passes:
 //
 // 1. `cell_lists_count`: a thread per volume counts itself into each cell its box meets and its
-//    sphere reaches;
+//    sphere and oriented box reach;
 // 2. `cell_lists_scan_blocks`: exclusive prefix sums of the counts within blocks of BLOCK_CELLS cells,
 //    and each block's total;
 // 3. `cell_lists_scan_offsets`: each block adds the totals of the blocks before it, giving every
@@ -33,13 +33,15 @@ struct CellListParams {
     row_threads: u32,
 }
 
-// A volume's bounds in its group's space: a sphere and a box, each containing it. Keep in sync with
-// `ListBounds` in `accel/rebuilt_cell_lists.rs`.
+// A volume's bounds in its group's space, each containing it: a sphere, a box, and an oriented box as
+// the rows of the map into its unit cube [-0.5, 0.5]³ (zero rows where there is none). Keep in sync
+// with `ListBounds` in `accel/rebuilt_cell_lists.rs`.
 struct ListBounds {
     // xyz centre, w radius.
     sphere: vec4<f32>,
     low: vec4<f32>,
     high: vec4<f32>,
+    unit_from_group: array<vec4<f32>, 3>,
 }
 
 @group(0) @binding(0) var<uniform> params: CellListParams;
@@ -70,13 +72,33 @@ fn clamped_cell(p: vec3<f32>) -> vec3<u32> {
     return vec3<u32>(clamp(floor((p - params.min) * params.cells_per_unit), vec3<f32>(0.0), vec3<f32>(params.dims - 1u)));
 }
 
-// Whether the volume's sphere reaches the (widened) cell.
-fn sphere_reaches_cell(sphere: vec4<f32>, cell: vec3<u32>) -> bool {
+// Whether the volume's sphere and oriented box both reach the (widened) cell. The oriented box is
+// tested along its own three axes (the cell's are the box's, which the caller's range has tested):
+// along each, the cell's centre lies within half the unit cube plus the cell's reach, with a
+// ten-thousandth more for rounding, as the CPU-built lists test decals (`decal_may_reach`). Cells on
+// the grid's faces reach out to infinity: only the sphere bounds them.
+fn volume_reaches_cell(b: ListBounds, cell: vec3<u32>) -> bool {
     let corner = params.min + vec3<f32>(cell) * params.cell_size;
+    let on_face = any(cell == vec3<u32>(0u)) || any(cell == params.dims - 1u);
     let low = select(corner - params.margin, vec3<f32>(-FAR), cell == vec3<u32>(0u));
     let high = select(corner + params.cell_size + params.margin, vec3<f32>(FAR), cell == params.dims - 1u);
-    let gap = max(max(low - sphere.xyz, sphere.xyz - high), vec3<f32>(0.0));
-    return dot(gap, gap) <= sphere.w * sphere.w;
+    let gap = max(max(low - b.sphere.xyz, b.sphere.xyz - high), vec3<f32>(0.0));
+    if dot(gap, gap) > b.sphere.w * b.sphere.w {
+        return false;
+    }
+    if on_face {
+        return true;
+    }
+    let centre = corner + 0.5 * params.cell_size;
+    let half = 0.5 * params.cell_size + params.margin;
+    for (var i = 0u; i < 3u; i += 1u) {
+        let row = b.unit_from_group[i];
+        let reach = dot(abs(row.xyz), half);
+        if abs(dot(row.xyz, centre) + row.w) > 0.5 + reach + 1e-4 * (1.0 + reach) {
+            return false;
+        }
+    }
+    return true;
 }
 
 // Counts the volume into its cells (`fill` false), or writes it into their lists (`fill` true).
@@ -87,7 +109,7 @@ fn visit_cells(item: u32, fill: bool) {
     for (var z = first.z; z <= last.z; z += 1u) {
         for (var y = first.y; y <= last.y; y += 1u) {
             for (var x = first.x; x <= last.x; x += 1u) {
-                if !sphere_reaches_cell(b.sphere, vec3<u32>(x, y, z)) {
+                if !volume_reaches_cell(b, vec3<u32>(x, y, z)) {
                     continue;
                 }
                 let cell = (z * params.dims.y + y) * params.dims.x + x;

@@ -219,7 +219,7 @@ impl VolumeKind {
                 groups: "light_blas_build",
                 leaf_order: "light_leaf_order",
                 rebuilt_grids: "light_entry_grid_build",
-                rebuilt_lists: "light_cell_lists_build",
+                rebuilt_lists: "rebuilt_light_lists_build",
                 clusters: "light_cluster_build",
                 hardware_pack: "light_hardware_boxes_build",
             },
@@ -292,7 +292,7 @@ pub struct Volumes<'a> {
     /// Groups rebuilt on the GPU every frame get entry grids (`plan::StructurePlan::rebuilt_grids`).
     pub rebuilt_grids: bool,
     /// The one placed group gets cell lists where they fit (`plan::StructurePlan::cell_lists`): built
-    /// with its BVH on the CPU (decals), or on the GPU every frame in place of its BVH (lights).
+    /// with its BVH on the CPU (crowded decals), or on the GPU every frame in place of its BVH.
     pub cell_lists: bool,
     /// Light groups get their light tree (`light_tree.rs`, `plan::StructurePlan::light_tree`): built
     /// with the CPU's BVHs, or alongside each GPU rebuild (the dynamic group's too).
@@ -597,12 +597,21 @@ impl VolumeStructure {
         let rebuilt_lists = listed
             .map(|(group, placement)| {
                 let range = &layout.ranges[group];
-                let lights: &[GpuLight] = bytemuck::cast_slice(&volumes.items[group_bytes(volumes, range)]);
-                let bounds: Vec<ListBounds> = lights
-                    .iter()
-                    .zip(&volumes.boxes[range.clone()])
-                    .map(|(light, aabb)| ListBounds::of_light(light.position.into(), light.range, *aabb))
-                    .collect();
+                let boxes = &volumes.boxes[range.clone()];
+                let bounds: Vec<ListBounds> = match volumes.kind {
+                    VolumeKind::Lights => {
+                        let lights: &[GpuLight] = bytemuck::cast_slice(&volumes.items[group_bytes(volumes, range)]);
+                        lights
+                            .iter()
+                            .zip(boxes)
+                            .map(|(light, aabb)| ListBounds::of_light(light.position.into(), light.range, *aabb))
+                            .collect()
+                    }
+                    VolumeKind::Decals => {
+                        let decals: &[GpuDecal] = bytemuck::cast_slice(&volumes.items[group_bytes(volumes, range)]);
+                        boxes.iter().zip(decals).map(|(aabb, decal)| ListBounds::of_decal(aabb, decal.decal_from_group)).collect()
+                    }
+                };
                 let capacity = u32::try_from(placement.visits).unwrap_or(u32::MAX);
                 RebuiltCellLists::new(ctx, label, volumes.kind.scopes().rebuilt_lists, placement, &bounds, range.start as u32, capacity)
             })
@@ -678,8 +687,8 @@ impl VolumeStructure {
     /// a point's cell instead of walking: decals that crowd and whose queries share them out
     /// (`wide_leaves`), built on the CPU (`cell_lists.rs`, `shading/enumerate/decals_bvh_cells.wgsl`),
     /// whose BVH stays, for its items' order and for walks of other passes, which start at its root;
-    /// or sparse lights rebuilt every frame (`rebuilt_cell_lists.rs`,
-    /// `shading/enumerate/lights_cells.wgsl`), whose lists replace their BVH.
+    /// or sparse lights or decals rebuilt every frame (`rebuilt_cell_lists.rs`,
+    /// `shading/enumerate/lights_cells.wgsl`, `decals_cells.wgsl`), whose lists replace their BVH.
     pub fn cell_lists(&self) -> bool {
         self.cell_lists
     }
@@ -1127,16 +1136,12 @@ fn rebuilds(volumes: &Volumes, layout: &Layout, build: GroupBuild, listed: Optio
         .collect()
 }
 
-/// The group rebuilt on the GPU every frame as cell lists in place of its BVH, and their grid: the
-/// lights' one placed group, where `volumes.cell_lists` asks for them and a grid fits its volumes
+/// The group rebuilt on the GPU every frame as cell lists in place of its BVH, and their grid: the one
+/// placed group, where `volumes.cell_lists` asks for them and a grid fits its volumes
 /// (`ListPlacement::for_boxes`); the others keep their LBVHs.
 fn rebuilt_list_placement(volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Option<(usize, ListPlacement)> {
-    let lone = (build == GroupBuild::GpuEveryFrame
-        && volumes.cell_lists
-        && volumes.kind == VolumeKind::Lights
-        && layout.instances.len() == 1
-        && layout.dynamic.is_none())
-    .then(|| layout.instances[0].group)?;
+    let lone = (build == GroupBuild::GpuEveryFrame && volumes.cell_lists && layout.instances.len() == 1 && layout.dynamic.is_none())
+        .then(|| layout.instances[0].group)?;
     ListPlacement::for_boxes(&volumes.boxes[layout.ranges[lone].clone()]).map(|placement| (lone, placement))
 }
 

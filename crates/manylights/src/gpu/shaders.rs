@@ -46,6 +46,7 @@ const SOURCES: &[(&str, &str)] = &[
     ("shading/enumerate/decals_off.wgsl", include_str!("../shading/enumerate/decals_off.wgsl")),
     ("shading/enumerate/lights_clustered.wgsl", include_str!("../shading/enumerate/lights_clustered.wgsl")),
     ("shading/enumerate/lights_cells.wgsl", include_str!("../shading/enumerate/lights_cells.wgsl")),
+    ("shading/enumerate/decals_cells.wgsl", include_str!("../shading/enumerate/decals_cells.wgsl")),
     ("shading/enumerate/decals_clustered.wgsl", include_str!("../shading/enumerate/decals_clustered.wgsl")),
     ("accel/cluster_grid.wgsl", include_str!("../accel/cluster_grid.wgsl")),
     ("accel/cluster_build.wgsl", include_str!("../accel/cluster_build.wgsl")),
@@ -422,11 +423,13 @@ mod tests {
             let source = shader(listed).compose().unwrap();
             assert!(source.contains("fn decal_box_meets_box(") && !source.contains("fn decal_query_next_leaf("));
         }
-        // Sparse lights with rebuilt cell lists are read from them in every stage, never walked.
-        let lights_listed = ShadingMethods { light_cell_lists: true, subgroups: false, ..sparse };
+        // Sparse lights and decals with rebuilt cell lists are read from them in every stage, never
+        // walked.
+        let rebuilt = ShadingMethods { rebuilt_light_lists: true, rebuilt_decal_lists: true, subgroups: false, ..sparse };
         for shader in [visbuffer_shade::shader, deferred_shade::shader, forward_shade::shader, blended_shade::shader] {
-            let source = shader(lights_listed).compose().unwrap();
+            let source = shader(rebuilt).compose().unwrap();
             assert!(source.contains("cell_list_index(light_first_instance") && !source.contains("fn light_query_next_leaf("));
+            assert!(source.contains("cell_list_index(decal_first_instance") && !source.contains("fn decal_query_next_leaf("));
         }
     }
 

@@ -59,17 +59,27 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                 .collect();
             for (particles, reflections, direct) in variants {
                 // Dense decals, and their cell lists, change only the BVH's shader.
-                let mut densities: Vec<(bool, bool, bool, bool)> = if decals == DecalMethod::Bvh {
-                    vec![(false, false, false, false), (true, false, false, false), (true, true, false, false), (true, true, true, false)]
+                let mut densities: Vec<(bool, bool, bool, bool, bool)> = if decals == DecalMethod::Bvh {
+                    vec![
+                        (false, false, false, false, false),
+                        (true, false, false, false, false),
+                        (true, true, false, false, false),
+                        (true, true, true, false, false),
+                    ]
                 } else {
-                    vec![(false, false, false, false), (true, false, false, false)]
+                    vec![(false, false, false, false, false), (true, false, false, false, false)]
                 };
-                // Sparse lights read from rebuilt cell lists, which particle lights never join; the
-                // lights' module meets the decals' only through the core, so two decal methods do.
-                if lights == LightMethod::Bvh && particles != ParticleMethod::Bvh && matches!(decals, DecalMethod::Off | DecalMethod::Bvh) {
-                    densities.push((false, false, false, true));
+                // Sparse lights and decals read from rebuilt cell lists, which particle lights never
+                // join; the lights' module meets the decals' only through the core, so two decal
+                // methods do, and two light methods for the decals'.
+                let listed_lights = lights == LightMethod::Bvh && particles != ParticleMethod::Bvh;
+                if listed_lights && matches!(decals, DecalMethod::Off | DecalMethod::Bvh) {
+                    densities.push((false, false, false, true, decals == DecalMethod::Bvh));
                 }
-                for (subgroups, dense_decals, decal_cell_lists, light_cell_lists) in densities {
+                if decals == DecalMethod::Bvh && matches!(lights, LightMethod::Off | LightMethod::Brute) {
+                    densities.push((false, false, false, false, true));
+                }
+                for (subgroups, dense_decals, decal_cell_lists, rebuilt_light_lists, rebuilt_decal_lists) in densities {
                     let methods = ShadingMethods {
                         lights,
                         decals,
@@ -85,7 +95,8 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         // Dense lights walk as a subgroup, as subgroup-walked decals do.
                         dense_lights: subgroups && lights == LightMethod::Bvh,
                         decal_cell_lists,
-                        light_cell_lists,
+                        rebuilt_light_lists,
+                        rebuilt_decal_lists,
                         light_tree: false,
                         hardware_lights: false,
                         hardware_decals: false,
