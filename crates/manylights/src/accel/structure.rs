@@ -219,7 +219,7 @@ impl VolumeKind {
                 groups: "light_blas_build",
                 leaf_order: "light_leaf_order",
                 rebuilt_grids: "light_entry_grid_build",
-                rebuilt_lists: "rebuilt_light_lists_build",
+                rebuilt_lists: "light_cell_lists_build",
                 clusters: "light_cluster_build",
                 hardware_pack: "light_hardware_boxes_build",
             },
