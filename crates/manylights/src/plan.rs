@@ -17,18 +17,15 @@ use crate::{Error, Result};
 pub const BRUTE_FORCE_MAX: usize = 8;
 
 /// Whether `bvh` lights rebuilt on the GPU every frame are faster than clustered lists rebuilt every
-/// frame (BENCHMARKS.md, "Dense lights" and "Scaling"). As the one group placed (`placed_groups`)
-/// they are in every pipeline at every overlap measured: as cell lists rebuilt in place of their BVH
-/// below the overlap where subgroups share crowded lights out ([`FramePlan::resolve`]), as an LBVH
-/// whose leaves subgroups share out above it. Lights of several placed groups each get an LBVH walked
-/// from a rebuilt entry grid, which wins from overlap [`DENSE_LIGHT_OVERLAP`] where subgroups share
-/// their leaves out, and in compute from overlap [`REBUILT_BVH_OVERLAP`]; sparser, the LBVH's build and
-/// its coarser start cost more than its walk saves, and in fragments lights walked alone diverge too
-/// much.
-pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, overlap: f32, placed_groups: usize) -> bool {
-    placed_groups == 1
-        || (caps.subgroups && overlap >= DENSE_LIGHT_OVERLAP)
-        || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP)
+/// frame (BENCHMARKS.md, "Dense lights" and "Scaling"). Read from cell lists rebuilt in place of
+/// their BVH (`listed`, [`rebuilt_lights_listed`]) they are in every pipeline at every overlap
+/// measured, and so is an LBVH whose leaves subgroups share out above that overlap. Otherwise (several
+/// placed groups, the hardware back end, the light tree) each group gets an LBVH walked from a
+/// rebuilt entry grid, which wins from overlap [`DENSE_LIGHT_OVERLAP`] where subgroups share their
+/// leaves out, and in compute from overlap [`REBUILT_BVH_OVERLAP`]; sparser, the LBVH's build and its
+/// coarser start cost more than its walk saves, and in fragments lights walked alone diverge too much.
+pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, overlap: f32, listed: bool) -> bool {
+    listed || (caps.subgroups && overlap >= DENSE_LIGHT_OVERLAP) || (pipeline != PipelineKind::Forward && overlap >= REBUILT_BVH_OVERLAP)
 }
 
 pub const REBUILT_BVH_OVERLAP: f32 = 4.0;
@@ -126,11 +123,17 @@ impl MethodChoice {
     /// ([`Measurements::for_settings`] measures the overlaps it reads).
     pub fn resolve(config: &RenderConfig, caps: Capabilities, stats: &SceneStatistics) -> Self {
         let reflections = config.rays.reflection_bounces > 0;
+        // Rebuilt cell lists serve the software walk only: the hardware back end builds its own
+        // structures, and the light tree descends the BVH.
+        let software = !matches!(RayTracer::resolve(config.rays.backend, caps), Ok(RayTracer::Hardware));
         let lights = match config.light_method {
             LightMethod::Auto => {
                 let particle_lights = stats.particles > 0 && config.particle_method == ParticleMethod::Bvh;
                 let overlap = stats.light_overlap.unwrap_or(0.0);
-                let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, overlap, stats.placed_light_groups);
+                let as_bvh = RenderConfig { light_method: LightMethod::Bvh, ..config.clone() };
+                let light_tree = restir_light_tree(&as_bvh, particle_lights, stats.light_overlap).unwrap_or(false);
+                let listed = software && !light_tree && rebuilt_lights_listed(caps, overlap, stats.placed_light_groups);
+                let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, overlap, listed);
                 let shared_out = lights_shared_out(caps, config.pipeline, overlap);
                 let (method, why) = match (particle_lights, stats.placed_lights, stats.light_overlap) {
                     (true, _, _) => (LightMethod::Bvh, Why::ParticleLights),
@@ -140,10 +143,7 @@ impl MethodChoice {
                     _ if config.light_bvh_build == BvhBuild::GpuEveryFrame && !rebuilt_bvh_wins => {
                         (LightMethod::Clustered, Why::RebuiltEveryFrame)
                     }
-                    (false, count, _)
-                        if config.light_bvh_build == BvhBuild::GpuEveryFrame
-                            && rebuilt_lights_listed(caps, overlap, stats.placed_light_groups) =>
-                    {
+                    (false, count, _) if config.light_bvh_build == BvhBuild::GpuEveryFrame && listed => {
                         (LightMethod::Bvh, Why::Listed { count, overlap })
                     }
                     (false, count, _) => (LightMethod::Bvh, Why::Overlap { count, overlap, shared_out }),
@@ -160,7 +160,8 @@ impl MethodChoice {
                 // groups, each an LBVH walked alone, lose or come level.
                 let shared_out = decals_shared_out(caps, stats.decal_centre_overlap);
                 let rebuilt = config.decal_bvh_build == BvhBuild::GpuEveryFrame && !shared_out;
-                let listed = stats.placed_decal_groups == 1
+                let listed = software
+                    && stats.placed_decal_groups == 1
                     && (config.pipeline != PipelineKind::Forward
                         || stats.decal_overlap.is_some_and(|overlap| overlap >= REBUILT_FRAGMENT_DECAL_OVERLAP));
                 let (method, why) = match (stats.placed_decals, stats.decal_overlap) {
@@ -642,7 +643,7 @@ pub struct StructurePlan {
     /// The one placed group gets cell lists where they fit their budget, and shading then reads them
     /// instead of walking ([`FramePlan::shading_methods`]): built on the CPU with the group's BVH
     /// (`accel/cell_lists.rs`) where it is built once, or on the GPU every frame in place of its
-    /// LBVH (`accel/rebuilt_cell_lists.rs`) where it is rebuilt ([`lights_listed`]).
+    /// LBVH (`accel/rebuilt_cell_lists.rs`) where it is rebuilt ([`rebuilt_lights_listed`]).
     pub cell_lists: bool,
     /// The light groups get their light tree (`accel/light_tree.rs`), with their CPU builds or
     /// alongside their GPU rebuilds: `restir` draws its candidates through it
@@ -1084,6 +1085,19 @@ mod tests {
         assert!(FramePlan::resolve(&rebuilt(PipelineKind::Visbuffer), no_subgroups, &stats(100.0, 1)).unwrap().lights.cell_lists);
         let methods = FramePlan::resolve(&rebuilt(PipelineKind::Visbuffer), SUBGROUPS, &stats(0.5, 1)).unwrap().shading_methods(true, true);
         assert_eq!(methods.light_enumeration_module(), "shading/enumerate/lights_cells.wgsl");
+        // The hardware back end and the light tree need the group's own structure: no lists, and
+        // `auto` then keeps clustered lists for sparse lights rebuilt every frame.
+        let auto = RenderConfig { light_method: LightMethod::Auto, ..rebuilt(PipelineKind::Visbuffer) };
+        let ray_queries = Capabilities { ray_queries: RayQueries::Native, ..SUBGROUPS };
+        assert_eq!(MethodChoice::resolve(&auto, ray_queries, &stats(0.5, 1)).lights.method, LightMethod::Clustered);
+        let hardware = FramePlan::resolve(&RenderConfig { light_method: LightMethod::Bvh, ..auto.clone() }, ray_queries, &stats(0.5, 1));
+        assert!(!hardware.unwrap().lights.cell_lists);
+        let mut tree = RenderConfig { light_method: LightMethod::Auto, ..rebuilt(PipelineKind::Forward) };
+        tree.rays.direct_lighting = DirectLighting::Restir;
+        assert_eq!(MethodChoice::resolve(&tree, no_subgroups, &stats(RESTIR_TREE_OVERLAP, 1)).lights.method, LightMethod::Clustered);
+        let tree_bvh = RenderConfig { light_method: LightMethod::Bvh, ..tree };
+        let plan = FramePlan::resolve(&tree_bvh, no_subgroups, &stats(RESTIR_TREE_OVERLAP, 1)).unwrap();
+        assert!(plan.lights.light_tree && !plan.lights.cell_lists);
         // Particle lights join the lights' structure as a group of their own, rebuilt every frame.
         let particles = SceneStatistics { particles: 1000, ..stats(0.5, 1) };
         assert!(!listed(&RenderConfig { particle_method: ParticleMethod::Bvh, ..rebuilt(PipelineKind::Visbuffer) }, &particles));
@@ -1284,6 +1298,8 @@ mod tests {
         assert_eq!(chosen(&rebuilt, scene(1000, 0.1, 1000, 0.1)), (LightMethod::Bvh, DecalMethod::Bvh));
         let listed = MethodChoice::resolve(&rebuilt, SUBGROUPS, &scene(1000, 0.1, 1000, 0.1));
         assert_eq!(listed.decals.why, Why::Listed { count: 1000, overlap: 0.1 });
+        let ray_queries = Capabilities { ray_queries: RayQueries::Native, ..SUBGROUPS };
+        assert_eq!(MethodChoice::resolve(&rebuilt, ray_queries, &scene(0, 0.0, 1000, 0.1)).decals.method, DecalMethod::Clustered);
         let grouped = |lights, overlap| SceneStatistics { placed_light_groups: 2, ..scene(lights, overlap, 0, 0.0) };
         assert_eq!(chosen(&rebuilt, grouped(1000, 0.1)).0, LightMethod::Clustered);
         assert_eq!(chosen(&rebuilt, grouped(1000, DENSE_LIGHT_OVERLAP)).0, LightMethod::Bvh);

@@ -316,8 +316,9 @@ impl Renderer {
     /// only when the timer's slots are full and at the end; each frame advances `time` by
     /// [`FRAME_INTERVAL`]. Returns each frame's timings.
     ///
-    /// When the clustered lists or the blended surfaces' layers were too short for a frame, they
-    /// grow and the frames are rendered again from the same time, so every returned frame is complete.
+    /// When the clustered lists, the rebuilt cell lists or the blended surfaces' layers were too short
+    /// for a frame, they grow and the frames are rendered again from the same time, so every returned
+    /// frame is complete.
     pub fn render_frames(&mut self, camera: &Camera, count: u32) -> Result<Vec<FrameTiming>> {
         let start = self.time;
         if !start.is_finite() {

@@ -6,13 +6,13 @@
 //! where a walk loses most: the LBVH takes more dependent passes than the lists' four, and its entry
 //! grid, rebuilt every frame too, is coarser than a CPU-built one (benchmarks/LOG.md, topic 1).
 //!
-//! The grid's placement is fixed when the structure is built, from the volumes' boxes then: cells
-//! five eighths of the typical volume's size, coarsened until every volume visits few enough cells
-//! for a thread and the lists fit their budget. Cells on the grid's faces reach out to infinity, so
-//! volumes that later move outside it stay exact. The lists' total length is known only on the GPU:
-//! they hold [`RebuiltCellLists::capacity`] entries, each frame records what it needed, and the
-//! renderer grows them and renders again when a frame needed more, as for the clustered lists
-//! (`Renderer::render_frames`).
+//! The grid's placement is fixed when the structure is built, from the volumes' boxes then: the
+//! coarsest cells, from 1.5 typical volume sizes down, whose lists stay short, coarser still where a
+//! volume would visit too many cells for a thread. Cells on the grid's faces reach out to infinity,
+//! so a volume outside the grid is listed where the points outside it look. The lists' total length
+//! is known only on the GPU: they hold [`RebuiltCellLists::capacity`] entries (as many as the
+//! volumes' boxes visit), each frame records what it needed, and the renderer grows them and renders
+//! again when a frame needed more, as for the clustered lists (`Renderer::render_frames`).
 
 use glam::{UVec3, Vec3};
 use wgpu::util::DeviceExt;
@@ -34,7 +34,7 @@ const MAX_MEAN_LIST: f64 = 12.0;
 const MAX_CELLS_PER_VOLUME: u64 = 512;
 /// The most cells a grid has (8 bytes of ranges each).
 const MAX_CELLS: u64 = 1 << 22;
-/// The most entries the lists may start with at load (8 bytes each).
+/// The most entries the lists may start with at load (8 bytes each), where the device binds as many.
 const MAX_ENTRIES: u64 = 1 << 24;
 /// Each try over a limit coarsens the cells by this much.
 const COARSER: f32 = 1.25;
@@ -102,8 +102,9 @@ impl ListPlacement {
     /// The grid over `boxes`: the coarsest of [`CELL_EDGE_SHARES`] whose lists stay short
     /// ([`MAX_MEAN_LIST`]), or the finest within the limits; where even the coarsest passes them
     /// (volumes of very unequal sizes), coarser still. `None` for bounds that are not finite, or
-    /// where no grid keeps both the largest volume's cells and the lists within their limits.
-    pub fn for_boxes(boxes: &[Aabb]) -> Option<Self> {
+    /// where no grid keeps the largest volume's cells, the cells and the lists within their limits:
+    /// the cells' ranges and the entries each within `max_binding_bytes`.
+    pub fn for_boxes(boxes: &[Aabb], max_binding_bytes: u64) -> Option<Self> {
         let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
         let extent = bounds.max - bounds.min;
         if boxes.is_empty() || !(extent.is_finite() && bounds.min.is_finite()) || extent.max_element() <= 0.0 {
@@ -116,7 +117,7 @@ impl ListPlacement {
         for share in CELL_EDGE_SHARES {
             // Finer cells only take more cells and entries: once one grid passes the limits, the
             // finer ones do too.
-            let Some((placement, mean)) = Self::fit(bounds, boxes, edge_of(share)) else { break };
+            let Some((placement, mean)) = Self::fit(bounds, boxes, edge_of(share), max_binding_bytes) else { break };
             chosen = Some((placement, mean));
             if mean <= MAX_MEAN_LIST {
                 break;
@@ -128,7 +129,7 @@ impl ListPlacement {
                 break;
             }
             edge *= COARSER;
-            chosen = Self::fit(bounds, boxes, edge);
+            chosen = Self::fit(bounds, boxes, edge, max_binding_bytes);
         }
         let Some((placement, mean)) = chosen else {
             log::info!("no rebuilt cell lists for {} volumes: no grid keeps each volume's cells and the lists in bounds", boxes.len());
@@ -148,10 +149,11 @@ impl ListPlacement {
 
     /// The grid of cells of about `edge` over `bounds`, and its lists' mean length over the cells
     /// that list anything (counting every cell a volume's box meets); `None` past the limits.
-    fn fit(bounds: Aabb, boxes: &[Aabb], edge: f32) -> Option<(Self, f64)> {
+    fn fit(bounds: Aabb, boxes: &[Aabb], edge: f32, max_binding_bytes: u64) -> Option<(Self, f64)> {
         let dims = ((bounds.max - bounds.min) / edge).ceil().max(Vec3::ONE).min(Vec3::splat(MAX_CELLS_PER_AXIS as f32)).as_uvec3();
         let placement = Self::new(bounds, dims);
-        if u64::from(placement.cells()) > MAX_CELLS {
+        let max_entries = MAX_ENTRIES.min(max_binding_bytes / ENTRY_BYTES);
+        if u64::from(placement.cells()) > MAX_CELLS.min(max_binding_bytes / 8) {
             return None;
         }
         let mut counts = vec![0u32; placement.cells() as usize];
@@ -161,7 +163,7 @@ impl ListPlacement {
             let (first, last) = (placement.cell_of(b.min - margin), placement.cell_of(b.max + margin));
             let cells = (last - first + UVec3::ONE).as_u64vec3().element_product();
             visits += cells;
-            if cells > MAX_CELLS_PER_VOLUME || visits > MAX_ENTRIES {
+            if cells > MAX_CELLS_PER_VOLUME || visits > max_entries {
                 return None;
             }
             for z in first.z..=last.z {
@@ -248,6 +250,7 @@ pub struct RebuiltCellLists {
     params: wgpu::Buffer,
     bounds: wgpu::Buffer,
     counts: wgpu::Buffer,
+    cursors: wgpu::Buffer,
     block_sums: wgpu::Buffer,
     status: wgpu::Buffer,
     status_readback: wgpu::Buffer,
@@ -289,8 +292,9 @@ impl RebuiltCellLists {
             usage: U::STORAGE,
         });
         let params = buffer("params", std::mem::size_of::<CellListParams>() as u64, U::UNIFORM | U::COPY_DST);
-        // Zeroed at creation; every frame's fill counts each cell back down to zero.
+        // Zeroed at creation; every frame's scan takes the counts and leaves them at zero.
         let counts = buffer("counts", cells * 4, U::STORAGE);
+        let cursors = buffer("cursors", cells * 4, U::STORAGE);
         let ranges = buffer("ranges", cells * 8, U::STORAGE | U::COPY_SRC);
         let entries = buffer("entries", u64::from(capacity) * ENTRY_BYTES, U::STORAGE | U::COPY_SRC);
         let block_sums = buffer("block sums", cells.div_ceil(u64::from(BLOCK_CELLS)) * 4, U::STORAGE);
@@ -300,11 +304,12 @@ impl RebuiltCellLists {
         let compute = wgpu::ShaderStages::COMPUTE;
         // Keep in sync with the bindings of `rebuilt_cell_lists.wgsl`.
         let mut layout_entries = vec![bindings::uniform(0, compute), bindings::storage_read(1, compute)];
-        layout_entries.extend((2..=6).map(|b| bindings::storage_read_write(b, compute)));
+        layout_entries.extend((2..=7).map(|b| bindings::storage_read_write(b, compute)));
         let layout = bindings::layout(device, "rebuilt cell lists", &layout_entries);
         let shader = ShaderDesc::new("accel/rebuilt_cell_lists.wgsl");
         let pipelines = PASSES.iter().map(|entry| bindings::compute_pipeline(device, entry, &shader, &[&layout])).collect::<Result<_>>()?;
-        let bind_group = build_bind_group(ctx, &layout, [&params, &bounds_buffer, &counts, &ranges, &entries, &block_sums, &status]);
+        let bind_group =
+            build_bind_group(ctx, &layout, [&params, &bounds_buffer, &counts, &ranges, &entries, &block_sums, &status, &cursors]);
         let mut lists = Self {
             ranges,
             entries,
@@ -321,6 +326,7 @@ impl RebuiltCellLists {
             params,
             bounds: bounds_buffer,
             counts,
+            cursors,
             block_sums,
             status,
             status_readback,
@@ -355,7 +361,8 @@ impl RebuiltCellLists {
             row_threads: self.dispatch().0 * VOLUME_THREADS,
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let buffers = [&self.params, &self.bounds, &self.counts, &self.ranges, &self.entries, &self.block_sums, &self.status];
+        let buffers =
+            [&self.params, &self.bounds, &self.counts, &self.ranges, &self.entries, &self.block_sums, &self.status, &self.cursors];
         self.bind_group = build_bind_group(ctx, &self.layout, buffers);
     }
 
@@ -414,7 +421,7 @@ impl RebuiltCellLists {
 }
 
 /// The build's bind group, buffers in `rebuilt_cell_lists.wgsl`'s binding order.
-fn build_bind_group(ctx: &GpuContext, layout: &wgpu::BindGroupLayout, buffers: [&wgpu::Buffer; 7]) -> wgpu::BindGroup {
+fn build_bind_group(ctx: &GpuContext, layout: &wgpu::BindGroupLayout, buffers: [&wgpu::Buffer; 8]) -> wgpu::BindGroup {
     bindings::bind_group(&ctx.device, "rebuilt cell lists", layout, buffers.iter().map(|b| b.as_entire_binding()).collect())
 }
 
@@ -460,7 +467,7 @@ mod tests {
     fn placements_take_the_coarsest_cells_whose_lists_stay_short() {
         // Sparse: 0.4 m boxes 3 m apart share no cell even at the coarsest, 1.5 box edges.
         let sparse = lattice(1000, 3.0, 0.2);
-        let grid = ListPlacement::for_boxes(&sparse).unwrap();
+        let grid = ListPlacement::for_boxes(&sparse, u64::MAX).unwrap();
         assert_eq!(grid.dims, UVec3::splat((27.4f32 / 0.6).ceil() as u32));
         assert!(sparse.iter().all(|b| cells_visited(&grid, b) <= 8));
         assert_eq!(grid.visits, sparse.iter().map(|b| cells_visited(&grid, b)).sum::<u64>());
@@ -470,21 +477,23 @@ mod tests {
         assert!((grid.min + cell * grid.cell_size).cmple(p).all() && (grid.min + (cell + 1.0) * grid.cell_size).cmpge(p).all());
         // Crowded: 4 m boxes 1 m apart, dozens in every coarse cell: finer cells.
         let crowded = lattice(1000, 1.0, 2.0);
-        let fine = ListPlacement::for_boxes(&crowded).unwrap();
+        let fine = ListPlacement::for_boxes(&crowded, u64::MAX).unwrap();
         assert!(fine.dims.x > (13.0f32 / 6.0).ceil() as u32, "{:?}", fine.dims);
         // One volume as large as the scene among small ones: coarser than any share, until it
         // visits few enough cells.
         let mut mixed = sparse.clone();
         mixed.push(Aabb::new(Vec3::ZERO, Vec3::splat(27.0)));
-        let coarse = ListPlacement::for_boxes(&mixed).unwrap();
+        let coarse = ListPlacement::for_boxes(&mixed, u64::MAX).unwrap();
         assert!(mixed.iter().all(|b| cells_visited(&coarse, b) <= MAX_CELLS_PER_VOLUME));
         assert!(coarse.dims.x < grid.dims.x);
         // Flat groups get one cell across, and groups without finite bounds none.
         let flat: Vec<Aabb> = sparse.iter().map(|b| Aabb::new(b.min.with_y(0.0), b.max.with_y(0.0))).collect();
-        let flat_grid = ListPlacement::for_boxes(&flat).unwrap();
+        let flat_grid = ListPlacement::for_boxes(&flat, u64::MAX).unwrap();
         assert_eq!((flat_grid.dims.y, flat_grid.cells_per_unit.y), (1, 0.0));
-        assert_eq!(ListPlacement::for_boxes(&[Aabb::new(Vec3::splat(f32::NEG_INFINITY), Vec3::ZERO)]), None);
-        assert_eq!(ListPlacement::for_boxes(&[]), None);
+        assert_eq!(ListPlacement::for_boxes(&[Aabb::new(Vec3::splat(f32::NEG_INFINITY), Vec3::ZERO)], u64::MAX), None);
+        assert_eq!(ListPlacement::for_boxes(&[], u64::MAX), None);
+        // Lists the device cannot bind are not placed: the group keeps its LBVH.
+        assert_eq!(ListPlacement::for_boxes(&sparse, 4096), None);
         let d = grid.dims.x;
         assert_eq!(grid.header().skip, d | d << 10 | d << 20);
     }

@@ -5,11 +5,14 @@
 // 1. `cell_lists_count`: a thread per volume counts itself into each cell its box meets and its
 //    sphere and oriented box reach;
 // 2. `cell_lists_scan_blocks`: exclusive prefix sums of the counts within blocks of BLOCK_CELLS cells,
-//    and each block's total;
+//    and each block's total; each cell's count moves to its cursor, and the count is reset to zero
+//    for the next frame;
 // 3. `cell_lists_scan_offsets`: each block adds the totals of the blocks before it, giving every
 //    cell the range of its list, and the last block records how many entries the lists need;
 // 4. `cell_lists_fill`: the same threads as the count write themselves into those cells' lists,
-//    counting each cell's count back down to zero, ready for the next frame without a clear.
+//    counting each cell's cursor down. A volume the fill sees in a cell the count did not (should
+//    the two passes' arithmetic ever round differently) finds the cursor at zero and is left out,
+//    and counts never carry over into the next frame.
 //
 // Cells are widened by a margin, and those on the grid's faces reach out to infinity: a point looks up
 // its cell clamped into the grid (`cell_list_index` in `accel/bvh_types.wgsl`), so a volume that
@@ -48,6 +51,8 @@ struct ListBounds {
 @group(0) @binding(1) var<storage, read> bounds: array<ListBounds>;
 // Per cell, how many volumes it lists: zero between frames.
 @group(0) @binding(2) var<storage, read_write> counts: array<atomic<u32>>;
+// Per cell, the entries of its list the fill has yet to write.
+@group(0) @binding(7) var<storage, read_write> cursors: array<atomic<u32>>;
 // Per cell: its list's first entry and length (bound to shading).
 @group(0) @binding(3) var<storage, read_write> ranges: array<vec2<u32>>;
 // (instance, item) pairs, cell after cell (bound to shading).
@@ -117,8 +122,9 @@ fn visit_cells(item: u32, fill: bool) {
                     atomicAdd(&counts[cell], 1u);
                     continue;
                 }
-                let slot = ranges[cell].x + atomicSub(&counts[cell], 1u) - 1u;
-                if slot < params.capacity {
+                let left = atomicSub(&cursors[cell], 1u);
+                let slot = ranges[cell].x + left - 1u;
+                if left > 0u && slot < params.capacity {
                     entries[slot] = vec2<u32>(0u, params.first_item + item);
                 }
             }
@@ -140,7 +146,8 @@ fn cell_lists_scan_blocks(@builtin(local_invocation_index) local: u32, @builtin(
     var count = vec4<u32>(0u);
     for (var i = 0u; i < 4u; i += 1u) {
         if first + i < cell_count() {
-            count[i] = atomicLoad(&counts[first + i]);
+            count[i] = atomicExchange(&counts[first + i], 0u);
+            atomicStore(&cursors[first + i], count[i]);
         }
     }
     let scan = workgroup_exclusive_scan(local, count.x + count.y + count.z + count.w);

@@ -552,7 +552,7 @@ impl VolumeStructure {
         let cpu_groups = cpu_builds(volumes, &layout, build)?;
         let wide_leaves = volumes.wide_leaves && cpu_groups.iter().any(Option::is_some);
         let scene_indices = stored_order(&layout.ranges, &cpu_groups);
-        let listed = rebuilt_list_placement(volumes, &layout, build);
+        let listed = rebuilt_list_placement(ctx, volumes, &layout, build);
         let rebuilt_on_gpu = build == GroupBuild::GpuEveryFrame
             && layout.ranges.iter().enumerate().any(|(g, range)| !range.is_empty() && listed.is_none_or(|(listed, _)| listed != g));
         if rebuilt_on_gpu && clustering.is_some() {
@@ -1137,12 +1137,19 @@ fn rebuilds(volumes: &Volumes, layout: &Layout, build: GroupBuild, listed: Optio
 }
 
 /// The group rebuilt on the GPU every frame as cell lists in place of its BVH, and their grid: the one
-/// placed group, where `volumes.cell_lists` asks for them and a grid fits its volumes
+/// placed group, where `volumes.cell_lists` asks for them, nothing else needs its BVH (a light tree,
+/// the hardware back end, particles) and a grid fits its volumes and the device's bindings
 /// (`ListPlacement::for_boxes`); the others keep their LBVHs.
-fn rebuilt_list_placement(volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Option<(usize, ListPlacement)> {
-    let lone = (build == GroupBuild::GpuEveryFrame && volumes.cell_lists && layout.instances.len() == 1 && layout.dynamic.is_none())
-        .then(|| layout.instances[0].group)?;
-    ListPlacement::for_boxes(&volumes.boxes[layout.ranges[lone].clone()]).map(|placement| (lone, placement))
+fn rebuilt_list_placement(ctx: &GpuContext, volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Option<(usize, ListPlacement)> {
+    let lone = (build == GroupBuild::GpuEveryFrame
+        && volumes.cell_lists
+        && !volumes.light_tree
+        && !volumes.hardware
+        && layout.instances.len() == 1
+        && layout.dynamic.is_none())
+    .then(|| layout.instances[0].group)?;
+    let boxes = &volumes.boxes[layout.ranges[lone].clone()];
+    ListPlacement::for_boxes(boxes, ctx.limits.max_storage_buffer_binding_size).map(|placement| (lone, placement))
 }
 
 /// The most boxes a leaf of a GPU build holds, as the plan's `leaves` say.

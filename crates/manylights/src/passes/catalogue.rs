@@ -73,11 +73,13 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                 // join; the lights' module meets the decals' only through the core, so two decal
                 // methods do, and two light methods for the decals'.
                 let listed_lights = lights == LightMethod::Bvh && particles != ParticleMethod::Bvh;
-                if listed_lights && matches!(decals, DecalMethod::Off | DecalMethod::Bvh) {
-                    densities.push((false, false, false, true, decals == DecalMethod::Bvh));
-                }
-                if decals == DecalMethod::Bvh && matches!(lights, LightMethod::Off | LightMethod::Brute) {
-                    densities.push((false, false, false, false, true));
+                for subgroups in [false, true] {
+                    if listed_lights && matches!(decals, DecalMethod::Off | DecalMethod::Bvh) {
+                        densities.push((subgroups, false, false, true, decals == DecalMethod::Bvh));
+                    }
+                    if decals == DecalMethod::Bvh && matches!(lights, LightMethod::Off | LightMethod::Brute) {
+                        densities.push((subgroups, false, false, false, true));
+                    }
                 }
                 for (subgroups, dense_decals, decal_cell_lists, rebuilt_light_lists, rebuilt_decal_lists) in densities {
                     let methods = ShadingMethods {
