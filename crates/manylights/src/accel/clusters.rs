@@ -337,7 +337,7 @@ impl ClusterLists {
                 self.label,
             )));
         }
-        self.capacity = (u64::from(needed) * 5 / 4).min(u64::from(self.max_capacity)) as u32;
+        self.capacity = crate::gpu::readback::grown_capacity(needed, self.max_capacity);
         self.entries = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(&format!("{} cluster entries", self.label)),
             size: u64::from(self.capacity) * ENTRY_BYTES,

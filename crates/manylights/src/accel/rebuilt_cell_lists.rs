@@ -408,7 +408,7 @@ impl RebuiltCellLists {
                 self.label,
             )));
         }
-        self.capacity = (u64::from(needed) * 5 / 4).min(u64::from(self.max_capacity)) as u32;
+        self.capacity = readback::grown_capacity(needed, self.max_capacity);
         self.entries = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(&format!("{} cell list entries", self.label)),
             size: u64::from(self.capacity) * ENTRY_BYTES,

@@ -32,6 +32,12 @@ pub fn take_most_needed(ctx: &GpuContext, status: &wgpu::Buffer, readback: &wgpu
     Ok(map_buffer::<u32>(ctx, readback, 0, 8)?[1])
 }
 
+/// The entries lists grow to once a frame needed `needed` (over what they held): a quarter more, so
+/// a view that keeps growing re-renders rarely, but never past `max`.
+pub fn grown_capacity(needed: u32, max: u32) -> u32 {
+    (u64::from(needed) * 5 / 4).min(u64::from(max)) as u32
+}
+
 /// Copies a whole COPY_SRC buffer into a staging buffer and returns it as `T`s.
 pub fn read_buffer<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<T>> {
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
