@@ -30,11 +30,45 @@ pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, overlap: f32
 
 pub const REBUILT_BVH_OVERLAP: f32 = 4.0;
 
-/// From this mean overlap at surface points, decals rebuilt every frame as one placed group and read
-/// from cell lists shade faster in fragments than clustered lists (the forward pipeline's decal
-/// sweep: 0.97× at overlap 0.25, 1.11× at 1.0, 0.84× at 3.8); in compute they are faster at every
-/// overlap below the dense decals' (BENCHMARKS.md, "Scaling").
-pub const REBUILT_FRAGMENT_DECAL_OVERLAP: f32 = 2.0;
+/// How fine the cells of lists rebuilt every frame are (`accel/rebuilt_cell_lists.rs`): the coarsest
+/// edge tried, in the volumes' median box edges, finer ones following while lists run long. Finer
+/// cells take longer to rebuild (every frame's scans visit every cell) and list fewer volumes that
+/// miss a point, which pays where a listed entry costs more to shade: a decal's oriented-box test
+/// more than a light's sphere, and anything in fragments more than in compute ([`rebuilt_list_cells`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ListCells {
+    /// 1.5 edges.
+    Coarse,
+    /// 1.0 edge.
+    Medium,
+    /// 0.5 edge.
+    Fine,
+}
+
+impl ListCells {
+    /// The coarsest cell edge tried, in the volumes' median box edges.
+    pub fn coarsest_edge(self) -> f32 {
+        match self {
+            ListCells::Coarse => 1.5,
+            ListCells::Medium => 1.0,
+            ListCells::Fine => 0.5,
+        }
+    }
+}
+
+/// The cells of the lights' (`decals` false) or the decals' lists rebuilt every frame, where the
+/// opaque surfaces shade in `stage`. On the H200, frames on Sponza with cells of 1.5 / 1.0 / 0.5
+/// edges against clustered lists (benchmarks/LOG.md, topic 1): 28k small lights in compute 1.243 /
+/// 1.260 / 1.312 (0.625) ms against 1.292, in fragments 5.644 / 5.544 / 5.756 against 6.310;
+/// 4,096 decals in compute 1.319 / 1.301 / 1.317 (0.625) against 1.352, in fragments 7.909 / 6.788 /
+/// 6.331 against 7.064.
+pub fn rebuilt_list_cells(decals: bool, stage: ShadingStage) -> ListCells {
+    match (decals, stage) {
+        (false, ShadingStage::Compute) => ListCells::Coarse,
+        (true, ShadingStage::Fragment) => ListCells::Fine,
+        _ => ListCells::Medium,
+    }
+}
 
 /// Whether `bvh` lights rebuilt on the GPU every frame are read from cell lists rebuilt in place of
 /// their BVH (`accel/rebuilt_cell_lists.rs`): as the one group placed (`placed_groups`), in every
@@ -60,8 +94,8 @@ pub enum Why {
     /// Reflections shade points outside the view, which clustered lists do not cover.
     Reflections,
     /// The BVH would be rebuilt on the GPU every frame where clustered lists, rebuilt every frame too,
-    /// are faster: sparse lights ([`rebuilt_bvh_wins`]) and decals of several placed groups, and
-    /// sparse decals in fragments ([`REBUILT_FRAGMENT_DECAL_OVERLAP`]) (BENCHMARKS.md, "Scaling").
+    /// are faster: sparse lights ([`rebuilt_bvh_wins`]) and decals of several placed groups
+    /// (BENCHMARKS.md, "Scaling").
     RebuiltEveryFrame,
     /// Lights or decals rebuilt every frame as one placed group, below the overlap where subgroups
     /// share them out: read from cell lists rebuilt in place of their BVH ([`rebuilt_lights_listed`]).
@@ -155,15 +189,11 @@ impl MethodChoice {
         let decals = match config.decal_method {
             DecalMethod::Auto => {
                 // Rebuilt every frame, dense decals shared out beat clustered lists from 262k in the
-                // sweeps, and sparser ones as one placed group read from rebuilt cell lists, but in
-                // fragments below [`REBUILT_FRAGMENT_DECAL_OVERLAP`]; sparser decals of several
-                // groups, each an LBVH walked alone, lose or come level.
+                // sweeps, and sparser ones as one placed group read from rebuilt cell lists; sparser
+                // decals of several groups, each an LBVH walked alone, lose or come level.
                 let shared_out = decals_shared_out(caps, stats.decal_centre_overlap);
                 let rebuilt = config.decal_bvh_build == BvhBuild::GpuEveryFrame && !shared_out;
-                let listed = software
-                    && stats.placed_decal_groups == 1
-                    && (config.pipeline != PipelineKind::Forward
-                        || stats.decal_overlap.is_some_and(|overlap| overlap >= REBUILT_FRAGMENT_DECAL_OVERLAP));
+                let listed = software && stats.placed_decal_groups == 1;
                 let (method, why) = match (stats.placed_decals, stats.decal_overlap) {
                     (0, _) => (DecalMethod::Off, Why::NoVolumes),
                     (n, _) if n <= BRUTE_FORCE_MAX => (DecalMethod::Brute, Why::Few(n)),
@@ -645,6 +675,8 @@ pub struct StructurePlan {
     /// (`accel/cell_lists.rs`) where it is built once, or on the GPU every frame in place of its
     /// LBVH (`accel/rebuilt_cell_lists.rs`) where it is rebuilt ([`rebuilt_lights_listed`]).
     pub cell_lists: bool,
+    /// How fine the cells of lists rebuilt every frame are.
+    pub list_cells: ListCells,
     /// The light groups get their light tree (`accel/light_tree.rs`), with their CPU builds or
     /// alongside their GPU rebuilds: `restir` draws its candidates through it
     /// ([`ShadingMethods::light_tree`]).
@@ -775,6 +807,7 @@ impl FramePlan {
             rebuilt_leaves: rebuilt_leaves(dense_lights),
             rebuilt_grids: !walks.lights && !hardware_lights,
             cell_lists: lights_listed,
+            list_cells: rebuilt_list_cells(false, opaque_stage),
             light_tree,
             hardware: hardware_lights,
         };
@@ -794,6 +827,7 @@ impl FramePlan {
             rebuilt_leaves: rebuilt_leaves(dense_decals),
             rebuilt_grids: !walks.decals && !hardware_decals,
             cell_lists: decal_lists,
+            list_cells: rebuilt_list_cells(true, opaque_stage),
             light_tree: false,
             hardware: hardware_decals,
         };
@@ -978,6 +1012,18 @@ mod tests {
         assert_eq!(methods.decal_enumeration_module(), "shading/enumerate/decals_cells.wgsl");
         assert!(!listed.shading_methods(false, true).rebuilt_decal_lists, "lists that were not built are not read");
         assert!(!FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 1.0, 2)).unwrap().decals.cell_lists);
+        // Their cells, and the lights', are finer where an entry costs more to shade: decals more
+        // than lights, fragments more than compute.
+        for (pipeline, light_cells, decal_cells) in [
+            (PipelineKind::Visbuffer, ListCells::Coarse, ListCells::Medium),
+            (PipelineKind::Deferred, ListCells::Coarse, ListCells::Medium),
+            (PipelineKind::Forward, ListCells::Medium, ListCells::Fine),
+        ] {
+            let plan = FramePlan::resolve(&RenderConfig { pipeline, ..gpu_built.clone() }, SUBGROUPS, &stats(1.0, 1)).unwrap();
+            assert_eq!((plan.lights.list_cells, plan.decals.list_cells), (light_cells, decal_cells), "{pipeline:?}");
+        }
+        assert!(ListCells::Fine.coarsest_edge() < ListCells::Medium.coarsest_edge());
+        assert!(ListCells::Medium.coarsest_edge() < ListCells::Coarse.coarsest_edge());
         // And `auto` walks them rather than listing them in clusters.
         let auto_rebuilt = RenderConfig { decal_method: DecalMethod::Auto, ..gpu_built.clone() };
         let placed = |centre| SceneStatistics { placed_decals: 262_144, ..stats(centre, 1) };
@@ -1308,9 +1354,12 @@ mod tests {
         let crowded =
             SceneStatistics { placed_decal_groups: 3, decal_centre_overlap: Some(DENSE_DECAL_OVERLAP), ..scene(0, 0.0, 1000, 50.0) };
         assert_eq!(chosen(&rebuilt, crowded).1, DecalMethod::Bvh);
-        // In fragments, listed decals win from a higher overlap.
-        assert_eq!(chosen(&forward, scene(0, 0.0, 4096, REBUILT_FRAGMENT_DECAL_OVERLAP - 1.0)).1, DecalMethod::Clustered);
-        assert_eq!(chosen(&forward, scene(0, 0.0, 16_384, REBUILT_FRAGMENT_DECAL_OVERLAP)).1, DecalMethod::Bvh);
+        // In fragments too, sparse decals of one group are listed; of several, not.
+        assert_eq!(
+            MethodChoice::resolve(&forward, SUBGROUPS, &scene(0, 0.0, 4096, 1.0)).decals.why,
+            Why::Listed { count: 4096, overlap: 1.0 }
+        );
+        assert_eq!(chosen(&forward, grouped_decals).1, DecalMethod::Clustered);
         assert_eq!(chosen(&rebuilt, grouped(28_000, REBUILT_BVH_OVERLAP)).0, LightMethod::Bvh);
         assert_eq!(chosen(&rebuilt, grouped(1 << 18, REBUILT_BVH_OVERLAP - 1.5)).0, LightMethod::Clustered);
         assert_eq!(chosen(&forward, grouped(28_000, REBUILT_BVH_OVERLAP)).0, LightMethod::Clustered);

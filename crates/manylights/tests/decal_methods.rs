@@ -13,7 +13,7 @@ use manylights::{
     accel::VolumeStructure,
     gpu::cluster_grid::ClusterGrid,
     gpu::GpuContext,
-    plan::{rebuilt_leaves, Capabilities, FramePlan, GroupBuild, Measurements, RayQueries, StructurePlan},
+    plan::{rebuilt_leaves, Capabilities, FramePlan, GroupBuild, ListCells, Measurements, RayQueries, StructurePlan},
     renderer::{Image, Renderer},
     scene::{
         self,
@@ -322,6 +322,7 @@ fn decals_keep_their_layers_in_leaf_order_and_gpu_rebuilds_refuse_cpu_ordered_us
             rebuilt_leaves: rebuilt_leaves(false),
             rebuilt_grids: true,
             cell_lists: false,
+            list_cells: ListCells::Coarse,
             light_tree: false,
             hardware: false,
         };

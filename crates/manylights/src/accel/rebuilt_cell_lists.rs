@@ -23,11 +23,13 @@ use crate::{
     Error, Result,
 };
 
-/// Cell edges tried, as shares of the volumes' median box edge, coarsest first. Every frame's scans
-/// visit every cell: for 28k small lights over Sponza, cells of 1.5 edges rebuilt in a third of the
-/// time of cells of 0.625 and shaded 3 % slower; for lights reaching ten times as many points, the
-/// lists of such coarse cells grow long (benchmarks/LOG.md, topic 1).
-const CELL_EDGE_SHARES: [f32; 5] = [1.5, 1.2, 0.96, 0.77, 0.625];
+/// Each finer grid tried has cells this much smaller than the one before, from the plan's coarsest
+/// (`plan::ListCells`), [`FINER_GRIDS`] of them in all. Every frame's scans visit every cell: for
+/// 28k small lights over Sponza, cells of 1.5 edges rebuilt in a third of the time of cells of 0.625
+/// and shaded 3 % slower; for lights reaching ten times as many points, the lists of such coarse
+/// cells grow long (benchmarks/LOG.md, topic 1).
+const FINER: f32 = 0.8;
+const FINER_GRIDS: i32 = 5;
 /// The longest mean list, over the cells that list anything, of a grid chosen for its coarseness.
 const MAX_MEAN_LIST: f64 = 12.0;
 /// The most cells one volume may visit: a thread visits them all, twice a frame.
@@ -99,12 +101,13 @@ pub struct ListPlacement {
 }
 
 impl ListPlacement {
-    /// The grid over `boxes`: the coarsest of [`CELL_EDGE_SHARES`] whose lists stay short
-    /// ([`MAX_MEAN_LIST`]), or the finest within the limits; where even the coarsest passes them
-    /// (volumes of very unequal sizes), coarser still. `None` for bounds that are not finite, or
-    /// where no grid keeps the largest volume's cells, the cells and the lists within their limits:
-    /// the cells' ranges and the entries each within `max_binding_bytes`.
-    pub fn for_boxes(boxes: &[Aabb], max_binding_bytes: u64) -> Option<Self> {
+    /// The grid over `boxes`: the coarsest whose lists stay short ([`MAX_MEAN_LIST`]) of cells
+    /// from `coarsest_edge` median box edges down ([`FINER`]), or the finest within the limits;
+    /// where even the coarsest passes them (volumes of very unequal sizes), coarser still. `None`
+    /// for bounds that are not finite, or where no grid keeps the largest volume's cells, the cells
+    /// and the lists within their limits: the cells' ranges and the entries each within
+    /// `max_binding_bytes`.
+    pub fn for_boxes(boxes: &[Aabb], coarsest_edge: f32, max_binding_bytes: u64) -> Option<Self> {
         let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
         let extent = bounds.max - bounds.min;
         if boxes.is_empty() || !(extent.is_finite() && bounds.min.is_finite()) || extent.max_element() <= 0.0 {
@@ -114,7 +117,7 @@ impl ListPlacement {
         edges.sort_unstable_by(f32::total_cmp);
         let edge_of = |share: f32| (edges[edges.len() / 2] * share).max(extent.max_element() / MAX_CELLS_PER_AXIS as f32);
         let mut chosen = None;
-        for share in CELL_EDGE_SHARES {
+        for share in (0..FINER_GRIDS).map(|k| coarsest_edge * FINER.powi(k)) {
             // Finer cells only take more cells and entries: once one grid passes the limits, the
             // finer ones do too.
             let Some((placement, mean)) = Self::fit(bounds, boxes, edge_of(share), max_binding_bytes) else { break };
@@ -123,7 +126,7 @@ impl ListPlacement {
                 break;
             }
         }
-        let mut edge = edge_of(CELL_EDGE_SHARES[0]);
+        let mut edge = edge_of(coarsest_edge);
         for _ in 0..MAX_TRIES {
             if chosen.is_some() {
                 break;
@@ -430,6 +433,7 @@ mod tests {
     use std::mem::{offset_of, size_of};
 
     use super::*;
+    use crate::plan::ListCells;
 
     #[test]
     fn list_records_match_their_wgsl_layouts() {
@@ -465,10 +469,14 @@ mod tests {
 
     #[test]
     fn placements_take_the_coarsest_cells_whose_lists_stay_short() {
-        // Sparse: 0.4 m boxes 3 m apart share no cell even at the coarsest, 1.5 box edges.
+        // Sparse: 0.4 m boxes 3 m apart share no cell even at the coarsest, 1.5 box edges, nor at
+        // the plan's finer start.
+        let (coarse_edge, fine_edge) = (ListCells::Coarse.coarsest_edge(), ListCells::Fine.coarsest_edge());
         let sparse = lattice(1000, 3.0, 0.2);
-        let grid = ListPlacement::for_boxes(&sparse, u64::MAX).unwrap();
+        let grid = ListPlacement::for_boxes(&sparse, coarse_edge, u64::MAX).unwrap();
         assert_eq!(grid.dims, UVec3::splat((27.4f32 / 0.6).ceil() as u32));
+        let fine_start = ListPlacement::for_boxes(&sparse, fine_edge, u64::MAX).unwrap();
+        assert_eq!(fine_start.dims, UVec3::splat((27.4f32 / 0.2).ceil() as u32));
         assert!(sparse.iter().all(|b| cells_visited(&grid, b) <= 8));
         assert_eq!(grid.visits, sparse.iter().map(|b| cells_visited(&grid, b)).sum::<u64>());
         // A point's cell holds it.
@@ -477,23 +485,23 @@ mod tests {
         assert!((grid.min + cell * grid.cell_size).cmple(p).all() && (grid.min + (cell + 1.0) * grid.cell_size).cmpge(p).all());
         // Crowded: 4 m boxes 1 m apart, dozens in every coarse cell: finer cells.
         let crowded = lattice(1000, 1.0, 2.0);
-        let fine = ListPlacement::for_boxes(&crowded, u64::MAX).unwrap();
+        let fine = ListPlacement::for_boxes(&crowded, coarse_edge, u64::MAX).unwrap();
         assert!(fine.dims.x > (13.0f32 / 6.0).ceil() as u32, "{:?}", fine.dims);
         // One volume as large as the scene among small ones: coarser than any share, until it
         // visits few enough cells.
         let mut mixed = sparse.clone();
         mixed.push(Aabb::new(Vec3::ZERO, Vec3::splat(27.0)));
-        let coarse = ListPlacement::for_boxes(&mixed, u64::MAX).unwrap();
+        let coarse = ListPlacement::for_boxes(&mixed, coarse_edge, u64::MAX).unwrap();
         assert!(mixed.iter().all(|b| cells_visited(&coarse, b) <= MAX_CELLS_PER_VOLUME));
         assert!(coarse.dims.x < grid.dims.x);
         // Flat groups get one cell across, and groups without finite bounds none.
         let flat: Vec<Aabb> = sparse.iter().map(|b| Aabb::new(b.min.with_y(0.0), b.max.with_y(0.0))).collect();
-        let flat_grid = ListPlacement::for_boxes(&flat, u64::MAX).unwrap();
+        let flat_grid = ListPlacement::for_boxes(&flat, coarse_edge, u64::MAX).unwrap();
         assert_eq!((flat_grid.dims.y, flat_grid.cells_per_unit.y), (1, 0.0));
-        assert_eq!(ListPlacement::for_boxes(&[Aabb::new(Vec3::splat(f32::NEG_INFINITY), Vec3::ZERO)], u64::MAX), None);
-        assert_eq!(ListPlacement::for_boxes(&[], u64::MAX), None);
+        assert_eq!(ListPlacement::for_boxes(&[Aabb::new(Vec3::splat(f32::NEG_INFINITY), Vec3::ZERO)], coarse_edge, u64::MAX), None);
+        assert_eq!(ListPlacement::for_boxes(&[], coarse_edge, u64::MAX), None);
         // Lists the device cannot bind are not placed: the group keeps its LBVH.
-        assert_eq!(ListPlacement::for_boxes(&sparse, 4096), None);
+        assert_eq!(ListPlacement::for_boxes(&sparse, coarse_edge, 4096), None);
         let d = grid.dims.x;
         assert_eq!(grid.header().skip, d | d << 10 | d << 20);
     }

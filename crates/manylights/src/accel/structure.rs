@@ -44,7 +44,7 @@ use crate::{
         scene::{affine_rows, GpuDecal, GpuLight},
         GpuContext, GpuTimer,
     },
-    plan::{DynamicLeaves, GroupBuild, StructurePlan},
+    plan::{DynamicLeaves, GroupBuild, ListCells, StructurePlan},
     scene::{Decal, GroupInstance, Groups, Light, DECAL_LAYERS},
     Error, Result,
 };
@@ -294,6 +294,8 @@ pub struct Volumes<'a> {
     /// The one placed group gets cell lists where they fit (`plan::StructurePlan::cell_lists`): built
     /// with its BVH on the CPU (crowded decals), or on the GPU every frame in place of its BVH.
     pub cell_lists: bool,
+    /// How fine the cells of lists rebuilt every frame are (`plan::StructurePlan::list_cells`).
+    pub list_cells: ListCells,
     /// Light groups get their light tree (`light_tree.rs`, `plan::StructurePlan::light_tree`): built
     /// with the CPU's BVHs, or alongside each GPU rebuild (the dynamic group's too).
     pub light_tree: bool,
@@ -397,6 +399,7 @@ impl VolumeStructure {
             rebuilt_leaves: plan.rebuilt_leaves,
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: plan.cell_lists,
+            list_cells: plan.list_cells,
             light_tree: plan.light_tree,
             hardware: plan.hardware,
             groups,
@@ -428,6 +431,7 @@ impl VolumeStructure {
             rebuilt_leaves: plan.rebuilt_leaves,
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: false,
+            list_cells: plan.list_cells,
             light_tree: plan.light_tree,
             hardware: plan.hardware,
             groups,
@@ -487,6 +491,7 @@ impl VolumeStructure {
             rebuilt_leaves: plan.rebuilt_leaves,
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: plan.cell_lists,
+            list_cells: plan.list_cells,
             light_tree: false,
             hardware: plan.hardware,
             groups,
@@ -1149,7 +1154,8 @@ fn rebuilt_list_placement(ctx: &GpuContext, volumes: &Volumes, layout: &Layout, 
         && layout.dynamic.is_none())
     .then(|| layout.instances[0].group)?;
     let boxes = &volumes.boxes[layout.ranges[lone].clone()];
-    ListPlacement::for_boxes(boxes, ctx.limits.max_storage_buffer_binding_size).map(|placement| (lone, placement))
+    ListPlacement::for_boxes(boxes, volumes.list_cells.coarsest_edge(), ctx.limits.max_storage_buffer_binding_size)
+        .map(|placement| (lone, placement))
 }
 
 /// The most boxes a leaf of a GPU build holds, as the plan's `leaves` say.
