@@ -79,6 +79,22 @@ pub fn rebuilt_lights_listed(caps: Capabilities, overlap: f32, placed_groups: us
     placed_groups == 1 && !lights_shared_out(caps, PipelineKind::Visbuffer, overlap)
 }
 
+/// Up to this many boxes holding a decal's centre, on average, decals rebuilt every frame as one
+/// placed group are read from cell lists rebuilt in place of their BVH rather than shared out from
+/// its leaves ([`decals_shared_out`]): on the H200 the decal sweep's 65,536 and 262,144 decals
+/// (26 and 102 boxes a centre) took 0.79 and 0.87 times the shared-out LBVH's frame read from lists
+/// in the visibility buffer, 0.89 and 0.89 deferred, 0.66 forward (65,536); 1,048,576 (401) 1.05
+/// times, their grid too coarse for the bindings (benchmarks/LOG.md, topic 1).
+pub const REBUILT_LISTED_DECAL_OVERLAP: f32 = 200.0;
+
+/// Whether `bvh` decals rebuilt on the GPU every frame are read from cell lists rebuilt in place of
+/// their BVH (`accel/rebuilt_cell_lists.rs`): as the one group placed (`placed_groups`), below
+/// [`REBUILT_LISTED_DECAL_OVERLAP`] boxes a centre (`centre_overlap`, measured where subgroups could
+/// share them out).
+pub fn rebuilt_decals_listed(centre_overlap: Option<f32>, placed_groups: usize) -> bool {
+    placed_groups == 1 && centre_overlap.is_none_or(|overlap| overlap < REBUILT_LISTED_DECAL_OVERLAP)
+}
+
 /// Why `auto` chose a method, or that it was asked for: one line for `info`, `--timings` and the
 /// timings JSON.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -98,7 +114,8 @@ pub enum Why {
     /// (BENCHMARKS.md, "Scaling").
     RebuiltEveryFrame,
     /// Lights or decals rebuilt every frame as one placed group, below the overlap where subgroups
-    /// share them out: read from cell lists rebuilt in place of their BVH ([`rebuilt_lights_listed`]).
+    /// share them out faster: read from cell lists rebuilt in place of their BVH
+    /// ([`rebuilt_lights_listed`], [`rebuilt_decals_listed`]).
     Listed { count: usize, overlap: f32 },
     /// The mean overlap at surface points, where a BVH is faster: built once at every overlap
     /// measured (up to 100), or rebuilt every frame over lights dense enough that subgroups share
@@ -188,12 +205,13 @@ impl MethodChoice {
         };
         let decals = match config.decal_method {
             DecalMethod::Auto => {
-                // Rebuilt every frame, dense decals shared out beat clustered lists from 262k in the
-                // sweeps, and sparser ones as one placed group read from rebuilt cell lists; sparser
-                // decals of several groups, each an LBVH walked alone, lose or come level.
-                let shared_out = decals_shared_out(caps, stats.decal_centre_overlap);
-                let rebuilt = config.decal_bvh_build == BvhBuild::GpuEveryFrame && !shared_out;
-                let listed = software && stats.placed_decal_groups == 1;
+                // Rebuilt every frame, decals as one placed group read from rebuilt cell lists beat
+                // clustered lists at every overlap of the sweeps, and so do denser ones shared out;
+                // sparser decals of several groups, each an LBVH walked alone, lose or come level.
+                let rebuilt = config.decal_bvh_build == BvhBuild::GpuEveryFrame;
+                let listed = rebuilt && software && rebuilt_decals_listed(stats.decal_centre_overlap, stats.placed_decal_groups);
+                let shared_out = decals_shared_out(caps, stats.decal_centre_overlap) && !listed;
+                let rebuilt = rebuilt && !shared_out;
                 let (method, why) = match (stats.placed_decals, stats.decal_overlap) {
                     (0, _) => (DecalMethod::Off, Why::NoVolumes),
                     (n, _) if n <= BRUTE_FORCE_MAX => (DecalMethod::Brute, Why::Few(n)),
@@ -788,7 +806,18 @@ impl FramePlan {
             && !light_tree
             && !hardware_lights
             && stats.light_overlap.is_some_and(|overlap| lights_shared_out(caps, config.pipeline, overlap));
+        let decal_build = group_build(
+            config.decal_method == DecalMethod::Bvh,
+            matches!(config.decal_method, DecalMethod::Clustered | DecalMethod::DeferredDecals),
+            config.decal_bvh_build,
+        );
+        // Decals as one group placed once: crowded ones built once get cell lists with their BVH,
+        // those rebuilt every frame cell lists in its place up to a higher overlap.
+        let decals_listed = decal_build == GroupBuild::GpuEveryFrame
+            && !hardware_decals
+            && rebuilt_decals_listed(stats.decal_centre_overlap, stats.placed_decal_groups);
         let dense_decals = !hardware_decals
+            && !decals_listed
             && Measurements::for_settings(config, caps).decal_centre_overlap
             && decals_shared_out(caps, stats.decal_centre_overlap);
         let opaque_stage = if config.pipeline == PipelineKind::Forward { ShadingStage::Fragment } else { ShadingStage::Compute };
@@ -811,15 +840,7 @@ impl FramePlan {
             light_tree,
             hardware: hardware_lights,
         };
-        let decal_build = group_build(
-            config.decal_method == DecalMethod::Bvh,
-            matches!(config.decal_method, DecalMethod::Clustered | DecalMethod::DeferredDecals),
-            config.decal_bvh_build,
-        );
-        // Decals as one group placed once: crowded ones built once get cell lists with their BVH,
-        // sparse ones rebuilt every frame cell lists in its place.
-        let decals_listed = decal_build == GroupBuild::GpuEveryFrame && !dense_decals && !hardware_decals;
-        let decal_lists = stats.placed_decal_groups == 1 && (decals_listed || (dense_decals && decal_build == GroupBuild::CpuOnce));
+        let decal_lists = decals_listed || (stats.placed_decal_groups == 1 && dense_decals && decal_build == GroupBuild::CpuOnce);
         let decals = StructurePlan {
             build: decal_build,
             clustered: config.decal_method == DecalMethod::Clustered,
@@ -1001,16 +1022,22 @@ mod tests {
         assert!(!dense.shading_methods(false, false).decal_cell_lists && dense.shading_methods(false, false).dense_decals);
         let instanced = FramePlan::resolve(&bvh, SUBGROUPS, &stats(40.0, 3)).unwrap();
         assert!(instanced.decals.wide_leaves && !instanced.decals.cell_lists);
-        // Rebuilt every frame, dense decals are shared out from leaves of 32, with no grid.
-        let rebuilt = FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP, 1)).unwrap();
-        assert!(rebuilt.shading_methods(true, true).dense_decals && !rebuilt.decals.rebuilt_grids && !rebuilt.decals.cell_lists);
-        assert_eq!(rebuilt.decals.rebuilt_leaves, DynamicLeaves::AtMost(32));
-        // Sparser, as one placed group, they are read from cell lists rebuilt in place of their BVH.
-        let listed = FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 1.0, 1)).unwrap();
-        let methods = listed.shading_methods(true, true);
-        assert!(listed.decals.cell_lists && methods.rebuilt_decal_lists && !methods.decal_cell_lists);
-        assert_eq!(methods.decal_enumeration_module(), "shading/enumerate/decals_cells.wgsl");
-        assert!(!listed.shading_methods(false, true).rebuilt_decal_lists, "lists that were not built are not read");
+        // Rebuilt every frame, dense decals of several groups, or as one group crowded past the
+        // rebuilt lists' overlap, are shared out from leaves of 32, with no grid.
+        for (centre, placed) in [(DENSE_DECAL_OVERLAP, 2), (REBUILT_LISTED_DECAL_OVERLAP, 1)] {
+            let rebuilt = FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(centre, placed)).unwrap();
+            assert!(rebuilt.shading_methods(true, true).dense_decals && !rebuilt.decals.rebuilt_grids && !rebuilt.decals.cell_lists);
+            assert_eq!(rebuilt.decals.rebuilt_leaves, DynamicLeaves::AtMost(32));
+        }
+        // Sparser, as one placed group, they are read from cell lists rebuilt in place of their BVH,
+        // dense or not.
+        for centre in [1.0, DENSE_DECAL_OVERLAP, REBUILT_LISTED_DECAL_OVERLAP - 1.0] {
+            let listed = FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(centre, 1)).unwrap();
+            let methods = listed.shading_methods(true, true);
+            assert!(listed.decals.cell_lists && methods.rebuilt_decal_lists && !methods.decal_cell_lists && !methods.dense_decals);
+            assert_eq!(methods.decal_enumeration_module(), "shading/enumerate/decals_cells.wgsl");
+            assert!(!listed.shading_methods(false, true).rebuilt_decal_lists, "lists that were not built are not read");
+        }
         assert!(!FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 1.0, 2)).unwrap().decals.cell_lists);
         // Their cells, and the lights', are finer where an entry costs more to shade: decals more
         // than lights, fragments more than compute.
@@ -1026,13 +1053,17 @@ mod tests {
         assert!(ListCells::Medium.coarsest_edge() < ListCells::Coarse.coarsest_edge());
         // And `auto` walks them rather than listing them in clusters.
         let auto_rebuilt = RenderConfig { decal_method: DecalMethod::Auto, ..gpu_built.clone() };
-        let placed = |centre| SceneStatistics { placed_decals: 262_144, ..stats(centre, 1) };
-        assert_eq!(MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP)).decals.method, DecalMethod::Bvh);
+        let placed = |centre, groups| SceneStatistics { placed_decals: 262_144, ..stats(centre, groups) };
+        let crowded = MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(REBUILT_LISTED_DECAL_OVERLAP, 1));
+        assert_eq!(crowded.decals.why, Why::Overlap { count: 262_144, overlap: 0.0, shared_out: true });
+        assert_eq!(MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP, 2)).decals.method, DecalMethod::Bvh);
         // Sparser, as one placed group, it reads them from rebuilt cell lists; of several groups, it
         // takes clustered lists.
-        let sparse_rebuilt = MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP - 1.0));
-        assert_eq!(sparse_rebuilt.decals.why, Why::Listed { count: 262_144, overlap: 0.0 });
-        let grouped = SceneStatistics { placed_decal_groups: 2, ..placed(DENSE_DECAL_OVERLAP - 1.0) };
+        for centre in [DENSE_DECAL_OVERLAP - 1.0, DENSE_DECAL_OVERLAP] {
+            let listed = MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &placed(centre, 1));
+            assert_eq!(listed.decals.why, Why::Listed { count: 262_144, overlap: 0.0 });
+        }
+        let grouped = placed(DENSE_DECAL_OVERLAP - 1.0, 2);
         assert_eq!(MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &grouped).decals.method, DecalMethod::Clustered);
         // An overlap measured for other settings decides nothing.
         let alone = FramePlan::resolve(

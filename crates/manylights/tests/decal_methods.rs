@@ -133,12 +133,22 @@ fn assert_dense_decals_agree(scene: &Scene, cell_lists: bool, time: f32) {
 /// Decals crowded into one group placed once get cell lists (`accel/cell_lists.rs`), which shading
 /// reads instead of walking, each cell's list shared out among the lanes in that cell
 /// (`decals_bvh_cells.wgsl`; lavapipe's subgroups have 8 lanes): still the brute-force image, in
-/// compute passes and in fragments.
+/// compute passes and in fragments. Rebuilt every frame, they are read from cell lists rebuilt in
+/// place of their BVH (`accel/rebuilt_cell_lists.rs`), not shared out.
 #[test]
 fn dense_decals_read_from_cell_lists_agree_with_brute_force() {
     let mut scene = demo_scene();
     generators::add_scattered_decals(&mut scene, &ScatterDecals { count: 3000, seed: 4, size: Some(1.5) }).unwrap();
     assert_dense_decals_agree(&scene, true, 0.0);
+    for pipeline in [PipelineKind::Deferred, PipelineKind::Forward] {
+        let config = |method| RenderConfig { pipeline, ..decal_config(128, 72, method, BvhBuild::GpuEveryFrame) };
+        let mut rebuilt = renderer(&scene, config(DecalMethod::Bvh));
+        let methods = rebuilt.shading_methods();
+        assert!(methods.rebuilt_decal_lists && !methods.dense_decals, "{}: rebuilt dense decals are not listed", pipeline.name());
+        rebuilt.render(&scene.cameras[0]).expect("frame");
+        let difference = max_abs_difference(&render_at(&scene, config(DecalMethod::Brute), 0.0), &rebuilt.read_hdr().expect("hdr"));
+        assert!(difference <= TOLERANCE, "{}: rebuilt lists differ from brute force by {difference}", pipeline.name());
+    }
 }
 
 /// Cell lists run top layer first, and shading skips the decals of layers hidden by those above them:
