@@ -8,8 +8,8 @@
 #   scripts/bench-device.sh decals       pipelines × decal methods on 100k decals (issue 4)
 #   scripts/bench-device.sh tests        the GPU-only test binaries under .bench/tests/, if any
 #   scripts/bench-device.sh table        `manylights bench`: the paper's Table 1, every pipeline and method (issue 5)
-#   scripts/bench-device.sh sweeps       `manylights bench`: lights and decals from 1k to 1M (issue 5); decals to 16k in the
-#                                        forward and deferred pipelines (issue 33)
+#   scripts/bench-device.sh sweeps       `manylights bench`: lights and decals from 1k to 1M (issue 5); decals to 1M deferred and
+#                                        to 262k forward (issue 33)
 #   scripts/bench-device.sh dense        `manylights bench`: dense lights, bvh against clustered, and auto (issue 33)
 #   scripts/bench-device.sh assets       every scene of .bench/assets/ and sponza_lite with no flags against each
 #                                        explicit method, alone and with 28k lights or 100k decals (issue 33)
@@ -435,8 +435,9 @@ for set in "${@:-structures}"; do
     table) bench table --sweeps none --dense none ;;
     sweeps)
       bench sweeps --scenes none --dense none
-      # Sparse decals, where fragments shade them differently from compute.
-      for p in forward deferred; do bench "sweeps_$p" --scenes none --dense none --sweeps decals --sweep-max 16384 --sweep-pipeline $p; done ;;
+      # Decals where fragments and the G-buffer shade them differently from the visibility buffer.
+      bench sweeps_deferred --scenes none --dense none --sweeps decals --sweep-pipeline deferred
+      bench sweeps_forward --scenes none --dense none --sweeps decals --sweep-max 262144 --sweep-pipeline forward ;;
     dense) bench dense --scenes none --sweeps none ;;
     assets) assets ;;
     moving) moving ;;
