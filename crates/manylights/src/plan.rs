@@ -18,7 +18,7 @@ pub const BRUTE_FORCE_MAX: usize = 8;
 
 /// Whether `bvh` lights rebuilt on the GPU every frame are faster than clustered lists rebuilt every
 /// frame (BENCHMARKS.md, "Dense lights" and "Scaling"). Read from cell lists rebuilt in place of
-/// their BVH (`listed`, [`rebuilt_lights_listed`]) they are in every pipeline at every overlap
+/// their BVH (`listed`, [`lights_listed`]) they are in every pipeline at every overlap
 /// measured, and so is an LBVH whose leaves subgroups share out above that overlap. Otherwise (several
 /// placed groups, the hardware back end, the light tree) each group gets an LBVH walked from a
 /// rebuilt entry grid, which wins from overlap [`DENSE_LIGHT_OVERLAP`] where subgroups share their
@@ -30,11 +30,25 @@ pub fn rebuilt_bvh_wins(pipeline: PipelineKind, caps: Capabilities, overlap: f32
 
 pub const REBUILT_BVH_OVERLAP: f32 = 4.0;
 
-/// How fine the cells of lists rebuilt every frame are (`accel/rebuilt_cell_lists.rs`): the coarsest
+/// Where the one placed group of a structure gets cell lists, which shading reads instead of walking
+/// the group's BVH.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GroupLists {
+    /// None: the groups' BVHs are walked.
+    None,
+    /// Built on the CPU beside the group's BVH (`accel/cell_lists.rs`): crowded decals built once,
+    /// each cell's list shared out among a subgroup's lanes.
+    BesideBvh,
+    /// Built on the GPU in place of the group's BVH (`accel/rebuilt_cell_lists.rs`), in cells as
+    /// fine as [`ListCells`] says: every frame where the group is rebuilt every frame, else once.
+    InPlaceOfBvh(ListCells),
+}
+
+/// How fine the cells of lists built on the GPU are (`accel/rebuilt_cell_lists.rs`): the coarsest
 /// edge tried, in the volumes' median box edges, finer ones following while lists run long. Finer
-/// cells take longer to rebuild (every frame's scans visit every cell) and list fewer volumes that
-/// miss a point, which pays where a listed entry costs more to shade: a decal's oriented-box test
-/// more than a light's sphere, and anything in fragments more than in compute ([`rebuilt_list_cells`]).
+/// cells take longer to build (the scans visit every cell) and list fewer volumes that miss a
+/// point, which pays where a listed entry costs more to shade: a decal's oriented-box test more
+/// than a light's sphere, and anything in fragments more than in compute ([`list_cells`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ListCells {
     /// 1.5 edges.
@@ -56,13 +70,13 @@ impl ListCells {
     }
 }
 
-/// The cells of the lights' (`decals` false) or the decals' lists rebuilt every frame, where the
-/// opaque surfaces shade in `stage`. On the H200, frames on Sponza with cells of 1.5 / 1.0 / 0.5
-/// edges against clustered lists (benchmarks/LOG.md, topic 1): 28k small lights in compute 1.243 /
-/// 1.260 / 1.312 (0.625) ms against 1.292, in fragments 5.644 / 5.544 / 5.756 against 6.310;
-/// 4,096 decals in compute 1.319 / 1.301 / 1.317 (0.625) against 1.352, in fragments 7.909 / 6.788 /
-/// 6.331 against 7.064.
-pub fn rebuilt_list_cells(decals: bool, stage: ShadingStage) -> ListCells {
+/// The cells of the lights' (`decals` false) or the decals' lists built on the GPU, where the
+/// opaque surfaces shade in `stage`. On the H200, frames on Sponza, rebuilt every frame, with cells
+/// of 1.5 / 1.0 / 0.5 edges against clustered lists (benchmarks/LOG.md, topic 1): 28k small lights
+/// in compute 1.243 / 1.260 / 1.312 (0.625) ms against 1.292, in fragments 5.644 / 5.544 / 5.756
+/// against 6.310; 4,096 decals in compute 1.319 / 1.301 / 1.317 (0.625) against 1.352, in fragments
+/// 7.909 / 6.788 / 6.331 against 7.064.
+pub fn list_cells(decals: bool, stage: ShadingStage) -> ListCells {
     match (decals, stage) {
         (false, ShadingStage::Compute) => ListCells::Coarse,
         (true, ShadingStage::Fragment) => ListCells::Fine,
@@ -70,12 +84,14 @@ pub fn rebuilt_list_cells(decals: bool, stage: ShadingStage) -> ListCells {
     }
 }
 
-/// Whether `bvh` lights rebuilt on the GPU every frame are read from cell lists rebuilt in place of
-/// their BVH (`accel/rebuilt_cell_lists.rs`): as the one group placed (`placed_groups`), in every
-/// pipeline, below the overlap from which subgroups sharing an LBVH's leaves out in compute is faster
-/// (BENCHMARKS.md, "Dense lights": forward lights at overlap 10 take 0.79× clustered lists' time read
-/// from cell lists, 1.12× shared out).
-pub fn rebuilt_lights_listed(caps: Capabilities, overlap: f32, placed_groups: usize) -> bool {
+/// Whether `bvh` lights are read from cell lists built on the GPU in place of their BVH
+/// (`accel/rebuilt_cell_lists.rs`), once or every frame as the BVH would be: as the one group placed
+/// (`placed_groups`), in every pipeline, below the overlap from which subgroups sharing an LBVH's
+/// leaves out in compute is faster (BENCHMARKS.md, "Dense lights": forward lights at overlap 10
+/// rebuilt every frame take 0.70× clustered lists' time read from cell lists, 1.12× shared out, and
+/// 0.87× walked in the BVH built once). Built once, the lists shaded faster than the BVH built once
+/// (28k small lights in the visibility buffer: 0.163 against 0.176 ms).
+pub fn lights_listed(caps: Capabilities, overlap: f32, placed_groups: usize) -> bool {
     placed_groups == 1 && !lights_shared_out(caps, PipelineKind::Visbuffer, overlap)
 }
 
@@ -87,12 +103,22 @@ pub fn rebuilt_lights_listed(caps: Capabilities, overlap: f32, placed_groups: us
 /// times, their grid too coarse for the bindings (benchmarks/LOG.md, topic 1).
 pub const REBUILT_LISTED_DECAL_OVERLAP: f32 = 200.0;
 
-/// Whether `bvh` decals rebuilt on the GPU every frame are read from cell lists rebuilt in place of
-/// their BVH (`accel/rebuilt_cell_lists.rs`): as the one group placed (`placed_groups`), below
-/// [`REBUILT_LISTED_DECAL_OVERLAP`] boxes a centre (`centre_overlap`, measured where subgroups could
-/// share them out).
-pub fn rebuilt_decals_listed(centre_overlap: Option<f32>, placed_groups: usize) -> bool {
-    placed_groups == 1 && centre_overlap.is_none_or(|overlap| overlap < REBUILT_LISTED_DECAL_OVERLAP)
+/// Whether `bvh` decals are read from cell lists built on the GPU in place of their BVH
+/// (`accel/rebuilt_cell_lists.rs`), once or every frame (`every_frame`) as the BVH would be: as the
+/// one group placed (`placed_groups`); rebuilt every frame, below [`REBUILT_LISTED_DECAL_OVERLAP`]
+/// boxes a centre (`centre_overlap`, measured where subgroups could share them out), built once,
+/// where they are not dense enough for the lists built beside the BVH ([`decals_shared_out`]: 65,536
+/// decals took 20.631 ms forward in those, 23.347 in lists rebuilt every frame). Sparse decals
+/// walked in the BVH built once lost to clustered lists in fragments (1.09×, 1.20× and 1.28× at
+/// 1,024, 4,096 and 16,384) and shaded slower than in lists in compute (16,384: 0.361 against 0.306
+/// ms in the visibility buffer, 0.274 against 0.190 deferred; benchmarks/LOG.md, topic 1).
+pub fn decals_listed(caps: Capabilities, every_frame: bool, centre_overlap: Option<f32>, placed_groups: usize) -> bool {
+    placed_groups == 1
+        && if every_frame {
+            centre_overlap.is_none_or(|overlap| overlap < REBUILT_LISTED_DECAL_OVERLAP)
+        } else {
+            !decals_shared_out(caps, centre_overlap)
+        }
 }
 
 /// Why `auto` chose a method, or that it was asked for: one line for `info`, `--timings` and the
@@ -113,10 +139,13 @@ pub enum Why {
     /// are faster: sparse lights ([`rebuilt_bvh_wins`]) and decals of several placed groups
     /// (BENCHMARKS.md, "Scaling").
     RebuiltEveryFrame,
-    /// Lights or decals rebuilt every frame as one placed group, below the overlap where subgroups
-    /// share them out faster: read from cell lists rebuilt in place of their BVH
-    /// ([`rebuilt_lights_listed`], [`rebuilt_decals_listed`]).
+    /// Lights or decals of one placed group, below the overlap where subgroups share them out
+    /// faster: read from cell lists built in place of their BVH ([`lights_listed`],
+    /// [`decals_listed`]).
     Listed { count: usize, overlap: f32 },
+    /// Sparse decals of several placed groups, shaded in fragments: walked in their BVHs built
+    /// once, they lose to clustered lists ([`decals_listed`]).
+    WalkedInFragments,
     /// The mean overlap at surface points, where a BVH is faster: built once at every overlap
     /// measured (up to 100), or rebuilt every frame over lights dense enough that subgroups share
     /// their leaves out (`shared_out`: lights walked so, [`ShadingMethods::dense_lights`]).
@@ -134,8 +163,11 @@ impl fmt::Display for Why {
             Why::RebuiltEveryFrame => f.write_str("rebuilt every frame over sparse volumes, where clustered lists are faster than a BVH"),
             Why::Listed { count, overlap } => write!(
                 f,
-                "{count} reaching {overlap:.2} a surface point on average, rebuilt every frame as one group: cell lists in place of its BVH are faster"
+                "{count} reaching {overlap:.2} a surface point on average, as one group: cell lists in place of its BVH are faster"
             ),
+            Why::WalkedInFragments => {
+                f.write_str("sparse, in several groups, shaded in fragments, where clustered lists are faster than a BVH walk")
+            }
             Why::Overlap { count, overlap, shared_out: true } => {
                 write!(f, "{count} reaching {overlap:.2} a surface point on average: a BVH walk, its leaves shared out, is faster")
             }
@@ -183,7 +215,7 @@ impl MethodChoice {
                 let overlap = stats.light_overlap.unwrap_or(0.0);
                 let as_bvh = RenderConfig { light_method: LightMethod::Bvh, ..config.clone() };
                 let light_tree = restir_light_tree(&as_bvh, particle_lights, stats.light_overlap).unwrap_or(false);
-                let listed = software && !light_tree && rebuilt_lights_listed(caps, overlap, stats.placed_light_groups);
+                let listed = software && !light_tree && lights_listed(caps, overlap, stats.placed_light_groups);
                 let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, overlap, listed);
                 let shared_out = lights_shared_out(caps, config.pipeline, overlap);
                 let (method, why) = match (particle_lights, stats.placed_lights, stats.light_overlap) {
@@ -194,9 +226,7 @@ impl MethodChoice {
                     _ if config.light_bvh_build == BvhBuild::GpuEveryFrame && !rebuilt_bvh_wins => {
                         (LightMethod::Clustered, Why::RebuiltEveryFrame)
                     }
-                    (false, count, _) if config.light_bvh_build == BvhBuild::GpuEveryFrame && listed => {
-                        (LightMethod::Bvh, Why::Listed { count, overlap })
-                    }
+                    (false, count, _) if listed => (LightMethod::Bvh, Why::Listed { count, overlap }),
                     (false, count, _) => (LightMethod::Bvh, Why::Overlap { count, overlap, shared_out }),
                 };
                 Chosen { method, why }
@@ -205,19 +235,21 @@ impl MethodChoice {
         };
         let decals = match config.decal_method {
             DecalMethod::Auto => {
-                // Rebuilt every frame, decals as one placed group read from rebuilt cell lists beat
-                // clustered lists at every overlap of the sweeps, and so do denser ones shared out;
-                // sparser decals of several groups, each an LBVH walked alone, lose or come level.
-                let rebuilt = config.decal_bvh_build == BvhBuild::GpuEveryFrame;
-                let listed = rebuilt && software && rebuilt_decals_listed(stats.decal_centre_overlap, stats.placed_decal_groups);
+                // Decals as one placed group read from cell lists beat clustered lists at every
+                // overlap of the sweeps, and so do denser ones shared out; sparser decals of several
+                // groups, each walked alone, lose or come level where rebuilt every frame, and lose
+                // in fragments.
+                let every_frame = config.decal_bvh_build == BvhBuild::GpuEveryFrame;
+                let listed = software && decals_listed(caps, every_frame, stats.decal_centre_overlap, stats.placed_decal_groups);
                 let shared_out = decals_shared_out(caps, stats.decal_centre_overlap) && !listed;
-                let rebuilt = rebuilt && !shared_out;
+                let walked = !listed && !shared_out;
                 let (method, why) = match (stats.placed_decals, stats.decal_overlap) {
                     (0, _) => (DecalMethod::Off, Why::NoVolumes),
                     (n, _) if n <= BRUTE_FORCE_MAX => (DecalMethod::Brute, Why::Few(n)),
                     _ if reflections => (DecalMethod::Bvh, Why::Reflections),
-                    _ if rebuilt && !listed => (DecalMethod::Clustered, Why::RebuiltEveryFrame),
-                    (count, overlap) if rebuilt => (DecalMethod::Bvh, Why::Listed { count, overlap: overlap.unwrap_or(0.0) }),
+                    _ if walked && every_frame => (DecalMethod::Clustered, Why::RebuiltEveryFrame),
+                    _ if walked && software && config.pipeline == PipelineKind::Forward => (DecalMethod::Clustered, Why::WalkedInFragments),
+                    (count, overlap) if listed => (DecalMethod::Bvh, Why::Listed { count, overlap: overlap.unwrap_or(0.0) }),
                     (count, overlap) => (DecalMethod::Bvh, Why::Overlap { count, overlap: overlap.unwrap_or(0.0), shared_out }),
                 };
                 Chosen { method, why }
@@ -364,11 +396,11 @@ pub struct ShadingMethods {
     /// The decals' structure is one crowded group placed once, with cell lists: `bvh` decals are read
     /// from the list of a point's cell instead of walked (`shading/enumerate/decals_bvh_cells.wgsl`).
     pub decal_cell_lists: bool,
-    /// The lights' or the decals' structure is one sparse group placed once and rebuilt every frame as
-    /// cell lists: `bvh` lights or decals are read from the list of a point's cell
+    /// The lights' or the decals' structure is one sparser group placed once, built on the GPU (once
+    /// or every frame) as cell lists: `bvh` lights or decals are read from the list of a point's cell
     /// (`shading/enumerate/lights_cells.wgsl`, `decals_cells.wgsl`).
-    pub rebuilt_light_lists: bool,
-    pub rebuilt_decal_lists: bool,
+    pub gpu_light_lists: bool,
+    pub gpu_decal_lists: bool,
     /// `restir` draws its candidates through the light tree instead of enumerating the lights
     /// reaching a point (`shading/enumerate/lights_tree.wgsl`, [`restir_light_tree`]).
     pub light_tree: bool,
@@ -439,7 +471,7 @@ impl ShadingMethods {
             LightMethod::Brute => "shading/enumerate/lights_brute.wgsl",
             LightMethod::Bvh if self.light_tree => "shading/enumerate/lights_tree.wgsl",
             LightMethod::Bvh if self.hardware_lights => "shading/enumerate/lights_ray_query.wgsl",
-            LightMethod::Bvh if self.rebuilt_light_lists => "shading/enumerate/lights_cells.wgsl",
+            LightMethod::Bvh if self.gpu_light_lists => "shading/enumerate/lights_cells.wgsl",
             // `auto` is resolved before a plan is made (`MethodChoice`).
             LightMethod::Bvh | LightMethod::Auto => "shading/enumerate/lights_bvh.wgsl",
             LightMethod::Clustered => "shading/enumerate/lights_clustered.wgsl",
@@ -451,7 +483,7 @@ impl ShadingMethods {
     pub fn decal_enumeration_module(&self) -> &'static str {
         match self.decals {
             DecalMethod::Bvh if self.hardware_decals => "shading/enumerate/decals_ray_query.wgsl",
-            DecalMethod::Bvh if self.rebuilt_decal_lists => "shading/enumerate/decals_cells.wgsl",
+            DecalMethod::Bvh if self.gpu_decal_lists => "shading/enumerate/decals_cells.wgsl",
             DecalMethod::Bvh if self.decal_cell_lists && self.subgroups => "shading/enumerate/decals_bvh_cells.wgsl",
             DecalMethod::Off => "shading/enumerate/decals_off.wgsl",
             DecalMethod::Brute => "shading/enumerate/decals_brute.wgsl",
@@ -689,12 +721,8 @@ pub struct StructurePlan {
     /// cells in an LBVH.
     pub rebuilt_grids: bool,
     /// The one placed group gets cell lists where they fit their budget, and shading then reads them
-    /// instead of walking ([`FramePlan::shading_methods`]): built on the CPU with the group's BVH
-    /// (`accel/cell_lists.rs`) where it is built once, or on the GPU every frame in place of its
-    /// LBVH (`accel/rebuilt_cell_lists.rs`) where it is rebuilt ([`rebuilt_lights_listed`]).
-    pub cell_lists: bool,
-    /// How fine the cells of lists rebuilt every frame are.
-    pub list_cells: ListCells,
+    /// instead of walking ([`FramePlan::shading_methods`]).
+    pub cell_lists: GroupLists,
     /// The light groups get their light tree (`accel/light_tree.rs`), with their CPU builds or
     /// alongside their GPU rebuilds: `restir` draws its candidates through it
     /// ([`ShadingMethods::light_tree`]).
@@ -788,8 +816,8 @@ impl FramePlan {
             dense_decals: false,
             dense_lights: false,
             decal_cell_lists: false,
-            rebuilt_light_lists: false,
-            rebuilt_decal_lists: false,
+            gpu_light_lists: false,
+            gpu_decal_lists: false,
             debug_views: config.debug_view != DebugView::Off,
             material_extensions: stats.material_extensions,
             vertex_colors: stats.vertex_colors,
@@ -811,21 +839,22 @@ impl FramePlan {
             matches!(config.decal_method, DecalMethod::Clustered | DecalMethod::DeferredDecals),
             config.decal_bvh_build,
         );
-        // Decals as one group placed once: crowded ones built once get cell lists with their BVH,
-        // those rebuilt every frame cell lists in its place up to a higher overlap.
-        let decals_listed = decal_build == GroupBuild::GpuEveryFrame
+        // Decals as one group placed once get cell lists in place of their BVH, built once or every
+        // frame as it would be, up to an overlap; crowded ones built once get lists beside it.
+        let decals_in_lists = decal_build != GroupBuild::None
+            && config.decal_method == DecalMethod::Bvh
             && !hardware_decals
-            && rebuilt_decals_listed(stats.decal_centre_overlap, stats.placed_decal_groups);
+            && decals_listed(caps, decal_build == GroupBuild::GpuEveryFrame, stats.decal_centre_overlap, stats.placed_decal_groups);
         let dense_decals = !hardware_decals
-            && !decals_listed
+            && !decals_in_lists
             && Measurements::for_settings(config, caps).decal_centre_overlap
             && decals_shared_out(caps, stats.decal_centre_overlap);
         let opaque_stage = if config.pipeline == PipelineKind::Forward { ShadingStage::Fragment } else { ShadingStage::Compute };
         let walks = query_walks(ShadingMethods { dense_lights, dense_decals, ..unlisted }, opaque_stage);
         let light_build =
             group_build(config.light_method == LightMethod::Bvh, config.light_method == LightMethod::Clustered, config.light_bvh_build);
-        let lights_listed = light_build == GroupBuild::GpuEveryFrame
-            && rebuilt_lights_listed(caps, stats.light_overlap.unwrap_or(0.0), stats.placed_light_groups)
+        let lights_in_lists = config.light_method == LightMethod::Bvh
+            && lights_listed(caps, stats.light_overlap.unwrap_or(0.0), stats.placed_light_groups)
             && !light_tree
             && !hardware_lights
             && !particle_lights;
@@ -835,20 +864,22 @@ impl FramePlan {
             wide_leaves: dense_lights,
             rebuilt_leaves: rebuilt_leaves(dense_lights),
             rebuilt_grids: !walks.lights && !hardware_lights,
-            cell_lists: lights_listed,
-            list_cells: rebuilt_list_cells(false, opaque_stage),
+            cell_lists: if lights_in_lists { GroupLists::InPlaceOfBvh(list_cells(false, opaque_stage)) } else { GroupLists::None },
             light_tree,
             hardware: hardware_lights,
         };
-        let decal_lists = decals_listed || (stats.placed_decal_groups == 1 && dense_decals && decal_build == GroupBuild::CpuOnce);
+        let decal_lists_beside = stats.placed_decal_groups == 1 && dense_decals && decal_build == GroupBuild::CpuOnce;
         let decals = StructurePlan {
             build: decal_build,
             clustered: config.decal_method == DecalMethod::Clustered,
             wide_leaves: dense_decals,
             rebuilt_leaves: rebuilt_leaves(dense_decals),
             rebuilt_grids: !walks.decals && !hardware_decals,
-            cell_lists: decal_lists,
-            list_cells: rebuilt_list_cells(true, opaque_stage),
+            cell_lists: match (decals_in_lists, decal_lists_beside) {
+                (true, _) => GroupLists::InPlaceOfBvh(list_cells(true, opaque_stage)),
+                (false, true) => GroupLists::BesideBvh,
+                (false, false) => GroupLists::None,
+            },
             light_tree: false,
             hardware: hardware_decals,
         };
@@ -874,9 +905,9 @@ impl FramePlan {
             planned_methods: ShadingMethods {
                 dense_decals,
                 dense_lights,
-                decal_cell_lists: decal_lists && !decals_listed,
-                rebuilt_light_lists: lights.cell_lists,
-                rebuilt_decal_lists: decal_lists && decals_listed,
+                decal_cell_lists: decal_lists_beside,
+                gpu_light_lists: lights_in_lists,
+                gpu_decal_lists: decals_in_lists,
                 ..unlisted
             },
         })
@@ -888,8 +919,8 @@ impl FramePlan {
     pub fn shading_methods(&self, decal_lists_built: bool, light_lists_built: bool) -> ShadingMethods {
         ShadingMethods {
             decal_cell_lists: self.planned_methods.decal_cell_lists && decal_lists_built,
-            rebuilt_light_lists: self.planned_methods.rebuilt_light_lists && light_lists_built,
-            rebuilt_decal_lists: self.planned_methods.rebuilt_decal_lists && decal_lists_built,
+            gpu_light_lists: self.planned_methods.gpu_light_lists && light_lists_built,
+            gpu_decal_lists: self.planned_methods.gpu_decal_lists && decal_lists_built,
             ..self.planned_methods
         }
     }
@@ -1011,22 +1042,29 @@ mod tests {
         assert!(Measurements::for_settings(&gpu_built, SUBGROUPS).decal_centre_overlap);
         let stats =
             |overlap, placed| SceneStatistics { decal_centre_overlap: Some(overlap), placed_decal_groups: placed, ..Default::default() };
+        // Sparse decals of one group built once are read from lists built once on the GPU in place of
+        // their BVH; of several groups, walked.
         let sparse = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 0.5, 1)).unwrap();
-        assert!(!sparse.decals.wide_leaves && !sparse.decals.cell_lists && !sparse.shading_methods(true, true).dense_decals);
+        assert!(!sparse.decals.wide_leaves && !sparse.shading_methods(true, true).dense_decals);
+        assert_eq!(sparse.decals.cell_lists, GroupLists::InPlaceOfBvh(ListCells::Medium));
+        assert!(sparse.shading_methods(true, true).gpu_decal_lists && !sparse.shading_methods(false, true).gpu_decal_lists);
+        let grouped = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 0.5, 2)).unwrap();
+        assert_eq!(grouped.decals.cell_lists, GroupLists::None);
         let dense = FramePlan::resolve(&bvh, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP, 1)).unwrap();
-        assert!(dense.decals.wide_leaves && dense.decals.cell_lists);
+        assert!(dense.decals.wide_leaves && dense.decals.cell_lists == GroupLists::BesideBvh);
         let methods = dense.shading_methods(true, true);
         assert!(methods.dense_decals && methods.decal_cell_lists);
         assert_eq!(methods.decal_enumeration_module(), "shading/enumerate/decals_bvh_cells.wgsl");
         // Lists over their budget leave the wide leaves walked.
         assert!(!dense.shading_methods(false, false).decal_cell_lists && dense.shading_methods(false, false).dense_decals);
         let instanced = FramePlan::resolve(&bvh, SUBGROUPS, &stats(40.0, 3)).unwrap();
-        assert!(instanced.decals.wide_leaves && !instanced.decals.cell_lists);
+        assert!(instanced.decals.wide_leaves && instanced.decals.cell_lists == GroupLists::None);
         // Rebuilt every frame, dense decals of several groups, or as one group crowded past the
         // rebuilt lists' overlap, are shared out from leaves of 32, with no grid.
         for (centre, placed) in [(DENSE_DECAL_OVERLAP, 2), (REBUILT_LISTED_DECAL_OVERLAP, 1)] {
             let rebuilt = FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(centre, placed)).unwrap();
-            assert!(rebuilt.shading_methods(true, true).dense_decals && !rebuilt.decals.rebuilt_grids && !rebuilt.decals.cell_lists);
+            assert!(rebuilt.shading_methods(true, true).dense_decals && !rebuilt.decals.rebuilt_grids);
+            assert_eq!(rebuilt.decals.cell_lists, GroupLists::None);
             assert_eq!(rebuilt.decals.rebuilt_leaves, DynamicLeaves::AtMost(32));
         }
         // Sparser, as one placed group, they are read from cell lists rebuilt in place of their BVH,
@@ -1034,11 +1072,15 @@ mod tests {
         for centre in [1.0, DENSE_DECAL_OVERLAP, REBUILT_LISTED_DECAL_OVERLAP - 1.0] {
             let listed = FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(centre, 1)).unwrap();
             let methods = listed.shading_methods(true, true);
-            assert!(listed.decals.cell_lists && methods.rebuilt_decal_lists && !methods.decal_cell_lists && !methods.dense_decals);
+            assert!(matches!(listed.decals.cell_lists, GroupLists::InPlaceOfBvh(_)));
+            assert!(methods.gpu_decal_lists && !methods.decal_cell_lists && !methods.dense_decals);
             assert_eq!(methods.decal_enumeration_module(), "shading/enumerate/decals_cells.wgsl");
-            assert!(!listed.shading_methods(false, true).rebuilt_decal_lists, "lists that were not built are not read");
+            assert!(!listed.shading_methods(false, true).gpu_decal_lists, "lists that were not built are not read");
         }
-        assert!(!FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 1.0, 2)).unwrap().decals.cell_lists);
+        assert_eq!(
+            FramePlan::resolve(&gpu_built, SUBGROUPS, &stats(DENSE_DECAL_OVERLAP - 1.0, 2)).unwrap().decals.cell_lists,
+            GroupLists::None
+        );
         // Their cells, and the lights', are finer where an entry costs more to shade: decals more
         // than lights, fragments more than compute.
         for (pipeline, light_cells, decal_cells) in [
@@ -1046,8 +1088,10 @@ mod tests {
             (PipelineKind::Deferred, ListCells::Coarse, ListCells::Medium),
             (PipelineKind::Forward, ListCells::Medium, ListCells::Fine),
         ] {
-            let plan = FramePlan::resolve(&RenderConfig { pipeline, ..gpu_built.clone() }, SUBGROUPS, &stats(1.0, 1)).unwrap();
-            assert_eq!((plan.lights.list_cells, plan.decals.list_cells), (light_cells, decal_cells), "{pipeline:?}");
+            let lights = SceneStatistics { light_overlap: Some(0.5), placed_light_groups: 1, ..stats(1.0, 1) };
+            let plan = FramePlan::resolve(&RenderConfig { pipeline, ..gpu_built.clone() }, SUBGROUPS, &lights).unwrap();
+            let cells = (GroupLists::InPlaceOfBvh(light_cells), GroupLists::InPlaceOfBvh(decal_cells));
+            assert_eq!((plan.lights.cell_lists, plan.decals.cell_lists), cells, "{pipeline:?}");
         }
         assert!(ListCells::Fine.coarsest_edge() < ListCells::Medium.coarsest_edge());
         assert!(ListCells::Medium.coarsest_edge() < ListCells::Coarse.coarsest_edge());
@@ -1065,6 +1109,22 @@ mod tests {
         }
         let grouped = placed(DENSE_DECAL_OVERLAP - 1.0, 2);
         assert_eq!(MethodChoice::resolve(&auto_rebuilt, SUBGROUPS, &grouped).decals.method, DecalMethod::Clustered);
+        // Built once, sparse decals of one group are listed in every pipeline; of several groups,
+        // walked in compute, and in fragments left to clustered lists.
+        for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
+            let auto_once = RenderConfig { decal_method: DecalMethod::Auto, pipeline, ..bvh.clone() };
+            let listed = MethodChoice::resolve(&auto_once, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP - 1.0, 1));
+            assert_eq!(listed.decals.why, Why::Listed { count: 262_144, overlap: 0.0 });
+            let walked = MethodChoice::resolve(&auto_once, SUBGROUPS, &grouped).decals;
+            let expected = if pipeline == PipelineKind::Forward {
+                (DecalMethod::Clustered, Why::WalkedInFragments)
+            } else {
+                (DecalMethod::Bvh, Why::Overlap { count: 262_144, overlap: 0.0, shared_out: false })
+            };
+            assert_eq!((walked.method, walked.why), expected, "{pipeline:?}");
+            let dense = MethodChoice::resolve(&auto_once, SUBGROUPS, &placed(DENSE_DECAL_OVERLAP, 2)).decals;
+            assert_eq!(dense.why, Why::Overlap { count: 262_144, overlap: 0.0, shared_out: true });
+        }
         // An overlap measured for other settings decides nothing.
         let alone = FramePlan::resolve(
             &bvh,
@@ -1130,7 +1190,7 @@ mod tests {
     }
 
     #[test]
-    fn sparse_lights_rebuilt_every_frame_as_one_placed_group_are_listed() {
+    fn sparse_lights_of_one_placed_group_are_listed() {
         let rebuilt =
             |pipeline| RenderConfig { pipeline, light_bvh_build: BvhBuild::GpuEveryFrame, ..config(LightMethod::Bvh, DecalMethod::Off) };
         let stats = |overlap, groups| SceneStatistics {
@@ -1141,25 +1201,31 @@ mod tests {
         };
         let listed = |config: &RenderConfig, stats: &SceneStatistics| {
             let plan = FramePlan::resolve(config, SUBGROUPS, stats).unwrap();
-            assert_eq!(plan.lights.cell_lists, plan.shading_methods(false, true).rebuilt_light_lists);
-            assert!(!plan.shading_methods(true, false).rebuilt_light_lists, "lists that were not built are not read");
-            plan.lights.cell_lists
+            let listed = matches!(plan.lights.cell_lists, GroupLists::InPlaceOfBvh(_));
+            assert_eq!(listed, plan.shading_methods(false, true).gpu_light_lists);
+            assert!(!plan.shading_methods(true, false).gpu_light_lists, "lists that were not built are not read");
+            listed
         };
         for pipeline in [PipelineKind::Visbuffer, PipelineKind::Deferred, PipelineKind::Forward] {
             assert!(listed(&rebuilt(pipeline), &stats(0.5, 1)), "{pipeline:?}");
-            // Dense lights are walked, their leaves shared out; several placed groups, or lights
-            // built once, keep their BVHs.
+            // Dense lights are walked, their leaves shared out; several placed groups keep their
+            // BVHs. Built once, the lists are built once.
             assert!(!listed(&rebuilt(pipeline), &stats(DENSE_LIGHT_OVERLAP, 1)), "{pipeline:?}");
             assert!(!listed(&rebuilt(pipeline), &stats(0.5, 2)), "{pipeline:?}");
-            assert!(!listed(&RenderConfig { light_bvh_build: BvhBuild::CpuOnce, ..rebuilt(pipeline) }, &stats(0.5, 1)));
-            let auto = RenderConfig { light_method: LightMethod::Auto, ..rebuilt(pipeline) };
-            assert_eq!(MethodChoice::resolve(&auto, SUBGROUPS, &stats(0.5, 1)).lights.why, Why::Listed { count: 28_000, overlap: 0.5 });
-            assert!(listed(&auto, &stats(0.5, 1)));
+            let once = RenderConfig { light_bvh_build: BvhBuild::CpuOnce, ..rebuilt(pipeline) };
+            assert!(listed(&once, &stats(0.5, 1)) && !listed(&once, &stats(0.5, 2)) && !listed(&once, &stats(DENSE_LIGHT_OVERLAP, 1)));
+            for build in [BvhBuild::CpuOnce, BvhBuild::GpuEveryFrame] {
+                let auto = RenderConfig { light_method: LightMethod::Auto, light_bvh_build: build, ..rebuilt(pipeline) };
+                assert_eq!(MethodChoice::resolve(&auto, SUBGROUPS, &stats(0.5, 1)).lights.why, Why::Listed { count: 28_000, overlap: 0.5 });
+                assert!(listed(&auto, &stats(0.5, 1)));
+            }
         }
         // Forward fragments share lights out from a lower overlap when walking; listed, they are not.
         assert!(listed(&rebuilt(PipelineKind::Forward), &stats(DENSE_FRAGMENT_LIGHT_OVERLAP, 1)));
         let no_subgroups = Capabilities { subgroups: false, early_depth_test: true, ray_queries: RayQueries::None };
-        assert!(FramePlan::resolve(&rebuilt(PipelineKind::Visbuffer), no_subgroups, &stats(100.0, 1)).unwrap().lights.cell_lists);
+        assert!(listed(&rebuilt(PipelineKind::Visbuffer), &stats(DENSE_FRAGMENT_LIGHT_OVERLAP, 1)));
+        let plan = FramePlan::resolve(&rebuilt(PipelineKind::Visbuffer), no_subgroups, &stats(100.0, 1)).unwrap();
+        assert_eq!(plan.lights.cell_lists, GroupLists::InPlaceOfBvh(ListCells::Coarse));
         let methods = FramePlan::resolve(&rebuilt(PipelineKind::Visbuffer), SUBGROUPS, &stats(0.5, 1)).unwrap().shading_methods(true, true);
         assert_eq!(methods.light_enumeration_module(), "shading/enumerate/lights_cells.wgsl");
         // The hardware back end and the light tree need the group's own structure: no lists, and
@@ -1168,13 +1234,13 @@ mod tests {
         let ray_queries = Capabilities { ray_queries: RayQueries::Native, ..SUBGROUPS };
         assert_eq!(MethodChoice::resolve(&auto, ray_queries, &stats(0.5, 1)).lights.method, LightMethod::Clustered);
         let hardware = FramePlan::resolve(&RenderConfig { light_method: LightMethod::Bvh, ..auto.clone() }, ray_queries, &stats(0.5, 1));
-        assert!(!hardware.unwrap().lights.cell_lists);
+        assert_eq!(hardware.unwrap().lights.cell_lists, GroupLists::None);
         let mut tree = RenderConfig { light_method: LightMethod::Auto, ..rebuilt(PipelineKind::Forward) };
         tree.rays.direct_lighting = DirectLighting::Restir;
         assert_eq!(MethodChoice::resolve(&tree, no_subgroups, &stats(RESTIR_TREE_OVERLAP, 1)).lights.method, LightMethod::Clustered);
         let tree_bvh = RenderConfig { light_method: LightMethod::Bvh, ..tree };
         let plan = FramePlan::resolve(&tree_bvh, no_subgroups, &stats(RESTIR_TREE_OVERLAP, 1)).unwrap();
-        assert!(plan.lights.light_tree && !plan.lights.cell_lists);
+        assert!(plan.lights.light_tree && plan.lights.cell_lists == GroupLists::None);
         // Particle lights join the lights' structure as a group of their own, rebuilt every frame.
         let particles = SceneStatistics { particles: 1000, ..stats(0.5, 1) };
         assert!(!listed(&RenderConfig { particle_method: ParticleMethod::Bvh, ..rebuilt(PipelineKind::Visbuffer) }, &particles));
@@ -1417,7 +1483,10 @@ mod tests {
         assert_eq!((methods.lights, methods.decals), (LightMethod::Bvh, DecalMethod::Brute));
         assert_eq!(plan.lights.build, GroupBuild::CpuOnce);
         let why = plan.methods.lights.to_string();
-        assert!(why.starts_with("bvh (auto: 28000 reaching 0.45") && why.ends_with("a BVH walk is faster)"), "{why}");
+        assert!(why.starts_with("bvh (auto: 28000 reaching 0.45") && why.ends_with("cell lists in place of its BVH are faster)"), "{why}");
+        let grouped = SceneStatistics { placed_light_groups: 2, ..scene(28_000, 0.45, 3, 1.0) };
+        let why = FramePlan::resolve(&auto(), SUBGROUPS, &grouped).unwrap().methods.lights.to_string();
+        assert!(why.ends_with("a BVH walk is faster)"), "{why}");
         assert_eq!(plan.methods.decals.to_string(), format!("brute (auto: 3, at most {BRUTE_FORCE_MAX}: a loop over all is cheapest)"));
         // Overlaps are measured only for `auto`, and the lights' for `bvh` lights' walks.
         let measured = Measurements::for_settings(&auto(), SUBGROUPS);

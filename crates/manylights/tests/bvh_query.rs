@@ -8,7 +8,7 @@ use glam::{Affine3A, Quat, Vec3};
 use manylights::{
     accel::{light_contains, volume_query_probe_shader, VolumeStructure, CPU_TOP_LEVEL_MAX_INSTANCES},
     gpu::{readback, shaders, GpuContext},
-    plan::{rebuilt_leaves, GroupBuild, ListCells, StructurePlan},
+    plan::{rebuilt_leaves, GroupBuild, GroupLists, StructurePlan},
     scene::{GroupInstance, Groups, Light, LightKind, Spin},
 };
 use rand::{Rng, SeedableRng};
@@ -55,8 +55,7 @@ fn gpu_query(
         wide_leaves: false,
         rebuilt_leaves: rebuilt_leaves(subgroups),
         rebuilt_grids: true,
-        cell_lists: false,
-        list_cells: ListCells::Coarse,
+        cell_lists: GroupLists::None,
         light_tree: false,
         hardware: false,
     };

@@ -13,7 +13,7 @@ use manylights::{
     accel::VolumeStructure,
     gpu::cluster_grid::ClusterGrid,
     gpu::GpuContext,
-    plan::{rebuilt_leaves, Capabilities, FramePlan, GroupBuild, ListCells, Measurements, RayQueries, StructurePlan},
+    plan::{rebuilt_leaves, Capabilities, FramePlan, GroupBuild, GroupLists, Measurements, RayQueries, StructurePlan},
     renderer::{Image, Renderer},
     scene::{
         self,
@@ -73,11 +73,11 @@ fn demo_with_thousands_of_decals() {
     assert_decal_methods_agree(&scene, 128, 72, 0.0);
 }
 
-/// Sparse decals rebuilt every frame as one group placed once (here turned, and spinning) are read
-/// from cell lists rebuilt on the GPU in place of their LBVH, and blend in every pipeline as brute
-/// force does, reflections' hits too.
+/// Sparse decals as one group placed once (here turned, and spinning) are read from cell lists built
+/// on the GPU in place of their BVH, rebuilt every frame or built once as the BVH would be, and blend
+/// in every pipeline as brute force does, reflections' hits too.
 #[test]
-fn sparse_decals_rebuilt_every_frame_are_read_from_cell_lists() {
+fn sparse_decals_of_one_group_are_read_from_cell_lists() {
     let mut scene = with_decals_and_lights(demo_scene(), 1500, 200, 31);
     for (i, decal) in scene.decals.iter_mut().enumerate() {
         decal.layer = (i % 3) as u32;
@@ -95,12 +95,21 @@ fn sparse_decals_rebuilt_every_frame_are_read_from_cell_lists() {
         let reflections = RaySettings { reflection_bounces: u32::from(pipeline == PipelineKind::Visbuffer), ..Default::default() };
         let at = |method, build| RenderConfig { pipeline, rays: reflections, ..decal_config(96, 54, method, build) };
         let brute = render_at(&scene, at(DecalMethod::Brute, BvhBuild::CpuOnce), 0.7);
-        let mut rebuilt = renderer(&scene, at(DecalMethod::Bvh, BvhBuild::GpuEveryFrame));
-        assert!(rebuilt.shading_methods().rebuilt_decal_lists, "{}: the rebuilt decals are not listed", pipeline.name());
-        rebuilt.time = 0.7;
-        rebuilt.render(&scene.cameras[0]).expect("frame");
-        let difference = max_abs_difference(&brute, &rebuilt.read_hdr().unwrap());
-        assert!(difference <= TOLERANCE, "{}: max abs difference {difference} from brute force", pipeline.name());
+        // Rebuilt every frame, the lists are built in every frame; built once, in the first only.
+        for (build, builds_per_frame) in [(BvhBuild::GpuEveryFrame, [true, true]), (BvhBuild::CpuOnce, [true, false])] {
+            let mut listed = renderer(&scene, at(DecalMethod::Bvh, build));
+            assert!(listed.shading_methods().gpu_decal_lists, "{} {build:?}: the decals are not listed", pipeline.name());
+            assert!(listed.has_timestamps(), "the test needs an adapter with timestamp queries");
+            listed.time = 0.7;
+            for built in builds_per_frame {
+                let passes = listed.render(&scene.cameras[0]).expect("frame");
+                let timed = passes.iter().any(|&(name, _)| name == "decal_cell_lists_build");
+                assert_eq!(timed, built, "{} {build:?}: the lists' build ran {timed} in a frame", pipeline.name());
+                let difference = max_abs_difference(&brute, &listed.read_hdr().unwrap());
+                assert!(difference <= TOLERANCE, "{} {build:?}: max abs difference {difference} from brute force", pipeline.name());
+                listed.time = 0.7;
+            }
+        }
     }
 }
 
@@ -144,7 +153,7 @@ fn dense_decals_read_from_cell_lists_agree_with_brute_force() {
         let config = |method| RenderConfig { pipeline, ..decal_config(128, 72, method, BvhBuild::GpuEveryFrame) };
         let mut rebuilt = renderer(&scene, config(DecalMethod::Bvh));
         let methods = rebuilt.shading_methods();
-        assert!(methods.rebuilt_decal_lists && !methods.dense_decals, "{}: rebuilt dense decals are not listed", pipeline.name());
+        assert!(methods.gpu_decal_lists && !methods.dense_decals, "{}: rebuilt dense decals are not listed", pipeline.name());
         rebuilt.render(&scene.cameras[0]).expect("frame");
         let difference = max_abs_difference(&render_at(&scene, config(DecalMethod::Brute), 0.0), &rebuilt.read_hdr().expect("hdr"));
         assert!(difference <= TOLERANCE, "{}: rebuilt lists differ from brute force by {difference}", pipeline.name());
@@ -331,8 +340,7 @@ fn decals_keep_their_layers_in_leaf_order_and_gpu_rebuilds_refuse_cpu_ordered_us
             wide_leaves: false,
             rebuilt_leaves: rebuilt_leaves(false),
             rebuilt_grids: true,
-            cell_lists: false,
-            list_cells: ListCells::Coarse,
+            cell_lists: GroupLists::None,
             light_tree: false,
             hardware: false,
         };

@@ -209,7 +209,8 @@ fn gpu_builds_give_every_node_the_emitters_below_it() {
 /// moved outside the grid placed for them: each frame's lists name, for a point anywhere, every sphere
 /// holding it (exactness), each once, and only spheres reaching its cell. Lists that start with room
 /// for a few entries grow, and a frame rendered again then holds them all; the counts the fill passes
-/// leave behind start the next frame at zero, so later frames list the same.
+/// leave behind start the next frame at zero, so later frames list the same. Lists built once grow
+/// and are built again as well.
 #[test]
 fn rebuilt_cell_lists_list_every_volume_reaching_each_cell() {
     use manylights::accel::rebuilt_cell_lists::{ListBounds, ListPlacement, RebuiltCellLists};
@@ -232,17 +233,17 @@ fn rebuilt_cell_lists_list_every_volume_reaching_each_cell() {
     let bounds: Vec<ListBounds> = moved.iter().map(|&s| ListBounds::of_light(s.0, s.1, aabb(s))).collect();
     let first_item = 5;
     let mut lists = RebuiltCellLists::new(&ctx, "light", "cell_lists_build", placement, &bounds, first_item, 64).unwrap();
-    let record = |lists: &RebuiltCellLists| {
+    let record = |lists: &mut RebuiltCellLists| {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         lists.record(&mut encoder, None);
         ctx.queue.submit([encoder.finish()]);
     };
-    record(&lists);
+    record(&mut lists);
     assert!(!lists.fitted(&ctx).unwrap(), "64 entries cannot hold the lists");
     assert!(u64::from(lists.capacity()) >= placement.visits / 4, "the lists grew to what the frame needed");
     let mut previous: Option<Vec<Vec<u32>>> = None;
     for frame in 0..2 {
-        record(&lists);
+        record(&mut lists);
         assert!(lists.fitted(&ctx).unwrap(), "frame {frame}: the grown lists held every entry");
         let ranges: Vec<[u32; 2]> = read_buffer(&ctx, &lists.ranges).unwrap();
         let entries: Vec<[u32; 2]> = read_buffer(&ctx, &lists.entries).unwrap();
@@ -303,6 +304,23 @@ fn rebuilt_cell_lists_list_every_volume_reaching_each_cell() {
         }
         previous = Some(listed);
     }
+    // Built once, lists too short for their first build are built again once grown.
+    let mut once = RebuiltCellLists::new(&ctx, "light", "cell_lists_build", placement, &bounds, first_item, 64).unwrap().built_once();
+    record(&mut once);
+    assert!(!once.fitted(&ctx).unwrap(), "64 entries cannot hold the lists built once");
+    record(&mut once);
+    assert!(once.fitted(&ctx).unwrap(), "the grown lists built once held every entry");
+    let cells = |lists: &RebuiltCellLists| {
+        let entries: Vec<[u32; 2]> = read_buffer(&ctx, &lists.entries).unwrap();
+        let ranges: Vec<[u32; 2]> = read_buffer(&ctx, &lists.ranges).unwrap();
+        let in_cell = |[start, len]: [u32; 2]| {
+            let mut items = entries[start as usize..(start + len) as usize].to_vec();
+            items.sort_unstable();
+            items
+        };
+        ranges.into_iter().map(in_cell).collect::<Vec<_>>()
+    };
+    assert!(cells(&once) == cells(&lists), "lists built once are not those rebuilt every frame");
 }
 
 /// Oriented boxes (decals) of every size and turn: each frame's lists name, for points inside a box,

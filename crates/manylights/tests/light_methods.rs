@@ -202,7 +202,7 @@ fn sparse_lights_rebuilt_every_frame_are_read_from_cell_lists() {
         let at = |method| RenderConfig { pipeline, rays: reflections, ..config(96, 54, method) };
         let brute = render_at(&scene, at(LightMethod::Brute), 0.6);
         let mut rebuilt = renderer(&scene, RenderConfig { light_bvh_build: BvhBuild::GpuEveryFrame, ..at(LightMethod::Bvh) });
-        assert!(rebuilt.shading_methods().rebuilt_light_lists, "{}: the rebuilt lights are not listed", pipeline.name());
+        assert!(rebuilt.shading_methods().gpu_light_lists, "{}: the rebuilt lights are not listed", pipeline.name());
         rebuilt.time = 0.6;
         rebuilt.render(&scene.cameras[0]).expect("frame");
         let difference = max_abs_difference(&brute, &rebuilt.read_hdr().unwrap());

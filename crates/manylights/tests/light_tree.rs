@@ -9,7 +9,7 @@ use glam::Vec3;
 use manylights::{
     accel::{light_aabb, light_tree::light_tree_nodes, light_tree::LightTreeNode, Bvh, BvhNode, VolumeStructure},
     gpu::{readback, scene::GpuLight, shaders, shaders::ShaderDesc, GpuContext},
-    plan::{DynamicLeaves, GroupBuild, ListCells, StructurePlan},
+    plan::{DynamicLeaves, GroupBuild, GroupLists, StructurePlan},
     scene::{Groups, Light, LightKind},
 };
 use rand::{Rng, SeedableRng};
@@ -169,8 +169,7 @@ fn the_trees_draws_have_the_probabilities_they_report_and_these_sum_to_one() {
         wide_leaves: false,
         rebuilt_leaves: DynamicLeaves::AtMost(1),
         rebuilt_grids: false,
-        cell_lists: false,
-        list_cells: ListCells::Coarse,
+        cell_lists: GroupLists::None,
         light_tree: true,
         hardware: false,
     };

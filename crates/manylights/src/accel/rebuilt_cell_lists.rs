@@ -1,10 +1,12 @@
-//! Cell lists rebuilt on the GPU every frame (`rebuilt_cell_lists.wgsl`): for the one placed group of
-//! sparse lights or decals rebuilt every frame, what `cell_lists.rs` gives crowded decals built once —
-//! a uniform grid over the group whose cells list every volume that may reach them — built anew each
-//! frame in place of the group's LBVH, entry grid and leaf-order copy. A point query reads its cell's
-//! list (`shading/enumerate/lights_cells.wgsl`, `decals_cells.wgsl`) instead of walking. Sparse volumes rebuilt every frame are
-//! where a walk loses most: the LBVH takes more dependent passes than the lists' four, and its entry
-//! grid, rebuilt every frame too, is coarser than a CPU-built one (benchmarks/LOG.md, topic 1).
+//! Cell lists built on the GPU (`rebuilt_cell_lists.wgsl`): for the one placed group of lights or
+//! decals short of the density where subgroups share leaves out, what `cell_lists.rs` gives crowded
+//! decals built once — a uniform grid over the group whose cells list every volume that may reach
+//! them — in place of the group's BVH (and, rebuilt every frame, its entry grid and leaf-order copy):
+//! every frame where the group is rebuilt every frame, else once. A point query reads its cell's list
+//! (`shading/enumerate/lights_cells.wgsl`, `decals_cells.wgsl`) instead of walking. Rebuilt every
+//! frame, the LBVH takes more dependent passes than the lists' four, and its entry grid is coarser
+//! than a CPU-built one; built once, the lists still shade faster than a walk of the CPU-built BVH
+//! (benchmarks/LOG.md, topic 1).
 //!
 //! The grid's placement is fixed when the structure is built, from the volumes' boxes then: the
 //! coarsest cells, from 1.5 typical volume sizes down, whose lists stay short, coarser still where a
@@ -247,6 +249,10 @@ pub struct RebuiltCellLists {
     first_item: u32,
     capacity: u32,
     max_capacity: u32,
+    /// Rebuilt every frame; else built once, and again when they grow.
+    every_frame: bool,
+    /// The current entries hold the lists as built.
+    built: bool,
     pipelines: Vec<wgpu::ComputePipeline>,
     layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
@@ -323,6 +329,8 @@ impl RebuiltCellLists {
             first_item,
             capacity,
             max_capacity,
+            every_frame: true,
+            built: false,
             pipelines,
             layout,
             bind_group,
@@ -376,8 +384,19 @@ impl RebuiltCellLists {
         (x, groups.div_ceil(x))
     }
 
-    /// Records this frame's build, timed as one scope.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
+    /// The lists of volumes that stay as placed: built by the first `record`, and again only after
+    /// they grow.
+    pub fn built_once(self) -> Self {
+        Self { every_frame: false, ..self }
+    }
+
+    /// Records this frame's build, timed as one scope, where the lists are rebuilt every frame or
+    /// not built yet.
+    pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
+        if self.built && !self.every_frame {
+            return;
+        }
+        self.built = true;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(self.scope),
             timestamp_writes: timer.map(|t| t.compute_pass(self.scope)),
@@ -412,6 +431,7 @@ impl RebuiltCellLists {
             )));
         }
         self.capacity = readback::grown_capacity(needed, self.max_capacity);
+        self.built = false;
         self.entries = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(&format!("{} cell list entries", self.label)),
             size: u64::from(self.capacity) * ENTRY_BYTES,

@@ -44,7 +44,7 @@ use crate::{
         scene::{affine_rows, GpuDecal, GpuLight},
         GpuContext, GpuTimer,
     },
-    plan::{DynamicLeaves, GroupBuild, ListCells, StructurePlan},
+    plan::{DynamicLeaves, GroupBuild, GroupLists, StructurePlan},
     scene::{Decal, GroupInstance, Groups, Light, DECAL_LAYERS},
     Error, Result,
 };
@@ -292,10 +292,9 @@ pub struct Volumes<'a> {
     /// Groups rebuilt on the GPU every frame get entry grids (`plan::StructurePlan::rebuilt_grids`).
     pub rebuilt_grids: bool,
     /// The one placed group gets cell lists where they fit (`plan::StructurePlan::cell_lists`): built
-    /// with its BVH on the CPU (crowded decals), or on the GPU every frame in place of its BVH.
-    pub cell_lists: bool,
-    /// How fine the cells of lists rebuilt every frame are (`plan::StructurePlan::list_cells`).
-    pub list_cells: ListCells,
+    /// with its BVH on the CPU (crowded decals), or on the GPU in place of its BVH, once or every
+    /// frame as `build` says.
+    pub cell_lists: GroupLists,
     /// Light groups get their light tree (`light_tree.rs`, `plan::StructurePlan::light_tree`): built
     /// with the CPU's BVHs, or alongside each GPU rebuild (the dynamic group's too).
     pub light_tree: bool,
@@ -399,7 +398,6 @@ impl VolumeStructure {
             rebuilt_leaves: plan.rebuilt_leaves,
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: plan.cell_lists,
-            list_cells: plan.list_cells,
             light_tree: plan.light_tree,
             hardware: plan.hardware,
             groups,
@@ -430,8 +428,7 @@ impl VolumeStructure {
             wide_leaves: plan.wide_leaves,
             rebuilt_leaves: plan.rebuilt_leaves,
             rebuilt_grids: plan.rebuilt_grids,
-            cell_lists: false,
-            list_cells: plan.list_cells,
+            cell_lists: GroupLists::None,
             light_tree: plan.light_tree,
             hardware: plan.hardware,
             groups,
@@ -491,7 +488,6 @@ impl VolumeStructure {
             rebuilt_leaves: plan.rebuilt_leaves,
             rebuilt_grids: plan.rebuilt_grids,
             cell_lists: plan.cell_lists,
-            list_cells: plan.list_cells,
             light_tree: false,
             hardware: plan.hardware,
             groups,
@@ -554,10 +550,10 @@ impl VolumeStructure {
         fits("BVH nodes", node_bytes)?;
         // CPU builds first: their entry grids' cells and covers, or cell lists, follow the primitive
         // indices in the same array.
-        let cpu_groups = cpu_builds(volumes, &layout, build)?;
+        let listed = list_placement(ctx, volumes, &layout, build);
+        let cpu_groups = cpu_builds(volumes, &layout, build, listed.map(|(group, _)| group))?;
         let wide_leaves = volumes.wide_leaves && cpu_groups.iter().any(Option::is_some);
         let scene_indices = stored_order(&layout.ranges, &cpu_groups);
-        let listed = rebuilt_list_placement(ctx, volumes, &layout, build);
         let rebuilt_on_gpu = build == GroupBuild::GpuEveryFrame
             && layout.ranges.iter().enumerate().any(|(g, range)| !range.is_empty() && listed.is_none_or(|(listed, _)| listed != g));
         if rebuilt_on_gpu && clustering.is_some() {
@@ -618,7 +614,16 @@ impl VolumeStructure {
                     }
                 };
                 let capacity = u32::try_from(placement.visits).unwrap_or(u32::MAX);
-                RebuiltCellLists::new(ctx, label, volumes.kind.scopes().rebuilt_lists, placement, &bounds, range.start as u32, capacity)
+                let lists = RebuiltCellLists::new(
+                    ctx,
+                    label,
+                    volumes.kind.scopes().rebuilt_lists,
+                    placement,
+                    &bounds,
+                    range.start as u32,
+                    capacity,
+                )?;
+                Ok(if build == GroupBuild::GpuEveryFrame { lists } else { lists.built_once() })
             })
             .transpose()?;
         let rebuilt_grids = (!rebuilt.is_empty())
@@ -692,7 +697,7 @@ impl VolumeStructure {
     /// a point's cell instead of walking: decals that crowd and whose queries share them out
     /// (`wide_leaves`), built on the CPU (`cell_lists.rs`, `shading/enumerate/decals_bvh_cells.wgsl`),
     /// whose BVH stays, for its items' order and for walks of other passes, which start at its root;
-    /// or sparse lights or decals rebuilt every frame (`rebuilt_cell_lists.rs`,
+    /// or sparser lights or decals, built once or every frame (`rebuilt_cell_lists.rs`,
     /// `shading/enumerate/lights_cells.wgsl`, `decals_cells.wgsl`), whose lists replace their BVH.
     pub fn cell_lists(&self) -> bool {
         self.cell_lists
@@ -754,7 +759,7 @@ impl VolumeStructure {
             let span = TimerSpan { name: self.blas_scope, starts: k == 0, ends: k + 1 == rebuilding.len() };
             self.groups[g].builder.as_mut().expect("filtered on builders").record(encoder, timer.as_deref_mut(), span)?;
         }
-        if let Some(lists) = &self.rebuilt_lists {
+        if let Some(lists) = &mut self.rebuilt_lists {
             lists.record(encoder, timer.as_deref_mut());
         }
         if let Some(leaf_order) = &self.leaf_order {
@@ -894,22 +899,28 @@ struct CpuGroup {
     grid: Option<GroupGrid>,
 }
 
-/// Each group's CPU build where `build` asks for one: its BVH (with wide leaves where
-/// `volumes.wide_leaves` asks), and its entry grid or, for crowded decals that are one group placed
-/// once, its cell lists where they fit ([`VolumeStructure::cell_lists`]). Only the placed group gets
-/// lists: groups without an instance are never queried. Grids share one budget of cells and cover
-/// words for all the groups (`GridBudget`), lists one of list words (`cell_lists::MAX_LIST_WORDS`).
-fn cpu_builds(volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Result<Vec<Option<CpuGroup>>> {
+/// Each group's CPU build where `build` asks for one, but for the `listed` group's, whose lists built
+/// on the GPU replace its BVH: its BVH (with wide leaves where `volumes.wide_leaves` asks), and its
+/// entry grid or, for crowded decals that are one group placed once, its cell lists where they fit
+/// ([`VolumeStructure::cell_lists`]). Only the placed group gets lists: groups without an instance
+/// are never queried. Grids share one budget of cells and cover words for all the groups
+/// (`GridBudget`), lists one of list words (`cell_lists::MAX_LIST_WORDS`).
+fn cpu_builds(volumes: &Volumes, layout: &Layout, build: GroupBuild, listed: Option<usize>) -> Result<Vec<Option<CpuGroup>>> {
     const _: () = assert!(DECAL_LAYERS - 1 <= cell_lists::MAX_RANK);
     let tree = if volumes.wide_leaves { Bvh::build_wide } else { Bvh::build };
     let trees = layout
         .ranges
         .iter()
-        .map(|range| (build == GroupBuild::CpuOnce && !range.is_empty()).then(|| tree(&volumes.boxes[range.clone()])).transpose())
+        .enumerate()
+        .map(|(group, range)| {
+            (build == GroupBuild::CpuOnce && !range.is_empty() && listed != Some(group))
+                .then(|| tree(&volumes.boxes[range.clone()]))
+                .transpose()
+        })
         .collect::<Result<Vec<_>>>()?;
     let wide_leaves = volumes.wide_leaves && trees.iter().any(Option::is_some);
     let listed_group = (volumes.kind == VolumeKind::Decals
-        && volumes.cell_lists
+        && volumes.cell_lists == GroupLists::BesideBvh
         && wide_leaves
         && layout.instances.len() == 1
         && layout.dynamic.is_none())
@@ -1141,21 +1152,17 @@ fn rebuilds(volumes: &Volumes, layout: &Layout, build: GroupBuild, listed: Optio
         .collect()
 }
 
-/// The group rebuilt on the GPU every frame as cell lists in place of its BVH, and their grid: the one
-/// placed group, where `volumes.cell_lists` asks for them, nothing else needs its BVH (a light tree,
-/// the hardware back end, particles) and a grid fits its volumes and the device's bindings
-/// (`ListPlacement::for_boxes`); the others keep their LBVHs.
-fn rebuilt_list_placement(ctx: &GpuContext, volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Option<(usize, ListPlacement)> {
-    let lone = (build == GroupBuild::GpuEveryFrame
-        && volumes.cell_lists
-        && !volumes.light_tree
-        && !volumes.hardware
-        && layout.instances.len() == 1
-        && layout.dynamic.is_none())
-    .then(|| layout.instances[0].group)?;
+/// The group built on the GPU as cell lists in place of its BVH (once, or every frame as `build`
+/// says), and their grid: the one placed group, where `volumes.cell_lists` asks for them, nothing
+/// else needs its BVH (a light tree, the hardware back end, particles) and a grid fits its volumes
+/// and the device's bindings (`ListPlacement::for_boxes`); the others keep their BVHs.
+fn list_placement(ctx: &GpuContext, volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Option<(usize, ListPlacement)> {
+    let GroupLists::InPlaceOfBvh(cells) = volumes.cell_lists else { return None };
+    let lone =
+        (build != GroupBuild::None && !volumes.light_tree && !volumes.hardware && layout.instances.len() == 1 && layout.dynamic.is_none())
+            .then(|| layout.instances[0].group)?;
     let boxes = &volumes.boxes[layout.ranges[lone].clone()];
-    ListPlacement::for_boxes(boxes, volumes.list_cells.coarsest_edge(), ctx.limits.max_storage_buffer_binding_size)
-        .map(|placement| (lone, placement))
+    ListPlacement::for_boxes(boxes, cells.coarsest_edge(), ctx.limits.max_storage_buffer_binding_size).map(|placement| (lone, placement))
 }
 
 /// The most boxes a leaf of a GPU build holds, as the plan's `leaves` say.

@@ -425,7 +425,7 @@ mod tests {
         }
         // Sparse lights and decals with rebuilt cell lists are read from them in every stage, never
         // walked.
-        let rebuilt = ShadingMethods { rebuilt_light_lists: true, rebuilt_decal_lists: true, subgroups: false, ..sparse };
+        let rebuilt = ShadingMethods { gpu_light_lists: true, gpu_decal_lists: true, subgroups: false, ..sparse };
         for shader in [visbuffer_shade::shader, deferred_shade::shader, forward_shade::shader, blended_shade::shader] {
             let source = shader(rebuilt).compose().unwrap();
             assert!(source.contains("cell_list_index(light_first_instance") && !source.contains("fn light_query_next_leaf("));

@@ -81,7 +81,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         densities.push((subgroups, false, false, false, true));
                     }
                 }
-                for (subgroups, dense_decals, decal_cell_lists, rebuilt_light_lists, rebuilt_decal_lists) in densities {
+                for (subgroups, dense_decals, decal_cell_lists, gpu_light_lists, gpu_decal_lists) in densities {
                     let methods = ShadingMethods {
                         lights,
                         decals,
@@ -97,8 +97,8 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                         // Dense lights walk as a subgroup, as subgroup-walked decals do.
                         dense_lights: subgroups && lights == LightMethod::Bvh,
                         decal_cell_lists,
-                        rebuilt_light_lists,
-                        rebuilt_decal_lists,
+                        gpu_light_lists,
+                        gpu_decal_lists,
                         light_tree: false,
                         hardware_lights: false,
                         hardware_decals: false,
