@@ -226,7 +226,7 @@ fn rebuilt_cell_lists_list_every_volume_reaching_each_cell() {
         .collect();
     let aabb = |(c, r): (Vec3, f32)| Aabb::new(c - r, c + r);
     let boxes: Vec<Aabb> = spheres.iter().copied().map(aabb).collect();
-    let placement = ListPlacement::for_boxes(&boxes, ListCells::Coarse.coarsest_edge(), u64::MAX).unwrap();
+    let placement = ListPlacement::for_boxes(&boxes, ListCells::Coarse.coarsest_edge(), true, u64::MAX).unwrap();
     // Moved after placing: some out past the grid's faces, where points outside it still find them.
     let moved: Vec<(Vec3, f32)> =
         spheres.iter().enumerate().map(|(i, &(c, r))| if i % 7 == 0 { (c * Vec3::new(1.3, 1.0, 1.6), r) } else { (c, r) }).collect();
@@ -359,7 +359,7 @@ fn rebuilt_cell_lists_list_every_oriented_box_reaching_each_cell() {
     };
     let bounds: Vec<ListBounds> = boxes.iter().zip(&aabbs).map(|(b, a)| ListBounds::of_decal(a, rows(b))).collect();
     // The finest cells the plan starts from: decals shaded in fragments.
-    let placement = ListPlacement::for_boxes(&aabbs, ListCells::Fine.coarsest_edge(), u64::MAX).unwrap();
+    let placement = ListPlacement::for_boxes(&aabbs, ListCells::Fine.coarsest_edge(), true, u64::MAX).unwrap();
     let mut lists = RebuiltCellLists::new(&ctx, "decal", "cell_lists_build", placement, &bounds, 0, placement.visits as u32).unwrap();
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     lists.record(&mut encoder, None);

@@ -34,8 +34,13 @@ const FINER: f32 = 0.8;
 const FINER_GRIDS: i32 = 5;
 /// The longest mean list, over the cells that list anything, of a grid chosen for its coarseness.
 const MAX_MEAN_LIST: f64 = 12.0;
-/// The most cells one volume may visit: a thread visits them all, twice a frame.
+/// The most cells one volume may visit, where the lists are rebuilt every frame: a thread visits them
+/// all, twice a frame.
 const MAX_CELLS_PER_VOLUME: u64 = 512;
+/// The most cells one volume may visit, where the lists are built once: a volume far larger than the
+/// others then coarsens everyone's cells less (4,096 cells take 16 times the others' cell edge, 512
+/// only 8 times).
+const MAX_CELLS_PER_VOLUME_ONCE: u64 = 4096;
 /// The most cells a grid has (8 bytes of ranges each).
 const MAX_CELLS: u64 = 1 << 22;
 /// The most entries the lists may start with at load (8 bytes each), where the device binds as many.
@@ -91,6 +96,13 @@ impl ListBounds {
     }
 }
 
+/// What a grid may take: cells a volume visits, and bytes of a binding.
+#[derive(Clone, Copy)]
+struct Limits {
+    cells_per_volume: u64,
+    binding_bytes: u64,
+}
+
 /// Where a group's grid lies and how it is divided, chosen at load from its volumes' boxes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ListPlacement {
@@ -106,10 +118,10 @@ impl ListPlacement {
     /// The grid over `boxes`: the coarsest whose lists stay short ([`MAX_MEAN_LIST`]) of cells
     /// from `coarsest_edge` median box edges down ([`FINER`]), or the finest within the limits;
     /// where even the coarsest passes them (volumes of very unequal sizes), coarser still. `None`
-    /// for bounds that are not finite, or where no grid keeps the largest volume's cells, the cells
-    /// and the lists within their limits: the cells' ranges and the entries each within
-    /// `max_binding_bytes`.
-    pub fn for_boxes(boxes: &[Aabb], coarsest_edge: f32, max_binding_bytes: u64) -> Option<Self> {
+    /// for bounds that are not finite, or where no grid keeps the largest volume's cells (fewer
+    /// where the lists are rebuilt `every_frame`), the cells and the lists within their limits: the
+    /// cells' ranges and the entries each within `max_binding_bytes`.
+    pub fn for_boxes(boxes: &[Aabb], coarsest_edge: f32, every_frame: bool, max_binding_bytes: u64) -> Option<Self> {
         let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
         let extent = bounds.max - bounds.min;
         if boxes.is_empty() || !(extent.is_finite() && bounds.min.is_finite()) || extent.max_element() <= 0.0 {
@@ -118,11 +130,15 @@ impl ListPlacement {
         let mut edges: Vec<f32> = boxes.iter().map(|b| (b.max - b.min).max_element()).collect();
         edges.sort_unstable_by(f32::total_cmp);
         let edge_of = |share: f32| (edges[edges.len() / 2] * share).max(extent.max_element() / MAX_CELLS_PER_AXIS as f32);
+        let limits = Limits {
+            cells_per_volume: if every_frame { MAX_CELLS_PER_VOLUME } else { MAX_CELLS_PER_VOLUME_ONCE },
+            binding_bytes: max_binding_bytes,
+        };
         let mut chosen = None;
         for share in (0..FINER_GRIDS).map(|k| coarsest_edge * FINER.powi(k)) {
             // Finer cells only take more cells and entries: once one grid passes the limits, the
             // finer ones do too.
-            let Some((placement, mean)) = Self::fit(bounds, boxes, edge_of(share), max_binding_bytes) else { break };
+            let Some((placement, mean)) = Self::fit(bounds, boxes, edge_of(share), limits) else { break };
             chosen = Some((placement, mean));
             if mean <= MAX_MEAN_LIST {
                 break;
@@ -134,7 +150,7 @@ impl ListPlacement {
                 break;
             }
             edge *= COARSER;
-            chosen = Self::fit(bounds, boxes, edge, max_binding_bytes);
+            chosen = Self::fit(bounds, boxes, edge, limits);
         }
         let Some((placement, mean)) = chosen else {
             log::info!("no rebuilt cell lists for {} volumes: no grid keeps each volume's cells and the lists in bounds", boxes.len());
@@ -154,11 +170,11 @@ impl ListPlacement {
 
     /// The grid of cells of about `edge` over `bounds`, and its lists' mean length over the cells
     /// that list anything (counting every cell a volume's box meets); `None` past the limits.
-    fn fit(bounds: Aabb, boxes: &[Aabb], edge: f32, max_binding_bytes: u64) -> Option<(Self, f64)> {
+    fn fit(bounds: Aabb, boxes: &[Aabb], edge: f32, limits: Limits) -> Option<(Self, f64)> {
         let dims = ((bounds.max - bounds.min) / edge).ceil().max(Vec3::ONE).min(Vec3::splat(MAX_CELLS_PER_AXIS as f32)).as_uvec3();
         let placement = Self::new(bounds, dims);
-        let max_entries = MAX_ENTRIES.min(max_binding_bytes / ENTRY_BYTES);
-        if u64::from(placement.cells()) > MAX_CELLS.min(max_binding_bytes / 8) {
+        let max_entries = MAX_ENTRIES.min(limits.binding_bytes / ENTRY_BYTES);
+        if u64::from(placement.cells()) > MAX_CELLS.min(limits.binding_bytes / 8) {
             return None;
         }
         let mut counts = vec![0u32; placement.cells() as usize];
@@ -168,7 +184,7 @@ impl ListPlacement {
             let (first, last) = (placement.cell_of(b.min - margin), placement.cell_of(b.max + margin));
             let cells = (last - first + UVec3::ONE).as_u64vec3().element_product();
             visits += cells;
-            if cells > MAX_CELLS_PER_VOLUME || visits > max_entries {
+            if cells > limits.cells_per_volume || visits > max_entries {
                 return None;
             }
             for z in first.z..=last.z {
@@ -493,9 +509,9 @@ mod tests {
         // the plan's finer start.
         let (coarse_edge, fine_edge) = (ListCells::Coarse.coarsest_edge(), ListCells::Fine.coarsest_edge());
         let sparse = lattice(1000, 3.0, 0.2);
-        let grid = ListPlacement::for_boxes(&sparse, coarse_edge, u64::MAX).unwrap();
+        let grid = ListPlacement::for_boxes(&sparse, coarse_edge, true, u64::MAX).unwrap();
         assert_eq!(grid.dims, UVec3::splat((27.4f32 / 0.6).ceil() as u32));
-        let fine_start = ListPlacement::for_boxes(&sparse, fine_edge, u64::MAX).unwrap();
+        let fine_start = ListPlacement::for_boxes(&sparse, fine_edge, true, u64::MAX).unwrap();
         assert_eq!(fine_start.dims, UVec3::splat((27.4f32 / 0.2).ceil() as u32));
         assert!(sparse.iter().all(|b| cells_visited(&grid, b) <= 8));
         assert_eq!(grid.visits, sparse.iter().map(|b| cells_visited(&grid, b)).sum::<u64>());
@@ -505,23 +521,27 @@ mod tests {
         assert!((grid.min + cell * grid.cell_size).cmple(p).all() && (grid.min + (cell + 1.0) * grid.cell_size).cmpge(p).all());
         // Crowded: 4 m boxes 1 m apart, dozens in every coarse cell: finer cells.
         let crowded = lattice(1000, 1.0, 2.0);
-        let fine = ListPlacement::for_boxes(&crowded, coarse_edge, u64::MAX).unwrap();
+        let fine = ListPlacement::for_boxes(&crowded, coarse_edge, true, u64::MAX).unwrap();
         assert!(fine.dims.x > (13.0f32 / 6.0).ceil() as u32, "{:?}", fine.dims);
         // One volume as large as the scene among small ones: coarser than any share, until it
         // visits few enough cells.
         let mut mixed = sparse.clone();
         mixed.push(Aabb::new(Vec3::ZERO, Vec3::splat(27.0)));
-        let coarse = ListPlacement::for_boxes(&mixed, coarse_edge, u64::MAX).unwrap();
+        let coarse = ListPlacement::for_boxes(&mixed, coarse_edge, true, u64::MAX).unwrap();
         assert!(mixed.iter().all(|b| cells_visited(&coarse, b) <= MAX_CELLS_PER_VOLUME));
         assert!(coarse.dims.x < grid.dims.x);
+        // Built once, the large volume may visit more cells: the grid coarsens less.
+        let once = ListPlacement::for_boxes(&mixed, coarse_edge, false, u64::MAX).unwrap();
+        assert!(mixed.iter().all(|b| cells_visited(&once, b) <= MAX_CELLS_PER_VOLUME_ONCE));
+        assert!(coarse.dims.x < once.dims.x && once.dims.x < grid.dims.x, "{:?} {:?} {:?}", coarse.dims, once.dims, grid.dims);
         // Flat groups get one cell across, and groups without finite bounds none.
         let flat: Vec<Aabb> = sparse.iter().map(|b| Aabb::new(b.min.with_y(0.0), b.max.with_y(0.0))).collect();
-        let flat_grid = ListPlacement::for_boxes(&flat, coarse_edge, u64::MAX).unwrap();
+        let flat_grid = ListPlacement::for_boxes(&flat, coarse_edge, true, u64::MAX).unwrap();
         assert_eq!((flat_grid.dims.y, flat_grid.cells_per_unit.y), (1, 0.0));
-        assert_eq!(ListPlacement::for_boxes(&[Aabb::new(Vec3::splat(f32::NEG_INFINITY), Vec3::ZERO)], coarse_edge, u64::MAX), None);
-        assert_eq!(ListPlacement::for_boxes(&[], coarse_edge, u64::MAX), None);
+        assert_eq!(ListPlacement::for_boxes(&[Aabb::new(Vec3::splat(f32::NEG_INFINITY), Vec3::ZERO)], coarse_edge, true, u64::MAX), None);
+        assert_eq!(ListPlacement::for_boxes(&[], coarse_edge, true, u64::MAX), None);
         // Lists the device cannot bind are not placed: the group keeps its LBVH.
-        assert_eq!(ListPlacement::for_boxes(&sparse, coarse_edge, 4096), None);
+        assert_eq!(ListPlacement::for_boxes(&sparse, coarse_edge, true, 4096), None);
         let d = grid.dims.x;
         assert_eq!(grid.header().skip, d | d << 10 | d << 20);
     }

@@ -1162,7 +1162,9 @@ fn list_placement(ctx: &GpuContext, volumes: &Volumes, layout: &Layout, build: G
         (build != GroupBuild::None && !volumes.light_tree && !volumes.hardware && layout.instances.len() == 1 && layout.dynamic.is_none())
             .then(|| layout.instances[0].group)?;
     let boxes = &volumes.boxes[layout.ranges[lone].clone()];
-    ListPlacement::for_boxes(boxes, cells.coarsest_edge(), ctx.limits.max_storage_buffer_binding_size).map(|placement| (lone, placement))
+    let every_frame = build == GroupBuild::GpuEveryFrame;
+    ListPlacement::for_boxes(boxes, cells.coarsest_edge(), every_frame, ctx.limits.max_storage_buffer_binding_size)
+        .map(|placement| (lone, placement))
 }
 
 /// The most boxes a leaf of a GPU build holds, as the plan's `leaves` say.
