@@ -147,7 +147,7 @@ fn quick_bench_writes_the_configurations_asked_for() {
         "| 100 small decals |",
         "| 28k small lights |",
         "## Every pipeline with every method",
-        "## Sweep: lights",
+        "## Sweep: lights (visbuffer pipeline; bvh rebuilt on the GPU every frame)",
         "| bvh ÷ clustered |",
         "](sweep-lights.png)",
     ] {
@@ -160,6 +160,29 @@ fn quick_bench_writes_the_configurations_asked_for() {
     let colours: BTreeSet<[u8; 3]> = plot.pixels().map(|p| p.0).collect();
     assert!(colours.len() > 20, "{} colours", colours.len());
     assert!(!out.join("sweep-decals.png").exists());
+}
+
+/// `--sweep-build cpu-once` sweeps the bvh built once, and the report says so.
+#[test]
+fn sweeps_of_bvh_built_once() {
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench_sweep_once");
+    let _ = std::fs::remove_dir_all(&out);
+    #[rustfmt::skip]
+    let args = [
+        "bench", "--quick", "--scene", "demo", "--width", "64", "--height", "36", "--anisotropy", "1",
+        "--scenes", "none", "--dense", "none", "--sweeps", "decals", "--sweep-max", "1024", "--sweep-build", "cpu-once",
+        "--time-cap-ms", "60000", "--out", out.to_str().unwrap(),
+    ];
+    let run = manylights(&args);
+    assert!(run.status.success(), "bench failed: {}", String::from_utf8_lossy(&run.stderr));
+    let json: Value = serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    let results = json["results"].as_array().unwrap();
+    let builds: BTreeSet<(String, String)> =
+        results.iter().map(|r| (r["method"].as_str().unwrap().to_owned(), r["bvh_build"].as_str().unwrap().to_owned())).collect();
+    let want: BTreeSet<(String, String)> = ["bvh", "clustered", "brute"].iter().map(|m| (m.to_string(), "CpuOnce".to_owned())).collect();
+    assert_eq!(builds, want);
+    let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
+    assert!(md.contains("## Sweep: decals (visbuffer pipeline; bvh built once on the CPU)"), "{md}");
 }
 
 /// The dense-light suite: a range found for the overlap asked, bvh built once and every frame against

@@ -147,8 +147,9 @@ pub enum Why {
     /// once, they lose to clustered lists ([`decals_listed`]).
     WalkedInFragments,
     /// The mean overlap at surface points, where a BVH is faster: built once at every overlap
-    /// measured (up to 100), or rebuilt every frame over lights dense enough that subgroups share
-    /// their leaves out (`shared_out`: lights walked so, [`ShadingMethods::dense_lights`]).
+    /// measured (up to 100; but for sparse decals of several groups in fragments), or rebuilt every
+    /// frame over volumes dense enough that subgroups share their leaves out (`shared_out`: walked so,
+    /// [`ShadingMethods::dense_lights`], [`ShadingMethods::dense_decals`]).
     Overlap { count: usize, overlap: f32, shared_out: bool },
 }
 

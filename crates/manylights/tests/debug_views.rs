@@ -9,7 +9,7 @@ use common::*;
 use glam::{Affine3A, Vec3, Vec4};
 use manylights::{
     renderer::Image,
-    scene::{Decal, Material},
+    scene::{Decal, GroupInstance, Groups, Material},
     settings::{heat_map, DebugView, RenderConfig},
     settings::{DecalMethod, LightMethod, PipelineKind},
 };
@@ -68,16 +68,34 @@ fn the_lights_reaching_each_point_are_counted_alike_by_every_method_and_pipeline
         }
     }
     // The work: brute force tests all four lights everywhere; the BVH's query shows its own count
-    // (nodes visited), not brute force's.
-    let work = |method| debug_image(&scene, &camera, RenderConfig { debug_view: DebugView::LightWork, ..config(SIZE.0, SIZE.1, method) });
-    let brute = work(LightMethod::Brute);
-    let all_four = heat_map(4, DebugView::LightWork.scale());
-    assert!(brute.pixels.iter().all(|&p| close(p, all_four)), "brute force tests every light at every point");
-    let bvh = work(LightMethod::Bvh);
-    assert!(
-        bvh.pixels.iter().all(|&p| !close(p, all_four) && p[..3] != [0.0; 3]),
-        "the BVH's work is its nodes visited, at least its root"
-    );
+    // (nodes visited), not brute force's: walked where the lights are two groups, each point's
+    // cell's list (0 to 4 lights, at least those reaching it) where one group is listed.
+    let work = |scene: &manylights::scene::Scene, method| {
+        debug_image(scene, &camera, RenderConfig { debug_view: DebugView::LightWork, ..config(SIZE.0, SIZE.1, method) })
+    };
+    let brute = work(&scene, LightMethod::Brute);
+    let work_of = |n| heat_map(n, DebugView::LightWork.scale());
+    assert!(brute.pixels.iter().all(|&p| close(p, work_of(4))), "brute force tests every light at every point");
+    let mut grouped = scene.clone();
+    let still = |group| GroupInstance { group, world_from_group: Affine3A::IDENTITY, spin: None };
+    grouped.light_groups = Groups { sizes: vec![2, 2], instances: vec![still(0), still(1)] };
+    let walked = work(&grouped, LightMethod::Bvh);
+    assert!(walked.pixels.iter().all(|&p| p[..3] != [0.0; 3]), "the BVH's work is its nodes visited, at least a root");
+    let brute_like = walked.pixels.iter().filter(|&&p| close(p, work_of(4))).count();
+    assert!(brute_like < walked.pixels.len() / 2, "the BVH's work is brute force's at {brute_like} pixels");
+    let listed = work(&scene, LightMethod::Bvh);
+    let mut list_lengths = [0usize; 5];
+    for y in 0..SIZE.1 {
+        for x in 0..SIZE.0 {
+            let p = wall_point(x, y);
+            let reaching = lights.iter().filter(|l| (l.position - p).length() < 0.98 * l.range).count();
+            let got = pixel(&listed, x, y);
+            let length = (reaching..=4).find(|&n| close(got, work_of(n as u32)));
+            assert!(length.is_some(), "pixel ({x}, {y}): its cell's list {got:?} is not 0 to 4 lights holding the {reaching} reaching it");
+            list_lengths[length.unwrap()] += 1;
+        }
+    }
+    assert!(list_lengths[4] < list_lengths.iter().sum::<usize>(), "every cell lists every light: {list_lengths:?}");
 }
 
 #[test]

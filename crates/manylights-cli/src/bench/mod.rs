@@ -85,6 +85,10 @@ pub struct BenchArgs {
     /// Pipeline of the sweeps.
     #[arg(long, value_enum, default_value_t = PipelineKind::Visbuffer)]
     sweep_pipeline: PipelineKind,
+    /// How the sweeps' bvh is built: every frame on the GPU, as for anything that moves, or once on
+    /// the CPU at load (clustered lists are built every frame either way).
+    #[arg(long, value_enum, default_value_t = BvhBuild::GpuEveryFrame)]
+    sweep_build: BvhBuild,
     /// A configuration whose first two frames each take longer than this on the GPU is reported over
     /// the cap and not timed further (brute force on large counts); in a sweep, larger counts of that
     /// method are skipped.
@@ -433,14 +437,15 @@ fn plan_jobs(args: &BenchArgs, sweep_max: u32) -> Vec<Job> {
     for sweep in sweeps.into_iter().filter(|&s| s != SweepArg::None) {
         let mut count = SWEEP_START;
         while count <= sweep_max {
-            // The BVH is rebuilt on the GPU every frame, as clustered lists are: build times compare.
+            // By default the BVH is rebuilt on the GPU every frame, as clustered lists are: build
+            // times compare.
             for method in [DecalMethod::Bvh, DecalMethod::Clustered, DecalMethod::Brute] {
+                let build = args.sweep_build;
                 let (config, make_scene) = match sweep {
-                    SweepArg::Lights => (
-                        config(args.sweep_pipeline, light_method(method), DecalMethod::Off, BvhBuild::GpuEveryFrame),
-                        SceneRecipe::SweepLights(count),
-                    ),
-                    _ => (config(args.sweep_pipeline, LightMethod::Off, method, BvhBuild::GpuEveryFrame), SceneRecipe::SweepDecals(count)),
+                    SweepArg::Lights => {
+                        (config(args.sweep_pipeline, light_method(method), DecalMethod::Off, build), SceneRecipe::SweepLights(count))
+                    }
+                    _ => (config(args.sweep_pipeline, LightMethod::Off, method, build), SceneRecipe::SweepDecals(count)),
                 };
                 jobs.push(Job { suite: Suite::Sweep(sweep), scene_name: count.to_string(), make_scene, config });
             }

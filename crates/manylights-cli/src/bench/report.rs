@@ -317,7 +317,11 @@ fn matrix(md: &mut String, table: &[&Measurement]) {
 /// Per count: the mean overlap, then build, shade and frame medians of each method.
 fn sweep_table(md: &mut String, sweep: SweepArg, rows: &[&Measurement]) {
     let what = if sweep == SweepArg::Lights { "lights" } else { "decals" };
-    let _ = writeln!(md, "## Sweep: {what} ({} pipeline; bvh rebuilt on the GPU every frame)\n", rows[0].config.pipeline.name());
+    let build = match rows[0].config.decal_bvh_build {
+        BvhBuild::CpuOnce => "built once on the CPU",
+        BvhBuild::GpuEveryFrame => "rebuilt on the GPU every frame",
+    };
+    let _ = writeln!(md, "## Sweep: {what} ({} pipeline; bvh {build})\n", rows[0].config.pipeline.name());
     let methods = ["bvh", "clustered", "brute"];
     let _ = writeln!(
         md,

@@ -90,8 +90,8 @@ fn entry_grid_cell(header: BvhNode, p: vec3<f32>) -> u32 {
 }
 
 // The index of the grid cell holding the group-space point `p`, clamped into the grid, x fastest: the
-// cell of an entry grid or of cell lists (`entry_grid_cell`), or of lists rebuilt on the GPU every
-// frame (`accel/rebuilt_cell_lists.rs`, whose header has no first cell; the CPU's twin is
+// cell of an entry grid or of cell lists (`entry_grid_cell`), or of lists built on the GPU
+// (`accel/rebuilt_cell_lists.rs`, whose header has no first cell; the CPU's twin is
 // `ListPlacement::cell_of`).
 fn cell_list_index(header: BvhNode, p: vec3<f32>) -> u32 {
     let dims = entry_grid_dims(header);

@@ -118,13 +118,18 @@ impl ListPlacement {
     /// The grid over `boxes`: the coarsest whose lists stay short ([`MAX_MEAN_LIST`]) of cells
     /// from `coarsest_edge` median box edges down ([`FINER`]), or the finest within the limits;
     /// where even the coarsest passes them (volumes of very unequal sizes), coarser still. `None`
-    /// for bounds that are not finite, or where no grid keeps the largest volume's cells (fewer
-    /// where the lists are rebuilt `every_frame`), the cells and the lists within their limits: the
-    /// cells' ranges and the entries each within `max_binding_bytes`.
+    /// for bounds that are not finite, where the volumes' [`ListBounds`] pass `max_binding_bytes`,
+    /// or where no grid keeps the largest volume's cells (fewer where the lists are rebuilt
+    /// `every_frame`), the cells and the lists within their limits: the cells' ranges and the
+    /// entries each within `max_binding_bytes`.
     pub fn for_boxes(boxes: &[Aabb], coarsest_edge: f32, every_frame: bool, max_binding_bytes: u64) -> Option<Self> {
         let bounds = boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x));
         let extent = bounds.max - bounds.min;
         if boxes.is_empty() || !(extent.is_finite() && bounds.min.is_finite()) || extent.max_element() <= 0.0 {
+            return None;
+        }
+        if boxes.len() as u64 * std::mem::size_of::<ListBounds>() as u64 > max_binding_bytes {
+            log::info!("no cell lists for {} volumes: their bounds pass the device's storage binding limit", boxes.len());
             return None;
         }
         let mut edges: Vec<f32> = boxes.iter().map(|b| (b.max - b.min).max_element()).collect();
@@ -252,7 +257,7 @@ struct CellListParams {
     row_threads: u32,
 }
 
-/// One group's cell lists and the passes that rebuild them every frame.
+/// One group's cell lists and the passes that build them, every frame or once.
 pub struct RebuiltCellLists {
     /// Per cell, (first entry, length): bound to shading.
     pub ranges: wgpu::Buffer,
@@ -267,7 +272,9 @@ pub struct RebuiltCellLists {
     max_capacity: u32,
     /// Rebuilt every frame; else built once, and again when they grow.
     every_frame: bool,
-    /// The current entries hold the lists as built.
+    /// A build was recorded since the last `fitted`.
+    recorded: bool,
+    /// A build held every entry (`fitted`): lists built once need no other.
     built: bool,
     pipelines: Vec<wgpu::ComputePipeline>,
     layout: wgpu::BindGroupLayout,
@@ -346,6 +353,7 @@ impl RebuiltCellLists {
             capacity,
             max_capacity,
             every_frame: true,
+            recorded: false,
             built: false,
             pipelines,
             layout,
@@ -400,8 +408,8 @@ impl RebuiltCellLists {
         (x, groups.div_ceil(x))
     }
 
-    /// The lists of volumes that stay as placed: built by the first `record`, and again only after
-    /// they grow.
+    /// The lists of volumes that stay as placed: built by each `record` until a build has held every
+    /// entry (`fitted`), then no more.
     pub fn built_once(self) -> Self {
         Self { every_frame: false, ..self }
     }
@@ -412,7 +420,7 @@ impl RebuiltCellLists {
         if self.built && !self.every_frame {
             return;
         }
-        self.built = true;
+        self.recorded = true;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(self.scope),
             timestamp_writes: timer.map(|t| t.compute_pass(self.scope)),
@@ -433,7 +441,9 @@ impl RebuiltCellLists {
     /// (the caller renders those frames again, and rebinds `entries`).
     pub fn fitted(&mut self, ctx: &GpuContext) -> Result<bool> {
         let needed = readback::take_most_needed(ctx, &self.status, &self.status_readback)?;
+        let recorded = std::mem::take(&mut self.recorded);
         if needed <= self.capacity {
+            self.built |= recorded;
             return Ok(true);
         }
         if needed > self.max_capacity {
@@ -447,7 +457,6 @@ impl RebuiltCellLists {
             )));
         }
         self.capacity = readback::grown_capacity(needed, self.max_capacity);
-        self.built = false;
         self.entries = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(&format!("{} cell list entries", self.label)),
             size: u64::from(self.capacity) * ENTRY_BYTES,
@@ -542,6 +551,9 @@ mod tests {
         assert_eq!(ListPlacement::for_boxes(&[], coarse_edge, true, u64::MAX), None);
         // Lists the device cannot bind are not placed: the group keeps its LBVH.
         assert_eq!(ListPlacement::for_boxes(&sparse, coarse_edge, true, 4096), None);
+        // One volume: a cell and an entry of 8 bytes each, bounds of 96.
+        assert!(ListPlacement::for_boxes(&sparse[..1], coarse_edge, true, 96).is_some());
+        assert_eq!(ListPlacement::for_boxes(&sparse[..1], coarse_edge, true, 95), None);
         let d = grid.dims.x;
         assert_eq!(grid.header().skip, d | d << 10 | d << 20);
     }

@@ -1,4 +1,4 @@
-// Cell lists rebuilt on the GPU every frame (`accel/rebuilt_cell_lists.rs`): a uniform grid over a
+// Cell lists built on the GPU, once or every frame (`accel/rebuilt_cell_lists.rs`): a uniform grid over a
 // group whose cells list every volume that may reach them, as (instance, item) pairs in the clustered
 // lists' format, built in four passes:
 //

@@ -342,13 +342,14 @@ pub struct VolumeStructure {
     layers: Vec<u32>,
     /// The scene's index of each item but the dynamic group's, in the order they are stored: CPU-built
     /// groups' in leaf order; GPU-rebuilt groups' in scene order, as their copy into leaf order reads
-    /// them (where they land changes with every build).
+    /// them (where they land changes with every build); a group listed in place of its BVH in scene
+    /// order.
     scene_indices: Vec<u32>,
     /// The CPU-built groups have wide leaves ([`Volumes::wide_leaves`]).
     wide_leaves: bool,
     /// The structure's one placed group has cell lists ([`Self::cell_lists`]).
     cell_lists: bool,
-    /// Rebuilds the cell lists of the one placed group every frame, in place of its BVH.
+    /// Builds the cell lists of the one placed group in place of its BVH, every frame or once.
     rebuilt_lists: Option<RebuiltCellLists>,
     /// Puts the items in leaf order after GPU rebuilds (none when every group is built on the CPU).
     leaf_order: Option<LeafOrder>,
@@ -688,7 +689,7 @@ impl VolumeStructure {
 
     /// The scene's index of each stored item but the dynamic group's: item i of the structure is the
     /// scene's light or decal `scene_indices()[i]` where its group is built on the CPU, which stores
-    /// it in leaf order.
+    /// it in leaf order (or in scene order, where lists replace the group's BVH).
     pub fn scene_indices(&self) -> &[u32] {
         &self.scene_indices
     }

@@ -423,7 +423,7 @@ mod tests {
             let source = shader(listed).compose().unwrap();
             assert!(source.contains("fn decal_box_meets_box(") && !source.contains("fn decal_query_next_leaf("));
         }
-        // Sparse lights and decals with rebuilt cell lists are read from them in every stage, never
+        // Sparse lights and decals with cell lists built on the GPU are read from them in every stage, never
         // walked.
         let rebuilt = ShadingMethods { gpu_light_lists: true, gpu_decal_lists: true, subgroups: false, ..sparse };
         for shader in [visbuffer_shade::shader, deferred_shade::shader, forward_shade::shader, blended_shade::shader] {

@@ -69,7 +69,7 @@ pub fn all_shaders() -> Vec<ShaderDesc> {
                 } else {
                     vec![(false, false, false, false, false), (true, false, false, false, false)]
                 };
-                // Sparse lights and decals read from rebuilt cell lists, which particle lights never
+                // Sparse lights and decals read from cell lists built on the GPU, which particle lights never
                 // join; the lights' module meets the decals' only through the core, so two decal
                 // methods do, and two light methods for the decals'.
                 let listed_lights = lights == LightMethod::Bvh && particles != ParticleMethod::Bvh;

@@ -1,5 +1,5 @@
-// Decal enumeration through cell lists rebuilt every frame (`accel/rebuilt_cell_lists.rs`): where the
-// decals are one sparse group placed once and rebuilt on the GPU every frame, a grid over the group
+// Decal enumeration through cell lists built on the GPU (`accel/rebuilt_cell_lists.rs`): where the
+// decals are one sparse group placed once, built once or every frame, a grid over the group
 // lists, per cell, every decal whose bounding sphere may reach it, and a point's query is its cell's
 // list — no walk. `decal_accumulate` applies the exact box test and blends each layer order-
 // independently, so the result equals the brute-force loop's. Points outside the grid read a cell on

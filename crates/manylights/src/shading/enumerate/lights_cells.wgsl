@@ -1,5 +1,5 @@
-// Light enumeration through cell lists rebuilt every frame (`accel/rebuilt_cell_lists.rs`): where the
-// lights are one sparse group placed once and rebuilt on the GPU every frame, a grid over the group
+// Light enumeration through cell lists built on the GPU (`accel/rebuilt_cell_lists.rs`): where the
+// lights are one sparse group placed once, built once or every frame, a grid over the group
 // lists, per cell, every light whose sphere may reach it, and a point's query is its cell's list — no
 // walk. Each light gets the tight test inside `light_contribution` (range, cone), so the result equals
 // the brute-force loop's. Points outside the grid read a cell on its faces, which reach out to
