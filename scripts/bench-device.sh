@@ -10,6 +10,7 @@
 #   scripts/bench-device.sh table        `manylights bench`: the paper's Table 1, every pipeline and method (issue 5)
 #   scripts/bench-device.sh sweeps       `manylights bench`: lights and decals from 1k to 1M (issue 5); decals to 1M deferred and
 #                                        to 262k forward (issue 33)
+#   scripts/bench-device.sh sweeps_once  the same sweeps with the bvh built once on the CPU (issue 33)
 #   scripts/bench-device.sh dense        `manylights bench`: dense lights, bvh against clustered, and auto (issue 33)
 #   scripts/bench-device.sh assets       every scene of .bench/assets/ and sponza_lite with no flags against each
 #                                        explicit method, alone and with 28k lights or 100k decals (issue 33)
@@ -438,12 +439,16 @@ for set in "${@:-structures}"; do
       # Decals where fragments and the G-buffer shade them differently from the visibility buffer.
       bench sweeps_deferred --scenes none --dense none --sweeps decals --sweep-pipeline deferred
       bench sweeps_forward --scenes none --dense none --sweeps decals --sweep-max 262144 --sweep-pipeline forward ;;
+    sweeps_once)
+      bench sweeps_once --scenes none --dense none --sweep-build cpu-once
+      bench sweeps_once_deferred --scenes none --dense none --sweeps decals --sweep-pipeline deferred --sweep-build cpu-once
+      bench sweeps_once_forward --scenes none --dense none --sweeps decals --sweep-max 262144 --sweep-pipeline forward --sweep-build cpu-once ;;
     dense) bench dense --scenes none --sweeps none ;;
     assets) assets ;;
     moving) moving ;;
     tree) tree ;;
     particle_tree) particle_tree ;;
-    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, dense, assets, particles, exact, clipmap, rays, post, deform, soak, direct, direct_error, moving, tree or particle_tree)" >&2; exit 2 ;;
+    *) echo "unknown set $set (structures, lights, decals, tests, table, sweeps, sweeps_once, dense, assets, particles, exact, clipmap, rays, post, deform, soak, direct, direct_error, moving, tree or particle_tree)" >&2; exit 2 ;;
   esac
 done
 tar -C "$out" -czf "${OUT:-/tmp/out}/timings.tgz" .
