@@ -207,7 +207,7 @@ impl MethodChoice {
     /// ([`Measurements::for_settings`] measures the overlaps it reads).
     pub fn resolve(config: &RenderConfig, caps: Capabilities, stats: &SceneStatistics) -> Self {
         let reflections = config.rays.reflection_bounces > 0;
-        // Rebuilt cell lists serve the software walk only: the hardware back end builds its own
+        // Cell lists built on the GPU serve the software walk only: the hardware back end builds its own
         // structures, and the light tree descends the BVH.
         let software = !matches!(RayTracer::resolve(config.rays.backend, caps), Ok(RayTracer::Hardware));
         let lights = match config.light_method {

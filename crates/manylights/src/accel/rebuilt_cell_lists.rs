@@ -158,12 +158,12 @@ impl ListPlacement {
             chosen = Self::fit(bounds, boxes, edge, limits);
         }
         let Some((placement, mean)) = chosen else {
-            log::info!("no rebuilt cell lists for {} volumes: no grid keeps each volume's cells and the lists in bounds", boxes.len());
+            log::info!("no GPU cell lists for {} volumes: no grid keeps each volume's cells and the lists in bounds", boxes.len());
             return None;
         };
         let dims = placement.dims;
         log::info!(
-            "rebuilt cell lists for {} volumes: {}×{}×{} cells, at most {} entries, {mean:.1} a listing cell",
+            "GPU cell lists for {} volumes: {}×{}×{} cells, at most {} entries, {mean:.1} a listing cell",
             boxes.len(),
             dims.x,
             dims.y,
