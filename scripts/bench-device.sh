@@ -10,7 +10,7 @@
 #   scripts/bench-device.sh table        `manylights bench`: the paper's Table 1, every pipeline and method (issue 5)
 #   scripts/bench-device.sh sweeps       `manylights bench`: lights and decals from 1k to 1M (issue 5); decals to 1M deferred and
 #                                        to 262k forward (issue 33)
-#   scripts/bench-device.sh sweeps_once  the same sweeps with the bvh built once on the CPU (issue 33)
+#   scripts/bench-device.sh sweeps_once  the same sweeps with the bvh built once (issue 33)
 #   scripts/bench-device.sh dense        `manylights bench`: dense lights, bvh against clustered, and auto (issue 33)
 #   scripts/bench-device.sh assets       every scene of .bench/assets/ and sponza_lite with no flags against each
 #                                        explicit method, alone and with 28k lights or 100k decals (issue 33)

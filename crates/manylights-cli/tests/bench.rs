@@ -182,7 +182,7 @@ fn sweeps_of_bvh_built_once() {
     let want: BTreeSet<(String, String)> = ["bvh", "clustered", "brute"].iter().map(|m| (m.to_string(), "CpuOnce".to_owned())).collect();
     assert_eq!(builds, want);
     let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
-    assert!(md.contains("## Sweep: decals (visbuffer pipeline; bvh built once on the CPU)"), "{md}");
+    assert!(md.contains("## Sweep: decals (visbuffer pipeline; bvh built once)"), "{md}");
 }
 
 /// The dense-light suite: a range found for the overlap asked, bvh built once and every frame against

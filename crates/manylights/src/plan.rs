@@ -11,9 +11,13 @@ use crate::settings::{
 };
 use crate::{Error, Result};
 
-/// Up to this many lights or decals, `auto` loops over them all: a handful of volumes costs a brute
-/// loop less than a walk or a list, which win by 100 (BENCHMARKS.md, Table 1: 6 large and 100 small
-/// decals).
+/// Up to this many lights or decals in several placed groups, `auto` loops over them all: a handful
+/// of volumes costs a brute loop less than walking each group's BVH, which wins by 100 (BENCHMARKS.md,
+/// Table 1: 6 large and 100 small decals). As one placed group they are read from cell lists
+/// ([`lights_listed`], [`decals_listed`]), which a loop does not beat: on the H200, 6 large decals
+/// over Sponza took 5.243 against 5.730 ms forward, 1.220 against 1.221 in the visibility buffer,
+/// and 6 or 8 scattered lights or decals 0.82–0.92 times the loop's frame forward, at most 1.016
+/// times in compute rebuilt every frame (benchmarks/LOG.md, topic 1).
 pub const BRUTE_FORCE_MAX: usize = 8;
 
 /// Whether `bvh` lights rebuilt on the GPU every frame are faster than clustered lists rebuilt every
@@ -129,7 +133,7 @@ pub enum Why {
     Asked,
     /// The scene has none to find.
     NoVolumes,
-    /// Few enough for a loop over all of them ([`BRUTE_FORCE_MAX`]).
+    /// Few enough for a loop over all of them, in several placed groups ([`BRUTE_FORCE_MAX`]).
     Few(usize),
     /// Particles are lit as lights in the lights' BVH, which only `bvh` reads.
     ParticleLights,
@@ -222,7 +226,7 @@ impl MethodChoice {
                 let (method, why) = match (particle_lights, stats.placed_lights, stats.light_overlap) {
                     (true, _, _) => (LightMethod::Bvh, Why::ParticleLights),
                     (false, 0, _) => (LightMethod::Off, Why::NoVolumes),
-                    (false, n, _) if n <= BRUTE_FORCE_MAX => (LightMethod::Brute, Why::Few(n)),
+                    (false, n, _) if n <= BRUTE_FORCE_MAX && !listed => (LightMethod::Brute, Why::Few(n)),
                     _ if reflections => (LightMethod::Bvh, Why::Reflections),
                     _ if config.light_bvh_build == BvhBuild::GpuEveryFrame && !rebuilt_bvh_wins => {
                         (LightMethod::Clustered, Why::RebuiltEveryFrame)
@@ -246,7 +250,7 @@ impl MethodChoice {
                 let walked = !listed && !shared_out;
                 let (method, why) = match (stats.placed_decals, stats.decal_overlap) {
                     (0, _) => (DecalMethod::Off, Why::NoVolumes),
-                    (n, _) if n <= BRUTE_FORCE_MAX => (DecalMethod::Brute, Why::Few(n)),
+                    (n, _) if n <= BRUTE_FORCE_MAX && !listed => (DecalMethod::Brute, Why::Few(n)),
                     _ if reflections => (DecalMethod::Bvh, Why::Reflections),
                     _ if walked && every_frame => (DecalMethod::Clustered, Why::RebuiltEveryFrame),
                     _ if walked && software && config.pipeline == PipelineKind::Forward => (DecalMethod::Clustered, Why::WalkedInFragments),
@@ -1419,7 +1423,17 @@ mod tests {
             (c.lights.method, c.decals.method)
         };
         assert_eq!(chosen(&auto(), scene(0, 0.0, 0, 0.0)), (LightMethod::Off, DecalMethod::Off));
-        assert_eq!(chosen(&auto(), scene(BRUTE_FORCE_MAX, 3.0, 6, 1.0)), (LightMethod::Brute, DecalMethod::Brute));
+        // A handful is looped over in several groups, or with the hardware back end; read from
+        // cell lists as one group.
+        let few_grouped = SceneStatistics { placed_light_groups: 2, placed_decal_groups: 2, ..scene(BRUTE_FORCE_MAX, 3.0, 6, 1.0) };
+        assert_eq!(chosen(&auto(), few_grouped), (LightMethod::Brute, DecalMethod::Brute));
+        let few = MethodChoice::resolve(&auto(), SUBGROUPS, &scene(BRUTE_FORCE_MAX, 3.0, 6, 1.0));
+        assert_eq!((few.lights.method, few.decals.method), (LightMethod::Bvh, DecalMethod::Bvh));
+        assert_eq!((few.lights.why, few.decals.why), (Why::Listed { count: 8, overlap: 3.0 }, Why::Listed { count: 6, overlap: 1.0 }));
+        let hardware =
+            MethodChoice::resolve(&auto(), Capabilities { ray_queries: RayQueries::Native, ..SUBGROUPS }, &scene(6, 3.0, 6, 1.0));
+        assert_eq!((hardware.lights.method, hardware.decals.method), (LightMethod::Brute, DecalMethod::Brute));
+        assert_eq!(chosen(&auto(), scene(BRUTE_FORCE_MAX + 1, 3.0, 0, 0.0)).0, LightMethod::Bvh);
         // Built once, a BVH wins at any overlap, in every pipeline.
         for pipeline in PipelineKind::ALL {
             let config = RenderConfig { pipeline, ..auto() };
@@ -1479,13 +1493,14 @@ mod tests {
 
     #[test]
     fn auto_is_resolved_before_anything_is_planned_and_says_why() {
-        let plan = FramePlan::resolve(&auto(), SUBGROUPS, &scene(28_000, 0.45, 3, 1.0)).unwrap();
+        let three_decal_groups = SceneStatistics { placed_decal_groups: 3, ..scene(28_000, 0.45, 3, 1.0) };
+        let plan = FramePlan::resolve(&auto(), SUBGROUPS, &three_decal_groups).unwrap();
         let methods = plan.shading_methods(true, true);
         assert_eq!((methods.lights, methods.decals), (LightMethod::Bvh, DecalMethod::Brute));
         assert_eq!(plan.lights.build, GroupBuild::CpuOnce);
         let why = plan.methods.lights.to_string();
         assert!(why.starts_with("bvh (auto: 28000 reaching 0.45") && why.ends_with("cell lists in place of its BVH are faster)"), "{why}");
-        let grouped = SceneStatistics { placed_light_groups: 2, ..scene(28_000, 0.45, 3, 1.0) };
+        let grouped = SceneStatistics { placed_light_groups: 2, ..three_decal_groups };
         let why = FramePlan::resolve(&auto(), SUBGROUPS, &grouped).unwrap().methods.lights.to_string();
         assert!(why.ends_with("a BVH walk is faster)"), "{why}");
         assert_eq!(plan.methods.decals.to_string(), format!("brute (auto: 3, at most {BRUTE_FORCE_MAX}: a loop over all is cheapest)"));

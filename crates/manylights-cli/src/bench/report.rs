@@ -311,14 +311,14 @@ fn matrix(md: &mut String, table: &[&Measurement]) {
             frame_cell(Some(r)),
         );
     }
-    md.push_str("\nbuild: per-frame GPU builds (clustered lists; the bvh of the table is built once on the CPU); CPU: recording and submitting a frame.\n\n");
+    md.push_str("\nbuild: per-frame GPU builds (clustered lists; the bvh of the table is built once: one placed group's cell lists on the GPU in the first frame, other groups' BVHs on the CPU at load); CPU: recording and submitting a frame.\n\n");
 }
 
 /// Per count: the mean overlap, then build, shade and frame medians of each method.
 fn sweep_table(md: &mut String, sweep: SweepArg, rows: &[&Measurement]) {
     let what = if sweep == SweepArg::Lights { "lights" } else { "decals" };
     let build = match rows[0].config.decal_bvh_build {
-        BvhBuild::CpuOnce => "built once on the CPU",
+        BvhBuild::CpuOnce => "built once",
         BvhBuild::GpuEveryFrame => "rebuilt on the GPU every frame",
     };
     let _ = writeln!(md, "## Sweep: {what} ({} pipeline; bvh {build})\n", rows[0].config.pipeline.name());
@@ -419,5 +419,5 @@ fn dense_table(md: &mut String, rows: &[&Measurement]) {
             );
         }
     }
-    md.push_str("\nonce: the BVH built on the CPU at load; every frame: rebuilt on the GPU (an LBVH) each frame, its build in the frame time; clustered lists are built every frame in both. auto ÷ best: auto's frame against the faster of bvh and clustered for the same build, the worse of the two builds.\n\n");
+    md.push_str("\nonce: built once (one placed group's cell lists on the GPU in the first frame, or its BVH on the CPU at load where dense); every frame: rebuilt on the GPU each frame (cell lists or an LBVH), its build in the frame time; clustered lists are built every frame in both. auto ÷ best: auto's frame against the faster of bvh and clustered for the same build, the worse of the two builds.\n\n");
 }
