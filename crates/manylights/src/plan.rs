@@ -11,13 +11,13 @@ use crate::settings::{
 };
 use crate::{Error, Result};
 
-/// Up to this many lights or decals in several placed groups, `auto` loops over them all: a handful
-/// of volumes costs a brute loop less than walking each group's BVH, which wins by 100 (BENCHMARKS.md,
-/// Table 1: 6 large and 100 small decals). As one placed group they are read from cell lists
-/// ([`lights_listed`], [`decals_listed`]), which a loop does not beat: on the H200, 6 large decals
-/// over Sponza took 5.243 against 5.730 ms forward, 1.220 against 1.221 in the visibility buffer,
-/// and 6 or 8 scattered lights or decals 0.82–0.92 times the loop's frame forward, at most 1.016
-/// times in compute rebuilt every frame (benchmarks/LOG.md, topic 1).
+/// Up to this many lights or decals, `auto` loops over them all unless they are read from cell lists
+/// ([`lights_listed`], [`decals_listed`]: one placed group, the software walk, no light tree): a
+/// handful of volumes costs a loop less than walking a BVH (6 large decals on the H100 at `862a346`,
+/// benchmarks/LOG.md topic 1: 5.532 ms forward against 5.813), but not less than lists. On the H200,
+/// 6 large decals read from lists took 5.238 ms forward against the loop's 5.726, and 6 or 8
+/// scattered lights or decals 8–18 % less than the loop in fragments, within 1.6 % of it in compute
+/// (benchmarks/LOG.md, topic 1).
 pub const BRUTE_FORCE_MAX: usize = 8;
 
 /// Whether `bvh` lights rebuilt on the GPU every frame are faster than clustered lists rebuilt every
@@ -133,10 +133,13 @@ pub enum Why {
     Asked,
     /// The scene has none to find.
     NoVolumes,
-    /// Few enough for a loop over all of them, in several placed groups ([`BRUTE_FORCE_MAX`]).
+    /// Few enough for a loop over all of them, where they are not read from cell lists
+    /// ([`BRUTE_FORCE_MAX`]).
     Few(usize),
     /// Particles are lit as lights in the lights' BVH, which only `bvh` reads.
     ParticleLights,
+    /// Restir's candidates were asked to be drawn through the light tree, which only `bvh` builds.
+    LightTree,
     /// Reflections shade points outside the view, which clustered lists do not cover.
     Reflections,
     /// The BVH would be rebuilt on the GPU every frame where clustered lists, rebuilt every frame too,
@@ -164,6 +167,7 @@ impl fmt::Display for Why {
             Why::NoVolumes => f.write_str("none in the scene"),
             Why::Few(n) => write!(f, "{n}, at most {BRUTE_FORCE_MAX}: a loop over all is cheapest"),
             Why::ParticleLights => f.write_str("particles are lights in the lights' BVH, which only bvh reads"),
+            Why::LightTree => f.write_str("restir's candidates are drawn through the light tree, which only bvh builds"),
             Why::Reflections => f.write_str("reflections shade points outside the view, where clustered lists do not reach"),
             Why::RebuiltEveryFrame => f.write_str("rebuilt every frame over sparse volumes, where clustered lists are faster than a BVH"),
             Why::Listed { count, overlap } => write!(
@@ -223,8 +227,11 @@ impl MethodChoice {
                 let listed = software && !light_tree && lights_listed(caps, overlap, stats.placed_light_groups);
                 let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, overlap, listed);
                 let shared_out = lights_shared_out(caps, config.pipeline, overlap);
+                let tree_asked =
+                    config.rays.direct_lighting == DirectLighting::Restir && config.rays.restir_candidates == RestirCandidates::Tree;
                 let (method, why) = match (particle_lights, stats.placed_lights, stats.light_overlap) {
                     (true, _, _) => (LightMethod::Bvh, Why::ParticleLights),
+                    _ if tree_asked => (LightMethod::Bvh, Why::LightTree),
                     (false, 0, _) => (LightMethod::Off, Why::NoVolumes),
                     (false, n, _) if n <= BRUTE_FORCE_MAX && !listed => (LightMethod::Brute, Why::Few(n)),
                     _ if reflections => (LightMethod::Bvh, Why::Reflections),
@@ -1434,6 +1441,17 @@ mod tests {
             MethodChoice::resolve(&auto(), Capabilities { ray_queries: RayQueries::Native, ..SUBGROUPS }, &scene(6, 3.0, 6, 1.0));
         assert_eq!((hardware.lights.method, hardware.decals.method), (LightMethod::Brute, DecalMethod::Brute));
         assert_eq!(chosen(&auto(), scene(BRUTE_FORCE_MAX + 1, 3.0, 0, 0.0)).0, LightMethod::Bvh);
+        // Candidates asked to come through the light tree need the BVH it is built in, for any
+        // count and build.
+        let mut tree = RenderConfig { light_bvh_build: BvhBuild::GpuEveryFrame, ..auto() };
+        tree.rays.direct_lighting = DirectLighting::Restir;
+        tree.rays.restir_candidates = RestirCandidates::Tree;
+        for lights in [0, 3, 28_000] {
+            let grouped = SceneStatistics { placed_light_groups: 2, ..scene(lights, 0.45, 0, 0.0) };
+            let choice = MethodChoice::resolve(&tree, SUBGROUPS, &grouped);
+            assert_eq!((choice.lights.method, choice.lights.why), (LightMethod::Bvh, Why::LightTree), "{lights}");
+            assert!(FramePlan::resolve(&tree, SUBGROUPS, &grouped).is_ok(), "{lights}");
+        }
         // Built once, a BVH wins at any overlap, in every pipeline.
         for pipeline in PipelineKind::ALL {
             let config = RenderConfig { pipeline, ..auto() };
