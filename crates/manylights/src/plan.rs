@@ -89,14 +89,15 @@ pub fn list_cells(decals: bool, stage: ShadingStage) -> ListCells {
 }
 
 /// Whether `bvh` lights are read from cell lists built on the GPU in place of their BVH
-/// (`accel/rebuilt_cell_lists.rs`), once or every frame as the BVH would be: as the one group placed
-/// (`placed_groups`), in every pipeline, below the overlap from which subgroups sharing an LBVH's
+/// (`accel/rebuilt_cell_lists.rs`), once or every frame as the BVH would be: where nothing else needs
+/// the BVH (`bvh_needed`: the hardware back end, which builds its own structures, the light tree,
+/// which descends it, particle lights, which join it), as the one group placed, in every pipeline, below the overlap from which subgroups sharing an LBVH's
 /// leaves out in compute is faster (BENCHMARKS.md, "Dense lights": forward lights at overlap 10
 /// rebuilt every frame take 0.70× clustered lists' time read from cell lists, 1.12× shared out, and
 /// 0.87× walked in the BVH built once). Built once, the lists shaded faster than the BVH built once
 /// (28k small lights in the visibility buffer: 0.163 against 0.176 ms).
-pub fn lights_listed(caps: Capabilities, overlap: f32, placed_groups: usize) -> bool {
-    placed_groups == 1 && !lights_shared_out(caps, PipelineKind::Visbuffer, overlap)
+pub fn lights_listed(caps: Capabilities, stats: &SceneStatistics, bvh_needed: bool) -> bool {
+    !bvh_needed && stats.placed_light_groups == 1 && !lights_shared_out(caps, PipelineKind::Visbuffer, stats.light_overlap.unwrap_or(0.0))
 }
 
 /// Up to this many boxes holding a decal's centre, on average, decals rebuilt every frame as one
@@ -108,20 +109,21 @@ pub fn lights_listed(caps: Capabilities, overlap: f32, placed_groups: usize) -> 
 pub const REBUILT_LISTED_DECAL_OVERLAP: f32 = 200.0;
 
 /// Whether `bvh` decals are read from cell lists built on the GPU in place of their BVH
-/// (`accel/rebuilt_cell_lists.rs`), once or every frame (`every_frame`) as the BVH would be: as the
-/// one group placed (`placed_groups`); rebuilt every frame, below [`REBUILT_LISTED_DECAL_OVERLAP`]
-/// boxes a centre (`centre_overlap`, measured where subgroups could share them out), built once,
+/// (`accel/rebuilt_cell_lists.rs`), once or every frame (`every_frame`) as the BVH would be: but on
+/// the hardware back end (`hardware`), as the one group placed; rebuilt every frame, below
+/// [`REBUILT_LISTED_DECAL_OVERLAP`] boxes a centre (measured where subgroups could share them out), built once,
 /// where they are not dense enough for the lists built beside the BVH ([`decals_shared_out`]: 65,536
 /// decals took 20.631 ms forward in those, 23.347 in lists rebuilt every frame). Sparse decals
 /// walked in the BVH built once lost to clustered lists in fragments (1.09×, 1.20× and 1.28× at
 /// 1,024, 4,096 and 16,384) and shaded slower than in lists in compute (16,384: 0.361 against 0.306
 /// ms in the visibility buffer, 0.274 against 0.190 deferred; benchmarks/LOG.md, topic 1).
-pub fn decals_listed(caps: Capabilities, every_frame: bool, centre_overlap: Option<f32>, placed_groups: usize) -> bool {
-    placed_groups == 1
+pub fn decals_listed(caps: Capabilities, stats: &SceneStatistics, every_frame: bool, hardware: bool) -> bool {
+    !hardware
+        && stats.placed_decal_groups == 1
         && if every_frame {
-            centre_overlap.is_none_or(|overlap| overlap < REBUILT_LISTED_DECAL_OVERLAP)
+            stats.decal_centre_overlap.is_none_or(|overlap| overlap < REBUILT_LISTED_DECAL_OVERLAP)
         } else {
-            !decals_shared_out(caps, centre_overlap)
+            !decals_shared_out(caps, stats.decal_centre_overlap)
         }
 }
 
@@ -215,16 +217,14 @@ impl MethodChoice {
     /// ([`Measurements::for_settings`] measures the overlaps it reads).
     pub fn resolve(config: &RenderConfig, caps: Capabilities, stats: &SceneStatistics) -> Self {
         let reflections = config.rays.reflection_bounces > 0;
-        // Cell lists built on the GPU serve the software walk only: the hardware back end builds its own
-        // structures, and the light tree descends the BVH.
-        let software = !matches!(RayTracer::resolve(config.rays.backend, caps), Ok(RayTracer::Hardware));
+        let hardware = matches!(RayTracer::resolve(config.rays.backend, caps), Ok(RayTracer::Hardware));
         let lights = match config.light_method {
             LightMethod::Auto => {
                 let particle_lights = stats.particles > 0 && config.particle_method == ParticleMethod::Bvh;
                 let overlap = stats.light_overlap.unwrap_or(0.0);
                 let as_bvh = RenderConfig { light_method: LightMethod::Bvh, ..config.clone() };
                 let light_tree = restir_light_tree(&as_bvh, particle_lights, stats.light_overlap).unwrap_or(false);
-                let listed = software && !light_tree && lights_listed(caps, overlap, stats.placed_light_groups);
+                let listed = lights_listed(caps, stats, hardware || light_tree || particle_lights);
                 let rebuilt_bvh_wins = rebuilt_bvh_wins(config.pipeline, caps, overlap, listed);
                 let shared_out = lights_shared_out(caps, config.pipeline, overlap);
                 let tree_asked =
@@ -252,7 +252,7 @@ impl MethodChoice {
                 // groups, each walked alone, lose or come level where rebuilt every frame, and lose
                 // in fragments.
                 let every_frame = config.decal_bvh_build == BvhBuild::GpuEveryFrame;
-                let listed = software && decals_listed(caps, every_frame, stats.decal_centre_overlap, stats.placed_decal_groups);
+                let listed = decals_listed(caps, stats, every_frame, hardware);
                 let shared_out = decals_shared_out(caps, stats.decal_centre_overlap) && !listed;
                 let walked = !listed && !shared_out;
                 let (method, why) = match (stats.placed_decals, stats.decal_overlap) {
@@ -260,7 +260,9 @@ impl MethodChoice {
                     (n, _) if n <= BRUTE_FORCE_MAX && !listed => (DecalMethod::Brute, Why::Few(n)),
                     _ if reflections => (DecalMethod::Bvh, Why::Reflections),
                     _ if walked && every_frame => (DecalMethod::Clustered, Why::RebuiltEveryFrame),
-                    _ if walked && software && config.pipeline == PipelineKind::Forward => (DecalMethod::Clustered, Why::WalkedInFragments),
+                    _ if walked && !hardware && config.pipeline == PipelineKind::Forward => {
+                        (DecalMethod::Clustered, Why::WalkedInFragments)
+                    }
                     (count, overlap) if listed => (DecalMethod::Bvh, Why::Listed { count, overlap: overlap.unwrap_or(0.0) }),
                     (count, overlap) => (DecalMethod::Bvh, Why::Overlap { count, overlap: overlap.unwrap_or(0.0), shared_out }),
                 };
@@ -853,10 +855,8 @@ impl FramePlan {
         );
         // Decals as one group placed once get cell lists in place of their BVH, built once or every
         // frame as it would be, up to an overlap; crowded ones built once get lists beside it.
-        let decals_in_lists = decal_build != GroupBuild::None
-            && config.decal_method == DecalMethod::Bvh
-            && !hardware_decals
-            && decals_listed(caps, decal_build == GroupBuild::GpuEveryFrame, stats.decal_centre_overlap, stats.placed_decal_groups);
+        let decals_in_lists =
+            config.decal_method == DecalMethod::Bvh && decals_listed(caps, stats, decal_build == GroupBuild::GpuEveryFrame, hardware);
         let dense_decals = !hardware_decals
             && !decals_in_lists
             && Measurements::for_settings(config, caps).decal_centre_overlap
@@ -865,11 +865,8 @@ impl FramePlan {
         let walks = query_walks(ShadingMethods { dense_lights, dense_decals, ..unlisted }, opaque_stage);
         let light_build =
             group_build(config.light_method == LightMethod::Bvh, config.light_method == LightMethod::Clustered, config.light_bvh_build);
-        let lights_in_lists = config.light_method == LightMethod::Bvh
-            && lights_listed(caps, stats.light_overlap.unwrap_or(0.0), stats.placed_light_groups)
-            && !light_tree
-            && !hardware_lights
-            && !particle_lights;
+        let lights_in_lists =
+            config.light_method == LightMethod::Bvh && lights_listed(caps, stats, hardware || light_tree || particle_lights);
         let lights = StructurePlan {
             build: light_build,
             clustered: config.light_method == LightMethod::Clustered,

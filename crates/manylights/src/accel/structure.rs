@@ -1154,14 +1154,13 @@ fn rebuilds(volumes: &Volumes, layout: &Layout, build: GroupBuild, listed: Optio
 }
 
 /// The group built on the GPU as cell lists in place of its BVH (once, or every frame as `build`
-/// says), and their grid: the one placed group, where `volumes.cell_lists` asks for them, nothing
-/// else needs its BVH (a light tree, the hardware back end, particles) and a grid fits its volumes
-/// and the device's bindings (`ListPlacement::for_boxes`); the others keep their BVHs.
+/// says), and their grid: the one placed group, where `volumes.cell_lists` asks for them (the plan
+/// asks only where nothing else needs the BVH: `plan::lights_listed`, `plan::decals_listed`), no
+/// dynamic group joins it, and a grid fits its volumes and the device's bindings
+/// (`ListPlacement::for_boxes`); the others keep their BVHs.
 fn list_placement(ctx: &GpuContext, volumes: &Volumes, layout: &Layout, build: GroupBuild) -> Option<(usize, ListPlacement)> {
     let GroupLists::InPlaceOfBvh(cells) = volumes.cell_lists else { return None };
-    let lone =
-        (build != GroupBuild::None && !volumes.light_tree && !volumes.hardware && layout.instances.len() == 1 && layout.dynamic.is_none())
-            .then(|| layout.instances[0].group)?;
+    let lone = (layout.instances.len() == 1 && layout.dynamic.is_none()).then(|| layout.instances[0].group)?;
     let boxes = &volumes.boxes[layout.ranges[lone].clone()];
     let every_frame = build == GroupBuild::GpuEveryFrame;
     ListPlacement::for_boxes(boxes, cells.coarsest_edge(), every_frame, ctx.limits.max_storage_buffer_binding_size)
